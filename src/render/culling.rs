@@ -1,0 +1,1 @@
+//! CPU light culling (placeholder until implemented).

@@ -1,0 +1,2 @@
+//! Pipelines and what they share.
+pub mod culling;

@@ -1,0 +1,1 @@
+//! Generated albedo textures (placeholder until implemented).

@@ -1,0 +1,362 @@
+//! The scene model every pipeline renders: meshes, materials, textures, object
+//! instances, lights and cameras, plus the loaders and generators that build it.
+//!
+//! A [`Scene`] is plain CPU data. `render::SceneGpu` uploads it once; pipelines
+//! never look at files.
+
+pub mod camera;
+pub mod checker;
+pub mod error;
+pub mod generate;
+pub mod gltf;
+pub mod lights;
+pub mod obj;
+pub mod path;
+
+use std::path::Path;
+
+use glam::{Mat4, Vec2, Vec3, Vec4};
+
+pub use camera::Camera;
+pub use error::SceneError;
+pub use lights::{Light, LightKind, LightSpec};
+pub use path::CameraPath;
+
+/// One triangle mesh with one material. glTF primitives and OBJ objects each
+/// become one `Mesh`.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    /// Unit normals, one per vertex (generated from faces when the file has none).
+    pub normals: Vec<Vec3>,
+    /// Tangent (xyz) and bitangent sign (w), one per vertex (generated when absent).
+    pub tangents: Vec<Vec4>,
+    /// Texture coordinates of the material's textures (TEXCOORD_0 / OBJ `vt`).
+    pub uv0: Vec<Vec2>,
+    /// A second UV set when the file has one (glTF TEXCOORD_1). The chart
+    /// module prefers it for object-space shading when it is unique.
+    pub uv1: Option<Vec<Vec2>>,
+    /// Triangle list, three indices per triangle, all `< positions.len()`.
+    pub indices: Vec<u32>,
+}
+
+impl Mesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Object-space bounding box.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(self.positions.iter().copied())
+    }
+
+    /// Sum of triangle areas in object space (metres squared for the shared scenes).
+    pub fn surface_area(&self) -> f32 {
+        self.indices
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [0, 1, 2].map(|k| self.positions[t[k] as usize]);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum()
+    }
+
+    /// Fills `normals` with area-weighted face normals when they are missing,
+    /// and `tangents` from `uv0` when they are missing.
+    pub fn generate_missing_attributes(&mut self) {
+        if self.normals.len() != self.positions.len() {
+            self.normals = vec![Vec3::ZERO; self.positions.len()];
+            for t in self.indices.chunks_exact(3) {
+                let [a, b, c] = [0, 1, 2].map(|k| self.positions[t[k] as usize]);
+                let n = (b - a).cross(c - a); // length = 2 * area: area weighting
+                for &i in t {
+                    self.normals[i as usize] += n;
+                }
+            }
+            for n in &mut self.normals {
+                *n = n.try_normalize().unwrap_or(Vec3::Y);
+            }
+        }
+        if self.uv0.len() != self.positions.len() {
+            self.uv0 = vec![Vec2::ZERO; self.positions.len()];
+        }
+        if self.tangents.len() != self.positions.len() {
+            self.tangents = generate_tangents(&self.positions, &self.normals, &self.uv0, &self.indices);
+        }
+    }
+
+    /// Checks the invariants the renderer relies on; loaders call this so that a
+    /// bad file is reported by name instead of crashing a GPU pass.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.positions.len();
+        if self.indices.len() % 3 != 0 {
+            return Err(format!("mesh '{}': index count {} is not a multiple of 3", self.name, self.indices.len()));
+        }
+        if let Some((k, &i)) = self.indices.iter().enumerate().find(|(_, i)| **i as usize >= n) {
+            return Err(format!(
+                "mesh '{}': index {} at position {} is out of range ({} vertices)",
+                self.name, i, k, n
+            ));
+        }
+        if let Some(k) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(format!("mesh '{}': vertex {} has a non-finite position", self.name, k));
+        }
+        for (what, len) in [("normals", self.normals.len()), ("tangents", self.tangents.len()), ("uv0", self.uv0.len())] {
+            if len != n {
+                return Err(format!("mesh '{}': {} has {} entries for {} vertices", self.name, what, len, n));
+            }
+        }
+        if let Some(uv1) = &self.uv1
+            && uv1.len() != n
+        {
+            return Err(format!("mesh '{}': uv1 has {} entries for {} vertices", self.name, uv1.len(), n));
+        }
+        Ok(())
+    }
+}
+
+/// Per-vertex tangents from UV gradients (Lengyel's method), orthogonalised
+/// against the normal. Degenerate UVs give an arbitrary tangent perpendicular to N.
+pub fn generate_tangents(positions: &[Vec3], normals: &[Vec3], uvs: &[Vec2], indices: &[u32]) -> Vec<Vec4> {
+    let mut tan = vec![Vec3::ZERO; positions.len()];
+    let mut bit = vec![Vec3::ZERO; positions.len()];
+    for t in indices.chunks_exact(3) {
+        let [i0, i1, i2] = [t[0] as usize, t[1] as usize, t[2] as usize];
+        let (e1, e2) = (positions[i1] - positions[i0], positions[i2] - positions[i0]);
+        let (d1, d2) = (uvs[i1] - uvs[i0], uvs[i2] - uvs[i0]);
+        let det = d1.x * d2.y - d2.x * d1.y;
+        if det.abs() < 1e-12 {
+            continue;
+        }
+        let r = 1.0 / det;
+        let s = (e1 * d2.y - e2 * d1.y) * r;
+        let u = (e2 * d1.x - e1 * d2.x) * r;
+        for i in [i0, i1, i2] {
+            tan[i] += s;
+            bit[i] += u;
+        }
+    }
+    (0..positions.len())
+        .map(|i| {
+            let n = normals[i];
+            let t = (tan[i] - n * n.dot(tan[i])).try_normalize().unwrap_or_else(|| n.any_orthonormal_vector());
+            let w = if n.cross(t).dot(bit[i]) < 0.0 { -1.0 } else { 1.0 };
+            t.extend(w)
+        })
+        .collect()
+}
+
+/// An RGBA8 texture in sRGB, as decoded from a file or generated.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// `width * height * 4` bytes, row-major, sRGB-encoded colour.
+    pub rgba8: Vec<u8>,
+}
+
+/// A Phong material (the shared lighting model of `shaders/lighting.wgsl`).
+/// glTF's metallic/roughness and emissive are kept for later pipelines; the
+/// Phong exponent is derived from roughness where a file gives one.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    /// Linear RGBA multiplier of the base colour texture.
+    pub base_color: Vec4,
+    /// Index into [`Scene::textures`].
+    pub base_color_texture: Option<usize>,
+    /// Index into [`Scene::textures`] (tangent-space normal map).
+    pub normal_texture: Option<usize>,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Linear emitted radiance.
+    pub emissive: Vec3,
+    /// Strength of the specular term.
+    pub specular: f32,
+    /// Phong exponent p in `max(R·V, 0)^p`.
+    pub shininess: f32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            base_color: Vec4::ONE,
+            base_color_texture: None,
+            normal_texture: None,
+            metallic: 0.0,
+            roughness: 0.6,
+            emissive: Vec3::ZERO,
+            specular: 0.25,
+            shininess: 32.0,
+        }
+    }
+}
+
+impl Material {
+    /// Phong exponent equivalent to a GGX roughness (the Blinn-Phong mapping
+    /// 2/alpha^2 - 2, halved for the reflection-vector form).
+    pub fn shininess_from_roughness(roughness: f32) -> f32 {
+        let alpha = (roughness * roughness).max(1e-3);
+        ((2.0 / (alpha * alpha) - 2.0) * 0.25).clamp(1.0, 512.0)
+    }
+}
+
+/// One instance of a mesh in the world.
+#[derive(Clone, Debug)]
+pub struct Object {
+    pub name: String,
+    /// Index into [`Scene::meshes`].
+    pub mesh: usize,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Object-to-world transform.
+    pub transform: Mat4,
+    /// Shade this object with forward shading even in the object-space
+    /// pipeline (the sources do this for foliage and particles).
+    pub forward_only: bool,
+}
+
+/// Axis-aligned bounding box. An empty box has `min > max`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+
+    pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Self {
+        points.into_iter().fold(Self::EMPTY, |b, p| Aabb { min: b.min.min(p), max: b.max.max(p) })
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
+    }
+
+    pub fn center(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+
+    pub fn extent(&self) -> Vec3 {
+        self.max - self.min
+    }
+
+    pub fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|i| {
+            Vec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
+    }
+
+    /// The box of this box's corners moved by `m`.
+    pub fn transformed(&self, m: &Mat4) -> Aabb {
+        if self.is_empty() {
+            return *self;
+        }
+        Aabb::from_points(self.corners().map(|c| m.transform_point3(c)))
+    }
+}
+
+/// Everything one render needs besides the view and the lights.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// Short name used in reports (`atrium`, `sponza-thesis`, ...).
+    pub name: String,
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub objects: Vec<Object>,
+    /// Lights that came with the scene file (glTF `KHR_lights_punctual`).
+    pub lights: Vec<Light>,
+    /// Cameras that came with the scene file (glTF cameras).
+    pub cameras: Vec<Camera>,
+}
+
+impl Scene {
+    pub fn triangle_count(&self) -> usize {
+        self.objects.iter().map(|o| self.meshes[o.mesh].triangle_count()).sum()
+    }
+
+    /// World-space bounds of one object.
+    pub fn object_bounds(&self, object: usize) -> Aabb {
+        let o = &self.objects[object];
+        self.meshes[o.mesh].bounds().transformed(&o.transform)
+    }
+
+    /// World-space bounds of the whole scene.
+    pub fn bounds(&self) -> Aabb {
+        (0..self.objects.len()).fold(Aabb::EMPTY, |b, i| b.union(&self.object_bounds(i)))
+    }
+
+    /// Checks every invariant the renderer relies on (see [`Mesh::validate`]),
+    /// and that every reference between scene parts is in range.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.objects.is_empty() || self.triangle_count() == 0 {
+            return Err("the scene has no triangles".into());
+        }
+        for m in &self.meshes {
+            m.validate()?;
+        }
+        for o in &self.objects {
+            if o.mesh >= self.meshes.len() || o.material >= self.materials.len() {
+                return Err(format!("object '{}' refers to a missing mesh or material", o.name));
+            }
+            if !o.transform.is_finite() {
+                return Err(format!("object '{}' has a non-finite transform", o.name));
+            }
+        }
+        for m in &self.materials {
+            for t in [m.base_color_texture, m.normal_texture].into_iter().flatten() {
+                if t >= self.textures.len() {
+                    return Err(format!("material '{}' refers to missing texture {}", m.name, t));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The names of the procedural scenes, for `--scene` and `--help`.
+pub const PROCEDURAL_SCENES: [&str; 2] = ["atrium", "voxels"];
+
+/// Loads a scene by procedural name (`atrium`, `voxels`) or by path: a `.gltf`
+/// or `.glb` file, an `.obj` file, or a folder of `.obj` files (one scene).
+/// The result is validated, so a bad file fails here with its name.
+pub fn load(spec: &str) -> Result<Scene, SceneError> {
+    let scene = match spec {
+        "atrium" => generate::atrium(),
+        "voxels" => generate::voxels(),
+        _ => {
+            let path = Path::new(spec);
+            if !path.exists() {
+                return Err(SceneError::NotFound(path.to_path_buf()));
+            }
+            if path.is_dir() {
+                obj::load_folder(path)?
+            } else {
+                match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+                    Some("gltf" | "glb") => gltf::load(path)?,
+                    Some("obj") => obj::load_file(path)?,
+                    _ => return Err(SceneError::UnknownFormat(path.to_path_buf())),
+                }
+            }
+        }
+    };
+    scene.validate().map_err(|problem| SceneError::Invalid { path: spec.into(), problem })?;
+    Ok(scene)
+}

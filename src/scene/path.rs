@@ -1,0 +1,2 @@
+//! Camera paths (placeholder until implemented).
+pub struct CameraPath;
