@@ -1,1 +1,68 @@
-//! Generated albedo textures (placeholder until implemented).
+//! Generated albedo textures: a UV checker with a per-object tint, given to
+//! objects that have no texture so that their UV layouts are visible.
+
+use glam::Vec3;
+
+use super::Texture;
+
+/// A distinct, deterministic tint for object `index` (hues spaced by the
+/// golden angle, so neighbours in a file never get similar colours).
+pub fn object_tint(index: usize) -> Vec3 {
+    let hue = (index as f32 * 0.618_034).fract();
+    let h = hue * 6.0;
+    let x = 1.0 - (h % 2.0 - 1.0).abs();
+    let rgb = match h as u32 {
+        0 => Vec3::new(1.0, x, 0.0),
+        1 => Vec3::new(x, 1.0, 0.0),
+        2 => Vec3::new(0.0, 1.0, x),
+        3 => Vec3::new(0.0, x, 1.0),
+        4 => Vec3::new(x, 0.0, 1.0),
+        _ => Vec3::new(1.0, 0.0, x),
+    };
+    // Desaturate so that lighting, not the tint, dominates the image.
+    Vec3::splat(0.55).lerp(rgb, 0.45)
+}
+
+/// A `size` x `size` checker of `cells` x `cells` squares alternating between
+/// `tint` and a darker `tint`, with thin grid lines every cell.
+pub fn uv_checker(name: &str, tint: Vec3, size: u32, cells: u32) -> Texture {
+    let cell = (size / cells.max(1)).max(1);
+    let mut rgba8 = Vec::with_capacity((size * size * 4) as usize);
+    for y in 0..size {
+        for x in 0..size {
+            let (cx, cy) = (x / cell, y / cell);
+            let line = x % cell == 0 || y % cell == 0;
+            let shade = if line {
+                0.35
+            } else if (cx + cy) % 2 == 0 {
+                1.0
+            } else {
+                0.7
+            };
+            let c = tint * shade;
+            rgba8.extend_from_slice(&[to_srgb8(c.x), to_srgb8(c.y), to_srgb8(c.z), 255]);
+        }
+    }
+    Texture { name: name.to_string(), width: size, height: size, rgba8 }
+}
+
+fn to_srgb8(linear: f32) -> u8 {
+    let l = linear.clamp(0.0, 1.0);
+    let s = if l <= 0.003_130_8 { l * 12.92 } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5) as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn checker_alternates_and_tints_differ() {
+        let t = uv_checker("t", Vec3::ONE, 64, 8);
+        assert_eq!(t.rgba8.len(), 64 * 64 * 4);
+        let px = |x: usize, y: usize| t.rgba8[(y * 64 + x) * 4];
+        assert!(px(4, 4) > px(12, 4), "neighbouring cells must differ");
+        assert_eq!(px(4, 4), px(12, 12), "diagonal cells must match");
+        assert_ne!(object_tint(0), object_tint(1));
+    }
+}

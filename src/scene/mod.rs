@@ -19,7 +19,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 
 pub use camera::Camera;
 pub use error::SceneError;
-pub use lights::{Light, LightKind, LightSpec};
+pub use lights::{Light, LightKind};
 pub use path::CameraPath;
 
 /// One triangle mesh with one material. glTF primitives and OBJ objects each
@@ -106,7 +106,8 @@ impl Mesh {
         if let Some(k) = self.positions.iter().position(|p| !p.is_finite()) {
             return Err(format!("mesh '{}': vertex {} has a non-finite position", self.name, k));
         }
-        for (what, len) in [("normals", self.normals.len()), ("tangents", self.tangents.len()), ("uv0", self.uv0.len())] {
+        for (what, len) in [("normals", self.normals.len()), ("tangents", self.tangents.len()), ("uv0", self.uv0.len())]
+        {
             if len != n {
                 return Err(format!("mesh '{}': {} has {} entries for {} vertices", self.name, what, len, n));
             }
