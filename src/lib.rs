@@ -5,6 +5,9 @@
 //! per frame: views + lights -> a pipeline's passes -> HDR target -> tone map)
 //! -> image + [`render::FrameStats`].
 
+pub mod bench;
 pub mod gpu;
+pub mod metrics;
 pub mod render;
+pub mod shaders;
 pub mod scene;

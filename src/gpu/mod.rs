@@ -1,1 +1,180 @@
-//! GPU context.
+//! The GPU context: adapter choice, optional features, validation errors,
+//! timestamp profiling and read-back.
+
+pub mod readback;
+pub mod timing;
+
+use std::sync::{Arc, Mutex};
+
+/// Optional features used where the adapter has them (see DESIGN.md); each
+/// pass that relies on one keeps a fallback for adapters without it.
+pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
+    .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS)
+    .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES)
+    .union(wgpu::Features::CONSERVATIVE_RASTERIZATION)
+    .union(wgpu::Features::TEXTURE_ATOMIC)
+    .union(wgpu::Features::SHADER_INT64)
+    .union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX)
+    .union(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS)
+    .union(wgpu::Features::TEXTURE_INT64_ATOMIC)
+    .union(wgpu::Features::PRIMITIVE_INDEX)
+    .union(wgpu::Features::SUBGROUP)
+    .union(wgpu::Features::MULTIVIEW)
+    .union(wgpu::Features::SHADER_BARYCENTRICS)
+    .union(wgpu::Features::INDIRECT_FIRST_INSTANCE)
+    .union(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT)
+    .union(wgpu::Features::FLOAT32_FILTERABLE);
+
+/// Environment variable that picks an adapter by name substring, like `--adapter`.
+pub const ADAPTER_ENV: &str = "SHADESPACE_ADAPTER";
+
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("no GPU adapter found (is a Vulkan driver installed? on a machine without a GPU, install Mesa's `mesa-vulkan-drivers`)")]
+    NoAdapter,
+    #[error("no adapter matches '{wanted}'; available: {available}")]
+    NoMatchingAdapter { wanted: String, available: String },
+    #[error("cannot open the device on '{adapter}': {message}")]
+    RequestDevice { adapter: String, message: String },
+    #[error("wgpu validation error(s):\n{0}")]
+    Validation(String),
+    #[error("GPU read-back failed: {0}")]
+    Readback(String),
+}
+
+/// Which adapter to open.
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
+    /// Case-insensitive substring of the adapter name; `None` reads
+    /// [`ADAPTER_ENV`], then prefers discrete, integrated, virtual, CPU.
+    pub adapter: Option<String>,
+}
+
+/// An open device with the features that were turned on.
+pub struct GpuContext {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    pub features: wgpu::Features,
+    pub limits: wgpu::Limits,
+    errors: Arc<Mutex<Vec<String>>>,
+}
+
+impl GpuContext {
+    pub fn new(options: &GpuOptions) -> Result<Self, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        let wanted = options.adapter.clone().or_else(|| std::env::var(ADAPTER_ENV).ok()).filter(|s| !s.is_empty());
+        let adapter = choose_adapter(adapters, wanted.as_deref())?;
+        let info = adapter.get_info();
+        let features = adapter.features() & OPTIONAL_FEATURES;
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("shadespace"),
+            required_features: features,
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::RequestDevice { adapter: info.name.clone(), message: e.to_string() })?;
+        let errors = Arc::new(Mutex::new(Vec::new()));
+        let sink = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            sink.lock().unwrap_or_else(|p| p.into_inner()).push(e.to_string());
+        }));
+        Ok(Self { instance, adapter, device, queue, info, features, limits, errors })
+    }
+
+    pub fn has(&self, feature: wgpu::Features) -> bool {
+        self.features.contains(feature)
+    }
+
+    /// Returns the validation errors raised since the last call, as an error.
+    /// Every frame and every test calls this: errors are never swallowed.
+    pub fn check_errors(&self) -> Result<(), GpuError> {
+        let mut errors = self.errors.lock().unwrap_or_else(|p| p.into_inner());
+        if errors.is_empty() {
+            return Ok(());
+        }
+        let all = errors.drain(..).collect::<Vec<_>>().join("\n");
+        Err(GpuError::Validation(all))
+    }
+
+    /// Blocks until the GPU has finished all submitted work.
+    pub fn wait_idle(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Readback(e.to_string()))
+    }
+
+    /// A one-line description: adapter name, backend, driver.
+    pub fn adapter_summary(&self) -> String {
+        format!("{} ({:?}, {:?}, driver {} {})", self.info.name, self.info.backend, self.info.device_type, self.info.driver, self.info.driver_info)
+    }
+
+    /// The report of `shadespace info`: the adapter, the optional features
+    /// that are on and off, and the limits the pipelines depend on.
+    pub fn report(&self) -> String {
+        let mut s = format!("adapter: {}\n", self.adapter_summary());
+        let on: Vec<_> = OPTIONAL_FEATURES.iter_names().filter(|(_, f)| self.features.contains(*f)).map(|(n, _)| n).collect();
+        let off: Vec<_> = OPTIONAL_FEATURES.iter_names().filter(|(_, f)| !self.features.contains(*f)).map(|(n, _)| n).collect();
+        s += &format!("features on:  {}\n", on.join(", "));
+        s += &format!("features off: {}\n", if off.is_empty() { "(none)".to_string() } else { off.join(", ") });
+        let l = &self.limits;
+        s += &format!(
+            "limits: max_texture_dimension_2d {}, max_texture_array_layers {}, max_storage_buffer_binding_size {} MiB, \
+             max_storage_textures_per_shader_stage {}, max_compute_workgroup_storage_size {} KiB, \
+             max_compute_invocations_per_workgroup {}, max_buffer_size {} MiB\n",
+            l.max_texture_dimension_2d,
+            l.max_texture_array_layers,
+            l.max_storage_buffer_binding_size >> 20,
+            l.max_storage_textures_per_shader_stage,
+            l.max_compute_workgroup_storage_size >> 10,
+            l.max_compute_invocations_per_workgroup,
+            l.max_buffer_size >> 20,
+        );
+        s += &format!("timestamp period: {} ns/tick\n", self.queue.get_timestamp_period());
+        s
+    }
+}
+
+/// Lists every adapter the instance sees, one line each, for `shadespace info`.
+pub fn list_adapters() -> Vec<String> {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
+        .into_iter()
+        .map(|a| {
+            let i = a.get_info();
+            format!("{} ({:?}, {:?}, driver {} {})", i.name, i.backend, i.device_type, i.driver, i.driver_info)
+        })
+        .collect()
+}
+
+fn choose_adapter(adapters: Vec<wgpu::Adapter>, wanted: Option<&str>) -> Result<wgpu::Adapter, GpuError> {
+    if adapters.is_empty() {
+        return Err(GpuError::NoAdapter);
+    }
+    if let Some(wanted) = wanted {
+        let needle = wanted.to_lowercase();
+        let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+        return adapters
+            .into_iter()
+            .find(|a| a.get_info().name.to_lowercase().contains(&needle))
+            .ok_or_else(|| GpuError::NoMatchingAdapter { wanted: wanted.to_string(), available: names.join(", ") });
+    }
+    let rank = |a: &wgpu::Adapter| {
+        let i = a.get_info();
+        let ty = match i.device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Cpu => 3,
+            wgpu::DeviceType::Other => 4,
+        };
+        // Vulkan first (the backend this project is proven on).
+        (ty, if i.backend == wgpu::Backend::Vulkan { 0 } else { 1 })
+    };
+    adapters.into_iter().min_by_key(rank).ok_or(GpuError::NoAdapter)
+}

@@ -1,0 +1,152 @@
+//! `shadespace bench`: render a camera path for many frames and summarise GPU
+//! time per pass and per frame (median, p95 after warm-up) and CPU frame time.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use crate::gpu::GpuContext;
+use crate::gpu::timing::FrameTimings;
+use crate::render::{FrameStats, RenderError, Renderer};
+use crate::scene::{CameraPath, Light};
+
+/// Median and 95th percentile of a series, in milliseconds.
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct Summary {
+    pub median_ms: f64,
+    pub p95_ms: f64,
+    pub mean_ms: f64,
+    pub samples: usize,
+}
+
+impl Summary {
+    /// Nearest-rank percentiles of `values` (empty gives zeros).
+    pub fn of(values: &[f64]) -> Self {
+        if values.is_empty() {
+            return Self::default();
+        }
+        let mut v = values.to_vec();
+        v.sort_by(f64::total_cmp);
+        let rank = |p: f64| v[(((p * v.len() as f64).ceil() as usize).max(1) - 1).min(v.len() - 1)];
+        Summary { median_ms: rank(0.5), p95_ms: rank(0.95), mean_ms: v.iter().sum::<f64>() / v.len() as f64, samples: v.len() }
+    }
+}
+
+/// What the run measured; written as the bench JSON.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchResult {
+    pub adapter: String,
+    pub backend: String,
+    pub driver: String,
+    pub driver_info: String,
+    pub features: Vec<String>,
+    pub scene: String,
+    pub triangles: u64,
+    pub objects: usize,
+    pub width: u32,
+    pub height: u32,
+    pub pipeline: String,
+    pub lights_spec: String,
+    pub light_count: usize,
+    pub seed: u64,
+    pub camera: String,
+    pub frames: u32,
+    pub warmup: u32,
+    /// GPU time per pass over the measured frames.
+    pub gpu_passes: BTreeMap<String, Summary>,
+    /// GPU time from the first pass's start to the last pass's end.
+    pub gpu_frame: Summary,
+    /// CPU time to cull, upload, record and submit a frame.
+    pub cpu_frame: Summary,
+    /// Per measured frame: GPU frame milliseconds (for plots).
+    pub gpu_frame_ms: Vec<f64>,
+    pub mean_light_assignments: f64,
+}
+
+/// Descriptive fields of a run that the renderer does not know.
+pub struct BenchSetup<'a> {
+    pub scene_name: &'a str,
+    pub objects: usize,
+    pub lights_spec: &'a str,
+    pub seed: u64,
+    pub camera: &'a str,
+}
+
+/// Renders `warmup + frames` frames along `path` (frame `i` uses the path's
+/// camera `i mod path length`), then waits for the GPU timings and summarises
+/// the measured frames. `progress` is called after each frame.
+pub fn run(
+    ctx: &GpuContext,
+    renderer: &mut Renderer,
+    path: &CameraPath,
+    lights: &[Light],
+    warmup: u32,
+    frames: u32,
+    setup: &BenchSetup,
+    mut progress: impl FnMut(u32),
+) -> Result<BenchResult, RenderError> {
+    let total = warmup + frames;
+    let mut stats: Vec<FrameStats> = Vec::with_capacity(total as usize);
+    let mut timings: Vec<FrameTimings> = Vec::with_capacity(total as usize);
+    let path_len = path.frame_count().max(1);
+    for i in 0..total {
+        let camera = path.camera_at(i % path_len);
+        stats.push(renderer.render(ctx, &camera, lights, i as u64)?);
+        timings.extend(renderer.collect_timings(ctx, false));
+        progress(i + 1);
+    }
+    timings.extend(renderer.collect_timings(ctx, true));
+    ctx.check_errors()?;
+
+    let measured = |frame: u64| frame >= warmup as u64;
+    let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut gpu_frame_ms = Vec::new();
+    for t in timings.iter().filter(|t| measured(t.frame)) {
+        for (name, ms) in &t.passes {
+            per_pass.entry(name.clone()).or_default().push(*ms);
+        }
+        gpu_frame_ms.push(t.total_ms);
+    }
+    let cpu: Vec<f64> = stats.iter().filter(|s| measured(s.frame)).map(|s| s.cpu_ms).collect();
+    let assignments: Vec<f64> = stats.iter().filter(|s| measured(s.frame)).map(|s| s.light_assignments as f64).collect();
+    Ok(BenchResult {
+        adapter: ctx.info.name.clone(),
+        backend: format!("{:?}", ctx.info.backend),
+        driver: ctx.info.driver.clone(),
+        driver_info: ctx.info.driver_info.clone(),
+        features: ctx.features.iter_names().map(|(n, _)| n.to_string()).collect(),
+        scene: setup.scene_name.to_string(),
+        triangles: renderer.scene.triangle_count,
+        objects: setup.objects,
+        width: renderer.targets.width,
+        height: renderer.targets.height,
+        pipeline: renderer.pipeline_name().to_string(),
+        lights_spec: setup.lights_spec.to_string(),
+        light_count: lights.len(),
+        seed: setup.seed,
+        camera: setup.camera.to_string(),
+        frames,
+        warmup,
+        gpu_passes: per_pass.iter().map(|(k, v)| (k.clone(), Summary::of(v))).collect(),
+        gpu_frame: Summary::of(&gpu_frame_ms),
+        cpu_frame: Summary::of(&cpu),
+        gpu_frame_ms,
+        mean_light_assignments: Summary::of(&assignments).mean_ms,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Summary;
+
+    #[test]
+    fn summary_percentiles() {
+        let v: Vec<f64> = (1..=100).map(f64::from).collect();
+        let s = Summary::of(&v);
+        assert_eq!(s.median_ms, 50.0);
+        assert_eq!(s.p95_ms, 95.0);
+        assert_eq!(s.mean_ms, 50.5);
+        assert_eq!(Summary::of(&[3.0]).p95_ms, 3.0);
+        assert_eq!(Summary::of(&[]).samples, 0);
+    }
+}

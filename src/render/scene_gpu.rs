@@ -1,0 +1,355 @@
+//! The scene on the GPU: vertices, indices, objects, albedo textures, view and
+//! lights, bound as group 0 by every pipeline.
+
+use glam::{Mat4, Vec4};
+use image::imageops::FilterType;
+use wgpu::util::DeviceExt;
+
+use super::culling::LightLists;
+use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
+use crate::scene::{Aabb, Camera, Light, Scene};
+
+/// Largest side of a layer of the albedo array; bigger textures are resized.
+pub const MAX_ALBEDO_SIZE: u32 = 1024;
+
+/// Where one object's triangles are in the shared buffers.
+#[derive(Clone, Copy, Debug)]
+pub struct DrawRange {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub base_vertex: u32,
+}
+
+/// A storage buffer that grows (and is then re-created) when written past its size.
+struct GrowableBuffer {
+    buffer: wgpu::Buffer,
+    label: &'static str,
+}
+
+impl GrowableBuffer {
+    fn new(device: &wgpu::Device, label: &'static str, size: u64) -> Self {
+        Self { buffer: Self::create(device, label, size), label }
+    }
+
+    fn create(device: &wgpu::Device, label: &'static str, size: u64) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.max(256).next_power_of_two(),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Writes `data`; returns true when the buffer had to be re-created.
+    fn write(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, data: &[u8]) -> bool {
+        let grew = data.len() as u64 > self.buffer.size();
+        if grew {
+            self.buffer = Self::create(device, self.label, data.len() as u64);
+        }
+        if !data.is_empty() {
+            queue.write_buffer(&self.buffer, 0, data);
+        }
+        grew
+    }
+}
+
+pub struct SceneGpu {
+    pub vertices: wgpu::Buffer,
+    pub indices: wgpu::Buffer,
+    pub objects: wgpu::Buffer,
+    pub view: wgpu::Buffer,
+    pub albedo: wgpu::Texture,
+    pub draws: Vec<DrawRange>,
+    /// World-space bounds per object (for culling).
+    pub object_bounds: Vec<Aabb>,
+    /// CPU copy of the object table; light ranges are rewritten per frame.
+    pub object_data: Vec<GpuObject>,
+    pub triangle_count: u64,
+    lights: GrowableBuffer,
+    light_indices: GrowableBuffer,
+    albedo_view: wgpu::TextureView,
+    sampler: wgpu::Sampler,
+    pub layout: wgpu::BindGroupLayout,
+    bind_group: wgpu::BindGroup,
+}
+
+impl SceneGpu {
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> Self {
+        let mut vertices = Vec::new();
+        let mut indices = Vec::new();
+        let mut mesh_ranges = Vec::with_capacity(scene.meshes.len());
+        for mesh in &scene.meshes {
+            let charts = mesh.uv1.as_ref().unwrap_or(&mesh.uv0);
+            mesh_ranges.push(DrawRange {
+                first_index: indices.len() as u32,
+                index_count: mesh.indices.len() as u32,
+                base_vertex: vertices.len() as u32,
+            });
+            vertices.extend((0..mesh.positions.len()).map(|i| GpuVertex {
+                position: mesh.positions[i],
+                uv0_x: mesh.uv0[i].x,
+                normal: mesh.normals[i],
+                uv0_y: mesh.uv0[i].y,
+                tangent: mesh.tangents[i],
+                chart_uv: charts[i],
+                pad: Default::default(),
+            }));
+            indices.extend_from_slice(&mesh.indices);
+        }
+        let (albedo, white_layer) = upload_albedo(device, queue, scene);
+        let draws: Vec<DrawRange> = scene.objects.iter().map(|o| mesh_ranges[o.mesh]).collect();
+        let object_data: Vec<GpuObject> = scene
+            .objects
+            .iter()
+            .zip(&draws)
+            .enumerate()
+            .map(|(i, (o, d))| {
+                let m = &scene.materials[o.material];
+                GpuObject {
+                    model: o.transform,
+                    normal_model: o.transform.inverse().transpose(),
+                    base_color: m.base_color,
+                    emissive: m.emissive,
+                    albedo_layer: m.base_color_texture.map_or(white_layer, |t| t as u32),
+                    light_offset: 0,
+                    light_count: 0,
+                    first_index: d.first_index,
+                    base_vertex: d.base_vertex,
+                    specular: m.specular,
+                    shininess: m.shininess,
+                    atlas_entry: i as u32,
+                    flags: o.forward_only as u32,
+                }
+            })
+            .collect();
+        let storage = |label, contents: &[u8], extra| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | extra,
+            })
+        };
+        let vertices_buf = storage("vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::empty());
+        let indices_buf = storage("indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
+        let objects = storage("objects", bytemuck::cast_slice(&object_data), wgpu::BufferUsages::empty());
+        let view = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("view"),
+            size: size_of::<GpuView>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let lights = GrowableBuffer::new(device, "lights", 64 * 1024);
+        let light_indices = GrowableBuffer::new(device, "light indices", 64 * 1024);
+        let albedo_view = albedo.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("albedo"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            ..Default::default()
+        });
+        let layout = bind_group_layout(device);
+        let bind_group = make_bind_group(
+            device,
+            &layout,
+            [&view, &objects, &vertices_buf, &lights.buffer, &light_indices.buffer, &indices_buf],
+            &albedo_view,
+            &sampler,
+        );
+        let object_bounds = (0..scene.objects.len()).map(|i| scene.object_bounds(i)).collect();
+        Self {
+            vertices: vertices_buf,
+            indices: indices_buf,
+            objects,
+            view,
+            albedo,
+            draws,
+            object_bounds,
+            object_data,
+            triangle_count: scene.triangle_count() as u64,
+            lights,
+            light_indices,
+            albedo_view,
+            sampler,
+            layout,
+            bind_group,
+        }
+    }
+
+    pub fn bind_group(&self) -> &wgpu::BindGroup {
+        &self.bind_group
+    }
+
+    /// Uploads this frame's view, lights and per-object light lists.
+    pub fn update_frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        view: &GpuView,
+        lights: &[Light],
+        lists: &LightLists,
+    ) {
+        queue.write_buffer(&self.view, 0, bytemuck::bytes_of(view));
+        for (i, o) in self.object_data.iter_mut().enumerate() {
+            o.light_offset = lists.offsets[i];
+            o.light_count = lists.counts[i];
+        }
+        queue.write_buffer(&self.objects, 0, bytemuck::cast_slice(&self.object_data));
+        let gpu_lights: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
+        let mut grew = self.lights.write(device, queue, bytemuck::cast_slice(&gpu_lights));
+        grew |= self.light_indices.write(device, queue, bytemuck::cast_slice(&lists.indices));
+        if grew {
+            self.bind_group = make_bind_group(
+                device,
+                &self.layout,
+                [&self.view, &self.objects, &self.vertices, &self.lights.buffer, &self.light_indices.buffer, &self.indices],
+                &self.albedo_view,
+                &self.sampler,
+            );
+        }
+    }
+}
+
+/// The view uniform for a camera and a target size.
+pub fn gpu_view(camera: &Camera, width: u32, height: u32, frame: u64, exposure: f32) -> GpuView {
+    let view_proj: Mat4 = camera.view_projection(width as f32 / height as f32);
+    GpuView {
+        view_proj,
+        inv_view_proj: view_proj.inverse(),
+        camera_position: camera.position.extend(1.0),
+        viewport: Vec4::new(width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32),
+        frame: frame as u32,
+        exposure,
+        pad: [0; 2],
+    }
+}
+
+fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let vis = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
+    let storage = |binding| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: vis,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("scene"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: vis,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            storage(1),
+            storage(2),
+            storage(3),
+            storage(4),
+            wgpu::BindGroupLayoutEntry {
+                binding: 5,
+                visibility: vis,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 6,
+                visibility: vis,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+            storage(7),
+        ],
+    })
+}
+
+/// Buffers in binding order 0, 1, 2, 3, 4, 7.
+fn make_bind_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    buffers: [&wgpu::Buffer; 6],
+    albedo: &wgpu::TextureView,
+    sampler: &wgpu::Sampler,
+) -> wgpu::BindGroup {
+    let [view, objects, vertices, lights, light_indices, indices] = buffers;
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("scene"),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: view.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: objects.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: vertices.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 3, resource: lights.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 4, resource: light_indices.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(albedo) },
+            wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(sampler) },
+            wgpu::BindGroupEntry { binding: 7, resource: indices.as_entire_binding() },
+        ],
+    })
+}
+
+/// Uploads every scene texture as one layer of an sRGB 2D array with a full
+/// mip chain (mips filtered on the CPU), plus a white layer for untextured
+/// materials. One array keeps the binding count constant in the number of
+/// objects, which lavapipe (no binding arrays) requires.
+fn upload_albedo(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> (wgpu::Texture, u32) {
+    let size = scene.textures.iter().map(|t| t.width.max(t.height)).max().unwrap_or(1).clamp(1, MAX_ALBEDO_SIZE).next_power_of_two();
+    let mip_count = size.ilog2() + 1;
+    let layers = scene.textures.len() as u32 + 1;
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("albedo array"),
+        size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
+        mip_level_count: mip_count,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let white = image::RgbaImage::from_pixel(size, size, image::Rgba([255; 4]));
+    let images = scene
+        .textures
+        .iter()
+        .map(|t| {
+            image::RgbaImage::from_raw(t.width, t.height, t.rgba8.clone())
+                .map(|img| if t.width == size && t.height == size { img } else { image::imageops::resize(&img, size, size, FilterType::Triangle) })
+                .unwrap_or_else(|| white.clone())
+        })
+        .chain(std::iter::once(white.clone()));
+    for (layer, mut img) in images.enumerate() {
+        for mip in 0..mip_count {
+            let s = (size >> mip).max(1);
+            if mip > 0 {
+                img = image::imageops::resize(&img, s, s, FilterType::Triangle);
+            }
+            queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &texture,
+                    mip_level: mip,
+                    origin: wgpu::Origin3d { x: 0, y: 0, z: layer as u32 },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                img.as_raw(),
+                wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * s), rows_per_image: Some(s) },
+                wgpu::Extent3d { width: s, height: s, depth_or_array_layers: 1 },
+            );
+        }
+    }
+    (texture, layers - 1)
+}

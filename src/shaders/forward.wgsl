@@ -1,0 +1,58 @@
+// Single-pass forward shading: every object drawn once, its fragments loop
+// over the lights that CPU culling found for the object.
+#import shadespace::lighting::{Light, Surface, light_radiance}
+#import shadespace::scene::{Vertex, Object, View, vertex_uv0}
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<storage, read> objects: array<Object>;
+@group(0) @binding(2) var<storage, read> vertices: array<Vertex>;
+@group(0) @binding(3) var<storage, read> lights: array<Light>;
+@group(0) @binding(4) var<storage, read> light_indices: array<u32>;
+@group(0) @binding(5) var albedo: texture_2d_array<f32>;
+@group(0) @binding(6) var albedo_sampler: sampler;
+
+struct VertexOut {
+    @builtin(position) @invariant clip: vec4f,
+    @location(0) world: vec3f,
+    @location(1) normal: vec3f,
+    @location(2) uv0: vec2f,
+    @location(3) @interpolate(flat) object: u32,
+}
+
+// The index buffer holds mesh-local indices; `vertex_index` includes the
+// draw's base vertex. `instance_index` is the object.
+@vertex
+fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
+    let o = objects[object];
+    let v = vertices[vi];
+    let world = o.model * vec4f(v.position, 1.0);
+    var out: VertexOut;
+    out.clip = view.view_proj * world;
+    out.world = world.xyz;
+    out.normal = (o.normal_model * vec4f(v.normal, 0.0)).xyz;
+    out.uv0 = vertex_uv0(v);
+    out.object = object;
+    return out;
+}
+
+@vertex
+fn vs_depth(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> @builtin(position) @invariant vec4f {
+    return view.view_proj * (objects[object].model * vec4f(vertices[vi].position, 1.0));
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4f {
+    let o = objects[in.object];
+    var s: Surface;
+    s.position = in.world;
+    s.normal = normalize(in.normal);
+    s.albedo = textureSample(albedo, albedo_sampler, in.uv0, o.albedo_layer).rgb * o.base_color.rgb;
+    s.specular = o.specular;
+    s.shininess = o.shininess;
+    let to_eye = normalize(view.camera_position.xyz - in.world);
+    var color = o.emissive;
+    for (var i = 0u; i < o.light_count; i++) {
+        color += light_radiance(lights[light_indices[o.light_offset + i]], s, to_eye);
+    }
+    return vec4f(color, 1.0);
+}

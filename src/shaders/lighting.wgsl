@@ -1,0 +1,78 @@
+// The lighting model of every pipeline (forward, object space, and the later
+// baselines), so that all of them compute the same image.
+//
+// Phong: diffuse max(N.L, 0), specular max(R.V, 0)^p, point/spot attenuation
+// 1 / (1 + d^2) cut off at the light's radius, spot factor
+// (cos(theta) - cos_outer) / (cos_inner - cos_outer) clamped, times albedo.
+#define_import_path shadespace::lighting
+
+const LIGHT_AMBIENT: u32 = 0u;
+const LIGHT_DIRECTIONAL: u32 = 1u;
+const LIGHT_POINT: u32 = 2u;
+const LIGHT_SPOT: u32 = 3u;
+
+// 64 bytes; mirrors `render::gpu_types::GpuLight`.
+struct Light {
+    position: vec3f,
+    kind: u32,
+    // Direction the light travels (directional, spot).
+    direction: vec3f,
+    radius: f32,
+    // Colour times intensity.
+    radiance: vec3f,
+    cos_inner: f32,
+    cos_outer: f32,
+    // Index of the light's shadow map, or -1 (shadows come with a later stage).
+    shadow: i32,
+    pad_a: u32,
+    pad_b: u32,
+}
+
+// What the lighting model needs to know of a surface point.
+struct Surface {
+    position: vec3f,
+    // Unit normal.
+    normal: vec3f,
+    albedo: vec3f,
+    specular: f32,
+    shininess: f32,
+}
+
+// The cut-off at the radius is a linear fade over the last tenth of it, so a
+// light's edge is not a visible ring (which bilinear filtering of object-space
+// shades would blur differently from forward shading).
+fn attenuation(d: f32, radius: f32) -> f32 {
+    let fade = clamp((radius - d) / (0.1 * radius), 0.0, 1.0);
+    return fade / (1.0 + d * d);
+}
+
+// Radiance reflected towards `to_eye` (unit vector from the point to the eye).
+fn light_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
+    if light.kind == LIGHT_AMBIENT {
+        return light.radiance * s.albedo;
+    }
+    var to_light: vec3f;
+    var falloff = 1.0;
+    if light.kind == LIGHT_DIRECTIONAL {
+        to_light = -light.direction;
+    } else {
+        let d = light.position - s.position;
+        let dist = length(d);
+        if dist >= light.radius {
+            return vec3f(0.0);
+        }
+        to_light = d / max(dist, 1e-6);
+        falloff = attenuation(dist, light.radius);
+        if light.kind == LIGHT_SPOT {
+            let cos_theta = dot(-to_light, light.direction);
+            falloff *= clamp((cos_theta - light.cos_outer) / max(light.cos_inner - light.cos_outer, 1e-4), 0.0, 1.0);
+        }
+    }
+    let n_dot_l = dot(s.normal, to_light);
+    if n_dot_l <= 0.0 || falloff <= 0.0 {
+        return vec3f(0.0);
+    }
+    let r = reflect(-to_light, s.normal);
+    let spec = s.specular * pow(max(dot(r, to_eye), 0.0), s.shininess);
+    return light.radiance * falloff * (s.albedo * n_dot_l + vec3f(spec));
+}
