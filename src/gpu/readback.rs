@@ -53,3 +53,93 @@ pub fn read_buffer(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, G
     ctx.check_errors()?;
     Ok(bytes)
 }
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU8, Ordering};
+
+/// Copied into its buffer; mapping not yet asked for.
+const RECORDED: u8 = 0;
+const MAPPING: u8 = 1;
+const MAPPED: u8 = 2;
+const FAILED: u8 = 3;
+
+struct InFlight<T> {
+    tag: T,
+    size: u64,
+    buffer: wgpu::Buffer,
+    state: Arc<AtomicU8>,
+}
+
+/// Asynchronous read-back of small per-frame results (timestamps, counters):
+/// a frame copies into a buffer from a pool, the buffer is mapped after the
+/// submit, and [`ReadbackRing::collect`] hands back the results that have
+/// arrived. The frame loop never waits on the GPU.
+pub struct ReadbackRing<T> {
+    label: &'static str,
+    capacity: u64,
+    free: Vec<wgpu::Buffer>,
+    in_flight: VecDeque<InFlight<T>>,
+}
+
+impl<T> ReadbackRing<T> {
+    /// Each read-back holds at most `capacity` bytes.
+    pub fn new(label: &'static str, capacity: u64) -> Self {
+        Self { label, capacity, free: Vec::new(), in_flight: VecDeque::new() }
+    }
+
+    /// Records a copy of `size` bytes of `source` for this frame, tagged `tag`.
+    pub fn copy(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, source: &wgpu::Buffer, size: u64, tag: T) {
+        assert!(size <= self.capacity, "read-back of {size} bytes exceeds {}", self.capacity);
+        let buffer = self.free.pop().unwrap_or_else(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(self.label),
+                size: self.capacity,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        encoder.copy_buffer_to_buffer(source, 0, &buffer, 0, size);
+        self.in_flight.push_back(InFlight { tag, size, buffer, state: Arc::new(AtomicU8::new(RECORDED)) });
+    }
+
+    /// Starts mapping what was recorded since the last call. Call right after
+    /// `queue.submit`.
+    pub fn after_submit(&mut self) {
+        for f in self.in_flight.iter().filter(|f| f.state.load(Ordering::Acquire) == RECORDED) {
+            f.state.store(MAPPING, Ordering::Release);
+            let state = f.state.clone();
+            f.buffer.map_async(wgpu::MapMode::Read, ..f.size, move |r| {
+                state.store(if r.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
+            });
+        }
+    }
+
+    /// The results that have arrived, oldest first (a failed mapping is
+    /// dropped with a warning). With `wait`, first waits for all of them.
+    pub fn collect(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(T, Vec<u8>)> {
+        let poll = if wait { wgpu::PollType::wait_indefinitely() } else { wgpu::PollType::Poll };
+        if let Err(e) = device.poll(poll) {
+            tracing::warn!("{}: poll failed: {e}", self.label);
+        }
+        let mut out = Vec::new();
+        while let Some(f) = self.in_flight.front() {
+            let state = f.state.load(Ordering::Acquire);
+            if state == RECORDED || state == MAPPING {
+                break;
+            }
+            let f = self.in_flight.pop_front().expect("front exists");
+            if state == MAPPED {
+                match f.buffer.get_mapped_range(..f.size) {
+                    Ok(view) => out.push((f.tag, view.to_vec())),
+                    Err(e) => tracing::warn!("{}: cannot read: {e}", self.label),
+                }
+                f.buffer.unmap();
+            } else {
+                tracing::warn!("{}: mapping failed", self.label);
+            }
+            self.free.push(f.buffer);
+        }
+        out
+    }
+}

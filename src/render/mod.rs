@@ -4,6 +4,7 @@
 pub mod culling;
 pub mod forward;
 pub mod gpu_types;
+pub mod objectspace;
 pub mod scene_gpu;
 pub mod targets;
 pub mod tonemap;
@@ -27,6 +28,23 @@ use tonemap::Tonemap;
 pub enum PipelineKind {
     /// Single-pass forward shading (the reference image).
     Forward,
+    /// Object-space (texel) shading: visible tiles shaded by compute into
+    /// per-object atlas squares, reused across frames, gathered per pixel.
+    #[value(name = "objectspace")]
+    #[serde(rename = "objectspace")]
+    ObjectSpace,
+}
+
+/// How to build a [`Renderer`].
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    pub pipeline: PipelineKind,
+    pub width: u32,
+    pub height: u32,
+    /// Forward: depth pre-pass before shading.
+    pub depth_prepass: bool,
+    /// Object space: tile size, reuse, mip bias, texture sizes, debug view.
+    pub objectspace: Option<objectspace::ObjectSpaceOptions>,
 }
 
 /// What a pipeline needs to record one frame.
@@ -39,12 +57,38 @@ pub struct FrameContext<'a> {
     /// Per object: inside the view frustum.
     pub visible: &'a [bool],
     pub frame: u64,
+    /// The lights differ from the previous frame's (cached shades are stale).
+    pub lights_changed: bool,
 }
 
 /// A shading pipeline: records the passes that fill `targets.hdr` (and depth).
 pub trait Pipeline {
     fn name(&self) -> &'static str;
     fn encode(&mut self, frame: &FrameContext, encoder: &mut wgpu::CommandEncoder, timer: &mut GpuTimer);
+    /// Called right after the frame's submit (to start read-backs).
+    fn after_submit(&mut self) {}
+    /// Shading counters of finished frames (object-space pipelines only).
+    fn collect_counters(&mut self, _device: &wgpu::Device, _wait: bool) -> Vec<ShadingCounters> {
+        Vec::new()
+    }
+}
+
+/// What an object-space frame shaded, counted on the GPU.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ShadingCounters {
+    pub frame: u64,
+    /// Tiles some pixel needs this frame.
+    pub visible_tiles: u64,
+    /// Visible tiles shaded this frame (their cached shade was too old or stale).
+    pub shaded_tiles: u64,
+    /// Visible tiles whose cached shade was reused.
+    pub reused_tiles: u64,
+    /// Visible tiles that were not visible in the previous frame.
+    pub new_tiles: u64,
+    /// shaded tiles x tile area.
+    pub shaded_texels: u64,
+    /// visible tiles x tile area (what shading every visible tile costs).
+    pub visible_texels: u64,
 }
 
 /// Statistics of one frame. GPU timings arrive a few frames later (they are
@@ -68,6 +112,8 @@ pub enum RenderError {
     Shader(#[from] ShaderError),
     #[error("image size {0}x{1} is not supported (1..={2} per side)")]
     BadSize(u32, u32, u32),
+    #[error(transparent)]
+    ObjectSpace(#[from] objectspace::ObjectSpaceError),
 }
 
 /// Renders frames of one scene at one size with one pipeline.
@@ -78,13 +124,16 @@ pub struct Renderer {
     tonemap: Tonemap,
     timer: GpuTimer,
     pub exposure: f32,
+    /// Hash of the previous frame's lights, to tell when they change.
+    lights_hash: Option<u64>,
 }
 
 /// Passes a frame may time (pipelines use a handful).
 const MAX_TIMED_PASSES: u32 = 16;
 
 impl Renderer {
-    pub fn new(ctx: &GpuContext, scene: &Scene, kind: PipelineKind, width: u32, height: u32) -> Result<Self, RenderError> {
+    pub fn new(ctx: &GpuContext, scene: &Scene, options: &RenderOptions) -> Result<Self, RenderError> {
+        let (width, height) = (options.width, options.height);
         let max = ctx.limits.max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
             return Err(RenderError::BadSize(width, height, max));
@@ -92,18 +141,33 @@ impl Renderer {
         let mut shaders = ShaderLibrary::new()?;
         let scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
         let targets = Targets::new(&ctx.device, width, height);
-        let pipeline: Box<dyn Pipeline> = match kind {
+        let pipeline: Box<dyn Pipeline> = match options.pipeline {
             PipelineKind::Forward => Box::new(forward::Forward::new(
                 &ctx.device,
                 &mut shaders,
                 &scene_gpu.layout,
-                forward::ForwardOptions { depth_prepass: true },
+                forward::ForwardOptions { depth_prepass: options.depth_prepass },
             )?),
+            PipelineKind::ObjectSpace => {
+                let os = options.objectspace.clone().unwrap_or_else(|| objectspace::ObjectSpaceOptions {
+                    texture_sizes: vec![Some(1024); scene.objects.len()],
+                    ..Default::default()
+                });
+                Box::new(objectspace::ObjectSpace::new(
+                    &ctx.device,
+                    &ctx.queue,
+                    &ctx.info.name,
+                    &mut shaders,
+                    &scene_gpu,
+                    &targets,
+                    os,
+                )?)
+            }
         };
         let tonemap = Tonemap::new(&ctx.device, &mut shaders, &targets)?;
         let timer = GpuTimer::new(&ctx.device, &ctx.queue, MAX_TIMED_PASSES);
         ctx.check_errors()?;
-        Ok(Self { scene: scene_gpu, targets, pipeline, tonemap, timer, exposure: 1.0 })
+        Ok(Self { scene: scene_gpu, targets, pipeline, tonemap, timer, exposure: 1.0, lights_hash: None })
     }
 
     pub fn pipeline_name(&self) -> &'static str {
@@ -121,6 +185,9 @@ impl Renderer {
         let visible: Vec<bool> = self.scene.object_bounds.iter().map(|b| frustum.intersects_aabb(b)).collect();
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, lights, &lists);
 
+        let hash = hash_lights(lights);
+        let lights_changed = self.lights_hash != Some(hash);
+        self.lights_hash = Some(hash);
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         self.timer.begin_frame(frame);
         let frame_ctx = FrameContext {
@@ -131,12 +198,14 @@ impl Renderer {
             camera,
             visible: &visible,
             frame,
+            lights_changed,
         };
         self.pipeline.encode(&frame_ctx, &mut encoder, &mut self.timer);
         self.tonemap.encode(&ctx.queue, &mut encoder, self.exposure, &mut self.timer);
         self.timer.end_frame(&ctx.device, &mut encoder);
         ctx.queue.submit([encoder.finish()]);
         self.timer.after_submit();
+        self.pipeline.after_submit();
         ctx.check_errors()?;
         Ok(FrameStats {
             frame,
@@ -152,6 +221,12 @@ impl Renderer {
         self.timer.collect(&ctx.device, wait)
     }
 
+    /// Shading counters of finished frames (empty for forward); `wait`
+    /// blocks until all are in.
+    pub fn collect_counters(&mut self, ctx: &GpuContext, wait: bool) -> Vec<ShadingCounters> {
+        self.pipeline.collect_counters(&ctx.device, wait)
+    }
+
     /// Whether the adapter can time passes.
     pub fn timing_enabled(&self) -> bool {
         self.timer.enabled()
@@ -162,4 +237,10 @@ impl Renderer {
         let bytes = readback::read_texture_rgba8(ctx, &self.targets.ldr)?;
         Ok(image::RgbaImage::from_raw(self.targets.width, self.targets.height, bytes).expect("read-back has w*h*4 bytes"))
     }
+}
+
+/// FNV-1a over the lights' GPU form: a change of any light changes the hash.
+fn hash_lights(lights: &[Light]) -> u64 {
+    let gpu: Vec<gpu_types::GpuLight> = lights.iter().map(gpu_types::GpuLight::from).collect();
+    bytemuck::cast_slice::<_, u8>(&gpu).iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ *b as u64).wrapping_mul(0x100_0000_01b3))
 }

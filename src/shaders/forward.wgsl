@@ -1,15 +1,9 @@
 // Single-pass forward shading: every object drawn once, its fragments loop
 // over the lights that CPU culling found for the object.
-#import shadespace::lighting::{Light, Surface, light_radiance}
-#import shadespace::scene::{Vertex, Object, View, vertex_uv0}
-
-@group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<storage, read> objects: array<Object>;
-@group(0) @binding(2) var<storage, read> vertices: array<Vertex>;
-@group(0) @binding(3) var<storage, read> lights: array<Light>;
-@group(0) @binding(4) var<storage, read> light_indices: array<u32>;
-@group(0) @binding(5) var albedo: texture_2d_array<f32>;
-@group(0) @binding(6) var albedo_sampler: sampler;
+#import shadespace::lighting::Surface
+#import shadespace::scene::vertex_uv0
+#import shadespace::scene_bindings::{view, objects, vertices, albedo, albedo_sampler}
+#import shadespace::surface::light_surface
 
 struct VertexOut {
     @builtin(position) @invariant clip: vec4f,
@@ -49,10 +43,5 @@ fn fs_main(in: VertexOut) -> @location(0) vec4f {
     s.albedo = textureSample(albedo, albedo_sampler, in.uv0, o.albedo_layer).rgb * o.base_color.rgb;
     s.specular = o.specular;
     s.shininess = o.shininess;
-    let to_eye = normalize(view.camera_position.xyz - in.world);
-    var color = o.emissive;
-    for (var i = 0u; i < o.light_count; i++) {
-        color += light_radiance(lights[light_indices[o.light_offset + i]], s, to_eye);
-    }
-    return vec4f(color, 1.0);
+    return vec4f(light_surface(o, s), 1.0);
 }

@@ -9,7 +9,13 @@ use naga_oil::compose::{
 };
 
 /// Modules that other shaders `#import`, in dependency order.
-const SHARED: &[(&str, &str)] = &[("lighting.wgsl", include_str!("lighting.wgsl")), ("scene.wgsl", include_str!("scene.wgsl"))];
+const SHARED: &[(&str, &str)] = &[
+    ("lighting.wgsl", include_str!("lighting.wgsl")),
+    ("scene.wgsl", include_str!("scene.wgsl")),
+    ("scene_bindings.wgsl", include_str!("scene_bindings.wgsl")),
+    ("surface.wgsl", include_str!("surface.wgsl")),
+    ("objectspace.wgsl", include_str!("objectspace.wgsl")),
+];
 
 /// One pass's shader: its file name (for error messages) and source.
 #[derive(Clone, Copy, Debug)]
@@ -26,9 +32,15 @@ macro_rules! shader {
 
 shader!(FORWARD, "forward.wgsl");
 shader!(TONEMAP, "tonemap.wgsl");
+shader!(VISIBILITY, "visibility.wgsl");
+shader!(MARK, "mark.wgsl");
+shader!(SHADE, "shade.wgsl");
+shader!(GATHER, "gather.wgsl");
+shader!(TRIMAP, "trimap.wgsl");
+shader!(DILATE, "dilate.wgsl");
 
 /// Every pass shader, for the test that validates them all.
-pub const ALL: &[ShaderSource] = &[FORWARD, TONEMAP];
+pub const ALL: &[ShaderSource] = &[FORWARD, TONEMAP, VISIBILITY, MARK, SHADE, GATHER, TRIMAP, DILATE];
 
 /// Composes pass shaders with the shared modules.
 pub struct ShaderLibrary {

@@ -1,0 +1,570 @@
+//! Object-space (texel) shading: visible surface tiles are shaded by compute
+//! into per-object squares of a shared atlas, reused across frames, and the
+//! frame is gathered from those shades.
+//!
+//! Per frame (each a pass, timed): *visibility* (raster: object and triangle
+//! id per pixel) -> *mark* (compute per pixel: mip level, bilinear footprint,
+//! tiles marked visible; the first marker of a tile queues it when its shade
+//! is `reuse` frames old or stale) -> *queue* (indirect dispatch arguments)
+//! -> *shade* (one workgroup per queued tile) -> *gather* (compute per pixel:
+//! bilinear from the atlas). No CPU read-back inside the frame: the counters
+//! are copied out and read a few frames later.
+
+pub mod atlas;
+pub mod trimap;
+
+use bytemuck::{Pod, Zeroable};
+use serde::Serialize;
+use wgpu::util::DeviceExt;
+
+use super::targets::{DEPTH_FORMAT, HDR_FORMAT};
+use super::{FrameContext, Pipeline, ShadingCounters};
+use crate::gpu::readback::ReadbackRing;
+use crate::gpu::timing::GpuTimer;
+use crate::render::scene_gpu::SceneGpu;
+use crate::render::targets::Targets;
+use crate::shaders::{self, ShaderError, ShaderLibrary};
+use atlas::{AtlasError, AtlasLayout};
+
+pub const ATLAS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+/// Largest atlas page side (the adapter's limit may be lower).
+pub const MAX_PAGE_SIZE: u32 = 8192;
+
+/// Debug views that replace the gathered shade (`render --view`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum DebugView {
+    /// The shaded image.
+    #[default]
+    Shade,
+    /// Chart UV as red/green.
+    ChartUv,
+    /// Mip level per pixel (red = 0, orange = 1, yellow = 2, ...).
+    MipLevel,
+    /// Tile mask: red tiles were shaded this frame, green ones reused.
+    TileMask,
+    /// Cache age of the tile: black = shaded this frame, white = `reuse` frames old.
+    CacheAge,
+}
+
+impl DebugView {
+    fn mode(self) -> u32 {
+        self as u32
+    }
+}
+
+/// Settings of the object-space pipeline.
+#[derive(Clone, Debug)]
+pub struct ObjectSpaceOptions {
+    /// Tile side in texels: 8, 16, 32 or 64.
+    pub tile_size: u32,
+    /// Re-shade a visible tile when its shade is this many frames old (N >= 1).
+    pub reuse: u32,
+    /// Added to every pixel's mip level (positive: coarser shading).
+    pub mip_bias: f32,
+    /// Strength of the per-pixel variable-rate bias (0 = off): up to this
+    /// many levels coarser where a triangle's normals do not vary.
+    pub variable_rate: f32,
+    pub view: DebugView,
+    /// Shading-texture side per scene object; `None` shades the object
+    /// forward (per pixel, in the gather).
+    pub texture_sizes: Vec<Option<u32>>,
+}
+
+impl Default for ObjectSpaceOptions {
+    fn default() -> Self {
+        Self { tile_size: 8, reuse: 1, mip_bias: 0.0, variable_rate: 0.0, view: DebugView::Shade, texture_sizes: Vec::new() }
+    }
+}
+
+/// Mirrors `Params` in `shaders/objectspace.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuParams {
+    stamp: u32,
+    reuse: u32,
+    tile_size: u32,
+    view_mode: u32,
+    mip_bias: f32,
+    variable_rate: f32,
+    max_queue: u32,
+    pad: u32,
+}
+
+/// Memory the pipeline holds, in bytes.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct MemoryUse {
+    pub atlas_bytes: u64,
+    pub triangle_map_bytes: u64,
+    /// Tile stamps (visible, shaded) and the work queue.
+    pub tile_bytes: u64,
+    pub visibility_bytes: u64,
+}
+
+/// Per object: its shading texture and what it costs.
+#[derive(Clone, Debug, Serialize)]
+pub struct ObjectMemory {
+    pub object: usize,
+    pub texture_size: u32,
+    pub levels: u32,
+    pub texels: u64,
+    pub tiles: u64,
+    /// Atlas (8 B/texel) + triangle map (4 B/texel) + tile state (16 B/tile).
+    pub bytes: u64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ObjectSpaceError {
+    #[error(transparent)]
+    Shader(#[from] ShaderError),
+    #[error(transparent)]
+    Atlas(#[from] AtlasError),
+    #[error("reuse must be at least 1 (got {0})")]
+    BadReuse(u32),
+    #[error("the object-space pipeline needs the PRIMITIVE_INDEX feature, which {0} lacks")]
+    NoPrimitiveIndex(String),
+    #[error("{0} texture sizes given for {1} objects")]
+    SizeCount(usize, usize),
+}
+
+pub struct ObjectSpace {
+    options: ObjectSpaceOptions,
+    pub layout: AtlasLayout,
+    pub atlas: wgpu::Texture,
+    visibility: wgpu::Texture,
+    params: wgpu::Buffer,
+    entries: wgpu::Buffer,
+    entry_data: Vec<atlas::GpuAtlasEntry>,
+    counters: wgpu::Buffer,
+    shade_dispatch: wgpu::Buffer,
+    raster: wgpu::RenderPipeline,
+    mark: wgpu::ComputePipeline,
+    queue_args: wgpu::ComputePipeline,
+    shade: wgpu::ComputePipeline,
+    gather: wgpu::ComputePipeline,
+    shared: wgpu::BindGroup,
+    shade_args: wgpu::BindGroup,
+    shade_outputs: wgpu::BindGroup,
+    gather_io: wgpu::BindGroup,
+    readback: ReadbackRing<u64>,
+    /// Frames rendered so far; stamps are `frames + 1` so that 0 means never.
+    frames: u32,
+    memory: MemoryUse,
+}
+
+impl ObjectSpace {
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        adapter_name: &str,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+        options: ObjectSpaceOptions,
+    ) -> Result<Self, ObjectSpaceError> {
+        if options.reuse == 0 {
+            return Err(ObjectSpaceError::BadReuse(0));
+        }
+        if !device.features().contains(wgpu::Features::PRIMITIVE_INDEX) {
+            return Err(ObjectSpaceError::NoPrimitiveIndex(adapter_name.to_string()));
+        }
+        if options.texture_sizes.len() != scene.draws.len() {
+            return Err(ObjectSpaceError::SizeCount(options.texture_sizes.len(), scene.draws.len()));
+        }
+        let max_page = MAX_PAGE_SIZE.min(device.limits().max_texture_dimension_2d);
+        let layout = AtlasLayout::new(&options.texture_sizes, options.tile_size, max_page)?;
+        let (triangle_map, _rings) = trimap::build(device, queue, shaders, scene, &layout)?;
+
+        let atlas = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shading atlas"),
+            size: wgpu::Extent3d { width: layout.page_size, height: layout.page_size, depth_or_array_layers: layout.pages },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: ATLAS_FORMAT,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let visibility = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("visibility"),
+            size: wgpu::Extent3d { width: targets.width, height: targets.height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: VISIBILITY_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let entry_data = layout.gpu_entries();
+        let storage = |label, size: u64, extra| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage: wgpu::BufferUsages::STORAGE | extra,
+                mapped_at_creation: false,
+            })
+        };
+        let tiles = layout.tile_count as u64;
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("object-space params"),
+            size: size_of::<GpuParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let entries = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("atlas entries"),
+            contents: bytemuck::cast_slice(&entry_data),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        });
+        // Zero-initialised: 0 = never visible / never shaded.
+        let tile_visible = storage("tile visible", tiles * 4, wgpu::BufferUsages::empty());
+        let tile_shaded = storage("tile shaded", tiles * 4, wgpu::BufferUsages::empty());
+        let work_queue = storage("shade queue", tiles * 8, wgpu::BufferUsages::empty());
+        let counters = storage("counters", 16, wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST);
+        let shade_dispatch = storage("shade dispatch", 16, wgpu::BufferUsages::INDIRECT);
+
+        let shared_layout = shared_layout(device);
+        let view = |t: &wgpu::Texture, dim| t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(dim), ..Default::default() });
+        let shared = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("object space"),
+            layout: &shared_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: entries.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: tile_visible.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: tile_shaded.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: work_queue.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: counters.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(&view(&visibility, wgpu::TextureViewDimension::D2)),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: wgpu::BindingResource::TextureView(&view(&triangle_map, wgpu::TextureViewDimension::D2Array)),
+                },
+            ],
+        });
+        // Its own group: the shade pass reads it as INDIRECT, which excludes storage use.
+        let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shade dispatch"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: false },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let shade_args = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shade dispatch"),
+            layout: &args_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: shade_dispatch.as_entire_binding() }],
+        });
+        let atlas_array = view(&atlas, wgpu::TextureViewDimension::D2Array);
+        let shade_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shade outputs"),
+            entries: &[storage_texture(0, ATLAS_FORMAT, wgpu::TextureViewDimension::D2Array)],
+        });
+        let shade_outputs = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shade outputs"),
+            layout: &shade_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&atlas_array) }],
+        });
+        let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gather io"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                storage_texture(1, HDR_FORMAT, wgpu::TextureViewDimension::D2),
+            ],
+        });
+        let gather_io = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gather io"),
+            layout: &gather_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&atlas_array) },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&targets.hdr_view) },
+            ],
+        });
+
+        let compute = |shader, entry: &str, groups: &[Option<&wgpu::BindGroupLayout>]| -> Result<_, ShaderError> {
+            let module = shaders.module(device, shader)?;
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(entry),
+                bind_group_layouts: groups,
+                immediate_size: 0,
+            });
+            Ok(device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            }))
+        };
+        let s = Some(&scene.layout);
+        let o = Some(&shared_layout);
+        // Each call borrows `shaders` mutably, so they run one after another.
+        let mut compute = compute;
+        let mark = compute(shaders::MARK, "mark", &[s, o])?;
+        let queue_args = compute(shaders::MARK, "queue_args", &[s, o, Some(&args_layout)])?;
+        let shade = compute(shaders::SHADE, "shade", &[s, o, Some(&shade_layout)])?;
+        let gather = compute(shaders::GATHER, "gather", &[s, o, Some(&gather_layout)])?;
+        let raster = visibility_pipeline(device, shaders, &scene.layout)?;
+
+        let texels = layout.atlas_texels();
+        let memory = MemoryUse {
+            atlas_bytes: texels * 8,
+            triangle_map_bytes: texels * 4,
+            tile_bytes: tiles * 16,
+            visibility_bytes: targets.width as u64 * targets.height as u64 * 8,
+        };
+        Ok(Self {
+            options,
+            layout,
+            atlas,
+            visibility,
+            params,
+            entries,
+            entry_data,
+            counters,
+            shade_dispatch,
+            raster,
+            mark,
+            queue_args,
+            shade,
+            gather,
+            shared,
+            shade_args,
+            shade_outputs,
+            gather_io,
+            readback: ReadbackRing::new("object-space counters", 16),
+            frames: 0,
+            memory,
+        })
+    }
+
+    pub fn memory(&self) -> MemoryUse {
+        self.memory
+    }
+
+    /// Per object in the atlas: texture size, levels, texels, tiles, bytes.
+    pub fn object_memory(&self) -> Vec<ObjectMemory> {
+        let t = self.layout.tile_size;
+        self.layout
+            .objects
+            .iter()
+            .enumerate()
+            .filter_map(|(object, a)| {
+                let a = a.as_ref()?;
+                let (texels, tiles) = (a.texels(), a.tiles(t));
+                Some(ObjectMemory {
+                    object,
+                    texture_size: a.size,
+                    levels: a.levels.len() as u32,
+                    texels,
+                    tiles,
+                    bytes: texels * 12 + tiles * 16,
+                })
+            })
+            .collect()
+    }
+
+    pub fn options(&self) -> &ObjectSpaceOptions {
+        &self.options
+    }
+}
+
+fn storage_texture(binding: u32, format: wgpu::TextureFormat, view_dimension: wgpu::TextureViewDimension) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::StorageTexture { access: wgpu::StorageTextureAccess::WriteOnly, format, view_dimension },
+        count: None,
+    }
+}
+
+/// Group 1 of the object-space passes; mirrors `shaders/objectspace.wgsl`.
+fn shared_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let buffer = |binding, ty| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    };
+    let rw = wgpu::BufferBindingType::Storage { read_only: false };
+    let texture = |binding, view_dimension| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Uint, view_dimension, multisampled: false },
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("object space"),
+        entries: &[
+            buffer(0, wgpu::BufferBindingType::Uniform),
+            buffer(1, wgpu::BufferBindingType::Storage { read_only: true }),
+            buffer(2, rw),
+            buffer(3, rw),
+            buffer(4, rw),
+            buffer(5, rw),
+            texture(6, wgpu::TextureViewDimension::D2),
+            texture(7, wgpu::TextureViewDimension::D2Array),
+        ],
+    })
+}
+
+fn visibility_pipeline(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    scene_layout: &wgpu::BindGroupLayout,
+) -> Result<wgpu::RenderPipeline, ShaderError> {
+    let module = shaders.module(device, shaders::VISIBILITY)?;
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("visibility"),
+        bind_group_layouts: &[Some(scene_layout)],
+        immediate_size: 0,
+    });
+    Ok(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("visibility"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers: &[] },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[Some(VISIBILITY_FORMAT.into())],
+        }),
+        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Greater),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        multiview_mask: None,
+        cache: None,
+    }))
+}
+
+impl Pipeline for ObjectSpace {
+    fn name(&self) -> &'static str {
+        "objectspace"
+    }
+
+    fn encode(&mut self, frame: &FrameContext, encoder: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
+        self.frames += 1;
+        let stamp = self.frames;
+        if frame.lights_changed || stamp == 1 {
+            for e in &mut self.entry_data {
+                e.valid_since = stamp;
+            }
+            frame.queue.write_buffer(&self.entries, 0, bytemuck::cast_slice(&self.entry_data));
+        }
+        let params = GpuParams {
+            stamp,
+            reuse: self.options.reuse,
+            tile_size: self.options.tile_size,
+            view_mode: self.options.view.mode(),
+            mip_bias: self.options.mip_bias,
+            variable_rate: self.options.variable_rate,
+            max_queue: self.layout.tile_count,
+            pad: 0,
+        };
+        frame.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        encoder.clear_buffer(&self.counters, 0, None);
+
+        let scene = frame.scene;
+        {
+            let vis_view = self.visibility.create_view(&Default::default());
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("visibility"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &vis_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &frame.targets.depth_view,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer.render_pass("visibility"),
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.raster);
+            pass.set_bind_group(0, scene.bind_group(), &[]);
+            pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+            for (i, d) in scene.draws.iter().enumerate().filter(|(i, _)| frame.visible[*i]) {
+                let i = i as u32;
+                pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, i..i + 1);
+            }
+        }
+        let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
+        let mut compute = |name: &str, pipeline: &wgpu::ComputePipeline, extra: Option<&wgpu::BindGroup>, dispatch: Dispatch| {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(name), timestamp_writes: timer.compute_pass(name) });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, scene.bind_group(), &[]);
+            pass.set_bind_group(1, &self.shared, &[]);
+            if let Some(g) = extra {
+                pass.set_bind_group(2, g, &[]);
+            }
+            match dispatch {
+                Dispatch::Direct(x, y) => pass.dispatch_workgroups(x, y, 1),
+                Dispatch::Indirect(buffer) => pass.dispatch_workgroups_indirect(buffer, 0),
+            }
+        };
+        compute("mark", &self.mark, None, Dispatch::Direct(w, h));
+        compute("queue", &self.queue_args, Some(&self.shade_args), Dispatch::Direct(1, 1));
+        compute("shade", &self.shade, Some(&self.shade_outputs), Dispatch::Indirect(&self.shade_dispatch));
+        compute("gather", &self.gather, Some(&self.gather_io), Dispatch::Direct(w, h));
+        self.readback.copy(frame.device, encoder, &self.counters, 16, frame.frame);
+    }
+
+    fn after_submit(&mut self) {
+        self.readback.after_submit();
+    }
+
+    fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<ShadingCounters> {
+        let tile_texels = (self.layout.tile_size * self.layout.tile_size) as u64;
+        self.readback
+            .collect(device, wait)
+            .into_iter()
+            .map(|(frame, bytes)| {
+                let c: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+                let (shaded, visible, new) = (c[0] as u64, c[1] as u64, c[2] as u64);
+                ShadingCounters {
+                    frame,
+                    visible_tiles: visible,
+                    shaded_tiles: shaded,
+                    reused_tiles: visible.saturating_sub(shaded),
+                    new_tiles: new,
+                    shaded_texels: shaded * tile_texels,
+                    visible_texels: visible * tile_texels,
+                }
+            })
+            .collect()
+    }
+}
+
+enum Dispatch<'a> {
+    Direct(u32, u32),
+    Indirect(&'a wgpu::Buffer),
+}

@@ -1,0 +1,21 @@
+// The scene bind group (group 0), bound by every pipeline. Mirrors
+// `render::scene_gpu::bind_group_layout`.
+#define_import_path shadespace::scene_bindings
+#import shadespace::scene::{Vertex, Object, View}
+#import shadespace::lighting::Light
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<storage, read> objects: array<Object>;
+@group(0) @binding(2) var<storage, read> vertices: array<Vertex>;
+@group(0) @binding(3) var<storage, read> lights: array<Light>;
+@group(0) @binding(4) var<storage, read> light_indices: array<u32>;
+@group(0) @binding(5) var albedo: texture_2d_array<f32>;
+@group(0) @binding(6) var albedo_sampler: sampler;
+// Mesh-local indices; add the object's base_vertex.
+@group(0) @binding(7) var<storage, read> indices: array<u32>;
+
+// The three (global) vertex indices of an object's triangle.
+fn triangle_vertices(o: Object, triangle: u32) -> vec3u {
+    let i = o.first_index + 3u * triangle;
+    return vec3u(indices[i], indices[i + 1u], indices[i + 2u]) + vec3u(o.base_vertex);
+}

@@ -1,0 +1,43 @@
+// Evaluating the shared lighting model at a point of an object's triangle,
+// given barycentrics: used by object-space shading (per texel) and by the
+// object-space gather for objects shaded forward (per pixel).
+#define_import_path shadespace::surface
+#import shadespace::lighting::{Surface, light_radiance}
+#import shadespace::scene::{Object, vertex_uv0}
+#import shadespace::scene_bindings::{view, vertices, lights, light_indices, albedo, albedo_sampler}
+
+// Shades the point with barycentrics `b` of the triangle with vertices `tri`,
+// sampling albedo at mip `albedo_lod`.
+fn shade_point(o: Object, tri: vec3u, b: vec3f, albedo_lod: f32) -> vec3f {
+    let v0 = vertices[tri.x];
+    let v1 = vertices[tri.y];
+    let v2 = vertices[tri.z];
+    let local = v0.position * b.x + v1.position * b.y + v2.position * b.z;
+    let n = v0.normal * b.x + v1.normal * b.y + v2.normal * b.z;
+    let uv0 = vertex_uv0(v0) * b.x + vertex_uv0(v1) * b.y + vertex_uv0(v2) * b.z;
+    let world = (o.model * vec4f(local, 1.0)).xyz;
+    var s: Surface;
+    s.position = world;
+    s.normal = normalize((o.normal_model * vec4f(n, 0.0)).xyz);
+    s.albedo = textureSampleLevel(albedo, albedo_sampler, uv0, o.albedo_layer, albedo_lod).rgb * o.base_color.rgb;
+    s.specular = o.specular;
+    s.shininess = o.shininess;
+    return light_surface(o, s);
+}
+
+// Emission plus every light the object's list holds, seen from the camera.
+fn light_surface(o: Object, s: Surface) -> vec3f {
+    let to_eye = normalize(view.camera_position.xyz - s.position);
+    var color = o.emissive;
+    for (var i = 0u; i < o.light_count; i++) {
+        color += light_radiance(lights[light_indices[o.light_offset + i]], s, to_eye);
+    }
+    return color;
+}
+
+// Albedo mip for a footprint whose UV0 derivatives are `d0` and `d1`.
+fn albedo_lod(d0: vec2f, d1: vec2f) -> f32 {
+    let size = vec2f(textureDimensions(albedo));
+    let rho = max(length(d0 * size), length(d1 * size));
+    return max(log2(max(rho, 1e-8)), 0.0);
+}

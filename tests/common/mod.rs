@@ -1,0 +1,78 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Vec2, Vec3, Vec4};
+use shadespace::gpu::{GpuContext, GpuOptions};
+use shadespace::scene::{Camera, Light, LightKind, Material, Mesh, Object, Scene, checker};
+
+/// A GPU context for tests; panics when none can be opened (CI installs
+/// lavapipe first, so "no adapter" is a real failure, not a skip).
+pub fn gpu() -> GpuContext {
+    GpuContext::new(&GpuOptions::default()).unwrap_or_else(|e| panic!("cannot open a GPU adapter: {e}"))
+}
+
+/// Where tests write images (actual, difference) for inspection.
+pub fn out_dir() -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("images");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A quad of `size` metres on the XZ plane at height `y`, facing up, with a
+/// unique chart (uv1) filling the unit square.
+pub fn floor_quad(size: f32, y: f32) -> Mesh {
+    let h = size / 2.0;
+    let positions = vec![Vec3::new(-h, y, -h), Vec3::new(h, y, -h), Vec3::new(h, y, h), Vec3::new(-h, y, h)];
+    let uv = vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)];
+    let mut mesh = Mesh {
+        name: "floor".into(),
+        positions,
+        normals: vec![Vec3::Y; 4],
+        uv0: uv.iter().map(|u| *u * size).collect(),
+        uv1: Some(uv),
+        indices: vec![0, 2, 1, 0, 3, 2],
+        ..Default::default()
+    };
+    mesh.generate_missing_attributes();
+    mesh
+}
+
+/// A small scene: a textured floor with a few point lights above it.
+pub fn floor_scene() -> (Scene, Camera, Vec<Light>) {
+    let scene = Scene {
+        name: "floor".into(),
+        meshes: vec![floor_quad(8.0, 0.0)],
+        materials: vec![Material { base_color_texture: Some(0), ..Default::default() }],
+        textures: vec![checker::uv_checker("floor", checker::object_tint(0), 64, 8)],
+        objects: vec![Object { name: "floor".into(), mesh: 0, material: 0, transform: Mat4::IDENTITY, forward_only: false }],
+        ..Default::default()
+    };
+    let camera = Camera {
+        position: Vec3::new(0.0, 4.0, 6.0),
+        forward: (Vec3::ZERO - Vec3::new(0.0, 4.0, 6.0)).normalize(),
+        up: Vec3::Y,
+        fov_y: 60f32.to_radians(),
+        near: 0.1,
+        far: 100.0,
+    };
+    let point = |x: f32, z: f32, color: Vec3| Light {
+        kind: LightKind::Point,
+        color,
+        intensity: 4.0,
+        position: Vec3::new(x, 1.0, z),
+        direction: Vec3::NEG_Y,
+        radius: 4.0,
+        cos_inner: 0.9,
+        cos_outer: 0.8,
+        casts_shadows: false,
+    };
+    let lights = vec![
+        Light { kind: LightKind::Ambient, color: Vec3::ONE, intensity: 0.05, ..point(0.0, 0.0, Vec3::ONE) },
+        point(-2.0, 0.0, Vec3::new(1.0, 0.3, 0.2)),
+        point(2.0, 1.0, Vec3::new(0.2, 0.5, 1.0)),
+    ];
+    let _ = Vec4::ONE;
+    (scene, camera, lights)
+}

@@ -1,0 +1,22 @@
+//! Forward pipeline on a tiny scene: renders without validation errors and
+//! the image shows lit geometry.
+mod common;
+
+use shadespace::render::{PipelineKind, RenderOptions, Renderer};
+
+#[test]
+fn forward_renders_lit_floor() {
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let options = RenderOptions { pipeline: PipelineKind::Forward, width: 128, height: 96, depth_prepass: true, objectspace: None };
+    let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
+    r.render(&ctx, &camera, &lights, 0).unwrap();
+    let img = r.read_image(&ctx).unwrap();
+    img.save(common::out_dir().join("forward_floor.png")).unwrap();
+    let lum: Vec<u32> = img.pixels().map(|p| p[0] as u32 + p[1] as u32 + p[2] as u32).collect();
+    let max = *lum.iter().max().unwrap();
+    let min = *lum.iter().min().unwrap();
+    assert!(max > 200, "image too dark: max {max}");
+    assert!(max - min > 100, "image nearly uniform");
+    ctx.check_errors().unwrap();
+}
