@@ -7,7 +7,8 @@ use serde::Serialize;
 
 use crate::gpu::GpuContext;
 use crate::gpu::timing::FrameTimings;
-use crate::render::{FrameStats, RenderError, Renderer};
+use crate::render::objectspace::MemoryReport;
+use crate::render::{FrameStats, RenderError, Renderer, ShadingCounters};
 use crate::scene::{CameraPath, Light};
 
 /// Median and 95th percentile of a series, in milliseconds.
@@ -61,6 +62,55 @@ pub struct BenchResult {
     /// Per measured frame: GPU frame milliseconds (for plots).
     pub gpu_frame_ms: Vec<f64>,
     pub mean_light_assignments: f64,
+    /// Object-space pipelines: tile statistics over the measured frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shading: Option<ShadingSummary>,
+    /// Object-space pipelines: memory in total and per object.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub memory: Option<MemoryReport>,
+}
+
+/// Medians (and means) over measured frames of the object-space counters.
+#[derive(Clone, Debug, Serialize)]
+pub struct ShadingSummary {
+    pub screen_pixels: u64,
+    pub median_visible_tiles: f64,
+    pub median_shaded_tiles: f64,
+    pub median_reused_tiles: f64,
+    pub median_new_tiles: f64,
+    /// new tiles / visible tiles, per frame, median.
+    pub median_new_fraction: f64,
+    pub median_shaded_texels: f64,
+    /// Texels of all visible tiles / screen pixels: what shading every visible
+    /// tile costs (the study's overshading), median.
+    pub median_overshading: f64,
+    /// Shaded texels / screen pixels (after reuse), median.
+    pub median_shaded_per_pixel: f64,
+    pub mean_shaded_tiles: f64,
+    pub frames: usize,
+}
+
+impl ShadingSummary {
+    pub fn of(counters: &[ShadingCounters], screen_pixels: u64) -> Option<Self> {
+        if counters.is_empty() {
+            return None;
+        }
+        let med = |f: &dyn Fn(&ShadingCounters) -> f64| Summary::of(&counters.iter().map(f).collect::<Vec<_>>()).median_ms;
+        let px = screen_pixels.max(1) as f64;
+        Some(Self {
+            screen_pixels,
+            median_visible_tiles: med(&|c| c.visible_tiles as f64),
+            median_shaded_tiles: med(&|c| c.shaded_tiles as f64),
+            median_reused_tiles: med(&|c| c.reused_tiles as f64),
+            median_new_tiles: med(&|c| c.new_tiles as f64),
+            median_new_fraction: med(&|c| c.new_tiles as f64 / c.visible_tiles.max(1) as f64),
+            median_shaded_texels: med(&|c| c.shaded_texels as f64),
+            median_overshading: med(&|c| c.visible_texels as f64 / px),
+            median_shaded_per_pixel: med(&|c| c.shaded_texels as f64 / px),
+            mean_shaded_tiles: counters.iter().map(|c| c.shaded_tiles as f64).sum::<f64>() / counters.len() as f64,
+            frames: counters.len(),
+        })
+    }
 }
 
 /// Descriptive fields of a run that the renderer does not know.
@@ -86,19 +136,23 @@ pub fn run(
     mut progress: impl FnMut(u32),
 ) -> Result<BenchResult, RenderError> {
     let total = warmup + frames;
+    let measured = |frame: u64| frame >= warmup as u64;
     let mut stats: Vec<FrameStats> = Vec::with_capacity(total as usize);
     let mut timings: Vec<FrameTimings> = Vec::with_capacity(total as usize);
+    let mut counters: Vec<ShadingCounters> = Vec::with_capacity(total as usize);
     let path_len = path.frame_count().max(1);
     for i in 0..total {
         let camera = path.camera_at(i % path_len);
         stats.push(renderer.render(ctx, &camera, lights, i as u64)?);
         timings.extend(renderer.collect_timings(ctx, false));
+        counters.extend(renderer.collect_counters(ctx, false));
         progress(i + 1);
     }
     timings.extend(renderer.collect_timings(ctx, true));
+    counters.extend(renderer.collect_counters(ctx, true));
+    counters.retain(|c| measured(c.frame));
     ctx.check_errors()?;
 
-    let measured = |frame: u64| frame >= warmup as u64;
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut gpu_frame_ms = Vec::new();
     for t in timings.iter().filter(|t| measured(t.frame)) {
@@ -132,6 +186,8 @@ pub fn run(
         cpu_frame: Summary::of(&cpu),
         gpu_frame_ms,
         mean_light_assignments: Summary::of(&assignments).mean_ms,
+        shading: ShadingSummary::of(&counters, renderer.targets.width as u64 * renderer.targets.height as u64),
+        memory: renderer.memory(),
     })
 }
 

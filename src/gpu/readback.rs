@@ -11,7 +11,18 @@ pub fn read_texture_rgba8(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<V
 
 /// Like [`read_texture_rgba8`] for any format of `bytes_per_texel` bytes.
 pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture, bytes_per_texel: u32) -> Result<Vec<u8>, GpuError> {
-    let (w, h) = (texture.width(), texture.height());
+    read_texture_region(ctx, texture, bytes_per_texel, (0, 0, 0), (texture.width(), texture.height()))
+}
+
+/// Reads the `size` texels at `origin` (x, y, array layer) of mip 0.
+pub fn read_texture_region(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    bytes_per_texel: u32,
+    origin: (u32, u32, u32),
+    size: (u32, u32),
+) -> Result<Vec<u8>, GpuError> {
+    let (w, h) = size;
     let unpadded = w * bytes_per_texel;
     let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -22,7 +33,12 @@ pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture, bytes_per_texel: 
     });
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect: wgpu::TextureAspect::All },
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d { x: origin.0, y: origin.1, z: origin.2 },
+            aspect: wgpu::TextureAspect::All,
+        },
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,
             layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) },

@@ -71,6 +71,10 @@ pub trait Pipeline {
     fn collect_counters(&mut self, _device: &wgpu::Device, _wait: bool) -> Vec<ShadingCounters> {
         Vec::new()
     }
+    /// The object-space pipeline, when this is one (for its reports and debug read-backs).
+    fn objectspace(&self) -> Option<&objectspace::ObjectSpace> {
+        None
+    }
 }
 
 /// What an object-space frame shaded, counted on the GPU.
@@ -225,6 +229,16 @@ impl Renderer {
     /// blocks until all are in.
     pub fn collect_counters(&mut self, ctx: &GpuContext, wait: bool) -> Vec<ShadingCounters> {
         self.pipeline.collect_counters(&ctx.device, wait)
+    }
+
+    /// Memory of the pipeline's own resources, when it reports any.
+    pub fn memory(&self) -> Option<objectspace::MemoryReport> {
+        self.pipeline.objectspace().map(|o| o.memory_report())
+    }
+
+    /// The object-space pipeline, when the renderer runs one.
+    pub fn objectspace(&self) -> Option<&objectspace::ObjectSpace> {
+        self.pipeline.objectspace()
     }
 
     /// Whether the adapter can time passes.

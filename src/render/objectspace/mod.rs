@@ -19,7 +19,8 @@ use wgpu::util::DeviceExt;
 
 use super::targets::{DEPTH_FORMAT, HDR_FORMAT};
 use super::{FrameContext, Pipeline, ShadingCounters};
-use crate::gpu::readback::ReadbackRing;
+use crate::gpu::readback::{self, ReadbackRing};
+use crate::gpu::{GpuContext, GpuError};
 use crate::gpu::timing::GpuTimer;
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::targets::Targets;
@@ -112,6 +113,16 @@ pub struct ObjectMemory {
     pub tiles: u64,
     /// Atlas (8 B/texel) + triangle map (4 B/texel) + tile state (16 B/tile).
     pub bytes: u64,
+}
+
+/// Memory in total and per object.
+#[derive(Clone, Debug, Serialize)]
+pub struct MemoryReport {
+    pub total: MemoryUse,
+    pub atlas_pages: u32,
+    pub page_size: u32,
+    pub tile_count: u32,
+    pub objects: Vec<ObjectMemory>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -358,14 +369,13 @@ impl ObjectSpace {
         })
     }
 
-    pub fn memory(&self) -> MemoryUse {
-        self.memory
-    }
-
-    /// Per object in the atlas: texture size, levels, texels, tiles, bytes.
-    pub fn object_memory(&self) -> Vec<ObjectMemory> {
+    /// Memory in total and per object in the atlas: texture size, levels,
+    /// texels, tiles, and bytes (atlas 8 B/texel + triangle map 4 B/texel +
+    /// tile state 16 B/tile).
+    pub fn memory_report(&self) -> MemoryReport {
         let t = self.layout.tile_size;
-        self.layout
+        let objects = self
+            .layout
             .objects
             .iter()
             .enumerate()
@@ -381,11 +391,35 @@ impl ObjectSpace {
                     bytes: texels * 12 + tiles * 16,
                 })
             })
-            .collect()
+            .collect();
+        MemoryReport {
+            total: self.memory,
+            atlas_pages: self.layout.pages,
+            page_size: self.layout.page_size,
+            tile_count: self.layout.tile_count,
+            objects,
+        }
     }
 
     pub fn options(&self) -> &ObjectSpaceOptions {
         &self.options
+    }
+
+    /// One mip level of one object's shades as an image (Reinhard tone
+    /// mapped, sRGB), for the atlas debug view. Blocks on the GPU.
+    pub fn read_atlas(&self, ctx: &GpuContext, object: usize, level: usize) -> Result<image::RgbaImage, GpuError> {
+        let Some(l) = self.layout.objects.get(object).and_then(|o| o.as_ref()).and_then(|o| o.levels.get(level)) else {
+            return Err(GpuError::Readback(format!("object {object} has no atlas level {level}")));
+        };
+        let bytes = readback::read_texture_region(ctx, &self.atlas, 8, (l.x, l.y, l.page), (l.size, l.size))?;
+        let halves: Vec<half::f16> = bytemuck::pod_collect_to_vec(&bytes);
+        let encode = |v: f32| {
+            let c = (v.max(0.0) / (1.0 + v.max(0.0))).min(1.0);
+            let s = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+            (s * 255.0 + 0.5) as u8
+        };
+        let pixels = halves.chunks_exact(4).flat_map(|p| [encode(p[0].to_f32()), encode(p[1].to_f32()), encode(p[2].to_f32()), 255]);
+        Ok(image::RgbaImage::from_raw(l.size, l.size, pixels.collect()).expect("size matches"))
     }
 }
 
@@ -540,6 +574,10 @@ impl Pipeline for ObjectSpace {
 
     fn after_submit(&mut self) {
         self.readback.after_submit();
+    }
+
+    fn objectspace(&self) -> Option<&ObjectSpace> {
+        Some(self)
     }
 
     fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<ShadingCounters> {
