@@ -1,8 +1,16 @@
 //! Lights and the seeded light-set generators of the four classic scenarios
 //! (small, big, big shadowed, mixed), parsed from `--lights SPEC`.
 
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
 use glam::Vec3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+
+use super::{Aabb, Camera};
 
 /// The four light types of the shared lighting model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -53,4 +61,715 @@ fn default_inner() -> f32 {
 }
 fn default_outer() -> f32 {
     0.85
+}
+
+// ---------------------------------------------------------------------------
+// Light-set specs and seeded generators
+// ---------------------------------------------------------------------------
+
+/// Most lights one spec may ask for in all (a typo like `small:10000000`
+/// should fail at parse time, not exhaust memory).
+pub const MAX_GENERATED_LIGHTS: u64 = 1_000_000;
+
+/// Screen coverage range of one small light (fraction of the screen).
+pub const SMALL_COVERAGE: (f32, f32) = (0.0025, 0.05);
+/// Screen coverage range of one big light (fraction of the screen).
+pub const BIG_COVERAGE: (f32, f32) = (0.20, 1.0);
+/// Smallest generated light radius, metres.
+pub const MIN_LIGHT_RADIUS: f32 = 0.01;
+
+/// One `+`-separated part of a generated light spec.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightPart {
+    /// `small:N`: N small point lights.
+    Small(u32),
+    /// `big:N`: N big lights without shadows.
+    Big(u32),
+    /// `shadowed:N`: N big lights with `casts_shadows = true`.
+    Shadowed(u32),
+    /// `mixed:N:R`: N big shadowed lights plus R small lights per big light.
+    Mixed { big: u32, small_per_big: u32 },
+}
+
+impl LightPart {
+    /// Number of lights this part generates.
+    pub fn count(&self) -> u64 {
+        match *self {
+            LightPart::Small(n) | LightPart::Big(n) | LightPart::Shadowed(n) => n as u64,
+            LightPart::Mixed { big, small_per_big } => big as u64 * (1 + small_per_big as u64),
+        }
+    }
+}
+
+impl fmt::Display for LightPart {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            LightPart::Small(n) => write!(f, "small:{n}"),
+            LightPart::Big(n) => write!(f, "big:{n}"),
+            LightPart::Shadowed(n) => write!(f, "shadowed:{n}"),
+            LightPart::Mixed { big, small_per_big } => write!(f, "mixed:{big}:{small_per_big}"),
+        }
+    }
+}
+
+/// What `--lights SPEC` asks for.
+///
+/// Grammar: `none` | `PART(+PART)*` | a path to a JSON light file, where PART
+/// is `small:N`, `big:N`, `shadowed:N` or `mixed:N:R`. A spec that ends in
+/// `.json`, or names an existing file, is a light file; anything else is parsed
+/// as parts. `Display` gives the canonical form (`small:100+shadowed:2`), which
+/// parses back to the same spec.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum LightSpec {
+    /// Only the fixed ambient and directional lights.
+    None,
+    /// Fixed ambient + directional lights plus the generated parts, in order.
+    Generated(Vec<LightPart>),
+    /// A JSON light file: an array of [`Light`] or `{"lights": [...]}`. Its
+    /// lights are the whole set, used as given (no ambient/directional added).
+    File(PathBuf),
+}
+
+impl LightSpec {
+    /// Number of generated lights (not counting the fixed ambient and
+    /// directional ones); `None` for a light file.
+    pub fn generated_count(&self) -> Option<u64> {
+        match self {
+            LightSpec::None => Some(0),
+            LightSpec::Generated(parts) => Some(parts.iter().map(LightPart::count).sum()),
+            LightSpec::File(_) => None,
+        }
+    }
+}
+
+impl fmt::Display for LightSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LightSpec::None => f.write_str("none"),
+            LightSpec::Generated(parts) => {
+                for (i, p) in parts.iter().enumerate() {
+                    if i > 0 {
+                        f.write_str("+")?;
+                    }
+                    write!(f, "{p}")?;
+                }
+                Ok(())
+            }
+            LightSpec::File(path) => write!(f, "{}", path.display()),
+        }
+    }
+}
+
+/// Why a `--lights` spec does not parse. Every message quotes the offending text.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LightSpecError {
+    /// Nothing was given.
+    #[error("empty light spec (expected small:N, big:N, shadowed:N, mixed:N:R, none, or a .json light file)")]
+    Empty,
+    #[error(
+        "\"{part}\": unknown light kind '{kind}' (expected small:N, big:N, shadowed:N, mixed:N:R, none, or a .json light file)"
+    )]
+    /// A part names no known kind (and the spec is no `.json` file).
+    UnknownKind { part: String, kind: String },
+    #[error("\"{part}\": expected {expected}")]
+    /// A part has the wrong number of `:` fields.
+    Form { part: String, expected: &'static str },
+    #[error("\"{part}\": {what} '{value}' is not a number")]
+    /// A count is not a non-negative integer.
+    NotANumber { part: String, what: &'static str, value: String },
+    #[error("\"{part}\": {what} '{value}' is too large")]
+    /// A count does not fit in 32 bits.
+    TooLarge { part: String, what: &'static str, value: String },
+    #[error("\"{spec}\": {count} lights in all is more than the limit of {MAX_GENERATED_LIGHTS}")]
+    /// The parts add up to more than [`MAX_GENERATED_LIGHTS`].
+    TooMany { spec: String, count: u64 },
+    #[error("\"{spec}\": 'none' cannot be combined with other parts")]
+    /// `none` joined with other parts.
+    NoneCombined { spec: String },
+}
+
+impl FromStr for LightSpec {
+    type Err = LightSpecError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let spec = s.trim();
+        if spec.is_empty() {
+            return Err(LightSpecError::Empty);
+        }
+        if spec.eq_ignore_ascii_case("none") {
+            return Ok(LightSpec::None);
+        }
+        // A file wins over parts: `x.json` is checked when the set is built,
+        // so that a missing file is reported by name rather than as a bad kind.
+        if spec.to_ascii_lowercase().ends_with(".json") || Path::new(spec).is_file() {
+            return Ok(LightSpec::File(PathBuf::from(spec)));
+        }
+        let mut parts = Vec::new();
+        for part in spec.split('+') {
+            let part = part.trim();
+            if part.eq_ignore_ascii_case("none") {
+                return Err(LightSpecError::NoneCombined { spec: spec.into() });
+            }
+            parts.push(parse_part(part)?);
+        }
+        let count: u64 = parts.iter().map(LightPart::count).sum();
+        if count > MAX_GENERATED_LIGHTS {
+            return Err(LightSpecError::TooMany { spec: spec.into(), count });
+        }
+        Ok(LightSpec::Generated(parts))
+    }
+}
+
+fn parse_part(part: &str) -> Result<LightPart, LightSpecError> {
+    let fields: Vec<&str> = part.split(':').map(str::trim).collect();
+    let kind = fields[0].to_ascii_lowercase();
+    let number = |value: &str, what: &'static str| -> Result<u32, LightSpecError> {
+        let not_a_number = || LightSpecError::NotANumber { part: part.into(), what, value: value.into() };
+        if value.is_empty() || !value.bytes().all(|b| b.is_ascii_digit()) {
+            return Err(not_a_number());
+        }
+        value.parse::<u32>().map_err(|_| LightSpecError::TooLarge { part: part.into(), what, value: value.into() })
+    };
+    let form = |expected| LightSpecError::Form { part: part.into(), expected };
+    match kind.as_str() {
+        "small" | "big" | "shadowed" => {
+            let expected = match kind.as_str() {
+                "small" => "small:N",
+                "big" => "big:N",
+                _ => "shadowed:N",
+            };
+            let [_, n] = fields[..] else { return Err(form(expected)) };
+            let n = number(n, "light count")?;
+            Ok(match kind.as_str() {
+                "small" => LightPart::Small(n),
+                "big" => LightPart::Big(n),
+                _ => LightPart::Shadowed(n),
+            })
+        }
+        "mixed" => {
+            let [_, n, r] = fields[..] else {
+                return Err(form("mixed:N:R (N big shadowed lights, R small lights per big light)"));
+            };
+            let big = number(n, "big light count")?;
+            let small_per_big = number(r, "small lights per big light")?;
+            Ok(LightPart::Mixed { big, small_per_big })
+        }
+        _ => Err(LightSpecError::UnknownKind { part: part.into(), kind: fields[0].into() }),
+    }
+}
+
+/// Why a light set cannot be built. File errors name the file.
+#[derive(Debug, thiserror::Error)]
+pub enum LightSetError {
+    /// The light file cannot be read.
+    #[error("{path}: cannot read light file: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: not a light file (expected an array of lights or {{\"lights\": [...]}}): {message}")]
+    /// The light file is not valid JSON of the expected shape.
+    Json { path: PathBuf, message: String },
+    /// A light in the file has an impossible value.
+    #[error("{path}: light {index}: {problem}")]
+    InvalidLight { path: PathBuf, index: usize, problem: String },
+    /// Generated lights need a non-empty, finite box to be placed in.
+    #[error("cannot place generated lights: the scene bounds are empty or not finite")]
+    EmptyBounds,
+}
+
+/// The fixed ambient light of every generated set: a dim, cool sky fill.
+pub fn default_ambient() -> Light {
+    Light {
+        kind: LightKind::Ambient,
+        color: Vec3::new(0.6, 0.7, 1.0),
+        intensity: 0.05,
+        position: Vec3::ZERO,
+        direction: default_direction(),
+        radius: default_radius(),
+        cos_inner: default_inner(),
+        cos_outer: default_outer(),
+        casts_shadows: false,
+    }
+}
+
+/// The fixed directional light of every generated set: a warm sun from above
+/// at about 60 degrees elevation, at modest intensity (0.3) so that point
+/// lights stay visible. It casts no shadows, so that the scenarios' shadow cost
+/// is that of their own lights.
+pub fn default_sun() -> Light {
+    Light {
+        kind: LightKind::Directional,
+        color: Vec3::new(1.0, 0.9, 0.75),
+        intensity: 0.3,
+        direction: Vec3::new(0.35, -1.0, 0.25).normalize(),
+        ..default_ambient()
+    }
+}
+
+/// Radius that makes a sphere at distance `distance` from a camera with
+/// vertical field of view `fov_y` cover the fraction `coverage` of a screen
+/// of aspect `aspect` (width / height).
+///
+/// The sphere projects to a disc of NDC radius `ρ = r / (D·tan(fov/2))` in y
+/// (the small-sphere approximation) and `ρ / aspect` in x, so its area is
+/// `π ρ² / aspect` of the screen's 4 NDC units: `c = π (r / (D tan(fov/2)))² / (4 aspect)`,
+/// hence `r = D tan(fov/2) sqrt(4 aspect c / π)`.
+pub fn radius_for_coverage(coverage: f32, distance: f32, fov_y: f32, aspect: f32) -> f32 {
+    distance * (0.5 * fov_y).tan() * (4.0 * aspect * coverage / std::f32::consts::PI).sqrt()
+}
+
+/// The inverse of [`radius_for_coverage`]: screen fraction covered by a sphere
+/// of radius `radius` at distance `distance`.
+pub fn coverage_of_sphere(radius: f32, distance: f32, fov_y: f32, aspect: f32) -> f32 {
+    let rho = radius / (distance * (0.5 * fov_y).tan());
+    std::f32::consts::PI * rho * rho / (4.0 * aspect)
+}
+
+/// Intensity of a generated light of radius `r`, before the per-part scale:
+/// `0.5 + 0.25 r²`. With the shared attenuation `1/(1+d²)` this keeps the lit
+/// value at least 0.5 at half the radius and about 0.25 at the cut-off, so that
+/// every light visibly lights its whole sphere.
+pub fn base_intensity(radius: f32) -> f32 {
+    0.5 + 0.25 * radius * radius
+}
+
+/// Intensity scale of the lights of one part of `count` lights whose coverage
+/// is drawn log-uniformly from `range`: `min(1, 2 / (count · mean coverage))`.
+///
+/// `count · mean coverage` is the expected number of that part's lights over
+/// a pixel; the scale keeps their sum at about two full-strength lights, so
+/// that 100 big lights (about 50 over each pixel) do not just saturate. For big
+/// lights this is about `min(1, 4 / N)`, for small ones `min(1, 126 / N)`. The
+/// scale depends only on the part itself, so adding `+` parts leaves earlier
+/// parts unchanged.
+pub fn part_intensity_scale(count: u32, range: (f32, f32)) -> f32 {
+    let mean = log_uniform_mean(range);
+    if count == 0 { 1.0 } else { (2.0 / (count as f32 * mean)).min(1.0) }
+}
+
+fn log_uniform_mean((lo, hi): (f32, f32)) -> f32 {
+    (hi - lo) / (hi / lo).ln()
+}
+
+/// Builds the light set of `spec` for a scene with bounds `bounds`.
+///
+/// A generated set is `[ambient, directional, part 0's lights, part 1's lights, ...]`
+/// ([`default_ambient`], [`default_sun`]); a light file's lights are returned
+/// as given (after validation, with directions normalised).
+///
+/// Placement: each light's position is uniform in `bounds` shrunk by 5% of its
+/// extent on every side, with the bottom raised by 10% of the height (at least
+/// 0.5 m) so that lights float above the floor. Part k draws from
+/// `ChaCha8Rng::seed_from_u64(seed)` on its own stream (2k for a part's main
+/// lights, 2k+1 for the small lights of `mixed`), and every light draws a fixed
+/// sequence, so the same seed gives the same lights, adding `+` parts changes
+/// no earlier part, and `small:10` is a prefix of `small:20`.
+///
+/// Size: a light's coverage c is drawn log-uniformly from [`SMALL_COVERAGE`]
+/// (0.25-5% of the screen) or [`BIG_COVERAGE`] (20-100%), and its radius is the
+/// one that covers c of the `reference` camera's screen at the light's distance
+/// D from it ([`radius_for_coverage`] with the camera's `fov_y` and `aspect`;
+/// D at least the near plane), clamped to at least [`MIN_LIGHT_RADIUS`] and at most the scene's diagonal.
+///
+/// Kinds: small lights are point lights. In `big`, `shadowed` and the big
+/// lights of `mixed`, light i is a spot when `i % 4 == 1` (a quarter of them,
+/// and already one in `shadowed:2`) so that spot code paths are exercised:
+/// pointing down, tilted up to about 30 degrees, outer half-angle 25-45 degrees,
+/// inner 80% of it. `shadowed` and `mixed`'s big lights cast shadows.
+///
+/// Colour: a random hue at saturation 0.6-1, value 1. Intensity:
+/// [`base_intensity`]`(r)` times [`part_intensity_scale`] of its part.
+pub fn build_lights(
+    spec: &LightSpec,
+    bounds: &Aabb,
+    reference: &Camera,
+    aspect: f32,
+    seed: u64,
+) -> Result<Vec<Light>, LightSetError> {
+    let parts = match spec {
+        LightSpec::File(path) => return load_light_file(path),
+        LightSpec::None => &[][..],
+        LightSpec::Generated(parts) => &parts[..],
+    };
+    let mut lights = vec![default_ambient(), default_sun()];
+    if parts.iter().all(|p| p.count() == 0) {
+        return Ok(lights);
+    }
+    if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
+        return Err(LightSetError::EmptyBounds);
+    }
+    let placer = Placer::new(bounds, reference, aspect);
+    for (k, part) in parts.iter().enumerate() {
+        let stream = 2 * k as u64;
+        match *part {
+            LightPart::Small(n) => placer.generate(&mut lights, seed, stream, n, Size::Small, false),
+            LightPart::Big(n) => placer.generate(&mut lights, seed, stream, n, Size::Big, false),
+            LightPart::Shadowed(n) => placer.generate(&mut lights, seed, stream, n, Size::Big, true),
+            LightPart::Mixed { big, small_per_big } => {
+                placer.generate(&mut lights, seed, stream, big, Size::Big, true);
+                placer.generate(&mut lights, seed, stream + 1, big * small_per_big, Size::Small, false);
+            }
+        }
+    }
+    Ok(lights)
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Size {
+    Small,
+    Big,
+}
+
+/// What every generated light of one build shares.
+struct Placer {
+    lo: Vec3,
+    hi: Vec3,
+    max_radius: f32,
+    eye: Vec3,
+    near: f32,
+    fov_y: f32,
+    aspect: f32,
+}
+
+impl Placer {
+    fn new(bounds: &Aabb, reference: &Camera, aspect: f32) -> Self {
+        let ext = bounds.extent();
+        let mut lo = bounds.min + 0.05 * ext;
+        let mut hi = bounds.max - 0.05 * ext;
+        lo.y = bounds.min.y + (0.1 * ext.y).max(0.5);
+        hi.y = hi.y.max(lo.y);
+        let aspect = if aspect.is_finite() && aspect > 0.0 { aspect } else { 1.0 };
+        Self {
+            lo,
+            hi,
+            max_radius: ext.length().max(1.0),
+            eye: reference.position,
+            near: reference.near.max(1e-3),
+            fov_y: reference.fov_y,
+            aspect,
+        }
+    }
+
+    fn generate(&self, out: &mut Vec<Light>, seed: u64, stream: u64, count: u32, size: Size, shadows: bool) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(stream);
+        let range = if size == Size::Small { SMALL_COVERAGE } else { BIG_COVERAGE };
+        let scale = part_intensity_scale(count, range);
+        out.reserve(count as usize);
+        for i in 0..count {
+            let t = Vec3::new(rng.random(), rng.random(), rng.random());
+            let position = self.lo + t * (self.hi - self.lo);
+            let u: f32 = rng.random();
+            let coverage = range.0 * (range.1 / range.0).powf(u);
+            let distance = position.distance(self.eye).max(self.near);
+            let radius = radius_for_coverage(coverage, distance, self.fov_y, self.aspect)
+                .clamp(MIN_LIGHT_RADIUS, self.max_radius);
+            let color = hsv_to_rgb(rng.random(), 0.6 + 0.4 * rng.random::<f32>(), 1.0);
+            let mut light = Light {
+                kind: LightKind::Point,
+                color,
+                intensity: base_intensity(radius) * scale,
+                position,
+                casts_shadows: shadows,
+                radius,
+                ..default_ambient()
+            };
+            if size == Size::Big && i % 4 == 1 {
+                let tilt = 0.58; // tan(30°): the most a spot leans off straight down
+                let (tx, tz): (f32, f32) = (rng.random(), rng.random());
+                light.kind = LightKind::Spot;
+                light.direction = Vec3::new(tilt * (2.0 * tx - 1.0), -1.0, tilt * (2.0 * tz - 1.0)).normalize();
+                let outer = (25.0 + 20.0 * rng.random::<f32>()).to_radians();
+                light.cos_outer = outer.cos();
+                light.cos_inner = (0.8 * outer).cos();
+            }
+            out.push(light);
+        }
+    }
+}
+
+/// HSV (all in [0, 1]) to linear RGB.
+fn hsv_to_rgb(h: f32, s: f32, v: f32) -> Vec3 {
+    let h6 = (h.fract() * 6.0).min(5.999);
+    let f = h6.fract();
+    let (p, q, t) = (v * (1.0 - s), v * (1.0 - s * f), v * (1.0 - s * (1.0 - f)));
+    match h6 as u32 {
+        0 => Vec3::new(v, t, p),
+        1 => Vec3::new(q, v, p),
+        2 => Vec3::new(p, v, t),
+        3 => Vec3::new(p, q, v),
+        4 => Vec3::new(t, p, v),
+        _ => Vec3::new(v, p, q),
+    }
+}
+
+/// Loads a JSON light file: an array of [`Light`] or `{"lights": [...]}`.
+/// Lights are checked (finite values, non-negative intensity, positive radius
+/// for point and spot lights, `cos_outer <= cos_inner`) and directions normalised.
+pub fn load_light_file(path: &Path) -> Result<Vec<Light>, LightSetError> {
+    #[derive(Deserialize)]
+    struct LightFile {
+        lights: Vec<Light>,
+    }
+    let text = std::fs::read_to_string(path).map_err(|source| LightSetError::Io { path: path.into(), source })?;
+    let json_error = |e: serde_json::Error| LightSetError::Json { path: path.into(), message: e.to_string() };
+    let mut lights: Vec<Light> = if text.trim_start().starts_with('[') {
+        serde_json::from_str(&text).map_err(json_error)?
+    } else {
+        serde_json::from_str::<LightFile>(&text).map_err(json_error)?.lights
+    };
+    for (index, l) in lights.iter_mut().enumerate() {
+        let invalid = |problem: String| LightSetError::InvalidLight { path: path.into(), index, problem };
+        let finite = l.color.is_finite()
+            && l.intensity.is_finite()
+            && l.position.is_finite()
+            && l.direction.is_finite()
+            && l.radius.is_finite()
+            && l.cos_inner.is_finite()
+            && l.cos_outer.is_finite();
+        if !finite {
+            return Err(invalid("a value is not finite".into()));
+        }
+        if l.intensity < 0.0 || l.color.min_element() < 0.0 {
+            return Err(invalid("negative colour or intensity".into()));
+        }
+        if matches!(l.kind, LightKind::Point | LightKind::Spot) && l.radius <= 0.0 {
+            return Err(invalid(format!("radius {} is not positive", l.radius)));
+        }
+        if matches!(l.kind, LightKind::Directional | LightKind::Spot) {
+            l.direction = l.direction.try_normalize().ok_or_else(|| invalid("direction is zero".into()))?;
+        }
+        if l.kind == LightKind::Spot && l.cos_outer > l.cos_inner {
+            return Err(invalid(format!(
+                "cos_outer {} is greater than cos_inner {} (the outer cone must be the wider one)",
+                l.cos_outer, l.cos_inner
+            )));
+        }
+    }
+    Ok(lights)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bounds() -> Aabb {
+        Aabb { min: Vec3::new(-15.0, 0.0, -9.0), max: Vec3::new(15.0, 13.0, 9.0) }
+    }
+
+    fn reference() -> Camera {
+        Camera {
+            position: Vec3::new(-12.0, 4.0, 0.0),
+            forward: Vec3::X,
+            up: Vec3::Y,
+            fov_y: 60f32.to_radians(),
+            near: 0.3,
+            far: 1000.0,
+        }
+    }
+
+    fn build(spec: &str, seed: u64) -> Vec<Light> {
+        build_lights(&spec.parse().unwrap(), &bounds(), &reference(), 16.0 / 9.0, seed).unwrap()
+    }
+
+    fn parse_err(spec: &str) -> String {
+        spec.parse::<LightSpec>().unwrap_err().to_string()
+    }
+
+    #[test]
+    fn parses_every_form() {
+        use LightPart::*;
+        assert_eq!("none".parse(), Ok(LightSpec::None));
+        assert_eq!("small:100".parse(), Ok(LightSpec::Generated(vec![Small(100)])));
+        assert_eq!("big:7".parse(), Ok(LightSpec::Generated(vec![Big(7)])));
+        assert_eq!("shadowed:2".parse(), Ok(LightSpec::Generated(vec![Shadowed(2)])));
+        assert_eq!("mixed:2:5".parse(), Ok(LightSpec::Generated(vec![Mixed { big: 2, small_per_big: 5 }])));
+        assert_eq!(" small:100 + shadowed:2 ".parse(), Ok(LightSpec::Generated(vec![Small(100), Shadowed(2)])));
+        assert_eq!("lights/set.json".parse(), Ok(LightSpec::File("lights/set.json".into())));
+        for canonical in ["none", "small:100+shadowed:2", "mixed:2:10", "big:0", "small:1+big:2+shadowed:3+mixed:4:5"] {
+            let spec: LightSpec = canonical.parse().unwrap();
+            assert_eq!(spec.to_string(), canonical);
+            assert_eq!(spec.to_string().parse::<LightSpec>().unwrap(), spec);
+        }
+        assert_eq!("SMALL:3".parse::<LightSpec>().unwrap().to_string(), "small:3");
+        assert_eq!("mixed:2:5+small:3".parse::<LightSpec>().unwrap().generated_count(), Some(15));
+    }
+
+    #[test]
+    fn parse_errors_say_what_is_wrong() {
+        assert_eq!(parse_err("small:x"), "\"small:x\": light count 'x' is not a number");
+        assert_eq!(parse_err("small:-3"), "\"small:-3\": light count '-3' is not a number");
+        assert_eq!(parse_err("small:"), "\"small:\": light count '' is not a number");
+        assert_eq!(parse_err("small"), "\"small\": expected small:N");
+        assert_eq!(parse_err("big:1:2"), "\"big:1:2\": expected big:N");
+        assert!(parse_err("mixed:2").starts_with("\"mixed:2\": expected mixed:N:R"));
+        assert_eq!(parse_err("mixed:2:y"), "\"mixed:2:y\": small lights per big light 'y' is not a number");
+        assert!(parse_err("tiny:3").starts_with("\"tiny:3\": unknown light kind 'tiny'"));
+        assert!(parse_err("small:3+").starts_with("\"\": unknown light kind ''"));
+        assert!(parse_err("").starts_with("empty light spec"));
+        assert_eq!(parse_err("none+small:3"), "\"none+small:3\": 'none' cannot be combined with other parts");
+        assert_eq!(parse_err("small:99999999999"), "\"small:99999999999\": light count '99999999999' is too large");
+        assert!(parse_err("mixed:1000:1000").contains("1001000 lights in all is more than the limit"));
+    }
+
+    #[test]
+    fn counts_and_kinds() {
+        let set = build("mixed:2:5", 1);
+        assert_eq!(set.len(), 2 + 2 + 10);
+        assert_eq!(set[0].kind, LightKind::Ambient);
+        assert_eq!(set[1].kind, LightKind::Directional);
+        assert_eq!(set.iter().filter(|l| l.kind == LightKind::Ambient).count(), 1);
+        assert_eq!(set.iter().filter(|l| l.kind == LightKind::Directional).count(), 1);
+        assert!(set[2..4].iter().all(|l| l.casts_shadows));
+        assert_eq!(set[3].kind, LightKind::Spot, "light 1 of a big part is a spot");
+        assert!(set[4..].iter().all(|l| !l.casts_shadows && l.kind == LightKind::Point));
+
+        assert_eq!(build("none", 1).len(), 2);
+        let big = build("big:100", 3);
+        assert_eq!(big.iter().filter(|l| l.kind == LightKind::Spot).count(), 25);
+        assert!(big.iter().all(|l| !l.casts_shadows));
+        assert!(build("shadowed:2", 3)[2..].iter().all(|l| l.casts_shadows));
+        assert_eq!(build("small:100+shadowed:2", 3).len(), 104);
+    }
+
+    #[test]
+    fn generated_lights_are_sane() {
+        let set = build("small:200+big:40", 9);
+        let b = bounds();
+        for l in &set[2..] {
+            assert!(l.position.cmpge(b.min).all() && l.position.cmple(b.max).all(), "{l:?}");
+            assert!(l.position.y >= b.min.y + 1.3 - 1e-4, "above the floor: {l:?}");
+            assert!(l.radius >= MIN_LIGHT_RADIUS && l.radius <= b.extent().length());
+            assert!(l.intensity > 0.0 && l.color.max_element() <= 1.0 + 1e-6 && l.color.min_element() >= 0.0);
+            assert!((l.color.max_element() - 1.0).abs() < 1e-5, "value 1");
+            if l.kind == LightKind::Spot {
+                assert!(l.direction.is_normalized() && l.direction.y < -0.8, "downward-ish: {l:?}");
+                assert!(l.cos_outer < l.cos_inner && l.cos_outer > 0.7);
+            }
+        }
+    }
+
+    #[test]
+    fn same_seed_same_lights_other_seed_other_lights() {
+        assert_eq!(build("mixed:3:4+small:50", 42), build("mixed:3:4+small:50", 42));
+        assert_ne!(build("small:50", 42), build("small:50", 43));
+    }
+
+    #[test]
+    fn adding_parts_keeps_earlier_parts() {
+        let a = build("small:30", 5);
+        let ab = build("small:30+shadowed:4", 5);
+        let abc = build("small:30+shadowed:4+mixed:2:3", 5);
+        assert_eq!(a[..], ab[..a.len()]);
+        assert_eq!(ab[..], abc[..ab.len()]);
+        // A longer part starts with the shorter one's lights (same positions and sizes).
+        let short = build("big:4", 5);
+        let long = build("big:40", 5);
+        for (s, l) in short[2..].iter().zip(&long[2..]) {
+            assert_eq!((s.position, s.radius, s.kind, s.color), (l.position, l.radius, l.kind, l.color));
+        }
+        // The same part at another place of the spec is a different set.
+        let moved = build("shadowed:4+small:30", 5);
+        assert_ne!(moved[2].position, ab[32].position);
+    }
+
+    #[test]
+    fn coverage_is_within_range() {
+        let cam = reference();
+        let aspect = 16.0 / 9.0;
+        for (spec, (lo, hi)) in [("small:300", SMALL_COVERAGE), ("big:300", BIG_COVERAGE)] {
+            let set = build(spec, 11);
+            let mut unclamped = 0;
+            for l in &set[2..] {
+                let d = l.position.distance(cam.position).max(cam.near);
+                let c = coverage_of_sphere(l.radius, d, cam.fov_y, aspect);
+                let clamped = l.radius == MIN_LIGHT_RADIUS || l.radius == bounds().extent().length();
+                if !clamped {
+                    unclamped += 1;
+                    assert!(c >= lo * 0.999 && c <= hi * 1.001, "{spec}: coverage {c} out of [{lo}, {hi}]");
+                }
+            }
+            assert!(unclamped > 250, "{spec}: only {unclamped} unclamped");
+        }
+        // The formula itself: a sphere of radius D tan(fov/2) covers π / (4 aspect).
+        let r = 10.0 * (30f32.to_radians()).tan();
+        let c = coverage_of_sphere(r, 10.0, 60f32.to_radians(), 1.0);
+        assert!((c - std::f32::consts::FRAC_PI_4).abs() < 1e-5);
+        assert!((radius_for_coverage(c, 10.0, 60f32.to_radians(), 1.0) - r).abs() < 1e-4);
+    }
+
+    #[test]
+    fn big_part_intensity_scales_with_count() {
+        assert_eq!(part_intensity_scale(1, BIG_COVERAGE), 1.0);
+        assert_eq!(part_intensity_scale(4, BIG_COVERAGE), 1.0);
+        let s100 = part_intensity_scale(100, BIG_COVERAGE);
+        assert!((s100 - 0.0402).abs() < 1e-3, "{s100}");
+        assert_eq!(part_intensity_scale(100, SMALL_COVERAGE), 1.0);
+        assert!(part_intensity_scale(1000, SMALL_COVERAGE) < 0.13);
+        let few = build("big:2", 1);
+        let many = build("big:100", 1);
+        assert_eq!(few[2].radius, many[2].radius);
+        assert!((many[2].intensity - few[2].intensity * s100).abs() < 1e-4 * few[2].intensity);
+    }
+
+    #[test]
+    fn json_light_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let array = dir.path().join("array.json");
+        std::fs::write(
+            &array,
+            r#"[{"kind": "ambient", "color": [1, 1, 1], "intensity": 0.1},
+                {"kind": "spot", "color": [1, 0.5, 0], "intensity": 3, "position": [0, 5, 0],
+                 "direction": [0, -2, 0], "radius": 8, "cos_inner": 0.9, "cos_outer": 0.8, "casts_shadows": true}]"#,
+        )
+        .unwrap();
+        let spec: LightSpec = array.to_str().unwrap().parse().unwrap();
+        assert_eq!(spec, LightSpec::File(array.clone()));
+        let lights = build_lights(&spec, &Aabb::EMPTY, &reference(), 1.0, 0).unwrap();
+        assert_eq!(lights.len(), 2, "a file is the whole set");
+        assert_eq!(lights[1].direction, Vec3::NEG_Y, "normalised");
+        assert_eq!(lights[0].radius, 10.0, "defaults fill missing fields");
+
+        let object = dir.path().join("object.json");
+        std::fs::write(
+            &object,
+            r#"{"about": "test", "lights": [{"kind": "point", "color": [1,1,1], "intensity": 1}]}"#,
+        )
+        .unwrap();
+        assert_eq!(load_light_file(&object).unwrap().len(), 1);
+
+        // A round trip through serde keeps the lights.
+        let set = build("mixed:1:2", 4);
+        let round = dir.path().join("round.json");
+        std::fs::write(&round, serde_json::to_string(&set).unwrap()).unwrap();
+        assert_eq!(load_light_file(&round).unwrap(), set);
+
+        let bad = dir.path().join("bad.json");
+        std::fs::write(&bad, r#"[{"kind": "laser", "color": [1,1,1], "intensity": 1}]"#).unwrap();
+        let err = build_lights(&LightSpec::File(bad.clone()), &bounds(), &reference(), 1.0, 0).unwrap_err().to_string();
+        assert!(err.starts_with(&bad.display().to_string()) && err.contains("laser"), "{err}");
+
+        std::fs::write(&bad, "{ not json").unwrap();
+        let err = load_light_file(&bad).unwrap_err().to_string();
+        assert!(err.starts_with(&format!("{}: not a light file", bad.display())), "{err}");
+
+        std::fs::write(&bad, r#"[{"kind": "point", "color": [1,1,1], "intensity": 1, "radius": -1}]"#).unwrap();
+        let err = load_light_file(&bad).unwrap_err().to_string();
+        assert_eq!(err, format!("{}: light 0: radius -1 is not positive", bad.display()));
+
+        let missing = dir.path().join("missing.json");
+        let spec: LightSpec = missing.to_str().unwrap().parse().unwrap();
+        let err = build_lights(&spec, &bounds(), &reference(), 1.0, 0).unwrap_err().to_string();
+        assert!(err.starts_with(&format!("{}: cannot read light file", missing.display())), "{err}");
+    }
+
+    #[test]
+    fn empty_bounds_only_matter_when_placing() {
+        let none = build_lights(&LightSpec::None, &Aabb::EMPTY, &reference(), 1.0, 0).unwrap();
+        assert_eq!(none.len(), 2);
+        let err = build_lights(&"small:3".parse().unwrap(), &Aabb::EMPTY, &reference(), 1.0, 0).unwrap_err();
+        assert!(matches!(err, LightSetError::EmptyBounds));
+    }
 }

@@ -19,7 +19,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 
 pub use camera::Camera;
 pub use error::SceneError;
-pub use lights::{Light, LightKind};
+pub use lights::{Light, LightKind, LightSpec};
 pub use path::CameraPath;
 
 /// One triangle mesh with one material. glTF primitives and OBJ objects each
