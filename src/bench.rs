@@ -29,7 +29,12 @@ impl Summary {
         let mut v = values.to_vec();
         v.sort_by(f64::total_cmp);
         let rank = |p: f64| v[(((p * v.len() as f64).ceil() as usize).max(1) - 1).min(v.len() - 1)];
-        Summary { median_ms: rank(0.5), p95_ms: rank(0.95), mean_ms: v.iter().sum::<f64>() / v.len() as f64, samples: v.len() }
+        Summary {
+            median_ms: rank(0.5),
+            p95_ms: rank(0.95),
+            mean_ms: v.iter().sum::<f64>() / v.len() as f64,
+            samples: v.len(),
+        }
     }
 }
 
@@ -95,7 +100,8 @@ impl ShadingSummary {
         if counters.is_empty() {
             return None;
         }
-        let med = |f: &dyn Fn(&ShadingCounters) -> f64| Summary::of(&counters.iter().map(f).collect::<Vec<_>>()).median_ms;
+        let med =
+            |f: &dyn Fn(&ShadingCounters) -> f64| Summary::of(&counters.iter().map(f).collect::<Vec<_>>()).median_ms;
         let px = screen_pixels.max(1) as f64;
         Some(Self {
             screen_pixels,
@@ -162,7 +168,8 @@ pub fn run(
         gpu_frame_ms.push(t.total_ms);
     }
     let cpu: Vec<f64> = stats.iter().filter(|s| measured(s.frame)).map(|s| s.cpu_ms).collect();
-    let assignments: Vec<f64> = stats.iter().filter(|s| measured(s.frame)).map(|s| s.light_assignments as f64).collect();
+    let assignments: Vec<f64> =
+        stats.iter().filter(|s| measured(s.frame)).map(|s| s.light_assignments as f64).collect();
     Ok(BenchResult {
         adapter: ctx.info.name.clone(),
         backend: format!("{:?}", ctx.info.backend),

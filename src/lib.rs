@@ -9,5 +9,5 @@ pub mod bench;
 pub mod gpu;
 pub mod metrics;
 pub mod render;
-pub mod shaders;
 pub mod scene;
+pub mod shaders;

@@ -30,7 +30,9 @@ pub const ADAPTER_ENV: &str = "SHADESPACE_ADAPTER";
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
-    #[error("no GPU adapter found (is a Vulkan driver installed? on a machine without a GPU, install Mesa's `mesa-vulkan-drivers`)")]
+    #[error(
+        "no GPU adapter found (is a Vulkan driver installed? on a machine without a GPU, install Mesa's `mesa-vulkan-drivers`)"
+    )]
     NoAdapter,
     #[error("no adapter matches '{wanted}'; available: {available}")]
     NoMatchingAdapter { wanted: String, available: String },
@@ -103,23 +105,25 @@ impl GpuContext {
 
     /// Blocks until the GPU has finished all submitted work.
     pub fn wait_idle(&self) -> Result<(), GpuError> {
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map(|_| ())
-            .map_err(|e| GpuError::Readback(e.to_string()))
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map(|_| ()).map_err(|e| GpuError::Readback(e.to_string()))
     }
 
     /// A one-line description: adapter name, backend, driver.
     pub fn adapter_summary(&self) -> String {
-        format!("{} ({:?}, {:?}, driver {} {})", self.info.name, self.info.backend, self.info.device_type, self.info.driver, self.info.driver_info)
+        format!(
+            "{} ({:?}, {:?}, driver {} {})",
+            self.info.name, self.info.backend, self.info.device_type, self.info.driver, self.info.driver_info
+        )
     }
 
     /// The report of `shadespace info`: the adapter, the optional features
     /// that are on and off, and the limits the pipelines depend on.
     pub fn report(&self) -> String {
         let mut s = format!("adapter: {}\n", self.adapter_summary());
-        let on: Vec<_> = OPTIONAL_FEATURES.iter_names().filter(|(_, f)| self.features.contains(*f)).map(|(n, _)| n).collect();
-        let off: Vec<_> = OPTIONAL_FEATURES.iter_names().filter(|(_, f)| !self.features.contains(*f)).map(|(n, _)| n).collect();
+        let on: Vec<_> =
+            OPTIONAL_FEATURES.iter_names().filter(|(_, f)| self.features.contains(*f)).map(|(n, _)| n).collect();
+        let off: Vec<_> =
+            OPTIONAL_FEATURES.iter_names().filter(|(_, f)| !self.features.contains(*f)).map(|(n, _)| n).collect();
         s += &format!("features on:  {}\n", on.join(", "));
         s += &format!("features off: {}\n", if off.is_empty() { "(none)".to_string() } else { off.join(", ") });
         let l = &self.limits;

@@ -61,9 +61,7 @@ pub fn read_buffer(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, G
         let _ = tx.send(r);
     });
     ctx.wait_idle()?;
-    rx.recv()
-        .map_err(|e| GpuError::Readback(e.to_string()))?
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    rx.recv().map_err(|e| GpuError::Readback(e.to_string()))?.map_err(|e| GpuError::Readback(e.to_string()))?;
     let bytes = buffer.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
     buffer.unmap();
     ctx.check_errors()?;
@@ -105,7 +103,14 @@ impl<T> ReadbackRing<T> {
     }
 
     /// Records a copy of `size` bytes of `source` for this frame, tagged `tag`.
-    pub fn copy(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, source: &wgpu::Buffer, size: u64, tag: T) {
+    pub fn copy(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        source: &wgpu::Buffer,
+        size: u64,
+        tag: T,
+    ) {
         assert!(size <= self.capacity, "read-back of {size} bytes exceeds {}", self.capacity);
         let buffer = self.free.pop().unwrap_or_else(|| {
             device.create_buffer(&wgpu::BufferDescriptor {

@@ -110,7 +110,11 @@ impl GpuTimer {
 
     /// The timings that have arrived, oldest first; `wait` waits for all.
     pub fn collect(&mut self, device: &wgpu::Device, wait: bool) -> Vec<FrameTimings> {
-        self.ring.collect(device, wait).into_iter().map(|((frame, names), bytes)| self.decode(frame, names, &bytes)).collect()
+        self.ring
+            .collect(device, wait)
+            .into_iter()
+            .map(|((frame, names), bytes)| self.decode(frame, names, &bytes))
+            .collect()
     }
 
     fn decode(&self, frame: u64, names: Vec<String>, bytes: &[u8]) -> FrameTimings {
@@ -118,7 +122,8 @@ impl GpuTimer {
         let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(bytes);
         let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * self.period_ns * 1e-6;
         let total_ms = ms(ticks[0], ticks[ticks.len() - 1]);
-        let passes = names.into_iter().enumerate().map(|(i, name)| (name, ms(ticks[2 * i], ticks[2 * i + 1]))).collect();
+        let passes =
+            names.into_iter().enumerate().map(|(i, name)| (name, ms(ticks[2 * i], ticks[2 * i + 1]))).collect();
         FrameTimings { frame, passes, total_ms }
     }
 }

@@ -121,7 +121,10 @@ impl Pipeline for Forward {
     }
 }
 
-fn depth_attachment<'a>(frame: &FrameContext<'a>, load: wgpu::LoadOp<f32>) -> wgpu::RenderPassDepthStencilAttachment<'a> {
+fn depth_attachment<'a>(
+    frame: &FrameContext<'a>,
+    load: wgpu::LoadOp<f32>,
+) -> wgpu::RenderPassDepthStencilAttachment<'a> {
     wgpu::RenderPassDepthStencilAttachment {
         view: &frame.targets.depth_view,
         depth_ops: Some(wgpu::Operations { load, store: wgpu::StoreOp::Store }),

@@ -180,7 +180,13 @@ impl Renderer {
 
     /// Culls, uploads and records one frame, and submits it. Does not wait
     /// for the GPU.
-    pub fn render(&mut self, ctx: &GpuContext, camera: &Camera, lights: &[Light], frame: u64) -> Result<FrameStats, RenderError> {
+    pub fn render(
+        &mut self,
+        ctx: &GpuContext,
+        camera: &Camera,
+        lights: &[Light],
+        frame: u64,
+    ) -> Result<FrameStats, RenderError> {
         let start = Instant::now();
         let (w, h) = (self.targets.width, self.targets.height);
         let view = scene_gpu::gpu_view(camera, w, h, frame, self.exposure);
@@ -249,12 +255,15 @@ impl Renderer {
     /// Reads the last tone-mapped frame back (blocks).
     pub fn read_image(&self, ctx: &GpuContext) -> Result<image::RgbaImage, RenderError> {
         let bytes = readback::read_texture_rgba8(ctx, &self.targets.ldr)?;
-        Ok(image::RgbaImage::from_raw(self.targets.width, self.targets.height, bytes).expect("read-back has w*h*4 bytes"))
+        Ok(image::RgbaImage::from_raw(self.targets.width, self.targets.height, bytes)
+            .expect("read-back has w*h*4 bytes"))
     }
 }
 
 /// FNV-1a over the lights' GPU form: a change of any light changes the hash.
 fn hash_lights(lights: &[Light]) -> u64 {
     let gpu: Vec<gpu_types::GpuLight> = lights.iter().map(gpu_types::GpuLight::from).collect();
-    bytemuck::cast_slice::<_, u8>(&gpu).iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ *b as u64).wrapping_mul(0x100_0000_01b3))
+    bytemuck::cast_slice::<_, u8>(&gpu)
+        .iter()
+        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ *b as u64).wrapping_mul(0x100_0000_01b3))
 }

@@ -207,7 +207,14 @@ impl SceneGpu {
             self.bind_group = make_bind_group(
                 device,
                 &self.layout,
-                [&self.view, &self.objects, &self.vertices, &self.lights.buffer, &self.light_indices.buffer, &self.indices],
+                [
+                    &self.view,
+                    &self.objects,
+                    &self.vertices,
+                    &self.lights.buffer,
+                    &self.light_indices.buffer,
+                    &self.indices,
+                ],
                 &self.albedo_view,
                 &self.sampler,
             );
@@ -309,7 +316,14 @@ fn make_bind_group(
 /// materials. One array keeps the binding count constant in the number of
 /// objects, which lavapipe (no binding arrays) requires.
 fn upload_albedo(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> (wgpu::Texture, u32) {
-    let size = scene.textures.iter().map(|t| t.width.max(t.height)).max().unwrap_or(1).clamp(1, MAX_ALBEDO_SIZE).next_power_of_two();
+    let size = scene
+        .textures
+        .iter()
+        .map(|t| t.width.max(t.height))
+        .max()
+        .unwrap_or(1)
+        .clamp(1, MAX_ALBEDO_SIZE)
+        .next_power_of_two();
     let mip_count = size.ilog2() + 1;
     let layers = scene.textures.len() as u32 + 1;
     let texture = device.create_texture(&wgpu::TextureDescriptor {
@@ -328,7 +342,13 @@ fn upload_albedo(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> (
         .iter()
         .map(|t| {
             image::RgbaImage::from_raw(t.width, t.height, t.rgba8.clone())
-                .map(|img| if t.width == size && t.height == size { img } else { image::imageops::resize(&img, size, size, FilterType::Triangle) })
+                .map(|img| {
+                    if t.width == size && t.height == size {
+                        img
+                    } else {
+                        image::imageops::resize(&img, size, size, FilterType::Triangle)
+                    }
+                })
                 .unwrap_or_else(|| white.clone())
         })
         .chain(std::iter::once(white.clone()));

@@ -37,15 +37,6 @@ impl Targets {
         let depth = make("depth", DEPTH_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
         let ldr = make("ldr", LDR_FORMAT, U::STORAGE_BINDING | U::COPY_SRC);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        Self {
-            width,
-            height,
-            hdr_view: view(&hdr),
-            depth_view: view(&depth),
-            ldr_view: view(&ldr),
-            hdr,
-            depth,
-            ldr,
-        }
+        Self { width, height, hdr_view: view(&hdr), depth_view: view(&depth), ldr_view: view(&ldr), hdr, depth, ldr }
     }
 }

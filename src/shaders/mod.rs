@@ -106,9 +106,12 @@ mod tests {
         let mut lib = ShaderLibrary::new().expect("shared modules compose");
         for shader in ALL {
             let module = lib.compose(*shader).unwrap_or_else(|e| panic!("{e}"));
-            wgpu::naga::valid::Validator::new(wgpu::naga::valid::ValidationFlags::all(), wgpu::naga::valid::Capabilities::all())
-                .validate(&module)
-                .unwrap_or_else(|e| panic!("{}: {e:?}", shader.file));
+            wgpu::naga::valid::Validator::new(
+                wgpu::naga::valid::ValidationFlags::all(),
+                wgpu::naga::valid::Capabilities::all(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{}: {e:?}", shader.file));
         }
     }
 }

@@ -46,7 +46,13 @@ pub fn floor_scene() -> (Scene, Camera, Vec<Light>) {
         meshes: vec![floor_quad(8.0, 0.0)],
         materials: vec![Material { base_color_texture: Some(0), ..Default::default() }],
         textures: vec![checker::uv_checker("floor", checker::object_tint(0), 64, 8)],
-        objects: vec![Object { name: "floor".into(), mesh: 0, material: 0, transform: Mat4::IDENTITY, forward_only: false }],
+        objects: vec![Object {
+            name: "floor".into(),
+            mesh: 0,
+            material: 0,
+            transform: Mat4::IDENTITY,
+            forward_only: false,
+        }],
         ..Default::default()
     };
     let camera = Camera {

@@ -87,8 +87,10 @@ impl AtlasLayout {
         }
         requests.sort_by(|a, b| b.2.cmp(&a.2).then(a.0.cmp(&b.0)).then(a.1.cmp(&b.1)));
         let mut buddy = Buddy::new(page_size);
-        let mut placed: Vec<Vec<Option<AtlasLevel>>> =
-            clamped.iter().map(|s| vec![None; s.map_or(0, |s| ((s / tile_size).ilog2() as usize + 1).min(MAX_LEVELS))]).collect();
+        let mut placed: Vec<Vec<Option<AtlasLevel>>> = clamped
+            .iter()
+            .map(|s| vec![None; s.map_or(0, |s| ((s / tile_size).ilog2() as usize + 1).min(MAX_LEVELS))])
+            .collect();
         for &(object, level, size) in &requests {
             let (page, x, y) = buddy.alloc(size);
             placed[object][level] = Some(AtlasLevel { page, x, y, size, tile_base: 0 });
@@ -126,7 +128,12 @@ impl AtlasLayout {
                     e.size = o.size;
                     e.level_count = o.levels.len() as u32;
                     for (g, l) in e.levels.iter_mut().zip(&o.levels) {
-                        *g = GpuAtlasLevel { page: l.page, origin: l.x | (l.y << 16), size: l.size, tile_base: l.tile_base };
+                        *g = GpuAtlasLevel {
+                            page: l.page,
+                            origin: l.x | (l.y << 16),
+                            size: l.size,
+                            tile_base: l.tile_base,
+                        };
                     }
                 }
                 e
@@ -247,7 +254,10 @@ mod tests {
         assert_eq!(a.objects[0].as_ref().unwrap().size, 16);
         assert_eq!(a.objects[0].as_ref().unwrap().levels.len(), 1);
         assert_eq!(a.objects[1].as_ref().unwrap().size, 2048);
-        assert_eq!(AtlasLayout::new(&[Some(300)], 8, 2048).unwrap_err(), AtlasError::NotPowerOfTwo { object: 0, size: 300 });
+        assert_eq!(
+            AtlasLayout::new(&[Some(300)], 8, 2048).unwrap_err(),
+            AtlasError::NotPowerOfTwo { object: 0, size: 300 }
+        );
         assert_eq!(AtlasLayout::new(&[Some(256)], 12, 2048).unwrap_err(), AtlasError::BadTileSize(12));
     }
 }

@@ -20,8 +20,8 @@ use wgpu::util::DeviceExt;
 use super::targets::{DEPTH_FORMAT, HDR_FORMAT};
 use super::{FrameContext, Pipeline, ShadingCounters};
 use crate::gpu::readback::{self, ReadbackRing};
-use crate::gpu::{GpuContext, GpuError};
 use crate::gpu::timing::GpuTimer;
+use crate::gpu::{GpuContext, GpuError};
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::targets::Targets;
 use crate::shaders::{self, ShaderError, ShaderLibrary};
@@ -75,7 +75,14 @@ pub struct ObjectSpaceOptions {
 
 impl Default for ObjectSpaceOptions {
     fn default() -> Self {
-        Self { tile_size: 8, reuse: 1, mip_bias: 0.0, variable_rate: 0.0, view: DebugView::Shade, texture_sizes: Vec::new() }
+        Self {
+            tile_size: 8,
+            reuse: 1,
+            mip_bias: 0.0,
+            variable_rate: 0.0,
+            view: DebugView::Shade,
+            texture_sizes: Vec::new(),
+        }
     }
 }
 
@@ -189,12 +196,18 @@ impl ObjectSpace {
 
         let atlas = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("shading atlas"),
-            size: wgpu::Extent3d { width: layout.page_size, height: layout.page_size, depth_or_array_layers: layout.pages },
+            size: wgpu::Extent3d {
+                width: layout.page_size,
+                height: layout.page_size,
+                depth_or_array_layers: layout.pages,
+            },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: ATLAS_FORMAT,
-            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
+            usage: wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
         let visibility = device.create_texture(&wgpu::TextureDescriptor {
@@ -236,7 +249,9 @@ impl ObjectSpace {
         let shade_dispatch = storage("shade dispatch", 16, wgpu::BufferUsages::INDIRECT);
 
         let shared_layout = shared_layout(device);
-        let view = |t: &wgpu::Texture, dim| t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(dim), ..Default::default() });
+        let view = |t: &wgpu::Texture, dim| {
+            t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(dim), ..Default::default() })
+        };
         let shared = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("object space"),
             layout: &shared_layout,
@@ -253,7 +268,10 @@ impl ObjectSpace {
                 },
                 wgpu::BindGroupEntry {
                     binding: 7,
-                    resource: wgpu::BindingResource::TextureView(&view(&triangle_map, wgpu::TextureViewDimension::D2Array)),
+                    resource: wgpu::BindingResource::TextureView(&view(
+                        &triangle_map,
+                        wgpu::TextureViewDimension::D2Array,
+                    )),
                 },
             ],
         });
@@ -418,12 +436,18 @@ impl ObjectSpace {
             let s = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
             (s * 255.0 + 0.5) as u8
         };
-        let pixels = halves.chunks_exact(4).flat_map(|p| [encode(p[0].to_f32()), encode(p[1].to_f32()), encode(p[2].to_f32()), 255]);
+        let pixels = halves
+            .chunks_exact(4)
+            .flat_map(|p| [encode(p[0].to_f32()), encode(p[1].to_f32()), encode(p[2].to_f32()), 255]);
         Ok(image::RgbaImage::from_raw(l.size, l.size, pixels.collect()).expect("size matches"))
     }
 }
 
-fn storage_texture(binding: u32, format: wgpu::TextureFormat, view_dimension: wgpu::TextureViewDimension) -> wgpu::BindGroupLayoutEntry {
+fn storage_texture(
+    binding: u32,
+    format: wgpu::TextureFormat,
+    view_dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -444,7 +468,11 @@ fn shared_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let texture = |binding, view_dimension| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Uint, view_dimension, multisampled: false },
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Uint,
+            view_dimension,
+            multisampled: false,
+        },
         count: None,
     };
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -476,7 +504,12 @@ fn visibility_pipeline(
     Ok(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("visibility"),
         layout: Some(&layout),
-        vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers: &[] },
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
         fragment: Some(wgpu::FragmentState {
             module: &module,
             entry_point: Some("fs_main"),
@@ -533,7 +566,10 @@ impl Pipeline for ObjectSpace {
                     view: &vis_view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &frame.targets.depth_view,
@@ -552,19 +588,23 @@ impl Pipeline for ObjectSpace {
             }
         }
         let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
-        let mut compute = |name: &str, pipeline: &wgpu::ComputePipeline, extra: Option<&wgpu::BindGroup>, dispatch: Dispatch| {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(name), timestamp_writes: timer.compute_pass(name) });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, scene.bind_group(), &[]);
-            pass.set_bind_group(1, &self.shared, &[]);
-            if let Some(g) = extra {
-                pass.set_bind_group(2, g, &[]);
-            }
-            match dispatch {
-                Dispatch::Direct(x, y) => pass.dispatch_workgroups(x, y, 1),
-                Dispatch::Indirect(buffer) => pass.dispatch_workgroups_indirect(buffer, 0),
-            }
-        };
+        let mut compute =
+            |name: &str, pipeline: &wgpu::ComputePipeline, extra: Option<&wgpu::BindGroup>, dispatch: Dispatch| {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(name),
+                    timestamp_writes: timer.compute_pass(name),
+                });
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, scene.bind_group(), &[]);
+                pass.set_bind_group(1, &self.shared, &[]);
+                if let Some(g) = extra {
+                    pass.set_bind_group(2, g, &[]);
+                }
+                match dispatch {
+                    Dispatch::Direct(x, y) => pass.dispatch_workgroups(x, y, 1),
+                    Dispatch::Indirect(buffer) => pass.dispatch_workgroups_indirect(buffer, 0),
+                }
+            };
         compute("mark", &self.mark, None, Dispatch::Direct(w, h));
         compute("queue", &self.queue_args, Some(&self.shade_args), Dispatch::Direct(1, 1));
         compute("shade", &self.shade, Some(&self.shade_outputs), Dispatch::Indirect(&self.shade_dispatch));

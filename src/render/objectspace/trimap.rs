@@ -39,7 +39,11 @@ pub fn build(
     let make = |label| {
         device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
-            size: wgpu::Extent3d { width: layout.page_size, height: layout.page_size, depth_or_array_layers: layout.pages },
+            size: wgpu::Extent3d {
+                width: layout.page_size,
+                height: layout.page_size,
+                depth_or_array_layers: layout.pages,
+            },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -94,7 +98,10 @@ pub fn build(
                 view: &view,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
             })],
             ..Default::default()
         });
@@ -201,7 +208,8 @@ pub fn build(
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&array_view(target)) },
             ],
         });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("dilate"), timestamp_writes: None });
+        let mut pass =
+            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("dilate"), timestamp_writes: None });
         pass.set_pipeline(&dilate);
         for (i, s) in squares.iter().enumerate() {
             pass.set_bind_group(0, &bind_group, &[(i * stride) as u32]);

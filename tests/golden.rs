@@ -1,0 +1,113 @@
+//! Golden images of the procedural scenes (forward pipeline), determinism, and
+//! object space against forward on them.
+//!
+//! Goldens were rendered on lavapipe; other adapters rasterize slightly
+//! differently, hence a FLIP threshold rather than exact equality. Set
+//! `SHADESPACE_BLESS=1` to (re)write them after an intended change.
+mod common;
+
+use std::path::PathBuf;
+
+use shadespace::metrics;
+use shadespace::render::objectspace::ObjectSpaceOptions;
+use shadespace::render::{PipelineKind, RenderOptions, Renderer};
+use shadespace::scene::{self, LightSpec, lights, path};
+
+const WIDTH: u32 = 192;
+const HEIGHT: u32 = 108;
+/// Mean FLIP allowed between a render and its golden image.
+const GOLDEN_FLIP: f32 = 0.02;
+/// Object space against forward (the bounds, at test size).
+const AGREEMENT_FLIP: f32 = 0.05;
+const AGREEMENT_PSNR: f64 = 35.0;
+
+fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: PipelineKind) -> image::RgbaImage {
+    let scene = scene::load(name).unwrap();
+    let bounds = scene.bounds();
+    let cameras = path::cameras_for_scene(name, &bounds).unwrap();
+    let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
+    let spec: LightSpec = "small:24+big:2".parse().unwrap();
+    let lights = lights::build_lights(&spec, &bounds, &camera, WIDTH as f32 / HEIGHT as f32, 7).unwrap();
+    let objectspace = ObjectSpaceOptions { texture_sizes: common::texture_sizes(&scene), ..Default::default() };
+    let options =
+        RenderOptions { pipeline, width: WIDTH, height: HEIGHT, depth_prepass: true, objectspace: Some(objectspace) };
+    let mut r = Renderer::new(ctx, &scene, &options).unwrap();
+    r.render(ctx, &camera, &lights, 0).unwrap();
+    let image = r.read_image(ctx).unwrap();
+    ctx.check_errors().unwrap();
+    image
+}
+
+fn golden_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(format!("{name}.png"))
+}
+
+fn check_golden(name: &str) {
+    let ctx = common::gpu();
+    let actual = render(&ctx, name, PipelineKind::Forward);
+    let path = golden_path(name);
+    if std::env::var_os("SHADESPACE_BLESS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        actual.save(&path).unwrap();
+        eprintln!("blessed {}", path.display());
+        return;
+    }
+    let golden = image::open(&path)
+        .unwrap_or_else(|e| panic!("{}: {e} (render it with SHADESPACE_BLESS=1)", path.display()))
+        .to_rgba8();
+    let (err, map) = metrics::compare(&golden, &actual);
+    if err.flip_mean > GOLDEN_FLIP {
+        let out = common::out_dir();
+        actual.save(out.join(format!("{name}-actual.png"))).unwrap();
+        map.save(out.join(format!("{name}-difference.png"))).unwrap();
+        panic!(
+            "{name}: mean FLIP {} > {GOLDEN_FLIP} ({err:?}); actual and difference in {}",
+            err.flip_mean,
+            out.display()
+        );
+    }
+    // Lit geometry, not a blank or one-colour image.
+    let lum: Vec<u32> = actual.pixels().map(|p| p[0] as u32 + p[1] as u32 + p[2] as u32).collect();
+    assert!(lum.iter().max().unwrap() - lum.iter().min().unwrap() > 150, "{name}: nearly uniform image");
+}
+
+#[test]
+fn golden_atrium() {
+    check_golden("atrium");
+}
+
+#[test]
+fn golden_voxels() {
+    check_golden("voxels");
+}
+
+#[test]
+fn same_inputs_give_the_same_image() {
+    let ctx = common::gpu();
+    let a = render(&ctx, "atrium", PipelineKind::Forward);
+    let b = render(&ctx, "atrium", PipelineKind::Forward);
+    assert!(a == b, "two renders of the same frame differ");
+}
+
+fn check_agreement(name: &str) {
+    let ctx = common::gpu();
+    let reference = render(&ctx, name, PipelineKind::Forward);
+    let test = render(&ctx, name, PipelineKind::ObjectSpace);
+    let (err, map) = metrics::compare(&reference, &test);
+    let out = common::out_dir();
+    test.save(out.join(format!("{name}-objectspace.png"))).unwrap();
+    reference.save(out.join(format!("{name}-forward.png"))).unwrap();
+    map.save(out.join(format!("{name}-objectspace-flip.png"))).unwrap();
+    eprintln!("{name}: object space vs forward: {err:?}");
+    assert!(err.flip_mean <= AGREEMENT_FLIP && err.psnr_db >= AGREEMENT_PSNR, "{name}: {err:?}");
+}
+
+#[test]
+fn objectspace_agrees_with_forward_atrium() {
+    check_agreement("atrium");
+}
+
+#[test]
+fn objectspace_agrees_with_forward_voxels() {
+    check_agreement("voxels");
+}

@@ -1,0 +1,50 @@
+//! The shared Sponza (../shared/scenes/sponza-thesis): renders, and object
+//! space agrees with forward. Skips with a message where the folder is absent.
+mod common;
+
+use std::path::Path;
+
+use shadespace::metrics;
+use shadespace::render::objectspace::ObjectSpaceOptions;
+use shadespace::render::{PipelineKind, RenderOptions, Renderer};
+use shadespace::scene::{self, LightSpec, lights, path};
+
+const SPONZA: &str = "../shared/scenes/sponza-thesis";
+
+#[test]
+fn sponza_forward_and_objectspace_agree() {
+    if !Path::new(SPONZA).is_dir() {
+        eprintln!("SKIPPED: {SPONZA} is absent");
+        return;
+    }
+    let ctx = common::gpu();
+    let scene = scene::load(SPONZA).unwrap();
+    let bounds = scene.bounds();
+    let camera =
+        path::cameras_for_scene(SPONZA, &bounds).unwrap().select(path::CameraChoice::Path).unwrap().camera_at(0);
+    let (w, h) = (256, 144);
+    let spec: LightSpec = "small:32".parse().unwrap();
+    let lights = lights::build_lights(&spec, &bounds, &camera, w as f32 / h as f32, 1).unwrap();
+    let objectspace = ObjectSpaceOptions { texture_sizes: common::texture_sizes(&scene), ..Default::default() };
+    let mut images = Vec::new();
+    for pipeline in [PipelineKind::Forward, PipelineKind::ObjectSpace] {
+        let options = RenderOptions {
+            pipeline,
+            width: w,
+            height: h,
+            depth_prepass: true,
+            objectspace: Some(objectspace.clone()),
+        };
+        let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
+        r.render(&ctx, &camera, &lights, 0).unwrap();
+        let image = r.read_image(&ctx).unwrap();
+        image.save(common::out_dir().join(format!("sponza-{pipeline:?}.png"))).unwrap();
+        images.push(image);
+    }
+    let lum: Vec<u32> = images[0].pixels().map(|p| p[0] as u32 + p[1] as u32 + p[2] as u32).collect();
+    assert!(lum.iter().max().unwrap() - lum.iter().min().unwrap() > 150, "nearly uniform image");
+    let (err, map) = metrics::compare(&images[0], &images[1]);
+    map.save(common::out_dir().join("sponza-objectspace-flip.png")).unwrap();
+    eprintln!("sponza: object space vs forward at {w}x{h}: {err:?}");
+    assert!(err.flip_mean <= 0.05 && err.psnr_db >= 35.0, "{err:?}");
+}
