@@ -94,7 +94,7 @@ impl Mesh {
     /// bad file is reported by name instead of crashing a GPU pass.
     pub fn validate(&self) -> Result<(), String> {
         let n = self.positions.len();
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             return Err(format!("mesh '{}': index count {} is not a multiple of 3", self.name, self.indices.len()));
         }
         if let Some((k, &i)) = self.indices.iter().enumerate().find(|(_, i)| **i as usize >= n) {
