@@ -318,10 +318,13 @@ impl Builder<'_> {
                 });
             }
         }
-        if let Some(light) = node.light() {
-            let Some(direction) = forward else {
-                return Err(self.invalid(format!("light node '{node_name}' has a degenerate transform")));
-            };
+        let light = node.light().and_then(|l| {
+            if forward.is_none() {
+                tracing::warn!("{}: light node '{node_name}' has a zero-scale transform; skipped", self.path.display());
+            }
+            Some(l).zip(forward)
+        });
+        if let Some((light, direction)) = light {
             let intensity = light.intensity();
             let mut l = Light {
                 kind: LightKind::Point,
@@ -353,7 +356,11 @@ impl Builder<'_> {
                 ::gltf::camera::Projection::Perspective(p) => {
                     let up = world.transform_vector3(Vec3::Y).try_normalize();
                     let (Some(forward), Some(up)) = (forward, up) else {
-                        return Err(self.invalid(format!("camera node '{node_name}' has a degenerate transform")));
+                        tracing::warn!(
+                            "{}: camera node '{node_name}' has a zero-scale transform; skipped",
+                            self.path.display()
+                        );
+                        return Ok(());
                     };
                     let far = p.zfar().unwrap_or(1000.0);
                     let (fov_y, near) = (p.yfov(), p.znear());
@@ -1164,6 +1171,18 @@ mod tests {
         }
         eprintln!("mutated glTF files: {ok} loaded, {failed} rejected");
         assert!(ok > 0 && failed > 0);
+    }
+
+    #[test]
+    fn zero_scale_light_and_camera_are_skipped() {
+        let mut doc = document(data_uri(&triangle_buffer([0, 1, 2])));
+        doc["nodes"][1]["scale"] = json!([0.0, 0.0, 0.0]);
+        doc["nodes"][3]["scale"] = json!([0.0, 0.0, 0.0]);
+        let dir = tempfile::tempdir().unwrap();
+        let scene = load(&write(dir.path(), "z.gltf", serde_json::to_vec(&doc).unwrap())).unwrap();
+        assert_eq!(scene.lights.len(), 1, "only the spot light is left");
+        assert_eq!(scene.lights[0].kind, LightKind::Spot);
+        assert!(scene.cameras.is_empty());
     }
 
     #[test]
