@@ -5,6 +5,7 @@
 //! per frame: views + lights -> a pipeline's passes -> HDR target -> tone map)
 //! -> image + [`render::FrameStats`].
 
+pub mod charts;
 pub mod gpu;
 pub mod render;
 pub mod scene;
