@@ -6,6 +6,7 @@
 //! -> image + [`render::FrameStats`].
 
 pub mod bench;
+pub mod charts;
 pub mod gpu;
 pub mod metrics;
 pub mod render;
