@@ -7,8 +7,9 @@ use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use shadespace::bench::{self, BenchSetup};
+use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::gpu::{GpuContext, GpuOptions};
-use shadespace::render::objectspace::{DebugView, ObjectSpaceOptions};
+use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpaceOptions};
 use shadespace::render::{PipelineKind, RenderOptions, Renderer};
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
@@ -28,6 +29,18 @@ enum Command {
     Bench(BenchArgs),
     /// List the GPU adapters, and the features and limits of the chosen one.
     Info(GpuArgs),
+    /// Print, per object, where its unique UV layout (chart) comes from, its
+    /// overlap, surface area, texel density and shading-texture size.
+    Charts(ChartsArgs),
+}
+
+#[derive(Args)]
+struct ChartsArgs {
+    /// `atrium`, `voxels`, or a path (see `render --help`).
+    #[arg(long, default_value = "atrium")]
+    scene: String,
+    #[command(flatten)]
+    objectspace: ObjectSpaceArgs,
 }
 
 #[derive(Args)]
@@ -99,6 +112,10 @@ struct ObjectSpaceArgs {
     /// triangle's normals do not vary (0 = off).
     #[arg(long, default_value_t = 0.0)]
     variable_rate: f32,
+    /// Atlas budget in Mi texels (all objects, mip chains included; 12 bytes
+    /// each with the triangle maps); texture sizes are halved until they fit.
+    #[arg(long, default_value_t = 64)]
+    atlas_budget: u64,
     /// Shade these objects (comma-separated names) forward instead of in object space.
     #[arg(long, value_delimiter = ',')]
     forward_only: Vec<String>,
@@ -178,6 +195,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render(a),
         Command::Bench(a) => run_bench(a),
         Command::Info(a) => info(a),
+        Command::Charts(a) => print_charts(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -210,6 +228,8 @@ fn input<T, E: Into<anyhow::Error>>(r: Result<T, E>) -> Result<T, Failure> {
 /// The scene, its cameras and its lights, as the options describe them.
 struct Setup {
     scene: Scene,
+    /// Object space: shading-texture side per object.
+    texture_sizes: Option<Vec<Option<u32>>>,
     path: CameraPath,
     camera_label: String,
     lights: Vec<Light>,
@@ -233,12 +253,22 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     let aspect = a.size.0 as f32 / a.size.1 as f32;
     let reference: Camera = path.camera_at(0);
     let lights = input(lights::build_lights(&spec, &bounds, &reference, aspect, a.seed))?;
-    Ok(Setup { scene, path, camera_label: a.camera.clone(), lights, lights_spec: spec.to_string() })
+    let (scene, texture_sizes) = if a.pipeline == PipelineKind::ObjectSpace {
+        let (charted, charts) = chart(&scene, &a.objectspace)?;
+        (charted, Some(charts.texture_sizes()))
+    } else {
+        (scene, None)
+    };
+    Ok(Setup { scene, texture_sizes, path, camera_label: a.camera.clone(), lights, lights_spec: spec.to_string() })
 }
 
-/// Renderer options from the command line (the scene is needed for the
-/// object-space texture sizes).
-fn render_options(a: &SceneArgs, scene: &Scene, view: DebugView) -> Result<RenderOptions, Failure> {
+/// Renderer options from the command line and, for object space, the
+/// texture sizes the charts gave.
+fn render_options(
+    a: &SceneArgs,
+    texture_sizes: &Option<Vec<Option<u32>>>,
+    view: DebugView,
+) -> Result<RenderOptions, Failure> {
     let objectspace = (a.pipeline == PipelineKind::ObjectSpace)
         .then(|| -> Result<_, Failure> {
             Ok(ObjectSpaceOptions {
@@ -247,7 +277,8 @@ fn render_options(a: &SceneArgs, scene: &Scene, view: DebugView) -> Result<Rende
                 mip_bias: a.objectspace.mip_bias,
                 variable_rate: a.objectspace.variable_rate,
                 view,
-                texture_sizes: texture_sizes(scene, &a.objectspace)?,
+                texture_sizes: texture_sizes.clone().unwrap_or_default(),
+                atlas_budget_texels: a.objectspace.atlas_budget << 20,
             })
         })
         .transpose()?;
@@ -260,10 +291,23 @@ fn render_options(a: &SceneArgs, scene: &Scene, view: DebugView) -> Result<Rende
     })
 }
 
-/// Shading-texture side per object (`None`: shaded forward).
-fn texture_sizes(scene: &Scene, a: &ObjectSpaceArgs) -> Result<Vec<Option<u32>>, Failure> {
-    // TEMPORARY until the charts module lands.
-    Ok(scene.objects.iter().map(|o| (!o.forward_only).then_some(a.texture_size.unwrap_or(1024))).collect())
+/// The texture sizing the options ask for.
+fn sizing(a: &ObjectSpaceArgs) -> Result<TextureSizing, Failure> {
+    match a.texture_size {
+        Some(size) if size.is_power_of_two() && size >= 8 => Ok(TextureSizing::Fixed(size)),
+        Some(size) => input(Err(anyhow::anyhow!("--texture-size {size} is not a power of two of at least 8"))),
+        None if a.texel_density > 0.0 && a.texel_density.is_finite() => {
+            Ok(TextureSizing::Density { texels_per_metre: a.texel_density, min: 64, max: MAX_PAGE_SIZE })
+        }
+        None => input(Err(anyhow::anyhow!("--texel-density must be a positive number"))),
+    }
+}
+
+/// Charts every object shaded in object space; returns the scene with its
+/// charts in `uv1` and the charts (texture sizes, sources).
+fn chart(scene: &Scene, a: &ObjectSpaceArgs) -> Result<(Scene, SceneCharts), Failure> {
+    let charts = charts::chart_scene(scene, &sizing(a)?, &ChartCache::from_env())?;
+    Ok((charts.apply(scene), charts))
 }
 
 fn open_gpu(a: &GpuArgs) -> Result<GpuContext, Failure> {
@@ -274,7 +318,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
-    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.scene, a.view)?)?;
+    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, a.view)?)?;
     renderer.exposure = a.scene.exposure;
     let camera = s.path.camera_at(a.frame);
     let stats = renderer.render(&ctx, &camera, &s.lights, a.frame as u64)?;
@@ -337,7 +381,7 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
-    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.scene, DebugView::Shade)?)?;
+    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, DebugView::Shade)?)?;
     renderer.exposure = a.scene.exposure;
     if !renderer.timing_enabled() {
         tracing::warn!("{} has no timestamp queries: the result has CPU times only", ctx.info.name);
@@ -378,6 +422,13 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
     for (name, s) in &result.gpu_passes {
         println!("  {name:<16} median {:8.3} ms  p95 {:8.3} ms", s.median_ms, s.p95_ms);
     }
+    Ok(())
+}
+
+fn print_charts(a: ChartsArgs) -> Result<(), Failure> {
+    let scene = input(scene::load(&a.scene))?;
+    let (_, charts) = chart(&scene, &a.objectspace)?;
+    print!("{charts}");
     Ok(())
 }
 

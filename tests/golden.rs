@@ -28,7 +28,8 @@ fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: PipelineKind)
     let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
     let spec: LightSpec = "small:24+big:2".parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &camera, WIDTH as f32 / HEIGHT as f32, 7).unwrap();
-    let objectspace = ObjectSpaceOptions { texture_sizes: common::texture_sizes(&scene), ..Default::default() };
+    let (scene, texture_sizes) = common::charted(&scene);
+    let objectspace = ObjectSpaceOptions { texture_sizes, ..Default::default() };
     let options =
         RenderOptions { pipeline, width: WIDTH, height: HEIGHT, depth_prepass: true, objectspace: Some(objectspace) };
     let mut r = Renderer::new(ctx, &scene, &options).unwrap();

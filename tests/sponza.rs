@@ -25,7 +25,8 @@ fn sponza_forward_and_objectspace_agree() {
     let (w, h) = (256, 144);
     let spec: LightSpec = "small:32".parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &camera, w as f32 / h as f32, 1).unwrap();
-    let objectspace = ObjectSpaceOptions { texture_sizes: common::texture_sizes(&scene), ..Default::default() };
+    let (scene, texture_sizes) = common::charted(&scene);
+    let objectspace = ObjectSpaceOptions { texture_sizes, ..Default::default() };
     let mut images = Vec::new();
     for pipeline in [PipelineKind::Forward, PipelineKind::ObjectSpace] {
         let options = RenderOptions {

@@ -268,6 +268,24 @@ impl SceneCharts {
         row.shading.and(self.meshes.get(row.mesh)?.as_ref())
     }
 
+    /// Shading-texture side per object; `None` for objects shaded forward.
+    pub fn texture_sizes(&self) -> Vec<Option<u32>> {
+        self.objects.iter().map(|o| o.shading.map(|s| s.texture.side)).collect()
+    }
+
+    /// A copy of `scene` whose meshes carry their charts in `uv1`: where a
+    /// chart was generated the mesh is replaced (vertices split along seams,
+    /// same triangles in the same order).
+    pub fn apply(&self, scene: &Scene) -> Scene {
+        let mut charted = scene.clone();
+        for (mesh, chart) in charted.meshes.iter_mut().zip(&self.meshes) {
+            if let Some(chart) = chart {
+                *mesh = chart.mesh.clone();
+            }
+        }
+        charted
+    }
+
     /// The per-object table as aligned text (the same as `Display`).
     pub fn table(&self) -> String {
         self.to_string()

@@ -82,3 +82,14 @@ pub fn floor_scene() -> (Scene, Camera, Vec<Light>) {
     let _ = Vec4::ONE;
     (scene, camera, lights)
 }
+
+/// Charts `scene` as the CLI does with its default density (uv1 set on every
+/// mesh) and returns it with the shading-texture sizes. Chart generation is
+/// cached under the test target folder.
+pub fn charted(scene: &Scene) -> (Scene, Vec<Option<u32>>) {
+    use shadespace::charts::{self, ChartCache, TextureSizing};
+    let cache = ChartCache::in_dir(Path::new(env!("CARGO_TARGET_TMPDIR")).join("charts"));
+    let sizing = TextureSizing::Density { texels_per_metre: 256.0, min: 64, max: 8192 };
+    let c = charts::chart_scene(scene, &sizing, &cache).unwrap();
+    (c.apply(scene), c.texture_sizes())
+}

@@ -146,6 +146,23 @@ impl AtlasLayout {
     }
 }
 
+/// Oxide's stable shading budget: while the objects' texels (mip chains
+/// included) exceed `budget_texels`, every object's side is halved (down to
+/// `min_side`), so shading density drops uniformly and no scene overflows.
+/// Returns the sizes and how many times they were halved.
+pub fn fit_budget(sizes: &[Option<u32>], budget_texels: u64, min_side: u32) -> (Vec<Option<u32>>, u32) {
+    let texels = |sizes: &[Option<u32>]| sizes.iter().flatten().map(|&s| s as u64 * s as u64 * 4 / 3).sum::<u64>();
+    let mut sizes = sizes.to_vec();
+    let mut halvings = 0;
+    while texels(&sizes) > budget_texels && sizes.iter().flatten().any(|&s| s > min_side) {
+        for s in sizes.iter_mut().flatten() {
+            *s = (*s / 2).max(min_side);
+        }
+        halvings += 1;
+    }
+    (sizes, halvings)
+}
+
 /// Buddy allocator over square pages of a power-of-two side.
 struct Buddy {
     page_size: u32,
@@ -246,6 +263,15 @@ mod tests {
         // Texels used fit the pages with little waste (buddy packing of sorted squares).
         let used: u64 = a.objects.iter().flatten().map(|o| o.texels()).sum();
         assert!(used <= a.atlas_texels() && used * 2 > a.atlas_texels(), "used {used} of {}", a.atlas_texels());
+    }
+
+    #[test]
+    fn budget_halves_every_object_until_it_fits() {
+        let (sizes, halvings) = fit_budget(&[Some(4096), Some(1024), None, Some(64)], 2 * 1024 * 1024, 64);
+        assert_eq!(halvings, 2);
+        assert_eq!(sizes, vec![Some(1024), Some(256), None, Some(64)]);
+        let (same, none) = fit_budget(&[Some(256)], 1 << 20, 64);
+        assert_eq!((same, none), (vec![Some(256)], 0));
     }
 
     #[test]

@@ -31,6 +31,8 @@ pub const ATLAS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 /// Largest atlas page side (the adapter's limit may be lower).
 pub const MAX_PAGE_SIZE: u32 = 8192;
+/// Default atlas budget: 64 Mi texels (768 MiB with the triangle maps).
+pub const DEFAULT_ATLAS_BUDGET: u64 = 64 << 20;
 
 /// Debug views that replace the gathered shade (`render --view`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
@@ -71,6 +73,9 @@ pub struct ObjectSpaceOptions {
     /// Shading-texture side per scene object; `None` shades the object
     /// forward (per pixel, in the gather).
     pub texture_sizes: Vec<Option<u32>>,
+    /// Most atlas texels (all objects, mip chains included); sizes are halved
+    /// uniformly until they fit (see [`atlas::fit_budget`]).
+    pub atlas_budget_texels: u64,
 }
 
 impl Default for ObjectSpaceOptions {
@@ -82,6 +87,7 @@ impl Default for ObjectSpaceOptions {
             variable_rate: 0.0,
             view: DebugView::Shade,
             texture_sizes: Vec::new(),
+            atlas_budget_texels: DEFAULT_ATLAS_BUDGET,
         }
     }
 }
@@ -126,6 +132,8 @@ pub struct ObjectMemory {
 #[derive(Clone, Debug, Serialize)]
 pub struct MemoryReport {
     pub total: MemoryUse,
+    /// Times the requested texture sizes were halved to fit the budget.
+    pub budget_halvings: u32,
     pub atlas_pages: u32,
     pub page_size: u32,
     pub tile_count: u32,
@@ -169,6 +177,7 @@ pub struct ObjectSpace {
     /// Frames rendered so far; stamps are `frames + 1` so that 0 means never.
     frames: u32,
     memory: MemoryUse,
+    budget_halvings: u32,
 }
 
 impl ObjectSpace {
@@ -191,7 +200,11 @@ impl ObjectSpace {
             return Err(ObjectSpaceError::SizeCount(options.texture_sizes.len(), scene.draws.len()));
         }
         let max_page = MAX_PAGE_SIZE.min(device.limits().max_texture_dimension_2d);
-        let layout = AtlasLayout::new(&options.texture_sizes, options.tile_size, max_page)?;
+        let (sizes, halvings) = atlas::fit_budget(&options.texture_sizes, options.atlas_budget_texels, 64);
+        if halvings > 0 {
+            tracing::info!("atlas budget: every object's shading texture halved {halvings} time(s)");
+        }
+        let layout = AtlasLayout::new(&sizes, options.tile_size, max_page)?;
         let (triangle_map, _rings) = trimap::build(device, queue, shaders, scene, &layout)?;
 
         let atlas = device.create_texture(&wgpu::TextureDescriptor {
@@ -384,6 +397,7 @@ impl ObjectSpace {
             readback: ReadbackRing::new("object-space counters", 16),
             frames: 0,
             memory,
+            budget_halvings: halvings,
         })
     }
 
@@ -412,6 +426,7 @@ impl ObjectSpace {
             .collect();
         MemoryReport {
             total: self.memory,
+            budget_halvings: self.budget_halvings,
             atlas_pages: self.layout.pages,
             page_size: self.layout.page_size,
             tile_count: self.layout.tile_count,
