@@ -58,6 +58,7 @@ pub struct BenchResult {
     pub camera: String,
     pub frames: u32,
     pub warmup: u32,
+    pub frame_step: u32,
     /// GPU time per pass over the measured frames.
     pub gpu_passes: BTreeMap<String, Summary>,
     /// GPU time from the first pass's start to the last pass's end.
@@ -129,7 +130,7 @@ pub struct BenchSetup<'a> {
 }
 
 /// Renders `warmup + frames` frames along `path` (frame `i` uses the path's
-/// camera `i mod path length`), then waits for the GPU timings and summarises
+/// camera `i * step mod path length`), then waits for the GPU timings and summarises
 /// the measured frames. `progress` is called after each frame.
 pub fn run(
     ctx: &GpuContext,
@@ -138,6 +139,7 @@ pub fn run(
     lights: &[Light],
     warmup: u32,
     frames: u32,
+    step: u32,
     setup: &BenchSetup,
     mut progress: impl FnMut(u32),
 ) -> Result<BenchResult, RenderError> {
@@ -148,7 +150,7 @@ pub fn run(
     let mut counters: Vec<ShadingCounters> = Vec::with_capacity(total as usize);
     let path_len = path.frame_count().max(1);
     for i in 0..total {
-        let camera = path.camera_at(i % path_len);
+        let camera = path.camera_at((i as u64 * step as u64 % path_len as u64) as u32);
         stats.push(renderer.render(ctx, &camera, lights, i as u64)?);
         timings.extend(renderer.collect_timings(ctx, false));
         counters.extend(renderer.collect_counters(ctx, false));
@@ -188,6 +190,7 @@ pub fn run(
         camera: setup.camera.to_string(),
         frames,
         warmup,
+        frame_step: step,
         gpu_passes: per_pass.iter().map(|(k, v)| (k.clone(), Summary::of(v))).collect(),
         gpu_frame: Summary::of(&gpu_frame_ms),
         cpu_frame: Summary::of(&cpu),

@@ -32,6 +32,19 @@ enum Command {
     /// Print, per object, where its unique UV layout (chart) comes from, its
     /// overlap, surface area, texel density and shading-texture size.
     Charts(ChartsArgs),
+    /// Compare two images: mean FLIP error, PSNR, largest channel difference.
+    Compare(CompareArgs),
+}
+
+#[derive(Args)]
+struct CompareArgs {
+    /// The reference image (e.g. forward shading).
+    reference: PathBuf,
+    /// The image under test (e.g. object-space shading).
+    test: PathBuf,
+    /// Also write the FLIP error map here.
+    #[arg(long)]
+    flip_map: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -155,6 +168,11 @@ struct BenchArgs {
     /// Frames rendered first and not measured.
     #[arg(long, default_value_t = 60)]
     warmup: u32,
+    /// Measured frame i shows path frame i x STEP (mod the path length): a
+    /// shorter run that still covers the whole path. Reuse between frames
+    /// shrinks as the step grows.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    frame_step: u32,
     /// Result JSON.
     #[arg(long, default_value = "bench.json")]
     out: PathBuf,
@@ -196,6 +214,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => run_bench(a),
         Command::Info(a) => info(a),
         Command::Charts(a) => print_charts(a),
+        Command::Compare(a) => compare(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -401,7 +420,7 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
         seed: a.scene.seed,
         camera: &s.camera_label,
     };
-    let result = bench::run(&ctx, &mut renderer, &s.path, &s.lights, a.warmup, a.frames, &setup, |i| {
+    let result = bench::run(&ctx, &mut renderer, &s.path, &s.lights, a.warmup, a.frames, a.frame_step, &setup, |i| {
         bar.set_position(i as u64)
     })?;
     bar.finish_and_clear();
@@ -429,6 +448,30 @@ fn print_charts(a: ChartsArgs) -> Result<(), Failure> {
     let scene = input(scene::load(&a.scene))?;
     let (_, charts) = chart(&scene, &a.objectspace)?;
     print!("{charts}");
+    Ok(())
+}
+
+fn compare(a: CompareArgs) -> Result<(), Failure> {
+    let load = |p: &Path| {
+        input(image::open(p).map(|i| i.to_rgba8()).with_context(|| format!("{}: cannot read image", p.display())))
+    };
+    let (reference, test) = (load(&a.reference)?, load(&a.test)?);
+    if reference.dimensions() != test.dimensions() {
+        return input(Err(anyhow::anyhow!(
+            "{} is {:?} but {} is {:?}",
+            a.reference.display(),
+            reference.dimensions(),
+            a.test.display(),
+            test.dimensions()
+        )));
+    }
+    let (err, map) = shadespace::metrics::compare(&reference, &test);
+    println!("FLIP mean {:.4}  PSNR {:.2} dB  max channel difference {}", err.flip_mean, err.psnr_db, err.max_abs);
+    if let Some(path) = &a.flip_map {
+        let mut bytes = Vec::new();
+        map.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).context("encoding PNG")?;
+        write_file(path, &bytes)?;
+    }
     Ok(())
 }
 

@@ -63,8 +63,10 @@ pub struct AtlasLayout {
 impl AtlasLayout {
     /// Lays out objects of the given shading-texture sizes (`None`: not in the
     /// atlas). Sizes above `max_page` are clamped to it; sizes below the tile
-    /// size are raised to it. Levels go down to one tile.
-    pub fn new(sizes: &[Option<u32>], tile_size: u32, max_page: u32) -> Result<Self, AtlasError> {
+    /// size are raised to it. Levels go down to `coarsest` texels (or one
+    /// tile, if larger): below the charts' gutter, neighbouring charts would
+    /// share texels.
+    pub fn new(sizes: &[Option<u32>], tile_size: u32, max_page: u32, coarsest: u32) -> Result<Self, AtlasError> {
         if ![8, 16, 32, 64].contains(&tile_size) {
             return Err(AtlasError::BadTileSize(tile_size));
         }
@@ -77,20 +79,19 @@ impl AtlasLayout {
             });
         }
         let page_size = clamped.iter().flatten().copied().max().unwrap_or(tile_size);
+        let coarsest = coarsest.max(tile_size);
+        let level_count = |size: u32| ((size / coarsest.min(size)).ilog2() as usize + 1).min(MAX_LEVELS);
         // Requests (object, level, size), largest first: then buddy splitting never fragments.
         let mut requests: Vec<(usize, usize, u32)> = Vec::new();
         for (object, size) in clamped.iter().enumerate() {
             if let Some(size) = size {
-                let levels = (size / tile_size).ilog2() as usize + 1;
-                requests.extend((0..levels.min(MAX_LEVELS)).map(|l| (object, l, size >> l)));
+                requests.extend((0..level_count(*size)).map(|l| (object, l, size >> l)));
             }
         }
         requests.sort_by(|a, b| b.2.cmp(&a.2).then(a.0.cmp(&b.0)).then(a.1.cmp(&b.1)));
         let mut buddy = Buddy::new(page_size);
-        let mut placed: Vec<Vec<Option<AtlasLevel>>> = clamped
-            .iter()
-            .map(|s| vec![None; s.map_or(0, |s| ((s / tile_size).ilog2() as usize + 1).min(MAX_LEVELS))])
-            .collect();
+        let mut placed: Vec<Vec<Option<AtlasLevel>>> =
+            clamped.iter().map(|s| vec![None; s.map_or(0, level_count)]).collect();
         for &(object, level, size) in &requests {
             let (page, x, y) = buddy.alloc(size);
             placed[object][level] = Some(AtlasLevel { page, x, y, size, tile_base: 0 });
@@ -239,7 +240,7 @@ mod tests {
     #[test]
     fn levels_are_disjoint_inside_pages_and_tiles_are_contiguous() {
         let sizes = [Some(1024), Some(256), None, Some(512), Some(64), Some(1024)];
-        let a = AtlasLayout::new(&sizes, 8, 4096).unwrap();
+        let a = AtlasLayout::new(&sizes, 8, 4096, 8).unwrap();
         assert_eq!(a.page_size, 1024);
         let all: Vec<AtlasLevel> = a.objects.iter().flatten().flat_map(|o| o.levels.clone()).collect();
         for (i, x) in all.iter().enumerate() {
@@ -266,6 +267,14 @@ mod tests {
     }
 
     #[test]
+    fn mip_chains_stop_at_the_coarsest_level() {
+        let a = AtlasLayout::new(&[Some(1024), Some(64)], 8, 4096, 128).unwrap();
+        let sizes: Vec<u32> = a.objects[0].as_ref().unwrap().levels.iter().map(|l| l.size).collect();
+        assert_eq!(sizes, vec![1024, 512, 256, 128]);
+        assert_eq!(a.objects[1].as_ref().unwrap().levels.len(), 1);
+    }
+
+    #[test]
     fn budget_halves_every_object_until_it_fits() {
         let (sizes, halvings) = fit_budget(&[Some(4096), Some(1024), None, Some(64)], 2 * 1024 * 1024, 64);
         assert_eq!(halvings, 2);
@@ -276,14 +285,14 @@ mod tests {
 
     #[test]
     fn sizes_are_clamped_and_checked() {
-        let a = AtlasLayout::new(&[Some(4), Some(1 << 15)], 16, 2048).unwrap();
+        let a = AtlasLayout::new(&[Some(4), Some(1 << 15)], 16, 2048, 16).unwrap();
         assert_eq!(a.objects[0].as_ref().unwrap().size, 16);
         assert_eq!(a.objects[0].as_ref().unwrap().levels.len(), 1);
         assert_eq!(a.objects[1].as_ref().unwrap().size, 2048);
         assert_eq!(
-            AtlasLayout::new(&[Some(300)], 8, 2048).unwrap_err(),
+            AtlasLayout::new(&[Some(300)], 8, 2048, 8).unwrap_err(),
             AtlasError::NotPowerOfTwo { object: 0, size: 300 }
         );
-        assert_eq!(AtlasLayout::new(&[Some(256)], 12, 2048).unwrap_err(), AtlasError::BadTileSize(12));
+        assert_eq!(AtlasLayout::new(&[Some(256)], 12, 2048, 8).unwrap_err(), AtlasError::BadTileSize(12));
     }
 }

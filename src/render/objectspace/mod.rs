@@ -31,6 +31,10 @@ pub const ATLAS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 /// Largest atlas page side (the adapter's limit may be lower).
 pub const MAX_PAGE_SIZE: u32 = 8192;
+/// Mip chains stop at this side: the procedural scenes' chart gutters are
+/// 1/128 of the square and generated charts have 4 texels at 256 or more, so
+/// below 128 texels neighbouring charts would share texels.
+pub const COARSEST_LEVEL: u32 = 128;
 /// Default atlas budget: 64 Mi texels (768 MiB with the triangle maps).
 pub const DEFAULT_ATLAS_BUDGET: u64 = 64 << 20;
 
@@ -204,7 +208,7 @@ impl ObjectSpace {
         if halvings > 0 {
             tracing::info!("atlas budget: every object's shading texture halved {halvings} time(s)");
         }
-        let layout = AtlasLayout::new(&sizes, options.tile_size, max_page)?;
+        let layout = AtlasLayout::new(&sizes, options.tile_size, max_page, COARSEST_LEVEL)?;
         let (triangle_map, _rings) = trimap::build(device, queue, shaders, scene, &layout)?;
 
         let atlas = device.create_texture(&wgpu::TextureDescriptor {
