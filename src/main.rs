@@ -147,6 +147,10 @@ struct RenderArgs {
     /// Also write the frame's statistics (and GPU pass times) as JSON here.
     #[arg(long)]
     stats: Option<PathBuf>,
+    /// Render the K path frames before --frame first (not saved), so that
+    /// reuse and the tile-mask and cache-age views have a history.
+    #[arg(long, default_value_t = 0)]
+    history: u32,
     /// Object space: write a debug view instead of the shaded image.
     #[arg(long, value_enum, default_value = "shade")]
     view: DebugView,
@@ -339,11 +343,15 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let (w, h) = a.scene.size;
     let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, a.view)?)?;
     renderer.exposure = a.scene.exposure;
+    for f in a.frame.saturating_sub(a.history)..a.frame {
+        renderer.render(&ctx, &s.path.camera_at(f), &s.lights, f as u64)?;
+    }
     let camera = s.path.camera_at(a.frame);
     let stats = renderer.render(&ctx, &camera, &s.lights, a.frame as u64)?;
     let image = renderer.read_image(&ctx)?;
-    let timings = renderer.collect_timings(&ctx, true);
-    let counters = renderer.collect_counters(&ctx, true);
+    let this_frame = |f: u64| f == a.frame as u64;
+    let timings: Vec<_> = renderer.collect_timings(&ctx, true).into_iter().filter(|t| this_frame(t.frame)).collect();
+    let counters: Vec<_> = renderer.collect_counters(&ctx, true).into_iter().filter(|c| this_frame(c.frame)).collect();
     save_png(&image, &a.out)?;
     if let Some(path) = &a.atlas_out {
         let Some(os) = renderer.objectspace() else {

@@ -1,0 +1,76 @@
+//! The command line on bad input: a clear message naming the file or value,
+//! exit status 2, and no panic. These fail before a GPU is opened.
+
+use std::process::Command;
+
+fn run(args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_shadespace")).args(args).output().expect("run shadespace");
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!stderr.contains("panicked"), "panic on {args:?}:\n{stderr}");
+    (out.status.code().unwrap_or(-1), stderr)
+}
+
+#[test]
+fn missing_scene_names_the_path() {
+    let (code, err) = run(&["render", "--scene", "no/such/scene.obj"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("no/such/scene.obj") && err.contains("no such file"), "{err}");
+}
+
+#[test]
+fn malformed_obj_names_the_file_and_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("broken.obj");
+    std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").unwrap();
+    let (code, err) = run(&["render", "--scene", path.to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(err.contains("broken.obj") && err.contains("out of range"), "{err}");
+}
+
+#[test]
+fn unknown_format_and_bad_gltf_are_input_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let txt = dir.path().join("scene.txt");
+    std::fs::write(&txt, "hello").unwrap();
+    let (code, err) = run(&["render", "--scene", txt.to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(err.contains("scene.txt") && err.contains("unknown scene format"), "{err}");
+    let gltf = dir.path().join("bad.gltf");
+    std::fs::write(&gltf, "{ not json").unwrap();
+    let (code, err) = run(&["render", "--scene", gltf.to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(err.contains("bad.gltf"), "{err}");
+}
+
+#[test]
+fn bad_options_say_what_is_wrong() {
+    let (code, err) = run(&["render", "--lights", "small:x"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("'x' is not a number"), "{err}");
+    let (code, err) = run(&["render", "--camera", "fixed:99"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("fixed:99"), "{err}");
+    let (code, err) = run(&["render", "--size", "12x"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("12x"), "{err}");
+    let (code, err) = run(&["render", "--pipeline", "objectspace", "--tile-size", "12"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("8, 16, 32, 64"), "{err}");
+    let (code, err) = run(&["bench", "--forward-only", "nothing-called-this"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("nothing-called-this"), "{err}");
+}
+
+#[test]
+fn help_explains_every_command() {
+    let out = Command::new(env!("CARGO_BIN_EXE_shadespace")).arg("--help").output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    for cmd in ["render", "bench", "info", "charts", "compare"] {
+        assert!(text.contains(cmd), "--help lacks {cmd}");
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_shadespace")).args(["render", "--help"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    for flag in ["--scene", "--lights", "--camera", "--reuse", "--tile-size", "--view", "--atlas-out"] {
+        assert!(text.contains(flag), "render --help lacks {flag}");
+    }
+}
