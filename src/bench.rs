@@ -120,6 +120,18 @@ impl ShadingSummary {
     }
 }
 
+/// What to render: the path, the lights, and how many frames.
+pub struct BenchPlan<'a> {
+    pub path: &'a CameraPath,
+    pub lights: &'a [Light],
+    /// Frames rendered first and not measured.
+    pub warmup: u32,
+    /// Measured frames.
+    pub frames: u32,
+    /// Frame `i` shows path frame `i * step` (mod the path length).
+    pub step: u32,
+}
+
 /// Descriptive fields of a run that the renderer does not know.
 pub struct BenchSetup<'a> {
     pub scene_name: &'a str,
@@ -135,14 +147,11 @@ pub struct BenchSetup<'a> {
 pub fn run(
     ctx: &GpuContext,
     renderer: &mut Renderer,
-    path: &CameraPath,
-    lights: &[Light],
-    warmup: u32,
-    frames: u32,
-    step: u32,
+    plan: &BenchPlan,
     setup: &BenchSetup,
     mut progress: impl FnMut(u32),
 ) -> Result<BenchResult, RenderError> {
+    let BenchPlan { path, lights, warmup, frames, step } = *plan;
     let total = warmup + frames;
     let measured = |frame: u64| frame >= warmup as u64;
     let mut stats: Vec<FrameStats> = Vec::with_capacity(total as usize);

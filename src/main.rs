@@ -428,9 +428,9 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
         seed: a.scene.seed,
         camera: &s.camera_label,
     };
-    let result = bench::run(&ctx, &mut renderer, &s.path, &s.lights, a.warmup, a.frames, a.frame_step, &setup, |i| {
-        bar.set_position(i as u64)
-    })?;
+    let plan =
+        bench::BenchPlan { path: &s.path, lights: &s.lights, warmup: a.warmup, frames: a.frames, step: a.frame_step };
+    let result = bench::run(&ctx, &mut renderer, &plan, &setup, |i| bar.set_position(i as u64))?;
     bar.finish_and_clear();
     write_file(&a.out, serde_json::to_string_pretty(&result)?.as_bytes())?;
     println!(

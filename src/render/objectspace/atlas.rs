@@ -164,12 +164,15 @@ pub fn fit_budget(sizes: &[Option<u32>], budget_texels: u64, min_side: u32) -> (
     (sizes, halvings)
 }
 
+/// A square's place: (page, x, y).
+type Spot = (u32, u32, u32);
+
 /// Buddy allocator over square pages of a power-of-two side.
 struct Buddy {
     page_size: u32,
     pages: u32,
     /// Free squares by side: (side, [(page, x, y)]).
-    free: Vec<(u32, Vec<(u32, u32, u32)>)>,
+    free: Vec<(u32, Vec<Spot>)>,
 }
 
 impl Buddy {
@@ -177,7 +180,7 @@ impl Buddy {
         Self { page_size, pages: 0, free: Vec::new() }
     }
 
-    fn free_list(&mut self, size: u32) -> &mut Vec<(u32, u32, u32)> {
+    fn free_list(&mut self, size: u32) -> &mut Vec<Spot> {
         let i = match self.free.iter().position(|(s, _)| *s == size) {
             Some(i) => i,
             None => {
@@ -188,7 +191,7 @@ impl Buddy {
         &mut self.free[i].1
     }
 
-    fn alloc(&mut self, size: u32) -> (u32, u32, u32) {
+    fn alloc(&mut self, size: u32) -> Spot {
         if let Some(spot) = self.free_list(size).pop() {
             return spot;
         }
