@@ -17,6 +17,12 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
     return out;
 }
 
+// Depth-only pre-pass (optional): the id pass then runs one fragment per pixel.
+@vertex
+fn vs_depth(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> @builtin(position) @invariant vec4f {
+    return view.view_proj * (objects[object].model * vec4f(vertices[vi].position, 1.0));
+}
+
 @fragment
 fn fs_main(in: VertexOut, @builtin(primitive_index) triangle: u32) -> @location(0) vec2u {
     return vec2u(in.object + 1u, triangle);

@@ -80,6 +80,8 @@ pub struct ObjectSpaceOptions {
     /// Most atlas texels (all objects, mip chains included); sizes are halved
     /// uniformly until they fit (see [`atlas::fit_budget`]).
     pub atlas_budget_texels: u64,
+    /// Lay down depth before the id pass, which then writes each pixel once.
+    pub visibility_prepass: bool,
 }
 
 impl Default for ObjectSpaceOptions {
@@ -92,6 +94,7 @@ impl Default for ObjectSpaceOptions {
             view: DebugView::Shade,
             texture_sizes: Vec::new(),
             atlas_budget_texels: DEFAULT_ATLAS_BUDGET,
+            visibility_prepass: false,
         }
     }
 }
@@ -169,6 +172,7 @@ pub struct ObjectSpace {
     counters: wgpu::Buffer,
     shade_dispatch: wgpu::Buffer,
     raster: wgpu::RenderPipeline,
+    depth_prepass: Option<wgpu::RenderPipeline>,
     mark: wgpu::ComputePipeline,
     queue_args: wgpu::ComputePipeline,
     shade: wgpu::ComputePipeline,
@@ -370,7 +374,11 @@ impl ObjectSpace {
         let queue_args = compute(shaders::MARK, "queue_args", &[s, o, Some(&args_layout)])?;
         let shade = compute(shaders::SHADE, "shade", &[s, o, Some(&shade_layout)])?;
         let gather = compute(shaders::GATHER, "gather", &[s, o, Some(&gather_layout)])?;
-        let raster = visibility_pipeline(device, shaders, &scene.layout)?;
+        let raster = visibility_pipeline(device, shaders, &scene.layout, options.visibility_prepass, false)?;
+        let depth_prepass = options
+            .visibility_prepass
+            .then(|| visibility_pipeline(device, shaders, &scene.layout, true, true))
+            .transpose()?;
 
         let texels = layout.atlas_texels();
         let memory = MemoryUse {
@@ -390,6 +398,7 @@ impl ObjectSpace {
             counters,
             shade_dispatch,
             raster,
+            depth_prepass,
             mark,
             queue_args,
             shade,
@@ -509,10 +518,14 @@ fn shared_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
+/// The id pass, or (`depth_only`) its depth pre-pass. After a pre-pass the id
+/// pass tests `Equal` and writes no depth.
 fn visibility_pipeline(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,
     scene_layout: &wgpu::BindGroupLayout,
+    after_prepass: bool,
+    depth_only: bool,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
     let module = shaders.module(device, shaders::VISIBILITY)?;
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -520,26 +533,31 @@ fn visibility_pipeline(
         bind_group_layouts: &[Some(scene_layout)],
         immediate_size: 0,
     });
+    let targets = [Some(VISIBILITY_FORMAT.into())];
+    let (depth_write, compare) = match (depth_only, after_prepass) {
+        (false, true) => (false, wgpu::CompareFunction::Equal),
+        _ => (true, wgpu::CompareFunction::Greater),
+    };
     Ok(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("visibility"),
+        label: Some(if depth_only { "visibility depth" } else { "visibility" }),
         layout: Some(&layout),
         vertex: wgpu::VertexState {
             module: &module,
-            entry_point: Some("vs_main"),
+            entry_point: Some(if depth_only { "vs_depth" } else { "vs_main" }),
             compilation_options: Default::default(),
             buffers: &[],
         },
-        fragment: Some(wgpu::FragmentState {
+        fragment: (!depth_only).then(|| wgpu::FragmentState {
             module: &module,
             entry_point: Some("fs_main"),
             compilation_options: Default::default(),
-            targets: &[Some(VISIBILITY_FORMAT.into())],
+            targets: &targets,
         }),
         primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
         depth_stencil: Some(wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Greater),
+            depth_write_enabled: Some(depth_write),
+            depth_compare: Some(compare),
             stencil: Default::default(),
             bias: Default::default(),
         }),
@@ -577,6 +595,30 @@ impl Pipeline for ObjectSpace {
         encoder.clear_buffer(&self.counters, 0, None);
 
         let scene = frame.scene;
+        let draw_visible = |pass: &mut wgpu::RenderPass, pipeline: &wgpu::RenderPipeline| {
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, scene.bind_group(), &[]);
+            pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+            for (i, d) in scene.draws.iter().enumerate().filter(|(i, _)| frame.visible[*i]) {
+                let i = i as u32;
+                pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, i..i + 1);
+            }
+        };
+        let mut depth_load = wgpu::LoadOp::Clear(0.0);
+        if let Some(prepass) = &self.depth_prepass {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("visibility depth"),
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &frame.targets.depth_view,
+                    depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer.render_pass("visibility depth"),
+                ..Default::default()
+            });
+            draw_visible(&mut pass, prepass);
+            depth_load = wgpu::LoadOp::Load;
+        }
         {
             let vis_view = self.visibility.create_view(&Default::default());
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -592,19 +634,13 @@ impl Pipeline for ObjectSpace {
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &frame.targets.depth_view,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+                    depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
                     stencil_ops: None,
                 }),
                 timestamp_writes: timer.render_pass("visibility"),
                 ..Default::default()
             });
-            pass.set_pipeline(&self.raster);
-            pass.set_bind_group(0, scene.bind_group(), &[]);
-            pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-            for (i, d) in scene.draws.iter().enumerate().filter(|(i, _)| frame.visible[*i]) {
-                let i = i as u32;
-                pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, i..i + 1);
-            }
+            draw_visible(&mut pass, &self.raster);
         }
         let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
         let mut compute =
