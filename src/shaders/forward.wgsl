@@ -2,7 +2,7 @@
 // over the lights that CPU culling found for the object.
 #import shadespace::lighting::Surface
 #import shadespace::scene::vertex_uv0
-#import shadespace::scene_bindings::{view, objects, vertices, albedo, albedo_sampler}
+#import shadespace::scene_bindings::{view, objects, vertices, albedo, albedo_sampler, object_clip_position}
 #import shadespace::surface::light_surface
 
 struct VertexOut {
@@ -31,7 +31,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
 
 @vertex
 fn vs_depth(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> @builtin(position) @invariant vec4f {
-    return view.view_proj * (objects[object].model * vec4f(vertices[vi].position, 1.0));
+    return object_clip_position(object, vi);
 }
 
 @fragment

@@ -19,3 +19,9 @@ fn triangle_vertices(o: Object, triangle: u32) -> vec3u {
     let i = o.first_index + 3u * triangle;
     return vec3u(indices[i], indices[i + 1u], indices[i + 2u]) + vec3u(o.base_vertex);
 }
+
+// Clip position of vertex `vi` of `object` (the depth and id passes share it,
+// so that equal-depth tests see bit-identical positions).
+fn object_clip_position(object: u32, vi: u32) -> vec4f {
+    return view.view_proj * (objects[object].model * vec4f(vertices[vi].position, 1.0));
+}

@@ -2,7 +2,7 @@
 // object (+1) and the triangle. No shading: later compute passes rebuild
 // everything else from these ids.
 enable primitive_index;
-#import shadespace::scene_bindings::{view, objects, vertices}
+#import shadespace::scene_bindings::object_clip_position
 
 struct VertexOut {
     @builtin(position) @invariant clip: vec4f,
@@ -12,7 +12,7 @@ struct VertexOut {
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
     var out: VertexOut;
-    out.clip = view.view_proj * (objects[object].model * vec4f(vertices[vi].position, 1.0));
+    out.clip = object_clip_position(object, vi);
     out.object = object;
     return out;
 }
@@ -20,7 +20,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
 // Depth-only pre-pass (optional): the id pass then runs one fragment per pixel.
 @vertex
 fn vs_depth(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> @builtin(position) @invariant vec4f {
-    return view.view_proj * (objects[object].model * vec4f(vertices[vi].position, 1.0));
+    return object_clip_position(object, vi);
 }
 
 @fragment
