@@ -2,8 +2,8 @@
 //! the lights that CPU culling assigned to its object. An optional depth
 //! pre-pass removes overdraw from the shading pass.
 
-use super::targets::{DEPTH_FORMAT, HDR_FORMAT};
-use super::{FrameContext, Pipeline};
+use super::targets::HDR_FORMAT;
+use super::{DepthMode, FrameContext, Pipeline, scene_raster_pipeline};
 use crate::gpu::timing::GpuTimer;
 use crate::shaders::{self, ShaderError, ShaderLibrary};
 
@@ -32,44 +32,16 @@ impl Forward {
             bind_group_layouts: &[Some(scene_layout)],
             immediate_size: 0,
         });
-        let color_targets = [Some(HDR_FORMAT.into())];
-        let pipeline = |label, vs, fs: Option<&str>, depth_write, compare| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(vs),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                fragment: fs.map(|fs| wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets: &color_targets,
-                }),
-                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(depth_write),
-                    depth_compare: Some(compare),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                multiview_mask: None,
-                cache: None,
-            })
+        let pipeline = |label, vs, fs: Option<&str>, depth| {
+            scene_raster_pipeline(device, label, &module, &layout, vs, fs.map(|fs| (fs, HDR_FORMAT)), depth)
         };
-        // Reversed depth: nearer is greater.
         let (prepass, shade) = if options.depth_prepass {
             (
-                Some(pipeline("forward depth", "vs_depth", None, true, wgpu::CompareFunction::Greater)),
-                pipeline("forward shade", "vs_main", Some("fs_main"), false, wgpu::CompareFunction::Equal),
+                Some(pipeline("forward depth", "vs_depth", None, DepthMode::Write)),
+                pipeline("forward shade", "vs_main", Some("fs_main"), DepthMode::EqualAfterPrepass),
             )
         } else {
-            (None, pipeline("forward shade", "vs_main", Some("fs_main"), true, wgpu::CompareFunction::Greater))
+            (None, pipeline("forward shade", "vs_main", Some("fs_main"), DepthMode::Write))
         };
         Ok(Self { prepass, shade })
     }

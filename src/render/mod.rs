@@ -22,6 +22,61 @@ use scene_gpu::SceneGpu;
 use targets::Targets;
 use tonemap::Tonemap;
 
+/// Depth state of a scene raster pass (reversed Z: nearer is greater).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum DepthMode {
+    /// Test `Greater` and write: the first (or only) pass.
+    Write,
+    /// Test `Equal`, no write: after a depth pre-pass, one fragment per pixel.
+    EqualAfterPrepass,
+}
+
+/// A raster pipeline over the scene bind group: vertices pulled from storage
+/// (no vertex buffers), no face culling, a reversed-Z depth test, and a
+/// fragment stage writing `color` when given (none: depth only).
+pub(crate) fn scene_raster_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    vertex_entry: &str,
+    fragment: Option<(&str, wgpu::TextureFormat)>,
+    depth: DepthMode,
+) -> wgpu::RenderPipeline {
+    let targets = fragment.map(|(_, format)| [Some(format.into())]);
+    let (depth_write, compare) = match depth {
+        DepthMode::Write => (true, wgpu::CompareFunction::Greater),
+        DepthMode::EqualAfterPrepass => (false, wgpu::CompareFunction::Equal),
+    };
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vertex_entry),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment: fragment.zip(targets.as_ref()).map(|((entry, _), targets)| wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: targets::DEPTH_FORMAT,
+            depth_write_enabled: Some(depth_write),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// The shading pipelines, for `--pipeline`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]

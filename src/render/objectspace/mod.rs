@@ -17,8 +17,8 @@ use bytemuck::{Pod, Zeroable};
 use serde::Serialize;
 use wgpu::util::DeviceExt;
 
-use super::targets::{DEPTH_FORMAT, HDR_FORMAT};
-use super::{FrameContext, Pipeline, ShadingCounters};
+use super::targets::HDR_FORMAT;
+use super::{DepthMode, FrameContext, Pipeline, ShadingCounters, scene_raster_pipeline};
 use crate::gpu::readback::{self, ReadbackRing};
 use crate::gpu::timing::GpuTimer;
 use crate::gpu::{GpuContext, GpuError};
@@ -534,38 +534,13 @@ fn visibility_pipeline(
         bind_group_layouts: &[Some(scene_layout)],
         immediate_size: 0,
     });
-    let targets = [Some(VISIBILITY_FORMAT.into())];
-    let (depth_write, compare) = match (depth_only, after_prepass) {
-        (false, true) => (false, wgpu::CompareFunction::Equal),
-        _ => (true, wgpu::CompareFunction::Greater),
-    };
-    Ok(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(if depth_only { "visibility depth" } else { "visibility" }),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some(if depth_only { "vs_depth" } else { "vs_main" }),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        fragment: (!depth_only).then(|| wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &targets,
-        }),
-        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(depth_write),
-            depth_compare: Some(compare),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        multiview_mask: None,
-        cache: None,
-    }))
+    Ok(if depth_only {
+        scene_raster_pipeline(device, "visibility depth", &module, &layout, "vs_depth", None, DepthMode::Write)
+    } else {
+        let depth = if after_prepass { DepthMode::EqualAfterPrepass } else { DepthMode::Write };
+        let fragment = Some(("fs_main", VISIBILITY_FORMAT));
+        scene_raster_pipeline(device, "visibility", &module, &layout, "vs_main", fragment, depth)
+    })
 }
 
 impl Pipeline for ObjectSpace {
