@@ -57,6 +57,7 @@ struct ChartsArgs {
 }
 
 #[derive(Args)]
+#[command(next_help_heading = "GPU")]
 struct GpuArgs {
     /// Use the first adapter whose name contains this text (case-insensitive);
     /// also read from SHADESPACE_ADAPTER. Default: the fastest kind available.
@@ -143,26 +144,26 @@ struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// Frame index on the camera path (frames are numbered, never timed).
-    #[arg(long, default_value_t = 0)]
+    #[arg(help_heading = "Frame and output", long, default_value_t = 0)]
     frame: u32,
     /// Output image (PNG).
-    #[arg(long, default_value = "shadespace.png")]
+    #[arg(help_heading = "Frame and output", long, default_value = "shadespace.png")]
     out: PathBuf,
     /// Also write the frame's statistics (and GPU pass times) as JSON here.
-    #[arg(long)]
+    #[arg(help_heading = "Frame and output", long)]
     stats: Option<PathBuf>,
     /// Render the K path frames before --frame first (not saved), so that
     /// reuse and the tile-mask and cache-age views have a history.
-    #[arg(long, default_value_t = 0)]
+    #[arg(help_heading = "Frame and output", long, default_value_t = 0)]
     history: u32,
     /// Object space: write a debug view instead of the shaded image.
-    #[arg(long, value_enum, default_value = "shade")]
+    #[arg(help_heading = "Frame and output", long, value_enum, default_value = "shade")]
     view: DebugView,
     /// Object space: also write mip 0 of one object's shading texture here.
-    #[arg(long)]
+    #[arg(help_heading = "Frame and output", long)]
     atlas_out: Option<PathBuf>,
     /// Object space: the object (index, see `shadespace charts`) for --atlas-out.
-    #[arg(long, default_value_t = 0)]
+    #[arg(help_heading = "Frame and output", long, default_value_t = 0)]
     atlas_object: usize,
 }
 
@@ -171,21 +172,21 @@ struct BenchArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// Measured frames (the camera path repeats if it is shorter).
-    #[arg(long, default_value_t = 600)]
+    #[arg(help_heading = "Frames and output", long, default_value_t = 600)]
     frames: u32,
     /// Frames rendered first and not measured.
-    #[arg(long, default_value_t = 60)]
+    #[arg(help_heading = "Frames and output", long, default_value_t = 60)]
     warmup: u32,
     /// Measured frame i shows path frame i x STEP (mod the path length): a
     /// shorter run that still covers the whole path. Reuse between frames
     /// shrinks as the step grows.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(help_heading = "Frames and output", long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     frame_step: u32,
     /// Result JSON.
-    #[arg(long, default_value = "bench.json")]
+    #[arg(help_heading = "Frames and output", long, default_value = "bench.json")]
     out: PathBuf,
     /// No progress bar.
-    #[arg(long)]
+    #[arg(help_heading = "Frames and output", long)]
     quiet: bool,
 }
 
