@@ -248,11 +248,12 @@ impl Renderer {
         let frustum = Frustum::from_view_projection(view.view_proj);
         let lists = culling::lights_per_object(lights, &self.scene.object_bounds, Some(&frustum));
         let visible: Vec<bool> = self.scene.object_bounds.iter().map(|b| frustum.intersects_aabb(b)).collect();
-        self.scene.update_frame(&ctx.device, &ctx.queue, &view, lights, &lists);
-
-        let hash = hash_lights(lights);
+        let gpu_lights: Vec<gpu_types::GpuLight> = lights.iter().map(gpu_types::GpuLight::from).collect();
+        let hash = hash_bytes(bytemuck::cast_slice(&gpu_lights));
         let lights_changed = self.lights_hash != Some(hash);
         self.lights_hash = Some(hash);
+        let changed = lights_changed.then_some(gpu_lights.as_slice());
+        self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         self.timer.begin_frame(frame);
         let frame_ctx = FrameContext {
@@ -315,10 +316,7 @@ impl Renderer {
     }
 }
 
-/// FNV-1a over the lights' GPU form: a change of any light changes the hash.
-fn hash_lights(lights: &[Light]) -> u64 {
-    let gpu: Vec<gpu_types::GpuLight> = lights.iter().map(gpu_types::GpuLight::from).collect();
-    bytemuck::cast_slice::<_, u8>(&gpu)
-        .iter()
-        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ *b as u64).wrapping_mul(0x100_0000_01b3))
+/// FNV-1a: the lights' GPU form hashes differently when any light changes.
+fn hash_bytes(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ *b as u64).wrapping_mul(0x100_0000_01b3))
 }

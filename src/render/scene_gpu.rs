@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 
 use super::culling::LightLists;
 use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
-use crate::scene::{Aabb, Camera, Light, Scene};
+use crate::scene::{Aabb, Camera, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
 pub const MAX_ALBEDO_SIZE: u32 = 1024;
@@ -185,13 +185,14 @@ impl SceneGpu {
         &self.bind_group
     }
 
-    /// Uploads this frame's view, lights and per-object light lists.
+    /// Uploads this frame's view and per-object light lists, and the lights
+    /// when they changed (`None`: same as last frame).
     pub fn update_frame(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         view: &GpuView,
-        lights: &[Light],
+        changed_lights: Option<&[GpuLight]>,
         lists: &LightLists,
     ) {
         queue.write_buffer(&self.view, 0, bytemuck::bytes_of(view));
@@ -200,8 +201,7 @@ impl SceneGpu {
             o.light_count = lists.counts[i];
         }
         queue.write_buffer(&self.objects, 0, bytemuck::cast_slice(&self.object_data));
-        let gpu_lights: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
-        let mut grew = self.lights.write(device, queue, bytemuck::cast_slice(&gpu_lights));
+        let mut grew = changed_lights.is_some_and(|l| self.lights.write(device, queue, bytemuck::cast_slice(l)));
         grew |= self.light_indices.write(device, queue, bytemuck::cast_slice(&lists.indices));
         if grew {
             self.bind_group = make_bind_group(
