@@ -142,6 +142,27 @@ impl AtlasLayout {
             .collect()
     }
 
+    /// A 2D array texture with one layer per page: the shading atlas and the
+    /// triangle-index maps share this layout, texel for texel.
+    pub fn page_array_texture(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        format: wgpu::TextureFormat,
+        usage: wgpu::TextureUsages,
+    ) -> wgpu::Texture {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width: self.page_size, height: self.page_size, depth_or_array_layers: self.pages },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    }
+
     pub fn atlas_texels(&self) -> u64 {
         self.pages as u64 * self.page_size as u64 * self.page_size as u64
     }

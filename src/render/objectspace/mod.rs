@@ -216,22 +216,12 @@ impl ObjectSpace {
         let layout = AtlasLayout::new(&sizes, options.tile_size, max_page, COARSEST_LEVEL)?;
         let (triangle_map, _rings) = trimap::build(device, queue, shaders, scene, &layout)?;
 
-        let atlas = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shading atlas"),
-            size: wgpu::Extent3d {
-                width: layout.page_size,
-                height: layout.page_size,
-                depth_or_array_layers: layout.pages,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: ATLAS_FORMAT,
-            usage: wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let atlas = layout.page_array_texture(
+            device,
+            "shading atlas",
+            ATLAS_FORMAT,
+            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
+        );
         let visibility = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("visibility"),
             size: wgpu::Extent3d { width: targets.width, height: targets.height, depth_or_array_layers: 1 },

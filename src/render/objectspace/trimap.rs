@@ -37,22 +37,14 @@ pub fn build(
     let conservative = device.features().contains(wgpu::Features::CONSERVATIVE_RASTERIZATION);
     let rings = if conservative { 1 } else { 2 };
     let make = |label| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: layout.page_size,
-                height: layout.page_size,
-                depth_or_array_layers: layout.pages,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+        layout.page_array_texture(
+            device,
+            label,
+            FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::STORAGE_BINDING,
-            view_formats: &[],
-        })
+        )
     };
     let maps = [make("triangle map"), make("triangle map (dilation)")];
 
