@@ -94,10 +94,11 @@ mod tests {
     fn sizes_match_wgsl() {
         const PROBE: ShaderSource = ShaderSource {
             file: "probe.wgsl",
-            source: "#import shadespace::scene::{Vertex, Object, View}\n#import shadespace::lighting::Light\n\
+            source: "#import shadespace::scene::{Vertex, Object, View}\n#import shadespace::lighting::Light\n#import shadespace::objectspace::AtlasEntry\n\
                      @group(0) @binding(0) var<storage> a: array<Vertex>;\n@group(0) @binding(1) var<storage> b: array<Object>;\n\
                      @group(0) @binding(2) var<storage> c: array<View>;\n@group(0) @binding(3) var<storage> d: array<Light>;\n\
-                     @compute @workgroup_size(1) fn main() { _ = a[0]; _ = b[0]; _ = c[0]; _ = d[0]; }",
+                     @group(0) @binding(4) var<storage> e: array<AtlasEntry>;\n\
+                     @compute @workgroup_size(1) fn main() { _ = a[0]; _ = b[0]; _ = c[0]; _ = d[0]; _ = e[0]; }",
         };
         let module = ShaderLibrary::new().unwrap().compose(PROBE).unwrap();
         let mut layouter = wgpu::naga::proc::Layouter::default();
@@ -114,5 +115,6 @@ mod tests {
         assert_eq!(size_of("Object"), size_of_val(&GpuObject::default()));
         assert_eq!(size_of("View"), size_of_val(&GpuView::default()));
         assert_eq!(size_of("Light"), size_of_val(&GpuLight::default()));
+        assert_eq!(size_of("AtlasEntry"), std::mem::size_of::<crate::render::objectspace::atlas::GpuAtlasEntry>());
     }
 }
