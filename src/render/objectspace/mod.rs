@@ -148,6 +148,25 @@ pub struct MemoryReport {
     pub objects: Vec<ObjectMemory>,
 }
 
+/// The object-space marking state after a frame, read back from the GPU.
+#[derive(Clone, Debug)]
+pub struct MarkState {
+    /// The frame's stamp (frames rendered so far; 0 in the tile buffers means never).
+    pub stamp: u32,
+    /// Per scene object: shades stamped before this are stale.
+    pub valid_since: Vec<u32>,
+    /// Per pixel, row-major: (object + 1, triangle); object 0 = background.
+    pub visibility: Vec<[u32; 2]>,
+    /// Per tile: stamp of the last frame it was visible.
+    pub tile_visible: Vec<u32>,
+    /// Per tile: stamp of the last frame it was shaded.
+    pub tile_shaded: Vec<u32>,
+    /// This frame's shade queue: (global tile, object << 8 | level), in GPU order.
+    pub queue: Vec<[u32; 2]>,
+    /// Queued, visible, new tiles (and one spare).
+    pub counters: [u32; 4],
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum ObjectSpaceError {
     #[error(transparent)]
@@ -171,6 +190,9 @@ pub struct ObjectSpace {
     entries: wgpu::Buffer,
     entry_data: Vec<atlas::GpuAtlasEntry>,
     counters: wgpu::Buffer,
+    tile_visible: wgpu::Buffer,
+    tile_shaded: wgpu::Buffer,
+    work_queue: wgpu::Buffer,
     shade_dispatch: wgpu::Buffer,
     raster: wgpu::RenderPipeline,
     depth_prepass: Option<wgpu::RenderPipeline>,
@@ -229,7 +251,9 @@ impl ObjectSpace {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: VISIBILITY_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
         let entry_data = layout.gpu_entries();
@@ -254,9 +278,9 @@ impl ObjectSpace {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         });
         // Zero-initialised: 0 = never visible / never shaded.
-        let tile_visible = storage("tile visible", tiles * 4, wgpu::BufferUsages::empty());
-        let tile_shaded = storage("tile shaded", tiles * 4, wgpu::BufferUsages::empty());
-        let work_queue = storage("shade queue", tiles * 8, wgpu::BufferUsages::empty());
+        let tile_visible = storage("tile visible", tiles * 4, wgpu::BufferUsages::COPY_SRC);
+        let tile_shaded = storage("tile shaded", tiles * 4, wgpu::BufferUsages::COPY_SRC);
+        let work_queue = storage("shade queue", tiles * 8, wgpu::BufferUsages::COPY_SRC);
         let counters = storage("counters", 16, wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST);
         let shade_dispatch = storage("shade dispatch", 16, wgpu::BufferUsages::INDIRECT);
 
@@ -387,6 +411,9 @@ impl ObjectSpace {
             entries,
             entry_data,
             counters,
+            tile_visible,
+            tile_shaded,
+            work_queue,
             shade_dispatch,
             raster,
             depth_prepass,
@@ -436,6 +463,44 @@ impl ObjectSpace {
             tile_count: self.layout.tile_count,
             objects,
         }
+    }
+
+    /// The marking state after the last frame, for tests that check tile
+    /// marking against its CPU twin. Blocks on the GPU.
+    pub fn read_mark_state(&self, ctx: &GpuContext) -> Result<MarkState, GpuError> {
+        let buffer = |b: &wgpu::Buffer| -> Result<Vec<u32>, GpuError> {
+            let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("mark state read-back"),
+                size: b.size(),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            encoder.copy_buffer_to_buffer(b, 0, &staging, 0, b.size());
+            ctx.queue.submit([encoder.finish()]);
+            Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(ctx, &staging)?))
+        };
+        let tiles = self.layout.tile_count as usize;
+        let mut tile_visible = buffer(&self.tile_visible)?;
+        let mut tile_shaded = buffer(&self.tile_shaded)?;
+        tile_visible.truncate(tiles);
+        tile_shaded.truncate(tiles);
+        let counters = buffer(&self.counters)?;
+        let queued = (counters[0] as usize).min(tiles);
+        let queue = buffer(&self.work_queue)?.chunks_exact(2).take(queued).map(|c| [c[0], c[1]]).collect();
+        let visibility = bytemuck::pod_collect_to_vec::<u8, u32>(&readback::read_texture(ctx, &self.visibility, 8)?)
+            .chunks_exact(2)
+            .map(|c| [c[0], c[1]])
+            .collect();
+        Ok(MarkState {
+            stamp: self.frames,
+            valid_since: self.entry_data.iter().map(|e| e.valid_since).collect(),
+            visibility,
+            tile_visible,
+            tile_shaded,
+            queue,
+            counters: [counters[0], counters[1], counters[2], counters[3]],
+        })
     }
 
     pub fn options(&self) -> &ObjectSpaceOptions {
