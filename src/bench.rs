@@ -1,5 +1,7 @@
-//! `shadespace bench`: render a camera path for many frames and summarise GPU
-//! time per pass and per frame (median, p95 after warm-up) and CPU frame time.
+//! Running a pipeline over frames of a camera path and reporting what it
+//! measured. `render --stats` (one frame, after `--history` frames) and
+//! `bench` (many frames after a warm-up) both write a [`RunReport`]: one
+//! typed schema, documented field by field here.
 
 use std::collections::BTreeMap;
 
@@ -7,16 +9,19 @@ use serde::Serialize;
 
 use crate::gpu::GpuContext;
 use crate::gpu::timing::FrameTimings;
-use crate::render::objectspace::MemoryReport;
-use crate::render::{FrameStats, RenderError, Renderer, ShadingCounters};
+use crate::render::{Counters, FrameStats, PipelineReport, RenderError, Renderer};
 use crate::scene::{CameraPath, Light};
 
-/// Median and 95th percentile of a series, in milliseconds.
+/// Version of the [`RunReport`] schema (bump on any change of its fields).
+pub const SCHEMA_VERSION: u32 = 2;
+
+/// Median, 95th percentile and mean of a series (in the series' unit: the
+/// key it is stored under says which, e.g. `_ms`).
 #[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
 pub struct Summary {
-    pub median_ms: f64,
-    pub p95_ms: f64,
-    pub mean_ms: f64,
+    pub median: f64,
+    pub p95: f64,
+    pub mean: f64,
     pub samples: usize,
 }
 
@@ -29,98 +34,105 @@ impl Summary {
         let mut v = values.to_vec();
         v.sort_by(f64::total_cmp);
         let rank = |p: f64| v[(((p * v.len() as f64).ceil() as usize).max(1) - 1).min(v.len() - 1)];
-        Summary {
-            median_ms: rank(0.5),
-            p95_ms: rank(0.95),
-            mean_ms: v.iter().sum::<f64>() / v.len() as f64,
-            samples: v.len(),
+        Summary { median: rank(0.5), p95: rank(0.95), mean: v.iter().sum::<f64>() / v.len() as f64, samples: v.len() }
+    }
+}
+
+/// The GPU the run used.
+#[derive(Clone, Debug, Serialize)]
+pub struct AdapterReport {
+    pub name: String,
+    pub backend: String,
+    pub driver: String,
+    pub driver_info: String,
+    /// Optional features that were turned on.
+    pub features: Vec<String>,
+}
+
+impl AdapterReport {
+    pub fn of(ctx: &GpuContext) -> Self {
+        Self {
+            name: ctx.info.name.clone(),
+            backend: format!("{:?}", ctx.info.backend),
+            driver: ctx.info.driver.clone(),
+            driver_info: ctx.info.driver_info.clone(),
+            features: ctx.features.iter_names().map(|(n, _)| n.to_string()).collect(),
         }
     }
 }
 
-/// What the run measured; written as the bench JSON.
+/// One pass's GPU time in one frame.
 #[derive(Clone, Debug, Serialize)]
-pub struct BenchResult {
-    pub adapter: String,
-    pub backend: String,
-    pub driver: String,
-    pub driver_info: String,
-    pub features: Vec<String>,
+pub struct PassTime {
+    pub pass: String,
+    pub ms: f64,
+}
+
+/// One measured frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameReport {
+    /// Render order, from 0 (warm-up frames included).
+    pub frame: u64,
+    /// The camera path frame it showed.
+    pub path_frame: u32,
+    /// CPU time to cull, upload, record and submit.
+    pub cpu_ms: f64,
+    pub visible_objects: u32,
+    /// Sum over objects of the lights assigned to them.
+    pub light_assignments: u64,
+    /// GPU time from the first pass's start to the last pass's end; absent
+    /// when the adapter has no timestamp queries.
+    pub gpu_ms: Option<f64>,
+    /// GPU time per pass, in recording order.
+    pub gpu_passes: Vec<PassTime>,
+    /// The pipeline's counters (see its `collect_counters`).
+    pub counters: Counters,
+}
+
+/// Medians over the measured frames.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RunSummary {
+    pub gpu_frame_ms: Summary,
+    pub cpu_frame_ms: Summary,
+    /// Per pass name.
+    pub gpu_passes_ms: BTreeMap<String, Summary>,
+    /// Per counter name.
+    pub counters: BTreeMap<String, Summary>,
+    pub light_assignments: Summary,
+}
+
+/// The document `render --stats` and `bench --out` write.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunReport {
+    /// [`SCHEMA_VERSION`].
+    pub schema: u32,
+    pub adapter: AdapterReport,
     pub scene: String,
-    pub triangles: u64,
     pub objects: usize,
+    pub triangles: u64,
     pub width: u32,
     pub height: u32,
-    pub pipeline: String,
+    /// The pipeline, its settings, memory and setup.
+    pub pipeline: PipelineReport,
+    /// The `--lights` text, and the light count with the ambient and
+    /// directional lights every set has.
     pub lights_spec: String,
     pub light_count: usize,
     pub seed: u64,
     pub camera: String,
-    pub frames: u32,
+    /// Frames rendered first and not measured.
     pub warmup: u32,
+    /// Measured frames.
+    pub frames: u32,
+    /// Path frame of the first rendered frame, and the step between frames.
+    pub first_path_frame: u32,
     pub frame_step: u32,
-    /// GPU time per pass over the measured frames.
-    pub gpu_passes: BTreeMap<String, Summary>,
-    /// GPU time from the first pass's start to the last pass's end.
-    pub gpu_frame: Summary,
-    /// CPU time to cull, upload, record and submit a frame.
-    pub cpu_frame: Summary,
-    /// Per measured frame: GPU frame milliseconds (for plots).
-    pub gpu_frame_ms: Vec<f64>,
-    pub mean_light_assignments: f64,
-    /// Object-space pipelines: tile statistics over the measured frames.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub shading: Option<ShadingSummary>,
-    /// Object-space pipelines: memory in total and per object.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub memory: Option<MemoryReport>,
+    pub summary: RunSummary,
+    /// Every measured frame.
+    pub per_frame: Vec<FrameReport>,
 }
 
-/// Medians (and means) over measured frames of the object-space counters.
-#[derive(Clone, Debug, Serialize)]
-pub struct ShadingSummary {
-    pub screen_pixels: u64,
-    pub median_visible_tiles: f64,
-    pub median_shaded_tiles: f64,
-    pub median_reused_tiles: f64,
-    pub median_new_tiles: f64,
-    /// new tiles / visible tiles, per frame, median.
-    pub median_new_fraction: f64,
-    pub median_shaded_texels: f64,
-    /// Texels of all visible tiles / screen pixels: what shading every visible
-    /// tile costs (the study's overshading), median.
-    pub median_overshading: f64,
-    /// Shaded texels / screen pixels (after reuse), median.
-    pub median_shaded_per_pixel: f64,
-    pub mean_shaded_tiles: f64,
-    pub frames: usize,
-}
-
-impl ShadingSummary {
-    pub fn of(counters: &[ShadingCounters], screen_pixels: u64) -> Option<Self> {
-        if counters.is_empty() {
-            return None;
-        }
-        let med =
-            |f: &dyn Fn(&ShadingCounters) -> f64| Summary::of(&counters.iter().map(f).collect::<Vec<_>>()).median_ms;
-        let px = screen_pixels.max(1) as f64;
-        Some(Self {
-            screen_pixels,
-            median_visible_tiles: med(&|c| c.visible_tiles as f64),
-            median_shaded_tiles: med(&|c| c.shaded_tiles as f64),
-            median_reused_tiles: med(&|c| c.reused_tiles as f64),
-            median_new_tiles: med(&|c| c.new_tiles as f64),
-            median_new_fraction: med(&|c| c.new_tiles as f64 / c.visible_tiles.max(1) as f64),
-            median_shaded_texels: med(&|c| c.shaded_texels as f64),
-            median_overshading: med(&|c| c.visible_texels as f64 / px),
-            median_shaded_per_pixel: med(&|c| c.shaded_texels as f64 / px),
-            mean_shaded_tiles: counters.iter().map(|c| c.shaded_tiles as f64).sum::<f64>() / counters.len() as f64,
-            frames: counters.len(),
-        })
-    }
-}
-
-/// What to render: the path, the lights, and how many frames.
+/// What to render: the path, the lights, and which frames.
 pub struct BenchPlan<'a> {
     pub path: &'a CameraPath,
     pub lights: &'a [Light],
@@ -128,7 +140,8 @@ pub struct BenchPlan<'a> {
     pub warmup: u32,
     /// Measured frames.
     pub frames: u32,
-    /// Frame `i` shows path frame `i * step` (mod the path length).
+    /// Rendered frame `i` shows path frame `first + i * step` (mod the path length).
+    pub first: u32,
     pub step: u32,
 }
 
@@ -141,87 +154,128 @@ pub struct BenchSetup<'a> {
     pub camera: &'a str,
 }
 
-/// Renders `warmup + frames` frames along `path` (frame `i` uses the path's
-/// camera `i * step mod path length`), then waits for the GPU timings and summarises
-/// the measured frames. `progress` is called after each frame.
+/// Renders `warmup + frames` frames along the plan's path, then waits for
+/// the GPU timings and counters and reports the measured frames. `progress`
+/// is called after each frame.
 pub fn run(
     ctx: &GpuContext,
     renderer: &mut Renderer,
     plan: &BenchPlan,
     setup: &BenchSetup,
     mut progress: impl FnMut(u32),
-) -> Result<BenchResult, RenderError> {
-    let BenchPlan { path, lights, warmup, frames, step } = *plan;
+) -> Result<RunReport, RenderError> {
+    let BenchPlan { path, lights, warmup, frames, first, step } = *plan;
     let total = warmup + frames;
     let measured = |frame: u64| frame >= warmup as u64;
+    let path_len = path.frame_count().max(1) as u64;
+    let path_frame = |i: u64| ((first as u64 + i * step as u64) % path_len) as u32;
     let mut stats: Vec<FrameStats> = Vec::with_capacity(total as usize);
-    let mut timings: Vec<FrameTimings> = Vec::with_capacity(total as usize);
-    let mut counters: Vec<ShadingCounters> = Vec::with_capacity(total as usize);
-    let path_len = path.frame_count().max(1);
-    for i in 0..total {
-        let camera = path.camera_at((i as u64 * step as u64 % path_len as u64) as u32);
-        stats.push(renderer.render(ctx, &camera, lights, i as u64)?);
-        timings.extend(renderer.collect_timings(ctx, false));
+    let mut timings: BTreeMap<u64, FrameTimings> = BTreeMap::new();
+    let mut counters: BTreeMap<u64, Counters> = BTreeMap::new();
+    for i in 0..total as u64 {
+        stats.push(renderer.render(ctx, &path.camera_at(path_frame(i)), lights, i)?);
+        timings.extend(renderer.collect_timings(ctx, false).into_iter().map(|t| (t.frame, t)));
         counters.extend(renderer.collect_counters(ctx, false));
-        progress(i + 1);
+        progress(i as u32 + 1);
     }
-    timings.extend(renderer.collect_timings(ctx, true));
+    timings.extend(renderer.collect_timings(ctx, true).into_iter().map(|t| (t.frame, t)));
     counters.extend(renderer.collect_counters(ctx, true));
-    counters.retain(|c| measured(c.frame));
     ctx.check_errors()?;
 
-    let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    let mut gpu_frame_ms = Vec::new();
-    for t in timings.iter().filter(|t| measured(t.frame)) {
-        for (name, ms) in &t.passes {
-            per_pass.entry(name.clone()).or_default().push(*ms);
-        }
-        gpu_frame_ms.push(t.total_ms);
-    }
-    let cpu: Vec<f64> = stats.iter().filter(|s| measured(s.frame)).map(|s| s.cpu_ms).collect();
-    let assignments: Vec<f64> =
-        stats.iter().filter(|s| measured(s.frame)).map(|s| s.light_assignments as f64).collect();
-    Ok(BenchResult {
-        adapter: ctx.info.name.clone(),
-        backend: format!("{:?}", ctx.info.backend),
-        driver: ctx.info.driver.clone(),
-        driver_info: ctx.info.driver_info.clone(),
-        features: ctx.features.iter_names().map(|(n, _)| n.to_string()).collect(),
+    let per_frame: Vec<FrameReport> = stats
+        .into_iter()
+        .filter(|s| measured(s.frame))
+        .map(|s| {
+            let t = timings.remove(&s.frame);
+            FrameReport {
+                frame: s.frame,
+                path_frame: path_frame(s.frame),
+                cpu_ms: s.cpu_ms,
+                visible_objects: s.visible_objects,
+                light_assignments: s.light_assignments,
+                gpu_ms: t.as_ref().map(|t| t.total_ms),
+                gpu_passes: t
+                    .map(|t| t.passes.into_iter().map(|(pass, ms)| PassTime { pass, ms }).collect())
+                    .unwrap_or_default(),
+                counters: counters.remove(&s.frame).unwrap_or_default(),
+            }
+        })
+        .collect();
+    Ok(RunReport {
+        schema: SCHEMA_VERSION,
+        adapter: AdapterReport::of(ctx),
         scene: setup.scene_name.to_string(),
-        triangles: renderer.scene.triangle_count,
         objects: setup.objects,
+        triangles: renderer.scene.triangle_count,
         width: renderer.targets.width,
         height: renderer.targets.height,
-        pipeline: renderer.pipeline_name().to_string(),
+        pipeline: renderer.report(),
         lights_spec: setup.lights_spec.to_string(),
         light_count: lights.len(),
         seed: setup.seed,
         camera: setup.camera.to_string(),
-        frames,
         warmup,
+        frames,
+        first_path_frame: first,
         frame_step: step,
-        gpu_passes: per_pass.iter().map(|(k, v)| (k.clone(), Summary::of(v))).collect(),
-        gpu_frame: Summary::of(&gpu_frame_ms),
-        cpu_frame: Summary::of(&cpu),
-        gpu_frame_ms,
-        mean_light_assignments: Summary::of(&assignments).mean_ms,
-        shading: ShadingSummary::of(&counters, renderer.targets.width as u64 * renderer.targets.height as u64),
-        memory: renderer.memory(),
+        summary: summarise(&per_frame),
+        per_frame,
     })
+}
+
+/// Medians (and p95, means) over frames of every timed and counted quantity.
+pub fn summarise(frames: &[FrameReport]) -> RunSummary {
+    let of = |f: &dyn Fn(&FrameReport) -> Option<f64>| Summary::of(&frames.iter().filter_map(f).collect::<Vec<_>>());
+    let mut passes: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    let mut counters: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    for f in frames {
+        for p in &f.gpu_passes {
+            passes.entry(&p.pass).or_default().push(p.ms);
+        }
+        for (name, v) in &f.counters {
+            counters.entry(name).or_default().push(*v);
+        }
+    }
+    RunSummary {
+        gpu_frame_ms: of(&|f| f.gpu_ms),
+        cpu_frame_ms: of(&|f| Some(f.cpu_ms)),
+        gpu_passes_ms: passes.into_iter().map(|(k, v)| (k.to_string(), Summary::of(&v))).collect(),
+        counters: counters.into_iter().map(|(k, v)| (k.to_string(), Summary::of(&v))).collect(),
+        light_assignments: of(&|f| Some(f.light_assignments as f64)),
+    }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::Summary;
+    use super::*;
 
     #[test]
     fn summary_percentiles() {
         let v: Vec<f64> = (1..=100).map(f64::from).collect();
         let s = Summary::of(&v);
-        assert_eq!(s.median_ms, 50.0);
-        assert_eq!(s.p95_ms, 95.0);
-        assert_eq!(s.mean_ms, 50.5);
-        assert_eq!(Summary::of(&[3.0]).p95_ms, 3.0);
+        assert_eq!(s.median, 50.0);
+        assert_eq!(s.p95, 95.0);
+        assert_eq!(s.mean, 50.5);
+        assert_eq!(Summary::of(&[3.0]).p95, 3.0);
         assert_eq!(Summary::of(&[]).samples, 0);
+    }
+
+    #[test]
+    fn summarise_collects_passes_and_counters_by_name() {
+        let frame = |gpu: f64, mark: f64, tiles: f64| FrameReport {
+            frame: 0,
+            path_frame: 0,
+            cpu_ms: 1.0,
+            visible_objects: 1,
+            light_assignments: 2,
+            gpu_ms: Some(gpu),
+            gpu_passes: vec![PassTime { pass: "mark".into(), ms: mark }],
+            counters: [("visible_tiles".to_string(), tiles)].into_iter().collect(),
+        };
+        let s = summarise(&[frame(2.0, 0.5, 10.0), frame(4.0, 0.7, 30.0), frame(3.0, 0.6, 20.0)]);
+        assert_eq!(s.gpu_frame_ms.median, 3.0);
+        assert_eq!(s.gpu_passes_ms["mark"].median, 0.6);
+        assert_eq!(s.counters["visible_tiles"].median, 20.0);
+        assert_eq!(s.counters["visible_tiles"].samples, 3);
     }
 }

@@ -2,15 +2,16 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::str::FromStr;
 
 use anyhow::Context;
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use shadespace::bench::{self, BenchSetup};
+use shadespace::bench::{self, BenchPlan, BenchSetup, RunReport};
 use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::gpu::{GpuContext, GpuOptions};
-use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpaceOptions};
-use shadespace::render::{PipelineKind, RenderOptions, Renderer};
+use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
+use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
 #[derive(Parser)]
@@ -73,7 +74,7 @@ struct SceneArgs {
     scene: String,
     /// Shading pipeline.
     #[arg(long, value_enum, default_value = "forward")]
-    pipeline: PipelineKind,
+    pipeline: PipelineName,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     size: (u32, u32),
@@ -83,16 +84,17 @@ struct SceneArgs {
     camera: String,
     /// Lights besides the ambient and directional light that every set has:
     /// `small:N` (each covers 0.25-5% of the screen), `big:N` (20-100%),
-    /// `shadowed:N` (big, casting shadows), `mixed:N:R` (N shadowed big lights,
-    /// R small ones per big one), `none`, several joined with `+`
-    /// (`small:100+shadowed:2`), or the path of a JSON light file.
+    /// `shadowed:N` (big lights meant to cast shadows; shadows are not
+    /// implemented yet, so they light unshadowed and a warning says so),
+    /// `mixed:N:R` (N such big lights, R small ones per big one), `none`,
+    /// several joined with `+` (`small:100+big:2`), or a JSON light file.
     #[arg(long, default_value = "small:32")]
     lights: String,
     /// Seed of the light placement (same seed, same lights).
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Exposure multiplier applied before tone mapping.
-    #[arg(long, default_value_t = 1.0)]
+    /// Exposure multiplier applied before tone mapping (positive, finite).
+    #[arg(long, default_value_t = 1.0, value_parser = positive_f32)]
     exposure: f32,
     /// Forward: skip the depth pre-pass (shade every rasterized fragment).
     #[arg(long)]
@@ -112,23 +114,24 @@ struct ObjectSpaceArgs {
     /// Re-shade a visible tile when its shade is N frames old (1 = every frame).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     reuse: u32,
-    /// Shading texels per metre of surface; an object's texture side is its
-    /// charted area times this, rounded up to a power of two.
-    #[arg(long, default_value_t = 256.0)]
+    /// Shading texels per metre of surface (above 0, at most 65536); an
+    /// object's texture side is its charted area times this, rounded up to a
+    /// power of two.
+    #[arg(long, default_value_t = 256.0, value_parser = texel_density)]
     texel_density: f32,
     /// Give every object an S x S shading texture instead (the reference study used 4096).
     #[arg(long)]
     texture_size: Option<u32>,
-    /// Added to every pixel's mip level (positive: coarser shading).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    /// Added to every pixel's mip level (positive: coarser shading; -16 to 16).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = mip_bias)]
     mip_bias: f32,
     /// Variable rate: shade up to this many mip levels coarser where a
-    /// triangle's normals do not vary (0 = off).
-    #[arg(long, default_value_t = 0.0)]
+    /// triangle's normals do not vary (0 = off; at most 16).
+    #[arg(long, default_value_t = 0.0, value_parser = variable_rate)]
     variable_rate: f32,
     /// Atlas budget in Mi texels (all objects, mip chains included; 12 bytes
     /// each with the triangle maps); texture sizes are halved until they fit.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=1 << 20))]
     atlas_budget: u64,
     /// Skip the depth pre-pass before the visibility (id) pass (with it, each
     /// pixel's ids are written once; measured faster on the H100).
@@ -156,8 +159,10 @@ struct RenderArgs {
     /// reuse and the tile-mask and cache-age views have a history.
     #[arg(help_heading = "Frame and output", long, default_value_t = 0)]
     history: u32,
-    /// Object space: write a debug view instead of the shaded image.
-    #[arg(help_heading = "Frame and output", long, value_enum, default_value = "shade")]
+    /// Object space: write a debug view instead of the shaded image: `shade`,
+    /// `chart-uv`, `mip-level`, `tile-mask` (red: shaded this frame, green:
+    /// reused), `cache-age`.
+    #[arg(help_heading = "Frame and output", long, default_value = "shade", value_parser = DebugView::from_str)]
     view: DebugView,
     /// Object space: also write mip 0 of one object's shading texture here.
     #[arg(help_heading = "Frame and output", long)]
@@ -165,6 +170,19 @@ struct RenderArgs {
     /// Object space: the object (index, see `shadespace charts`) for --atlas-out.
     #[arg(help_heading = "Frame and output", long, default_value_t = 0)]
     atlas_object: usize,
+    /// Also write the frame's GPU pass times as a Chrome trace (open in
+    /// chrome://tracing or ui.perfetto.dev).
+    #[arg(help_heading = "Frame and output", long)]
+    trace: Option<PathBuf>,
+}
+
+/// The shading pipelines, for `--pipeline`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum PipelineName {
+    /// Single-pass forward shading (the reference image).
+    Forward,
+    /// Object-space (texel) shading.
+    Objectspace,
 }
 
 #[derive(Args)]
@@ -188,6 +206,31 @@ struct BenchArgs {
     /// No progress bar.
     #[arg(help_heading = "Frames and output", long)]
     quiet: bool,
+}
+
+/// A finite number in `range`, for a flag whose meaning needs one.
+fn finite_in(s: &str, range: std::ops::RangeInclusive<f32>, what: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && range.contains(&v) => Ok(v),
+        Ok(_) => Err(format!("'{s}' is not {what}")),
+        Err(_) => Err(format!("'{s}' is not a number")),
+    }
+}
+
+fn positive_f32(s: &str) -> Result<f32, String> {
+    finite_in(s, f32::MIN_POSITIVE..=f32::MAX, "a positive finite number")
+}
+
+fn texel_density(s: &str) -> Result<f32, String> {
+    finite_in(s, f32::MIN_POSITIVE..=65536.0, "a density above 0 and at most 65536 texels per metre")
+}
+
+fn mip_bias(s: &str) -> Result<f32, String> {
+    finite_in(s, -16.0..=16.0, "a bias from -16 to 16 levels")
+}
+
+fn variable_rate(s: &str) -> Result<f32, String> {
+    finite_in(s, 0.0..=16.0, "a strength from 0 to 16 levels")
 }
 
 fn parse_tile_size(s: &str) -> Result<u32, String> {
@@ -281,7 +324,10 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     let aspect = a.size.0 as f32 / a.size.1 as f32;
     let reference: Camera = path.camera_at(0);
     let lights = input(lights::build_lights(&spec, &bounds, &reference, aspect, a.seed))?;
-    let (scene, texture_sizes) = if a.pipeline == PipelineKind::ObjectSpace {
+    if lights.iter().any(|l| l.casts_shadows) {
+        tracing::warn!("--lights {spec}: shadows are not implemented yet; shadowed lights light without shadows");
+    }
+    let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {
         let (charted, charts) = chart(&scene, &a.objectspace)?;
         (charted, Some(charts.texture_sizes()))
     } else {
@@ -290,34 +336,35 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     Ok(Setup { scene, texture_sizes, path, camera_label: a.camera.clone(), lights, lights_spec: spec.to_string() })
 }
 
+impl Setup {
+    fn bench_setup<'a>(&'a self, a: &SceneArgs) -> BenchSetup<'a> {
+        BenchSetup {
+            scene_name: &self.scene.name,
+            objects: self.scene.objects.len(),
+            lights_spec: &self.lights_spec,
+            seed: a.seed,
+            camera: &self.camera_label,
+        }
+    }
+}
+
 /// Renderer options from the command line and, for object space, the
 /// texture sizes the charts gave.
-fn render_options(
-    a: &SceneArgs,
-    texture_sizes: &Option<Vec<Option<u32>>>,
-    view: DebugView,
-) -> Result<RenderOptions, Failure> {
-    let objectspace = (a.pipeline == PipelineKind::ObjectSpace)
-        .then(|| -> Result<_, Failure> {
-            Ok(ObjectSpaceOptions {
-                tile_size: a.objectspace.tile_size,
-                reuse: a.objectspace.reuse,
-                mip_bias: a.objectspace.mip_bias,
-                variable_rate: a.objectspace.variable_rate,
-                view,
-                texture_sizes: texture_sizes.clone().unwrap_or_default(),
-                atlas_budget_texels: a.objectspace.atlas_budget << 20,
-                visibility_prepass: !a.objectspace.no_visibility_prepass,
-            })
-        })
-        .transpose()?;
-    Ok(RenderOptions {
-        pipeline: a.pipeline,
-        width: a.size.0,
-        height: a.size.1,
-        depth_prepass: !a.no_depth_prepass,
-        objectspace,
-    })
+fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view: DebugView) -> RenderOptions {
+    let pipeline = match a.pipeline {
+        PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
+        PipelineName::Objectspace => PipelineConfig::ObjectSpace(ObjectSpaceConfig {
+            tile_size: a.objectspace.tile_size,
+            reuse: a.objectspace.reuse,
+            mip_bias: a.objectspace.mip_bias,
+            variable_rate: a.objectspace.variable_rate,
+            view,
+            texture_sizes: texture_sizes.clone().unwrap_or_default(),
+            atlas_budget_texels: a.objectspace.atlas_budget << 20,
+            visibility_prepass: !a.objectspace.no_visibility_prepass,
+        }),
+    };
+    RenderOptions { width: a.size.0, height: a.size.1, pipeline }
 }
 
 /// The texture sizing the options ask for.
@@ -325,10 +372,8 @@ fn sizing(a: &ObjectSpaceArgs) -> Result<TextureSizing, Failure> {
     match a.texture_size {
         Some(size) if size.is_power_of_two() && size >= 8 => Ok(TextureSizing::Fixed(size)),
         Some(size) => input(Err(anyhow::anyhow!("--texture-size {size} is not a power of two of at least 8"))),
-        None if a.texel_density > 0.0 && a.texel_density.is_finite() => {
-            Ok(TextureSizing::Density { texels_per_metre: a.texel_density, min: 64, max: MAX_PAGE_SIZE })
-        }
-        None => input(Err(anyhow::anyhow!("--texel-density must be a positive number"))),
+        // The value parser has checked the density.
+        None => Ok(TextureSizing::Density { texels_per_metre: a.texel_density, min: 64, max: MAX_PAGE_SIZE }),
     }
 }
 
@@ -347,23 +392,23 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
-    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, a.view)?)?;
+    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, a.view))?;
     renderer.exposure = a.scene.exposure;
-    for f in a.frame.saturating_sub(a.history)..a.frame {
-        renderer.render(&ctx, &s.path.camera_at(f), &s.lights, f as u64)?;
+    if a.atlas_out.is_some() && renderer.pipeline::<ObjectSpace>().is_none() {
+        return input(Err(anyhow::anyhow!("--atlas-out needs --pipeline objectspace")));
     }
-    let camera = s.path.camera_at(a.frame);
-    let stats = renderer.render(&ctx, &camera, &s.lights, a.frame as u64)?;
+    // The history frames are the warm-up of a one-frame run.
+    let history = a.history.min(a.frame);
+    let plan =
+        BenchPlan { path: &s.path, lights: &s.lights, warmup: history, frames: 1, first: a.frame - history, step: 1 };
+    let report = bench::run(&ctx, &mut renderer, &plan, &s.bench_setup(&a.scene), |_| {})?;
     let image = renderer.read_image(&ctx)?;
-    let this_frame = |f: u64| f == a.frame as u64;
-    let timings: Vec<_> = renderer.collect_timings(&ctx, true).into_iter().filter(|t| this_frame(t.frame)).collect();
-    let counters: Vec<_> = renderer.collect_counters(&ctx, true).into_iter().filter(|c| this_frame(c.frame)).collect();
     save_png(&image, &a.out)?;
-    if let Some(path) = &a.atlas_out {
-        let Some(os) = renderer.objectspace() else {
-            return input(Err(anyhow::anyhow!("--atlas-out needs --pipeline objectspace")));
-        };
+    if let (Some(path), Some(os)) = (&a.atlas_out, renderer.pipeline::<ObjectSpace>()) {
         save_png(&input(os.read_atlas(&ctx, a.atlas_object, 0))?, path)?;
+    }
+    if let Some(path) = &a.trace {
+        write_trace(&renderer, path)?;
     }
     println!(
         "{}: {} ({} objects, {} triangles), {} lights, {}x{}, {} -> {}",
@@ -377,44 +422,47 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
         ctx.info.name,
         a.out.display()
     );
-    for t in &timings {
-        for (name, ms) in &t.passes {
-            println!("  {name:<16} {ms:8.3} ms GPU");
+    for f in &report.per_frame {
+        for p in &f.gpu_passes {
+            println!("  {:<16} {:8.3} ms GPU", p.pass, p.ms);
+        }
+        let c = |name: &str| f.counters.get(name).copied();
+        if let (Some(visible), Some(shaded), Some(reused), Some(new), Some(overshading)) =
+            (c("visible_tiles"), c("shaded_tiles"), c("reused_tiles"), c("new_tiles"), c("overshading"))
+        {
+            println!(
+                "  tiles: {visible} visible, {shaded} shaded, {reused} reused, {new} new; {overshading:.2} visible texels per pixel"
+            );
         }
     }
-    for c in &counters {
-        println!(
-            "  tiles: {} visible, {} shaded, {} reused, {} new; {:.2} visible texels per pixel",
-            c.visible_tiles,
-            c.shaded_tiles,
-            c.reused_tiles,
-            c.new_tiles,
-            c.visible_texels as f64 / stats.screen_pixels as f64
-        );
-    }
     if let Some(path) = &a.stats {
-        let json = serde_json::json!({
-            "adapter": ctx.adapter_summary(),
-            "scene": s.scene.name,
-            "pipeline": renderer.pipeline_name(),
-            "lights": s.lights_spec,
-            "light_count": s.lights.len(),
-            "camera": s.camera_label,
-            "stats": stats,
-            "gpu": timings,
-            "shading": counters,
-            "memory": renderer.memory(),
-        });
-        write_file(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
+        write_report(&report, path)?;
     }
     Ok(())
+}
+
+fn write_report(report: &RunReport, path: &Path) -> Result<(), Failure> {
+    write_file(path, serde_json::to_string_pretty(report)?.as_bytes())
+}
+
+/// Writes the GPU trace through a temporary file, like every other output.
+fn write_trace(renderer: &Renderer, path: &Path) -> Result<(), Failure> {
+    let tmp = temp_path(path);
+    match renderer.write_trace(&tmp) {
+        Ok(true) => input(std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))),
+        Ok(false) => {
+            tracing::warn!("--trace: the adapter has no timestamp queries; no trace written");
+            Ok(())
+        }
+        Err(e) => input(Err(anyhow::Error::new(e).context(format!("{}: cannot write", path.display())))),
+    }
 }
 
 fn run_bench(a: BenchArgs) -> Result<(), Failure> {
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
-    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, DebugView::Shade)?)?;
+    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, DebugView::Shade))?;
     renderer.exposure = a.scene.exposure;
     if !renderer.timing_enabled() {
         tracing::warn!("{} has no timestamp queries: the result has CPU times only", ctx.info.name);
@@ -427,33 +475,33 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
             .progress_chars("=> "),
     );
     bar.set_message(format!("{} {}", renderer.pipeline_name(), s.scene.name));
-    let setup = BenchSetup {
-        scene_name: &s.scene.name,
-        objects: s.scene.objects.len(),
-        lights_spec: &s.lights_spec,
-        seed: a.scene.seed,
-        camera: &s.camera_label,
+    let plan = BenchPlan {
+        path: &s.path,
+        lights: &s.lights,
+        warmup: a.warmup,
+        frames: a.frames,
+        first: 0,
+        step: a.frame_step,
     };
-    let plan =
-        bench::BenchPlan { path: &s.path, lights: &s.lights, warmup: a.warmup, frames: a.frames, step: a.frame_step };
-    let result = bench::run(&ctx, &mut renderer, &plan, &setup, |i| bar.set_position(i as u64))?;
+    let result = bench::run(&ctx, &mut renderer, &plan, &s.bench_setup(&a.scene), |i| bar.set_position(i as u64))?;
     bar.finish_and_clear();
-    write_file(&a.out, serde_json::to_string_pretty(&result)?.as_bytes())?;
+    write_report(&result, &a.out)?;
+    let summary = &result.summary;
     println!(
         "{} {} {}x{} lights {} ({}): GPU frame median {:.3} ms, p95 {:.3} ms; CPU {:.3} ms  -> {}",
-        result.pipeline,
+        renderer.pipeline_name(),
         result.scene,
         w,
         h,
         result.lights_spec,
         result.light_count,
-        result.gpu_frame.median_ms,
-        result.gpu_frame.p95_ms,
-        result.cpu_frame.median_ms,
+        summary.gpu_frame_ms.median,
+        summary.gpu_frame_ms.p95,
+        summary.cpu_frame_ms.median,
         a.out.display()
     );
-    for (name, s) in &result.gpu_passes {
-        println!("  {name:<16} median {:8.3} ms  p95 {:8.3} ms", s.median_ms, s.p95_ms);
+    for (name, s) in &summary.gpu_passes_ms {
+        println!("  {name:<16} median {:8.3} ms  p95 {:8.3} ms", s.median, s.p95);
     }
     Ok(())
 }
@@ -505,11 +553,16 @@ fn save_png(image: &image::RgbaImage, path: &Path) -> Result<(), Failure> {
     write_file(path, &bytes)
 }
 
+/// The temporary file an output is written to before its rename.
+fn temp_path(path: &Path) -> PathBuf {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    dir.join(format!(".{}.tmp", path.file_name().and_then(|n| n.to_str()).unwrap_or("out")))
+}
+
 /// Writes through a temporary file and a rename, so that a failed run never
 /// leaves a truncated result behind.
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let tmp = dir.join(format!(".{}.tmp", path.file_name().and_then(|n| n.to_str()).unwrap_or("out")));
+    let tmp = temp_path(path);
     let result = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
     input(result.with_context(|| format!("{}: cannot write", path.display())))
 }

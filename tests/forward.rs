@@ -2,19 +2,13 @@
 //! the image shows lit geometry.
 mod common;
 
-use shadespace::render::{PipelineKind, RenderOptions, Renderer};
+use shadespace::render::{ForwardConfig, PipelineConfig, RenderOptions, Renderer};
 
 #[test]
 fn forward_renders_lit_floor() {
     let ctx = common::gpu();
     let (scene, camera, lights) = common::floor_scene();
-    let options = RenderOptions {
-        pipeline: PipelineKind::Forward,
-        width: 128,
-        height: 96,
-        depth_prepass: true,
-        objectspace: None,
-    };
+    let options = RenderOptions { width: 128, height: 96, pipeline: PipelineConfig::Forward(ForwardConfig::default()) };
     let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
     r.render(&ctx, &camera, &lights, 0).unwrap();
     let img = r.read_image(&ctx).unwrap();

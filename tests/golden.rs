@@ -9,8 +9,7 @@ mod common;
 use std::path::PathBuf;
 
 use shadespace::metrics;
-use shadespace::render::objectspace::ObjectSpaceOptions;
-use shadespace::render::{PipelineKind, RenderOptions, Renderer};
+use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::{self, LightSpec, lights, path};
 
 const WIDTH: u32 = 192;
@@ -25,14 +24,20 @@ const GOLDEN_FLIP: f32 = 0.02;
 const AGREEMENT_FLIP: f32 = 0.05;
 const AGREEMENT_PSNR: f64 = 30.0;
 
-fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: PipelineKind) -> image::RgbaImage {
+#[derive(Clone, Copy)]
+enum Pipeline {
+    Forward,
+    ObjectSpace,
+}
+
+fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: Pipeline) -> image::RgbaImage {
     render_at(ctx, name, pipeline, WIDTH, HEIGHT)
 }
 
 fn render_at(
     ctx: &shadespace::gpu::GpuContext,
     name: &str,
-    pipeline: PipelineKind,
+    pipeline: Pipeline,
     width: u32,
     height: u32,
 ) -> image::RgbaImage {
@@ -43,11 +48,25 @@ fn render_at(
     let spec: LightSpec = "small:24+big:2".parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &camera, width as f32 / height as f32, 7).unwrap();
     let (scene, texture_sizes) = common::charted(&scene);
-    let objectspace = ObjectSpaceOptions { texture_sizes, ..Default::default() };
-    let options =
-        RenderOptions { pipeline, width: WIDTH, height: HEIGHT, depth_prepass: true, objectspace: Some(objectspace) };
-    let mut r = Renderer::new(ctx, &scene, &options).unwrap();
-    r.render(ctx, &camera, &lights, 0).unwrap();
+    let pipeline = match pipeline {
+        Pipeline::Forward => PipelineConfig::Forward(ForwardConfig::default()),
+        Pipeline::ObjectSpace => PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes, ..Default::default() }),
+    };
+    let options = RenderOptions { width, height, pipeline };
+    let image = render_with(ctx, &scene, &options, &camera, &lights);
+    assert_eq!(image.dimensions(), (width, height));
+    image
+}
+
+fn render_with(
+    ctx: &shadespace::gpu::GpuContext,
+    scene: &shadespace::scene::Scene,
+    options: &RenderOptions,
+    camera: &shadespace::scene::Camera,
+    lights: &[shadespace::scene::Light],
+) -> image::RgbaImage {
+    let mut r = Renderer::new(ctx, scene, options).unwrap();
+    r.render(ctx, camera, lights, 0).unwrap();
     let image = r.read_image(ctx).unwrap();
     ctx.check_errors().unwrap();
     image
@@ -59,7 +78,7 @@ fn golden_path(name: &str) -> PathBuf {
 
 fn check_golden(name: &str) {
     let ctx = common::gpu();
-    let actual = render(&ctx, name, PipelineKind::Forward);
+    let actual = render(&ctx, name, Pipeline::Forward);
     let path = golden_path(name);
     if std::env::var_os("SHADESPACE_BLESS").is_some() {
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
@@ -99,15 +118,15 @@ fn golden_voxels() {
 #[test]
 fn same_inputs_give_the_same_image() {
     let ctx = common::gpu();
-    let a = render(&ctx, "atrium", PipelineKind::Forward);
-    let b = render(&ctx, "atrium", PipelineKind::Forward);
+    let a = render(&ctx, "atrium", Pipeline::Forward);
+    let b = render(&ctx, "atrium", Pipeline::Forward);
     assert!(a == b, "two renders of the same frame differ");
 }
 
 fn check_agreement(name: &str) {
     let ctx = common::gpu();
-    let reference = render_at(&ctx, name, PipelineKind::Forward, 320, 180);
-    let test = render_at(&ctx, name, PipelineKind::ObjectSpace, 320, 180);
+    let reference = render_at(&ctx, name, Pipeline::Forward, 320, 180);
+    let test = render_at(&ctx, name, Pipeline::ObjectSpace, 320, 180);
     let (err, map) = metrics::compare(&reference, &test);
     let out = common::out_dir();
     test.save(out.join(format!("{name}-objectspace.png"))).unwrap();

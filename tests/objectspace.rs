@@ -2,27 +2,30 @@
 mod common;
 
 use shadespace::metrics;
-use shadespace::render::objectspace::ObjectSpaceOptions;
-use shadespace::render::{PipelineKind, RenderOptions, Renderer};
+use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 
-fn options(pipeline: PipelineKind, reuse: u32) -> RenderOptions {
-    RenderOptions {
-        pipeline,
-        width: 160,
-        height: 120,
-        depth_prepass: true,
-        objectspace: Some(ObjectSpaceOptions { reuse, texture_sizes: vec![Some(512)], ..Default::default() }),
-    }
+fn forward() -> RenderOptions {
+    RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::Forward(ForwardConfig::default()) }
+}
+
+fn objectspace(reuse: u32) -> RenderOptions {
+    let config = ObjectSpaceConfig { reuse, texture_sizes: vec![Some(512)], ..Default::default() };
+    RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config) }
+}
+
+/// The counter `name` of every collected frame.
+fn counter(c: &[(u64, shadespace::render::Counters)], name: &str) -> Vec<f64> {
+    c.iter().map(|(_, c)| c[name]).collect()
 }
 
 #[test]
 fn objectspace_matches_forward_on_floor() {
     let ctx = common::gpu();
     let (scene, camera, lights) = common::floor_scene();
-    let mut fwd = Renderer::new(&ctx, &scene, &options(PipelineKind::Forward, 1)).unwrap();
+    let mut fwd = Renderer::new(&ctx, &scene, &forward()).unwrap();
     fwd.render(&ctx, &camera, &lights, 0).unwrap();
     let reference = fwd.read_image(&ctx).unwrap();
-    let mut os = Renderer::new(&ctx, &scene, &options(PipelineKind::ObjectSpace, 1)).unwrap();
+    let mut os = Renderer::new(&ctx, &scene, &objectspace(1)).unwrap();
     os.render(&ctx, &camera, &lights, 0).unwrap();
     let test = os.read_image(&ctx).unwrap();
     let counters = os.collect_counters(&ctx, true);
@@ -32,7 +35,7 @@ fn objectspace_matches_forward_on_floor() {
     let (err, map) = metrics::compare(&reference, &test);
     map.save(out.join("os_floor_flip.png")).unwrap();
     eprintln!("{err:?} {counters:?}");
-    assert!(counters[0].visible_tiles > 0);
+    assert!(counter(&counters, "visible_tiles")[0] > 0.0);
     assert!(err.flip_mean < 0.05, "{err:?}");
 }
 
@@ -44,7 +47,7 @@ fn objectspace_matches_forward_on_floor() {
 fn reuse_skips_young_tiles_and_light_changes_invalidate() {
     let ctx = common::gpu();
     let (scene, camera, mut lights) = common::floor_scene();
-    let mut os = Renderer::new(&ctx, &scene, &options(PipelineKind::ObjectSpace, 2)).unwrap();
+    let mut os = Renderer::new(&ctx, &scene, &objectspace(2)).unwrap();
     for frame in 0..3 {
         os.render(&ctx, &camera, &lights, frame).unwrap();
     }
@@ -52,19 +55,21 @@ fn reuse_skips_young_tiles_and_light_changes_invalidate() {
     os.render(&ctx, &camera, &lights, 3).unwrap();
     let c = os.collect_counters(&ctx, true);
     assert_eq!(c.len(), 4);
-    assert!(c[0].visible_tiles > 0);
-    assert_eq!(c[0].shaded_tiles, c[0].visible_tiles, "first frame shades all");
-    assert_eq!(c[0].new_tiles, c[0].visible_tiles, "first frame: every tile is new");
-    assert_eq!(c[1].shaded_tiles, 0, "second frame reuses all");
-    assert_eq!(c[1].reused_tiles, c[1].visible_tiles);
-    assert_eq!(c[1].new_tiles, 0, "static camera: no new tiles");
-    assert_eq!(c[2].shaded_tiles, c[2].visible_tiles, "age 2 reached: shade again");
-    assert_eq!(c[3].shaded_tiles, c[3].visible_tiles, "a light changed: shade again");
+    let (visible, shaded) = (counter(&c, "visible_tiles"), counter(&c, "shaded_tiles"));
+    let (reused, new) = (counter(&c, "reused_tiles"), counter(&c, "new_tiles"));
+    assert!(visible[0] > 0.0);
+    assert_eq!(shaded[0], visible[0], "first frame shades all");
+    assert_eq!(new[0], visible[0], "first frame: every tile is new");
+    assert_eq!(shaded[1], 0.0, "second frame reuses all");
+    assert_eq!(reused[1], visible[1]);
+    assert_eq!(new[1], 0.0, "static camera: no new tiles");
+    assert_eq!(shaded[2], visible[2], "age 2 reached: shade again");
+    assert_eq!(shaded[3], visible[3], "a light changed: shade again");
 
-    let mut every = Renderer::new(&ctx, &scene, &options(PipelineKind::ObjectSpace, 1)).unwrap();
+    let mut every = Renderer::new(&ctx, &scene, &objectspace(1)).unwrap();
     for frame in 0..2 {
         every.render(&ctx, &camera, &lights, frame).unwrap();
     }
     let c = every.collect_counters(&ctx, true);
-    assert_eq!(c[1].shaded_tiles, c[1].visible_tiles);
+    assert_eq!(counter(&c, "shaded_tiles")[1], counter(&c, "visible_tiles")[1]);
 }

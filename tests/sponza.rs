@@ -5,8 +5,7 @@ mod common;
 use std::path::Path;
 
 use shadespace::metrics;
-use shadespace::render::objectspace::ObjectSpaceOptions;
-use shadespace::render::{PipelineKind, RenderOptions, Renderer};
+use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::{self, LightSpec, lights, path};
 
 const SPONZA: &str = "../shared/scenes/sponza-thesis";
@@ -26,20 +25,15 @@ fn sponza_forward_and_objectspace_agree() {
     let spec: LightSpec = "small:32".parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &camera, w as f32 / h as f32, 1).unwrap();
     let (scene, texture_sizes) = common::charted(&scene);
-    let objectspace = ObjectSpaceOptions { texture_sizes, ..Default::default() };
+    let objectspace = ObjectSpaceConfig { texture_sizes, ..Default::default() };
     let mut images = Vec::new();
-    for pipeline in [PipelineKind::Forward, PipelineKind::ObjectSpace] {
-        let options = RenderOptions {
-            pipeline,
-            width: w,
-            height: h,
-            depth_prepass: true,
-            objectspace: Some(objectspace.clone()),
-        };
+    for pipeline in [PipelineConfig::Forward(ForwardConfig::default()), PipelineConfig::ObjectSpace(objectspace)] {
+        let name = pipeline.name();
+        let options = RenderOptions { width: w, height: h, pipeline };
         let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
         r.render(&ctx, &camera, &lights, 0).unwrap();
         let image = r.read_image(&ctx).unwrap();
-        image.save(common::out_dir().join(format!("sponza-{pipeline:?}.png"))).unwrap();
+        image.save(common::out_dir().join(format!("sponza-{name}.png"))).unwrap();
         images.push(image);
     }
     let lum: Vec<u32> = images[0].pixels().map(|p| p[0] as u32 + p[1] as u32 + p[2] as u32).collect();

@@ -29,6 +29,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec2;
 
 use super::generate::{GeneratedChart, GeneratorSettings};
+use crate::hash::Fnv1a;
 use crate::scene::Mesh;
 
 /// Version of the file format and of everything that decides a generated chart
@@ -37,43 +38,6 @@ pub const FORMAT_VERSION: u32 = 1;
 
 const MAGIC: &[u8; 8] = b"SSCHART\0";
 const HEADER_LEN: usize = 8 + 4 + 8 + 4 + 4 + 4;
-
-/// 64-bit FNV-1a: a stable hash (std's `DefaultHasher` may change between
-/// Rust releases, which would silently invalidate every cache file).
-#[derive(Clone, Copy, Debug)]
-pub struct Fnv1a(u64);
-
-impl Default for Fnv1a {
-    fn default() -> Self {
-        Self(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv1a {
-    /// Hashes `bytes` into the state.
-    pub fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    }
-
-    /// Hashes a u32, little-endian.
-    pub fn write_u32(&mut self, x: u32) {
-        self.write(&x.to_le_bytes());
-    }
-
-    /// Hashes a slice of plain values by their bytes, after its length (so
-    /// that two arrays can't trade elements and hash the same).
-    pub fn write_pod<T: bytemuck::Pod>(&mut self, values: &[T]) {
-        self.write(&(values.len() as u64).to_le_bytes());
-        self.write(bytemuck::cast_slice(values));
-    }
-
-    /// The hash of everything written so far.
-    pub fn finish(&self) -> u64 {
-        self.0
-    }
-}
 
 /// The cache key of `mesh` unwrapped at `resolution` with `settings`.
 pub fn chart_key(mesh: &Mesh, resolution: u32, settings: &GeneratorSettings) -> u64 {
@@ -270,19 +234,6 @@ fn decode(bytes: &[u8], key: u64, mesh: &Mesh) -> Result<GeneratedChart, String>
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn fnv1a_matches_the_reference_values() {
-        // Published FNV-1a 64 test vectors.
-        let hash = |s: &[u8]| {
-            let mut h = Fnv1a::default();
-            h.write(s);
-            h.finish()
-        };
-        assert_eq!(hash(b""), 0xcbf29ce484222325);
-        assert_eq!(hash(b"a"), 0xaf63dc4c8601ec8c);
-        assert_eq!(hash(b"foobar"), 0x85944171f73967e8);
-    }
 
     #[test]
     fn cache_folder_precedence() {

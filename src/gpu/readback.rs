@@ -54,6 +54,20 @@ pub fn read_texture_region(
     Ok(out)
 }
 
+/// Copies a whole `COPY_SRC` buffer back, waiting for the GPU.
+pub fn read_whole_buffer(ctx: &GpuContext, source: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("buffer read-back"),
+        size: source.size(),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(source, 0, &staging, 0, source.size());
+    ctx.queue.submit([encoder.finish()]);
+    read_buffer(ctx, &staging)
+}
+
 /// Maps a `MAP_READ` buffer and returns its bytes, waiting for the GPU.
 pub fn read_buffer(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
     let (tx, rx) = std::sync::mpsc::channel();

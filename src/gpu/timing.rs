@@ -1,11 +1,12 @@
-//! GPU time per pass from timestamp queries, read back a few frames later so
-//! that the frame loop never waits for the GPU.
-//!
-//! Each pass asks for its `timestamp_writes`; at the end of the frame the
-//! queries are resolved and copied out through a [`ReadbackRing`], and
-//! [`GpuTimer::collect`] returns the frames whose results have arrived.
+//! GPU time per pass, through `wgpu-profiler` (timestamp queries written by
+//! each pass, resolved at the end of the frame, read back a few frames later
+//! so that the frame loop never waits for the GPU). Its results also export
+//! as a Chrome trace (`render --trace`).
 
-use super::readback::ReadbackRing;
+use std::collections::VecDeque;
+use std::path::Path;
+
+use wgpu_profiler::{GpuProfiler, GpuProfilerSettings, GpuTimerQueryResult};
 
 /// Timings of one frame, in milliseconds.
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -17,113 +18,101 @@ pub struct FrameTimings {
     pub total_ms: f64,
 }
 
+/// Frames whose timings may be in flight at once. The profiler drops frames
+/// beyond this; a benchmark submits frames faster than a slow pipeline
+/// finishes them and must lose none, so the bound is far above any run's
+/// backlog (each pending frame holds one small query set).
+const MAX_PENDING_FRAMES: usize = 4096;
+
 pub struct GpuTimer {
-    queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
-    capacity: u32,
-    ring: ReadbackRing<(u64, Vec<String>)>,
-    names: Vec<String>,
-    frame: u64,
-    period_ns: f64,
+    profiler: GpuProfiler,
+    enabled: bool,
+    /// Frame numbers of the frames handed to the profiler, oldest first.
+    pending: VecDeque<u64>,
+    period: f32,
+    /// The raw results of the newest collected frame (for trace export).
+    last: Option<Vec<GpuTimerQueryResult>>,
 }
 
 impl GpuTimer {
-    /// Up to `max_passes` timed passes per frame. Without `TIMESTAMP_QUERY`
-    /// the timer is inert and reports no timings.
-    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, max_passes: u32) -> Self {
-        let capacity = max_passes * 2;
-        let queries = device.features().contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
-            let set = device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("pass timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: capacity,
-            });
-            let resolve = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamp resolve"),
-                size: capacity as u64 * 8,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            (set, resolve)
-        });
-        Self {
-            queries,
-            capacity,
-            ring: ReadbackRing::new("timestamp read-back", capacity as u64 * 8),
-            names: Vec::new(),
-            frame: 0,
-            period_ns: queue.get_timestamp_period() as f64,
-        }
+    /// Without `TIMESTAMP_QUERY` the timer records nothing and reports no timings.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Self {
+        let enabled = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let settings = GpuProfilerSettings {
+            enable_timer_queries: enabled,
+            max_num_pending_frames: MAX_PENDING_FRAMES,
+            ..Default::default()
+        };
+        let profiler = GpuProfiler::new(device, settings).expect("profiler settings are valid");
+        Self { profiler, enabled, pending: VecDeque::new(), period: queue.get_timestamp_period(), last: None }
     }
 
     pub fn enabled(&self) -> bool {
-        self.queries.is_some()
+        self.enabled
     }
 
-    pub fn begin_frame(&mut self, frame: u64) {
-        self.frame = frame;
-        self.names.clear();
+    /// The profiler that passes open their timing scopes on.
+    pub fn profiler(&self) -> &GpuProfiler {
+        &self.profiler
     }
 
-    fn next_pair(&mut self, name: &str) -> Option<(&wgpu::QuerySet, u32)> {
-        let index = self.names.len() as u32 * 2;
-        if index + 2 > self.capacity {
-            tracing::warn!("timer: more than {} passes in a frame; '{name}' is not timed", self.capacity / 2);
-            return None;
+    /// Resolves this frame's queries. Call before the encoder is finished.
+    pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        self.profiler.resolve_queries(encoder);
+    }
+
+    /// Ends frame `frame` and starts its read-back. Call right after `queue.submit`.
+    pub fn end_frame(&mut self, frame: u64) {
+        match self.profiler.end_frame() {
+            Ok(()) => self.pending.push_back(frame),
+            Err(e) => tracing::warn!("timer: frame {frame} not timed: {e}"),
         }
-        let (set, _) = self.queries.as_ref()?;
-        self.names.push(name.to_string());
-        Some((set, index))
-    }
-
-    pub fn compute_pass(&mut self, name: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.next_pair(name).map(|(query_set, i)| wgpu::ComputePassTimestampWrites {
-            query_set,
-            beginning_of_pass_write_index: Some(i),
-            end_of_pass_write_index: Some(i + 1),
-        })
-    }
-
-    pub fn render_pass(&mut self, name: &str) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
-        self.next_pair(name).map(|(query_set, i)| wgpu::RenderPassTimestampWrites {
-            query_set,
-            beginning_of_pass_write_index: Some(i),
-            end_of_pass_write_index: Some(i + 1),
-        })
-    }
-
-    /// Resolves this frame's queries (only those written: the Vulkan backend
-    /// waits on unwritten ones) and queues their read-back. Call before `finish`.
-    pub fn end_frame(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
-        let Some((set, resolve)) = &self.queries else { return };
-        let n = self.names.len() as u32 * 2;
-        if n == 0 {
-            return;
-        }
-        encoder.resolve_query_set(set, 0..n, resolve, 0);
-        self.ring.copy(device, encoder, resolve, n as u64 * 8, (self.frame, std::mem::take(&mut self.names)));
-    }
-
-    /// Starts mapping this frame's read-back. Call right after `queue.submit`.
-    pub fn after_submit(&mut self) {
-        self.ring.after_submit();
     }
 
     /// The timings that have arrived, oldest first; `wait` waits for all.
     pub fn collect(&mut self, device: &wgpu::Device, wait: bool) -> Vec<FrameTimings> {
-        self.ring
-            .collect(device, wait)
-            .into_iter()
-            .map(|((frame, names), bytes)| self.decode(frame, names, &bytes))
-            .collect()
+        let poll = if wait { wgpu::PollType::wait_indefinitely() } else { wgpu::PollType::Poll };
+        if let Err(e) = device.poll(poll) {
+            tracing::warn!("timer: poll failed: {e}");
+        }
+        let mut out = Vec::new();
+        while let Some(results) = self.profiler.process_finished_frame(self.period) {
+            let frame = self.pending.pop_front().expect("one pending frame number per profiler frame");
+            if self.enabled {
+                out.push(decode(frame, &results));
+                self.last = Some(results);
+            }
+        }
+        out
     }
 
-    fn decode(&self, frame: u64, names: Vec<String>, bytes: &[u8]) -> FrameTimings {
-        // Copied bytes carry no alignment guarantee: decode rather than cast.
-        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(bytes);
-        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * self.period_ns * 1e-6;
-        let total_ms = ms(ticks[0], ticks[ticks.len() - 1]);
-        let passes =
-            names.into_iter().enumerate().map(|(i, name)| (name, ms(ticks[2 * i], ticks[2 * i + 1]))).collect();
-        FrameTimings { frame, passes, total_ms }
+    /// Writes the newest collected frame as a Chrome trace (chrome://tracing,
+    /// Perfetto). Returns false when no frame has been collected.
+    pub fn write_trace(&self, path: &Path) -> std::io::Result<bool> {
+        match &self.last {
+            Some(results) => wgpu_profiler::chrometrace::write_chrometrace(path, results).map(|()| true),
+            None => Ok(false),
+        }
     }
+}
+
+/// Flattens one frame's scopes into (name, ms) in recording order; nested
+/// scopes are named `outer/inner`.
+fn decode(frame: u64, results: &[GpuTimerQueryResult]) -> FrameTimings {
+    fn walk(prefix: &str, results: &[GpuTimerQueryResult], out: &mut Vec<(String, f64)>, span: &mut (f64, f64)) {
+        for r in results {
+            let name = if prefix.is_empty() { r.label.clone() } else { format!("{prefix}/{}", r.label) };
+            if let Some(t) = &r.time {
+                out.push((name.clone(), (t.end - t.start) * 1e3));
+                span.0 = span.0.min(t.start);
+                span.1 = span.1.max(t.end);
+            }
+            walk(&name, &r.nested_queries, out, span);
+        }
+    }
+    let mut passes = Vec::new();
+    let mut span = (f64::INFINITY, f64::NEG_INFINITY);
+    walk("", results, &mut passes, &mut span);
+    let total_ms = if span.1 >= span.0 { (span.1 - span.0) * 1e3 } else { 0.0 };
+    FrameTimings { frame, passes, total_ms }
 }

@@ -1,120 +1,119 @@
-//! Rust mirrors of the WGSL structs in `shaders/scene.wgsl` and
-//! `shaders/lighting.wgsl`. Sizes are checked by tests against naga's layout.
+//! Rust mirrors of the scene structs every pipeline reads
+//! (`shaders/shared/scene.wgsl`, `shaders/shared/lighting.wgsl`). Their
+//! layouts are compared member by member with naga's (`shaders::layout`).
 
-use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::scene::{Light, LightKind};
+use crate::shaders::gpu_struct;
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuVertex {
-    pub position: Vec3,
-    pub uv0_x: f32,
-    pub normal: Vec3,
-    pub uv0_y: f32,
-    pub tangent: Vec4,
-    pub chart_uv: Vec2,
-    pub pad: Vec2,
+gpu_struct! {
+    /// 48 bytes: pulled from a storage buffer by index, so raster and compute
+    /// passes read the same data.
+    pub struct GpuVertex as "Vertex" {
+        pub position: Vec3,
+        pub uv0_x: f32,
+        pub normal: Vec3,
+        pub uv0_y: f32,
+        /// The object's unique chart (object-space shading).
+        pub chart_uv: Vec2,
+        pub pad_a: f32,
+        pub pad_b: f32,
+    }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuObject {
-    pub model: Mat4,
-    pub normal_model: Mat4,
-    pub base_color: Vec4,
-    pub emissive: Vec3,
-    pub albedo_layer: u32,
-    pub light_offset: u32,
-    pub light_count: u32,
-    pub first_index: u32,
-    pub base_vertex: u32,
-    pub specular: f32,
-    pub shininess: f32,
-    pub atlas_entry: u32,
-    pub flags: u32,
+gpu_struct! {
+    pub struct GpuObject as "Object" {
+        pub model: Mat4,
+        /// Inverse transpose of `model` (upper 3x3 used).
+        pub normal_model: Mat4,
+        pub base_color: Vec4,
+        pub emissive: Vec3,
+        pub albedo_layer: u32,
+        /// This frame's light list: `light_indices[light_offset..][..light_count]`.
+        pub light_offset: u32,
+        pub light_count: u32,
+        pub first_index: u32,
+        pub base_vertex: u32,
+        pub specular: f32,
+        pub shininess: f32,
+        pub pad_a: u32,
+        pub pad_b: u32,
+    }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuView {
-    pub view_proj: Mat4,
-    pub inv_view_proj: Mat4,
-    pub camera_position: Vec4,
-    pub viewport: Vec4,
-    pub frame: u32,
-    pub exposure: f32,
-    pub pad: [u32; 2],
+gpu_struct! {
+    pub struct GpuView as "View" {
+        pub view_proj: Mat4,
+        pub camera_position: Vec4,
+        /// width, height, 1/width, 1/height
+        pub viewport: Vec4,
+    }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuLight {
-    pub position: Vec3,
-    pub kind: u32,
-    pub direction: Vec3,
-    pub radius: f32,
-    pub radiance: Vec3,
-    pub cos_inner: f32,
-    pub cos_outer: f32,
-    pub shadow: i32,
-    pub pad: [u32; 2],
+gpu_struct! {
+    pub struct GpuLight as "Light" {
+        pub position: Vec3,
+        /// A [`GpuLightKind`].
+        pub kind: u32,
+        /// Direction the light travels (directional, spot).
+        pub direction: Vec3,
+        pub radius: f32,
+        /// Colour times intensity.
+        pub radiance: Vec3,
+        pub cos_inner: f32,
+        pub cos_outer: f32,
+        pub pad_a: u32,
+        pub pad_b: u32,
+        pub pad_c: u32,
+    }
+}
+
+/// `Light.kind` in WGSL (exported to it as `LIGHT_*` by `shaders::contract`).
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GpuLightKind {
+    Ambient = 0,
+    Directional = 1,
+    Point = 2,
+    Spot = 3,
+}
+
+impl GpuLightKind {
+    pub const ALL: [Self; 4] = [Self::Ambient, Self::Directional, Self::Point, Self::Spot];
+
+    pub fn wgsl_name(self) -> &'static str {
+        match self {
+            Self::Ambient => "LIGHT_AMBIENT",
+            Self::Directional => "LIGHT_DIRECTIONAL",
+            Self::Point => "LIGHT_POINT",
+            Self::Spot => "LIGHT_SPOT",
+        }
+    }
+}
+
+impl From<LightKind> for GpuLightKind {
+    fn from(kind: LightKind) -> Self {
+        match kind {
+            LightKind::Ambient => Self::Ambient,
+            LightKind::Directional => Self::Directional,
+            LightKind::Point => Self::Point,
+            LightKind::Spot => Self::Spot,
+        }
+    }
 }
 
 impl From<&Light> for GpuLight {
     fn from(l: &Light) -> Self {
-        let kind = match l.kind {
-            LightKind::Ambient => 0,
-            LightKind::Directional => 1,
-            LightKind::Point => 2,
-            LightKind::Spot => 3,
-        };
         GpuLight {
             position: l.position,
-            kind,
+            kind: GpuLightKind::from(l.kind) as u32,
             direction: l.direction.normalize_or(Vec3::NEG_Y),
             radius: l.radius,
             radiance: l.color * l.intensity,
             cos_inner: l.cos_inner,
             cos_outer: l.cos_outer,
-            shadow: -1,
-            pad: [0; 2],
+            ..Default::default()
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::shaders::{ShaderLibrary, ShaderSource};
-
-    /// The Rust structs must have exactly the sizes naga computes for the WGSL ones.
-    #[test]
-    fn sizes_match_wgsl() {
-        const PROBE: ShaderSource = ShaderSource {
-            file: "probe.wgsl",
-            source: "#import shadespace::scene::{Vertex, Object, View}\n#import shadespace::lighting::Light\n#import shadespace::objectspace::AtlasEntry\n\
-                     @group(0) @binding(0) var<storage> a: array<Vertex>;\n@group(0) @binding(1) var<storage> b: array<Object>;\n\
-                     @group(0) @binding(2) var<storage> c: array<View>;\n@group(0) @binding(3) var<storage> d: array<Light>;\n\
-                     @group(0) @binding(4) var<storage> e: array<AtlasEntry>;\n\
-                     @compute @workgroup_size(1) fn main() { _ = a[0]; _ = b[0]; _ = c[0]; _ = d[0]; _ = e[0]; }",
-        };
-        let module = ShaderLibrary::new().unwrap().compose(PROBE).unwrap();
-        let mut layouter = wgpu::naga::proc::Layouter::default();
-        layouter.update(module.to_ctx()).unwrap();
-        let size_of = |name: &str| {
-            let (handle, _) = module
-                .types
-                .iter()
-                .find(|(_, t)| t.name.as_deref().is_some_and(|n| n.starts_with(name)))
-                .unwrap_or_else(|| panic!("no type {name}"));
-            layouter[handle].size as usize
-        };
-        assert_eq!(size_of("Vertex"), size_of_val(&GpuVertex::default()));
-        assert_eq!(size_of("Object"), size_of_val(&GpuObject::default()));
-        assert_eq!(size_of("View"), size_of_val(&GpuView::default()));
-        assert_eq!(size_of("Light"), size_of_val(&GpuLight::default()));
-        assert_eq!(size_of("AtlasEntry"), std::mem::size_of::<crate::render::objectspace::atlas::GpuAtlasEntry>());
     }
 }

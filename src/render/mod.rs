@@ -1,157 +1,90 @@
-//! Pipelines and what they share: the scene on the GPU, render targets, tone
-//! mapping, per-frame statistics, and the [`Renderer`] that runs a frame.
+//! Pipelines and the one seam they share: a [`PipelineConfig`] picks and
+//! configures a pipeline, a [`Pipeline`] records a frame's passes into the
+//! HDR target, and reports itself in one shape ([`PipelineReport`]). The
+//! [`Renderer`] owns what every pipeline uses: the scene on the GPU, the
+//! render targets, culling, tone mapping and GPU timing.
+//!
+//! Adding a pipeline takes one folder (its `mod.rs` composing shared passes
+//! from [`passes`], its WGSL beside it), one [`PipelineConfig`] variant and
+//! the line in [`Renderer::new`] that builds it.
 
 pub mod culling;
 pub mod forward;
+pub mod frame;
 pub mod gpu_types;
 pub mod objectspace;
+pub mod passes;
+pub mod report;
 pub mod scene_gpu;
 pub mod targets;
-pub mod tonemap;
 
+use std::any::Any;
 use std::time::Instant;
 
 use serde::Serialize;
 
 use crate::gpu::timing::{FrameTimings, GpuTimer};
 use crate::gpu::{GpuContext, GpuError, readback};
+use crate::hash::fnv1a;
 use crate::scene::{Camera, Light, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
 use culling::Frustum;
+pub use forward::ForwardConfig;
+pub use frame::Frame;
+pub use objectspace::ObjectSpaceConfig;
+use passes::tonemap::{Tonemap, tonemap};
+pub use report::{Counters, PipelineReport};
 use scene_gpu::SceneGpu;
 use targets::Targets;
-use tonemap::Tonemap;
 
-/// Depth state of a scene raster pass (reversed Z: nearer is greater).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum DepthMode {
-    /// Test `Greater` and write: the first (or only) pass.
-    Write,
-    /// Test `Equal`, no write: after a depth pre-pass, one fragment per pixel.
-    EqualAfterPrepass,
-}
-
-/// A raster pipeline over the scene bind group: vertices pulled from storage
-/// (no vertex buffers), no face culling, a reversed-Z depth test, and a
-/// fragment stage writing `color` when given (none: depth only).
-pub(crate) fn scene_raster_pipeline(
-    device: &wgpu::Device,
-    label: &str,
-    module: &wgpu::ShaderModule,
-    layout: &wgpu::PipelineLayout,
-    vertex_entry: &str,
-    fragment: Option<(&str, wgpu::TextureFormat)>,
-    depth: DepthMode,
-) -> wgpu::RenderPipeline {
-    let targets = fragment.map(|(_, format)| [Some(format.into())]);
-    let (depth_write, compare) = match depth {
-        DepthMode::Write => (true, wgpu::CompareFunction::Greater),
-        DepthMode::EqualAfterPrepass => (false, wgpu::CompareFunction::Equal),
-    };
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(label),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module,
-            entry_point: Some(vertex_entry),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        fragment: fragment.zip(targets.as_ref()).map(|((entry, _), targets)| wgpu::FragmentState {
-            module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            targets,
-        }),
-        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: targets::DEPTH_FORMAT,
-            depth_write_enabled: Some(depth_write),
-            depth_compare: Some(compare),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        multiview_mask: None,
-        cache: None,
-    })
-}
-
-/// The shading pipelines, for `--pipeline`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum PipelineKind {
+/// A shading pipeline and its settings.
+#[derive(Clone, Debug, Serialize)]
+#[serde(tag = "name")]
+pub enum PipelineConfig {
     /// Single-pass forward shading (the reference image).
-    Forward,
+    #[serde(rename = "forward")]
+    Forward(ForwardConfig),
     /// Object-space (texel) shading: visible tiles shaded by compute into
     /// per-object atlas squares, reused across frames, gathered per pixel.
-    #[value(name = "objectspace")]
     #[serde(rename = "objectspace")]
-    ObjectSpace,
+    ObjectSpace(ObjectSpaceConfig),
+}
+
+impl PipelineConfig {
+    /// The name `--pipeline` takes and reports carry.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Forward(_) => "forward",
+            Self::ObjectSpace(_) => "objectspace",
+        }
+    }
 }
 
 /// How to build a [`Renderer`].
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
-    pub pipeline: PipelineKind,
     pub width: u32,
     pub height: u32,
-    /// Forward: depth pre-pass before shading.
-    pub depth_prepass: bool,
-    /// Object space: tile size, reuse, mip bias, texture sizes, debug view.
-    pub objectspace: Option<objectspace::ObjectSpaceOptions>,
-}
-
-/// What a pipeline needs to record one frame.
-pub struct FrameContext<'a> {
-    pub device: &'a wgpu::Device,
-    pub queue: &'a wgpu::Queue,
-    pub scene: &'a SceneGpu,
-    pub targets: &'a Targets,
-    pub camera: &'a Camera,
-    /// Per object: inside the view frustum.
-    pub visible: &'a [bool],
-    pub frame: u64,
-    /// The lights differ from the previous frame's (cached shades are stale).
-    pub lights_changed: bool,
+    pub pipeline: PipelineConfig,
 }
 
 /// A shading pipeline: records the passes that fill `targets.hdr` (and depth).
-pub trait Pipeline {
-    fn name(&self) -> &'static str;
-    fn encode(&mut self, frame: &FrameContext, encoder: &mut wgpu::CommandEncoder, timer: &mut GpuTimer);
+pub trait Pipeline: Any {
+    /// Records the frame's passes, in order.
+    fn encode(&mut self, frame: &mut Frame);
     /// Called right after the frame's submit (to start read-backs).
     fn after_submit(&mut self) {}
-    /// Shading counters of finished frames (object-space pipelines only).
-    fn collect_counters(&mut self, _device: &wgpu::Device, _wait: bool) -> Vec<ShadingCounters> {
+    /// Counters of finished frames, by frame number, oldest first; `wait`
+    /// waits for all. Pipelines that count nothing return none.
+    fn collect_counters(&mut self, _device: &wgpu::Device, _wait: bool) -> Vec<(u64, Counters)> {
         Vec::new()
     }
-    /// The object-space pipeline, when this is one (for its reports and debug read-backs).
-    fn objectspace(&self) -> Option<&objectspace::ObjectSpace> {
-        None
-    }
+    /// Settings, memory and setup facts.
+    fn report(&self) -> PipelineReport;
 }
 
-/// What an object-space frame shaded, counted on the GPU.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
-pub struct ShadingCounters {
-    pub frame: u64,
-    /// Tiles some pixel needs this frame.
-    pub visible_tiles: u64,
-    /// Visible tiles shaded this frame (their cached shade was too old or stale).
-    pub shaded_tiles: u64,
-    /// Visible tiles whose cached shade was reused.
-    pub reused_tiles: u64,
-    /// Visible tiles that were not visible in the previous frame.
-    pub new_tiles: u64,
-    /// shaded tiles x tile area.
-    pub shaded_texels: u64,
-    /// visible tiles x tile area (what shading every visible tile costs).
-    pub visible_texels: u64,
-}
-
-/// Statistics of one frame. GPU timings arrive a few frames later (they are
-/// never waited for inside the frame loop); see [`Renderer::collect_timings`].
+/// Statistics of one frame. GPU timings and counters arrive a few frames
+/// later (they are never waited for inside the frame loop).
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct FrameStats {
     pub frame: u64,
@@ -160,7 +93,6 @@ pub struct FrameStats {
     pub visible_objects: u32,
     /// Sum over objects of the lights assigned to them.
     pub light_assignments: u64,
-    pub screen_pixels: u64,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -180,15 +112,13 @@ pub struct Renderer {
     pub scene: SceneGpu,
     pub targets: Targets,
     pipeline: Box<dyn Pipeline>,
+    name: &'static str,
     tonemap: Tonemap,
     timer: GpuTimer,
     pub exposure: f32,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
 }
-
-/// Passes a frame may time (pipelines use a handful).
-const MAX_TIMED_PASSES: u32 = 16;
 
 impl Renderer {
     pub fn new(ctx: &GpuContext, scene: &Scene, options: &RenderOptions) -> Result<Self, RenderError> {
@@ -200,37 +130,37 @@ impl Renderer {
         let mut shaders = ShaderLibrary::new()?;
         let scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
         let targets = Targets::new(&ctx.device, width, height);
-        let pipeline: Box<dyn Pipeline> = match options.pipeline {
-            PipelineKind::Forward => Box::new(forward::Forward::new(
-                &ctx.device,
-                &mut shaders,
-                &scene_gpu.layout,
-                forward::ForwardOptions { depth_prepass: options.depth_prepass },
-            )?),
-            PipelineKind::ObjectSpace => {
-                let os = options.objectspace.clone().unwrap_or_else(|| objectspace::ObjectSpaceOptions {
-                    texture_sizes: vec![Some(1024); scene.objects.len()],
-                    ..Default::default()
-                });
-                Box::new(objectspace::ObjectSpace::new(
-                    &ctx.device,
-                    &ctx.queue,
-                    &ctx.info.name,
-                    &mut shaders,
-                    &scene_gpu,
-                    &targets,
-                    os,
-                )?)
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        let pipeline: Box<dyn Pipeline> = match &options.pipeline {
+            PipelineConfig::Forward(c) => Box::new(forward::Forward::new(device, &mut shaders, &scene_gpu, *c)?),
+            PipelineConfig::ObjectSpace(c) => {
+                let os = objectspace::ObjectSpace::new(ctx, &mut shaders, &scene_gpu, &targets, c.clone())?;
+                Box::new(os)
             }
         };
-        let tonemap = Tonemap::new(&ctx.device, &mut shaders, &targets)?;
-        let timer = GpuTimer::new(&ctx.device, &ctx.queue, MAX_TIMED_PASSES);
+        let tonemap = Tonemap::new(device, &mut shaders, &targets)?;
+        let timer = GpuTimer::new(device, queue);
         ctx.check_errors()?;
-        Ok(Self { scene: scene_gpu, targets, pipeline, tonemap, timer, exposure: 1.0, lights_hash: None })
+        Ok(Self {
+            scene: scene_gpu,
+            targets,
+            pipeline,
+            name: options.pipeline.name(),
+            tonemap,
+            timer,
+            exposure: 1.0,
+            lights_hash: None,
+        })
     }
 
     pub fn pipeline_name(&self) -> &'static str {
-        self.pipeline.name()
+        self.name
+    }
+
+    /// The pipeline as its concrete type, for its own debug read-backs (for
+    /// example [`objectspace::ObjectSpace::read_atlas`]).
+    pub fn pipeline<T: Pipeline>(&self) -> Option<&T> {
+        (self.pipeline.as_ref() as &dyn Any).downcast_ref::<T>()
     }
 
     /// Culls, uploads and records one frame, and submits it. Does not wait
@@ -244,33 +174,36 @@ impl Renderer {
     ) -> Result<FrameStats, RenderError> {
         let start = Instant::now();
         let (w, h) = (self.targets.width, self.targets.height);
-        let view = scene_gpu::gpu_view(camera, w, h, frame, self.exposure);
+        let view = scene_gpu::gpu_view(camera, w, h);
         let frustum = Frustum::from_view_projection(view.view_proj);
         let lists = culling::lights_per_object(lights, &self.scene.object_bounds, Some(&frustum));
         let visible: Vec<bool> = self.scene.object_bounds.iter().map(|b| frustum.intersects_aabb(b)).collect();
         let gpu_lights: Vec<gpu_types::GpuLight> = lights.iter().map(gpu_types::GpuLight::from).collect();
-        let hash = hash_bytes(bytemuck::cast_slice(&gpu_lights));
+        let hash = fnv1a(bytemuck::cast_slice(&gpu_lights));
         let lights_changed = self.lights_hash != Some(hash);
         self.lights_hash = Some(hash);
         let changed = lights_changed.then_some(gpu_lights.as_slice());
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
-        self.timer.begin_frame(frame);
-        let frame_ctx = FrameContext {
-            device: &ctx.device,
-            queue: &ctx.queue,
-            scene: &self.scene,
-            targets: &self.targets,
-            camera,
-            visible: &visible,
-            frame,
-            lights_changed,
-        };
-        self.pipeline.encode(&frame_ctx, &mut encoder, &mut self.timer);
-        self.tonemap.encode(&ctx.queue, &mut encoder, self.exposure, &mut self.timer);
-        self.timer.end_frame(&ctx.device, &mut encoder);
+        {
+            let mut f = Frame {
+                device: &ctx.device,
+                queue: &ctx.queue,
+                scene: &self.scene,
+                targets: &self.targets,
+                camera,
+                visible: &visible,
+                number: frame,
+                lights_changed,
+                encoder: &mut encoder,
+                profiler: self.timer.profiler(),
+            };
+            self.pipeline.encode(&mut f);
+            tonemap(&mut f, &self.tonemap, self.exposure);
+        }
+        self.timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
-        self.timer.after_submit();
+        self.timer.end_frame(frame);
         self.pipeline.after_submit();
         ctx.check_errors()?;
         Ok(FrameStats {
@@ -278,7 +211,6 @@ impl Renderer {
             cpu_ms: start.elapsed().as_secs_f64() * 1e3,
             visible_objects: visible.iter().filter(|v| **v).count() as u32,
             light_assignments: lists.indices.len() as u64,
-            screen_pixels: w as u64 * h as u64,
         })
     }
 
@@ -287,25 +219,25 @@ impl Renderer {
         self.timer.collect(&ctx.device, wait)
     }
 
-    /// Shading counters of finished frames (empty for forward); `wait`
-    /// blocks until all are in.
-    pub fn collect_counters(&mut self, ctx: &GpuContext, wait: bool) -> Vec<ShadingCounters> {
+    /// Pipeline counters of finished frames; `wait` blocks until all are in.
+    pub fn collect_counters(&mut self, ctx: &GpuContext, wait: bool) -> Vec<(u64, Counters)> {
         self.pipeline.collect_counters(&ctx.device, wait)
     }
 
-    /// Memory of the pipeline's own resources, when it reports any.
-    pub fn memory(&self) -> Option<objectspace::MemoryReport> {
-        self.pipeline.objectspace().map(|o| o.memory_report())
-    }
-
-    /// The object-space pipeline, when the renderer runs one.
-    pub fn objectspace(&self) -> Option<&objectspace::ObjectSpace> {
-        self.pipeline.objectspace()
+    /// The pipeline's settings, memory and setup.
+    pub fn report(&self) -> PipelineReport {
+        self.pipeline.report()
     }
 
     /// Whether the adapter can time passes.
     pub fn timing_enabled(&self) -> bool {
         self.timer.enabled()
+    }
+
+    /// Writes the newest collected frame's GPU timings as a Chrome trace;
+    /// false when none was collected.
+    pub fn write_trace(&self, path: &std::path::Path) -> std::io::Result<bool> {
+        self.timer.write_trace(path)
     }
 
     /// Reads the last tone-mapped frame back (blocks).
@@ -314,9 +246,4 @@ impl Renderer {
         Ok(image::RgbaImage::from_raw(self.targets.width, self.targets.height, bytes)
             .expect("read-back has w*h*4 bytes"))
     }
-}
-
-/// FNV-1a: the lights' GPU form hashes differently when any light changes.
-fn hash_bytes(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ *b as u64).wrapping_mul(0x100_0000_01b3))
 }

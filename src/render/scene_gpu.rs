@@ -90,9 +90,8 @@ impl SceneGpu {
                 uv0_x: mesh.uv0[i].x,
                 normal: mesh.normals[i],
                 uv0_y: mesh.uv0[i].y,
-                tangent: mesh.tangents[i],
                 chart_uv: charts[i],
-                pad: Default::default(),
+                ..Default::default()
             }));
             indices.extend_from_slice(&mesh.indices);
         }
@@ -102,8 +101,7 @@ impl SceneGpu {
             .objects
             .iter()
             .zip(&draws)
-            .enumerate()
-            .map(|(i, (o, d))| {
+            .map(|(o, d)| {
                 let m = &scene.materials[o.material];
                 GpuObject {
                     model: o.transform,
@@ -117,8 +115,7 @@ impl SceneGpu {
                     base_vertex: d.base_vertex,
                     specular: m.specular,
                     shininess: m.shininess,
-                    atlas_entry: i as u32,
-                    flags: o.forward_only as u32,
+                    ..Default::default()
                 }
             })
             .collect();
@@ -223,16 +220,12 @@ impl SceneGpu {
 }
 
 /// The view uniform for a camera and a target size.
-pub fn gpu_view(camera: &Camera, width: u32, height: u32, frame: u64, exposure: f32) -> GpuView {
+pub fn gpu_view(camera: &Camera, width: u32, height: u32) -> GpuView {
     let view_proj: Mat4 = camera.view_projection(width as f32 / height as f32);
     GpuView {
         view_proj,
-        inv_view_proj: view_proj.inverse(),
         camera_position: camera.position.extend(1.0),
         viewport: Vec4::new(width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32),
-        frame: frame as u32,
-        exposure,
-        pad: [0; 2],
     }
 }
 

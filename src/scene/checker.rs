@@ -4,6 +4,7 @@
 use glam::Vec3;
 
 use super::Texture;
+use crate::color::linear_to_srgb8;
 
 /// A distinct, deterministic tint for object `index` (hues spaced by the
 /// golden angle, so neighbours in a file never get similar colours).
@@ -40,16 +41,10 @@ pub fn uv_checker(name: &str, tint: Vec3, size: u32, cells: u32) -> Texture {
                 0.7
             };
             let c = tint * shade;
-            rgba8.extend_from_slice(&[to_srgb8(c.x), to_srgb8(c.y), to_srgb8(c.z), 255]);
+            rgba8.extend_from_slice(&[linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255]);
         }
     }
     Texture { name: name.to_string(), width: size, height: size, rgba8 }
-}
-
-fn to_srgb8(linear: f32) -> u8 {
-    let l = linear.clamp(0.0, 1.0);
-    let s = if l <= 0.003_130_8 { l * 12.92 } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 };
-    (s * 255.0 + 0.5) as u8
 }
 
 #[cfg(test)]

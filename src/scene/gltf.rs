@@ -44,6 +44,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use super::obj::{check_indices, checker_texture};
 use super::{Camera, Light, LightKind, Material, Mesh, Object, Scene, SceneError, Texture};
+use crate::color::linear_to_srgb8;
 
 /// Accessors larger than this (bytes) are refused: no real scene needs one,
 /// and a corrupt count must not allocate gigabytes.
@@ -761,13 +762,6 @@ fn to_rgba8(data: &::gltf::image::Data) -> Result<(Vec<u8>, (u32, u32)), String>
         });
     }
     Ok((rgba8, (data.width, data.height)))
-}
-
-/// A linear value as an sRGB-encoded byte.
-fn linear_to_srgb8(linear: f32) -> u8 {
-    let l = if linear.is_finite() { linear.clamp(0.0, 1.0) } else { 0.0 };
-    let s = if l <= 0.003_130_8 { l * 12.92 } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 };
-    (s * 255.0 + 0.5) as u8
 }
 
 #[cfg(test)]

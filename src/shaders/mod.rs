@@ -1,6 +1,16 @@
 //! WGSL sources and their composition. WGSL has no `#include`, so shared
-//! modules (the lighting model, the scene layout) are composed into each
-//! pass's shader by `naga_oil`.
+//! modules (the lighting model, the scene layout, the constants shared with
+//! Rust) are composed into each pass's shader by `naga_oil`.
+//!
+//! Pass shaders live beside the Rust of their pass or pipeline (for example
+//! `render/objectspace/mark/mark.wgsl`); the modules every pipeline imports
+//! live in `shaders/shared/`; the constants WGSL shares with Rust are
+//! generated from the Rust definitions ([`contract`]), and every struct whose
+//! bytes cross between the two is declared with [`gpu_struct!`] so that a
+//! test can compare it member by member ([`layout`]).
+
+pub mod contract;
+pub mod layout;
 
 use std::borrow::Cow;
 
@@ -8,39 +18,39 @@ use naga_oil::compose::{
     ComposableModuleDescriptor, Composer, ComposerError, NagaModuleDescriptor, ShaderLanguage, ShaderType,
 };
 
-/// Modules that other shaders `#import`, in dependency order.
-const SHARED: &[(&str, &str)] = &[
-    ("lighting.wgsl", include_str!("lighting.wgsl")),
-    ("scene.wgsl", include_str!("scene.wgsl")),
-    ("scene_bindings.wgsl", include_str!("scene_bindings.wgsl")),
-    ("surface.wgsl", include_str!("surface.wgsl")),
-    ("objectspace.wgsl", include_str!("objectspace.wgsl")),
-];
+pub(crate) use layout::gpu_struct;
 
-/// One pass's shader: its file name (for error messages) and source.
+/// One WGSL file: its name (for error messages) and source.
 #[derive(Clone, Copy, Debug)]
 pub struct ShaderSource {
     pub file: &'static str,
     pub source: &'static str,
 }
 
-macro_rules! shader {
-    ($name:ident, $file:literal) => {
-        pub const $name: ShaderSource = ShaderSource { file: $file, source: include_str!($file) };
-    };
+impl ShaderSource {
+    pub const fn new(file: &'static str, source: &'static str) -> Self {
+        Self { file, source }
+    }
 }
 
-shader!(FORWARD, "forward.wgsl");
-shader!(TONEMAP, "tonemap.wgsl");
-shader!(VISIBILITY, "visibility.wgsl");
-shader!(MARK, "mark.wgsl");
-shader!(SHADE, "shade.wgsl");
-shader!(GATHER, "gather.wgsl");
-shader!(TRIMAP, "trimap.wgsl");
-shader!(DILATE, "dilate.wgsl");
+/// Modules that other shaders `#import`, in dependency order (after the
+/// generated `shadespace::contract`).
+const SHARED: &[ShaderSource] = &[
+    ShaderSource::new("shared/lighting.wgsl", include_str!("shared/lighting.wgsl")),
+    ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
+    ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
+    ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
+    crate::render::objectspace::SHARED_WGSL,
+];
 
 /// Every pass shader, for the test that validates them all.
-pub const ALL: &[ShaderSource] = &[FORWARD, TONEMAP, VISIBILITY, MARK, SHADE, GATHER, TRIMAP, DILATE];
+pub fn pass_shaders() -> Vec<ShaderSource> {
+    use crate::render::{forward, objectspace, passes};
+    let mut all =
+        vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
+    all.extend_from_slice(objectspace::PASS_SHADERS);
+    all
+}
 
 /// Composes pass shaders with the shared modules.
 pub struct ShaderLibrary {
@@ -57,7 +67,9 @@ pub struct ShaderError {
 impl ShaderLibrary {
     pub fn new() -> Result<Self, ShaderError> {
         let mut composer = Composer::default().with_capabilities(wgpu::naga::valid::Capabilities::all());
-        for (file, source) in SHARED {
+        let contract = contract::wgsl();
+        let generated = [("shadespace::contract (generated)", contract.as_str())];
+        for (file, source) in generated.into_iter().chain(SHARED.iter().map(|s| (s.file, s.source))) {
             let added = composer.add_composable_module(ComposableModuleDescriptor {
                 source,
                 file_path: file,
@@ -104,8 +116,8 @@ mod tests {
     #[test]
     fn all_shaders_compose_and_validate() {
         let mut lib = ShaderLibrary::new().expect("shared modules compose");
-        for shader in ALL {
-            let module = lib.compose(*shader).unwrap_or_else(|e| panic!("{e}"));
+        for shader in pass_shaders() {
+            let module = lib.compose(shader).unwrap_or_else(|e| panic!("{e}"));
             wgpu::naga::valid::Validator::new(
                 wgpu::naga::valid::ValidationFlags::all(),
                 wgpu::naga::valid::Capabilities::all(),

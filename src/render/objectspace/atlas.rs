@@ -6,7 +6,9 @@
 //! waste. The per-object table ([`GpuAtlasEntry`]) is what the GPU passes read;
 //! a page table can replace its rectangles later without changing the passes.
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Zeroable;
+
+use crate::shaders::gpu_struct;
 
 /// Most mip levels an object can have (a 16384 texture down to 8x8 tiles is 12).
 pub const MAX_LEVELS: usize = 14;
@@ -229,28 +231,28 @@ impl Buddy {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuAtlasLevel {
-    pub page: u32,
-    /// x | y << 16, in texels of the page.
-    pub origin: u32,
-    pub size: u32,
-    pub tile_base: u32,
+gpu_struct! {
+    pub struct GpuAtlasLevel as "AtlasLevel" {
+        pub page: u32,
+        /// x | y << 16, in texels of the page.
+        pub origin: u32,
+        pub size: u32,
+        pub tile_base: u32,
+    }
 }
 
-/// Mirrors `AtlasEntry` in `shaders/objectspace.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct GpuAtlasEntry {
-    /// Mip-0 side in texels; 0 for objects not in the atlas.
-    pub size: u32,
-    pub level_count: u32,
-    /// Shades older than this frame stamp are stale (lights or object changed).
-    pub valid_since: u32,
-    /// Per-object mip bias (variable rate), added to every pixel's level.
-    pub mip_bias: f32,
-    pub levels: [GpuAtlasLevel; MAX_LEVELS],
+gpu_struct! {
+    /// One object's row of the atlas table (`AtlasEntry` in `objectspace.wgsl`).
+    pub struct GpuAtlasEntry as "AtlasEntry" {
+        /// Mip-0 side in texels; 0 for objects not in the atlas.
+        pub size: u32,
+        pub level_count: u32,
+        /// Shades older than this frame stamp are stale (lights or object changed).
+        pub valid_since: u32,
+        /// Per-object mip bias, added to every pixel's level.
+        pub mip_bias: f32,
+        pub levels: [GpuAtlasLevel; MAX_LEVELS],
+    }
 }
 
 #[cfg(test)]

@@ -1,17 +1,18 @@
 // Scene data shared by every pipeline: vertices, objects and the view. Mirrors
-// `render::gpu_types`.
+// `render::gpu_types` (compared member by member by `shaders::layout`).
 #define_import_path shadespace::scene
 
-// 64 bytes. Vertices are pulled from a storage buffer by index, so raster and
+// 48 bytes. Vertices are pulled from a storage buffer by index, so raster and
 // compute passes read the same data.
 struct Vertex {
     position: vec3f,
     uv0_x: f32,
     normal: vec3f,
     uv0_y: f32,
-    tangent: vec4f,
+    // The object's unique chart (object-space shading).
     chart_uv: vec2f,
-    pad: vec2f,
+    pad_a: f32,
+    pad_b: f32,
 }
 
 struct Object {
@@ -27,21 +28,15 @@ struct Object {
     base_vertex: u32,
     specular: f32,
     shininess: f32,
-    // Object-space shading: index of the object's entry in the atlas table.
-    atlas_entry: u32,
-    flags: u32,
+    pad_a: u32,
+    pad_b: u32,
 }
 
 struct View {
     view_proj: mat4x4f,
-    inv_view_proj: mat4x4f,
     camera_position: vec4f,
     // width, height, 1/width, 1/height
     viewport: vec4f,
-    frame: u32,
-    exposure: f32,
-    pad_a: u32,
-    pad_b: u32,
 }
 
 fn vertex_uv0(v: Vertex) -> vec2f {

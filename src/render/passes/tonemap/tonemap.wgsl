@@ -12,7 +12,7 @@ fn srgb_encode(c: vec3f) -> vec3f {
 }
 
 @compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3u) {
+fn tonemap(@builtin(global_invocation_id) id: vec3u) {
     let size = textureDimensions(hdr);
     if id.x >= size.x || id.y >= size.y {
         return;

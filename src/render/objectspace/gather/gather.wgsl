@@ -3,6 +3,7 @@
 // bilinearly (by hand, with taps clamped inside the level's square, so no tap
 // reads a neighbour in the atlas). Objects outside the atlas (forward-only)
 // are shaded here per pixel. Debug views replace the shade.
+#import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene::vertex_uv0
 #import shadespace::scene_bindings::{objects, vertices}
 #import shadespace::surface::{shade_point, albedo_lod}
@@ -11,12 +12,6 @@
 
 @group(2) @binding(0) var atlas: texture_2d_array<f32>;
 @group(2) @binding(1) var hdr: texture_storage_2d<rgba16float, write>;
-
-const VIEW_SHADE: u32 = 0u;
-const VIEW_CHART_UV: u32 = 1u;
-const VIEW_MIP_LEVEL: u32 = 2u;
-const VIEW_TILE_MASK: u32 = 3u;
-const VIEW_CACHE_AGE: u32 = 4u;
 
 // Debug colours go through the tone mapper: pre-invert Reinhard so that they
 // come out as written.

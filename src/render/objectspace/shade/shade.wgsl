@@ -6,7 +6,8 @@
 #import shadespace::scene::vertex_uv0
 #import shadespace::scene_bindings::{objects, vertices, triangle_vertices}
 #import shadespace::surface::{shade_point, albedo_lod}
-#import shadespace::objectspace::{params, atlas_entries, queue, counters, triangle_map, level_origin, COUNT_QUEUED}
+#import shadespace::contract::COUNT_QUEUED
+#import shadespace::objectspace::{params, atlas_entries, queue, counters, triangle_map, level_origin}
 
 @group(2) @binding(0) var atlas: texture_storage_2d_array<rgba16float, write>;
 

@@ -1,8 +1,9 @@
 // Single-pass forward shading: every object drawn once, its fragments loop
-// over the lights that CPU culling found for the object.
+// over the lights that CPU culling found for the object. Its clip position is
+// `object_clip_position`'s expression, so the depth pre-pass matches it.
 #import shadespace::lighting::Surface
 #import shadespace::scene::vertex_uv0
-#import shadespace::scene_bindings::{view, objects, vertices, albedo, albedo_sampler, object_clip_position}
+#import shadespace::scene_bindings::{view, objects, vertices, albedo, albedo_sampler}
 #import shadespace::surface::light_surface
 
 struct VertexOut {
@@ -27,11 +28,6 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
     out.uv0 = vertex_uv0(v);
     out.object = object;
     return out;
-}
-
-@vertex
-fn vs_depth(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> @builtin(position) @invariant vec4f {
-    return object_clip_position(object, vi);
 }
 
 @fragment

@@ -1,6 +1,6 @@
 // Visibility pass: rasterize the scene with depth and write, per pixel, the
 // object (+1) and the triangle. No shading: later compute passes rebuild
-// everything else from these ids.
+// everything else from these ids. After a depth pre-pass it tests `Equal`.
 enable primitive_index;
 #import shadespace::scene_bindings::object_clip_position
 
@@ -15,12 +15,6 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
     out.clip = object_clip_position(object, vi);
     out.object = object;
     return out;
-}
-
-// Depth-only pre-pass (optional): the id pass then runs one fragment per pixel.
-@vertex
-fn vs_depth(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> @builtin(position) @invariant vec4f {
-    return object_clip_position(object, vi);
 }
 
 @fragment

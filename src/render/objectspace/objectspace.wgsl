@@ -2,10 +2,8 @@
 // visibility buffer, and the per-pixel mip selection that tile marking and
 // gathering must compute identically.
 #define_import_path shadespace::objectspace
-#import shadespace::scene::Object
+#import shadespace::contract::{MAX_LEVELS, TILE_COUNTER_SLOTS}
 #import shadespace::scene_bindings::{view, objects, vertices, triangle_vertices}
-
-const MAX_LEVELS: u32 = 14u;
 
 struct AtlasLevel {
     page: u32,
@@ -15,7 +13,8 @@ struct AtlasLevel {
     tile_base: u32,
 }
 
-// Mirrors `objectspace::atlas::GpuAtlasEntry`.
+// Mirrors `objectspace::atlas::GpuAtlasEntry` (and `AtlasLevel` its
+// `GpuAtlasLevel`).
 struct AtlasEntry {
     size: u32,
     level_count: u32,
@@ -24,7 +23,7 @@ struct AtlasEntry {
     levels: array<AtlasLevel, MAX_LEVELS>,
 }
 
-// Mirrors `objectspace::GpuParams`.
+// Mirrors `objectspace::resources::GpuParams`.
 struct Params {
     // frame + 1: 0 in the stamp buffers means "never".
     stamp: u32,
@@ -37,13 +36,8 @@ struct Params {
     // Strength of the per-pixel variable-rate bias (0 = off).
     variable_rate: f32,
     max_queue: u32,
-    pad_a: u32,
+    pad: u32,
 }
-
-// Indices into `counters`.
-const COUNT_QUEUED: u32 = 0u;
-const COUNT_VISIBLE: u32 = 1u;
-const COUNT_NEW: u32 = 2u;
 
 @group(1) @binding(0) var<uniform> params: Params;
 @group(1) @binding(1) var<storage, read> atlas_entries: array<AtlasEntry>;
@@ -53,7 +47,8 @@ const COUNT_NEW: u32 = 2u;
 @group(1) @binding(3) var<storage, read_write> tile_shaded: array<u32>;
 // Work list: (global tile, object << 8 | level).
 @group(1) @binding(4) var<storage, read_write> queue: array<vec2u>;
-@group(1) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
+// Indexed by the `COUNT_*` constants.
+@group(1) @binding(5) var<storage, read_write> counters: array<atomic<u32>, TILE_COUNTER_SLOTS>;
 // Visibility buffer: (object + 1, triangle); 0 = background.
 @group(1) @binding(6) var visibility: texture_2d<u32>;
 // Per atlas texel: triangle + 1 covering it; 0 = empty.

@@ -1,15 +1,12 @@
-// The lighting model of every pipeline (forward, object space, and the later
-// baselines), so that all of them compute the same image.
+// The lighting model of every pipeline (forward and object space), so that
+// all of them compute the same image.
 //
 // Phong: diffuse max(N.L, 0), specular max(R.V, 0)^p, point/spot attenuation
 // 1 / (1 + d^2) cut off at the light's radius, spot factor
 // (cos(theta) - cos_outer) / (cos_inner - cos_outer) clamped, times albedo.
 #define_import_path shadespace::lighting
 
-const LIGHT_AMBIENT: u32 = 0u;
-const LIGHT_DIRECTIONAL: u32 = 1u;
-const LIGHT_POINT: u32 = 2u;
-const LIGHT_SPOT: u32 = 3u;
+#import shadespace::contract::{LIGHT_AMBIENT, LIGHT_DIRECTIONAL, LIGHT_SPOT}
 
 // 64 bytes; mirrors `render::gpu_types::GpuLight`.
 struct Light {
@@ -22,10 +19,9 @@ struct Light {
     radiance: vec3f,
     cos_inner: f32,
     cos_outer: f32,
-    // Index of the light's shadow map, or -1 (shadows come with a later stage).
-    shadow: i32,
     pad_a: u32,
     pad_b: u32,
+    pad_c: u32,
 }
 
 // What the lighting model needs to know of a surface point.

@@ -8,32 +8,35 @@
 //! beyond. Without it (lavapipe), texels are covered by their centres and two
 //! rings of dilation stand in for the conservative coverage.
 
-use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::atlas::AtlasLayout;
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, view_as};
 use crate::render::scene_gpu::SceneGpu;
-use crate::shaders::{self, ShaderError, ShaderLibrary};
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
+
+pub const SHADER: ShaderSource = ShaderSource::new("trimap.wgsl", include_str!("trimap.wgsl"));
+pub const DILATE: ShaderSource = ShaderSource::new("dilate.wgsl", include_str!("dilate.wgsl"));
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct Square {
-    origin: [u32; 2],
-    size: u32,
-    page: u32,
+gpu_struct! {
+    /// One level's square in the atlas (`Square` in `dilate.wgsl`).
+    pub struct Square as "Square" {
+        pub origin: [u32; 2],
+        pub size: u32,
+        pub page: u32,
+    }
 }
 
-/// Builds the maps; returns the texture (one layer per atlas page) and the
-/// number of dilation rings applied.
+/// Builds the maps; returns the texture (one layer per atlas page).
 pub fn build(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     shaders: &mut ShaderLibrary,
     scene: &SceneGpu,
     layout: &AtlasLayout,
-) -> Result<(wgpu::Texture, u32), ShaderError> {
+) -> Result<wgpu::Texture, ShaderError> {
     let conservative = device.features().contains(wgpu::Features::CONSERVATIVE_RASTERIZATION);
     let rings = if conservative { 1 } else { 2 };
     let make = |label| {
@@ -49,7 +52,7 @@ pub fn build(
     let maps = [make("triangle map"), make("triangle map (dilation)")];
 
     // 1. Rasterize every object's levels into their squares.
-    let module = shaders.module(device, shaders::TRIMAP)?;
+    let module = shaders.module(device, SHADER)?;
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("triangle map"),
         bind_group_layouts: &[Some(&scene.layout)],
@@ -128,78 +131,30 @@ pub fn build(
         contents: &bytes,
         usage: wgpu::BufferUsages::UNIFORM,
     });
-    let dilate_module = shaders.module(device, shaders::DILATE)?;
-    let bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("dilate"),
-        entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: true,
-                    min_binding_size: wgpu::BufferSize::new(16),
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Uint,
-                    view_dimension: wgpu::TextureViewDimension::D2Array,
-                    multisampled: false,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 2,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::StorageTexture {
-                    access: wgpu::StorageTextureAccess::WriteOnly,
-                    format: FORMAT,
-                    view_dimension: wgpu::TextureViewDimension::D2Array,
-                },
-                count: None,
-            },
+    let bgl = bind_group_layout(
+        device,
+        "dilate",
+        &[
+            Binding::DynamicUniform { size: 16 },
+            Binding::Texture { sample: wgpu::TextureSampleType::Uint, dimension: wgpu::TextureViewDimension::D2Array },
+            Binding::StorageTexture { format: FORMAT, dimension: wgpu::TextureViewDimension::D2Array },
         ],
-    });
-    let dilate = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("dilate"),
-        layout: Some(&device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("dilate"),
-            bind_group_layouts: &[Some(&bgl)],
-            immediate_size: 0,
-        })),
-        module: &dilate_module,
-        entry_point: Some("dilate"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let array_view = |t: &wgpu::Texture| {
-        t.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        })
-    };
+    );
+    let dilate = compute_pipeline(device, shaders, DILATE, "dilate", &[&bgl])?;
+    let array_view = |t: &wgpu::Texture| view_as(t, wgpu::TextureViewDimension::D2Array);
     for ring in 0..rings {
         let (source, target) = (&maps[(ring % 2) as usize], &maps[((ring + 1) % 2) as usize]);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("dilate"),
-            layout: &bgl,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &uniforms,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(16),
-                    }),
-                },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&array_view(source)) },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&array_view(target)) },
+        let square = wgpu::BufferBinding { buffer: &uniforms, offset: 0, size: wgpu::BufferSize::new(16) };
+        let bind_group = bind_group(
+            device,
+            "dilate",
+            &bgl,
+            &[
+                wgpu::BindingResource::Buffer(square),
+                wgpu::BindingResource::TextureView(&array_view(source)),
+                wgpu::BindingResource::TextureView(&array_view(target)),
             ],
-        });
+        );
         let mut pass =
             encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("dilate"), timestamp_writes: None });
         pass.set_pipeline(&dilate);
@@ -210,5 +165,5 @@ pub fn build(
     }
     queue.submit([encoder.finish()]);
     let [a, b] = maps;
-    Ok((if rings % 2 == 0 { a } else { b }, rings))
+    Ok(if rings % 2 == 0 { a } else { b })
 }

@@ -1,0 +1,73 @@
+//! Single-pass forward shading: one draw per object; each fragment loops over
+//! the lights that CPU culling assigned to its object. An optional depth
+//! pre-pass removes overdraw from the shading pass.
+
+use serde::Serialize;
+
+use super::frame::Frame;
+use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
+use super::passes::{DepthMode, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline};
+use super::report::PipelineReport;
+use super::scene_gpu::SceneGpu;
+use super::targets::HDR_FORMAT;
+use super::{Pipeline, RenderError};
+use crate::shaders::{ShaderLibrary, ShaderSource};
+
+pub const SHADER: ShaderSource = ShaderSource::new("forward.wgsl", include_str!("forward.wgsl"));
+
+/// Settings of the forward pipeline.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct ForwardConfig {
+    /// Lay down depth first, then shade with an `Equal` depth test, so every
+    /// pixel is shaded once.
+    pub depth_prepass: bool,
+}
+
+impl Default for ForwardConfig {
+    fn default() -> Self {
+        Self { depth_prepass: true }
+    }
+}
+
+pub struct Forward {
+    config: ForwardConfig,
+    prepass: Option<DepthPrepass>,
+    shade: wgpu::RenderPipeline,
+}
+
+impl Forward {
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        config: ForwardConfig,
+    ) -> Result<Self, RenderError> {
+        let prepass = config.depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
+        let depth = DepthMode::after(config.depth_prepass);
+        let fragment = Some(("fs_main", HDR_FORMAT));
+        let shade = scene_raster_pipeline(device, shaders, SHADER, scene, "vs_main", fragment, depth)?;
+        Ok(Self { config, prepass, shade })
+    }
+}
+
+impl Pipeline for Forward {
+    fn encode(&mut self, frame: &mut Frame) {
+        if let Some(prepass) = &self.prepass {
+            depth_prepass(frame, prepass);
+        }
+        forward_shade(frame, &self.shade, self.prepass.is_none());
+    }
+
+    fn report(&self) -> PipelineReport {
+        PipelineReport::new(super::PipelineConfig::Forward(self.config))
+    }
+}
+
+/// Reads: the scene, its lights and per-object light lists, and the depth
+/// target unless `clear_depth`. Writes: `targets.hdr` (cleared first) and depth.
+fn forward_shade(frame: &mut Frame, pipeline: &wgpu::RenderPipeline, clear_depth: bool) {
+    let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
+    let color = [color_attachment(&targets.hdr_view, wgpu::Color::BLACK)];
+    let mut rp = frame.render_pass("forward shade", &color, Some(depth_attachment(targets, clear_depth)));
+    draw_objects(&mut rp, scene, visible, pipeline);
+}

@@ -1,0 +1,64 @@
+//! One frame being recorded: what the passes read (scene, targets, visible
+//! objects) and where they record (the encoder, with a timing scope per pass).
+//!
+//! Why no frame graph (resource handles, declared reads and writes): wgpu
+//! already tracks resource states and inserts the barriers, and every
+//! pipeline here records a fixed, short sequence of passes, so a graph's
+//! scheduling and aliasing would buy nothing yet. What a graph would make
+//! explicit lives in the pass functions instead: each takes its inputs and
+//! outputs as named arguments, and a pipeline's `encode` is the list of
+//! passes in order. Timing labels are automatic: every pass opened through
+//! [`Frame::compute_pass`] or [`Frame::render_pass`] is timed under its name.
+
+use wgpu_profiler::{GpuProfiler, OwningScope};
+
+use super::scene_gpu::SceneGpu;
+use super::targets::Targets;
+use crate::scene::Camera;
+
+/// A frame's inputs and its command encoder.
+pub struct Frame<'a> {
+    pub device: &'a wgpu::Device,
+    pub queue: &'a wgpu::Queue,
+    pub scene: &'a SceneGpu,
+    pub targets: &'a Targets,
+    pub camera: &'a Camera,
+    /// Per object: inside the view frustum.
+    pub visible: &'a [bool],
+    /// Frame number (tags counters and timings).
+    pub number: u64,
+    /// The lights differ from the previous frame's (cached shades are stale).
+    pub lights_changed: bool,
+    pub encoder: &'a mut wgpu::CommandEncoder,
+    pub profiler: &'a GpuProfiler,
+}
+
+impl Frame<'_> {
+    /// A compute pass timed as `label`.
+    pub fn compute_pass(&mut self, label: &str) -> OwningScope<'_, wgpu::ComputePass<'_>> {
+        let query = self.profiler.begin_pass_query(label, self.encoder);
+        let pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: query.compute_pass_timestamp_writes(),
+        });
+        OwningScope { profiler: self.profiler, recorder: pass, scope: Some(query) }
+    }
+
+    /// A render pass timed as `label`, over `color` and `depth` attachments.
+    pub fn render_pass(
+        &mut self,
+        label: &str,
+        color: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+        depth: Option<wgpu::RenderPassDepthStencilAttachment<'_>>,
+    ) -> OwningScope<'_, wgpu::RenderPass<'_>> {
+        let query = self.profiler.begin_pass_query(label, self.encoder);
+        let pass = self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: color,
+            depth_stencil_attachment: depth,
+            timestamp_writes: query.render_pass_timestamp_writes(),
+            ..Default::default()
+        });
+        OwningScope { profiler: self.profiler, recorder: pass, scope: Some(query) }
+    }
+}

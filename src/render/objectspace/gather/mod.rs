@@ -1,0 +1,63 @@
+//! Shade gathering (`gather.wgsl`): per pixel of the visibility buffer, the
+//! same mip level as marking chose, filtered bilinearly from the atlas into
+//! the HDR target (objects outside the atlas are shaded here per pixel).
+
+use super::resources::Resources;
+use crate::render::frame::Frame;
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use crate::render::scene_gpu::SceneGpu;
+use crate::render::targets::{HDR_FORMAT, Targets};
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
+
+pub const SHADER: ShaderSource = ShaderSource::new("gather.wgsl", include_str!("gather.wgsl"));
+
+pub struct GatherPass {
+    pipeline: wgpu::ComputePipeline,
+    /// The atlas (read) and the HDR target (written).
+    io: wgpu::BindGroup,
+}
+
+impl GatherPass {
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        res: &Resources,
+        targets: &Targets,
+    ) -> Result<Self, ShaderError> {
+        let layout = bind_group_layout(
+            device,
+            "gather io",
+            &[
+                Binding::Texture {
+                    sample: wgpu::TextureSampleType::Float { filterable: false },
+                    dimension: wgpu::TextureViewDimension::D2Array,
+                },
+                Binding::StorageTexture { format: HDR_FORMAT, dimension: wgpu::TextureViewDimension::D2 },
+            ],
+        );
+        let io = bind_group(
+            device,
+            "gather io",
+            &layout,
+            &[
+                wgpu::BindingResource::TextureView(&res.atlas_array),
+                wgpu::BindingResource::TextureView(&targets.hdr_view),
+            ],
+        );
+        let pipeline = compute_pipeline(device, shaders, SHADER, "gather", &[&scene.layout, &res.layout, &layout])?;
+        Ok(Self { pipeline, io })
+    }
+}
+
+/// Reads: the visibility buffer, the atlas and its table (and the tile
+/// stamps for the debug views). Writes: `targets.hdr`.
+pub fn gather(frame: &mut Frame, pass: &GatherPass, res: &Resources) {
+    let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
+    let scene = frame.scene.bind_group();
+    let mut cp = frame.compute_pass("gather");
+    cp.set_pipeline(&pass.pipeline);
+    res.bind(&mut cp, scene);
+    cp.set_bind_group(2, &pass.io, &[]);
+    cp.dispatch_workgroups(w, h, 1);
+}

@@ -1,0 +1,45 @@
+//! Shade evaluation (`shade.wgsl`): one workgroup per queued tile, through
+//! an indirect dispatch; each texel finds its triangle in the triangle-index
+//! map and runs the shared lighting model.
+
+use super::resources::{ATLAS_FORMAT, Resources};
+use crate::render::frame::Frame;
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use crate::render::scene_gpu::SceneGpu;
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
+
+pub const SHADER: ShaderSource = ShaderSource::new("shade.wgsl", include_str!("shade.wgsl"));
+
+pub struct ShadePass {
+    pipeline: wgpu::ComputePipeline,
+    /// The atlas as a storage texture.
+    outputs: wgpu::BindGroup,
+}
+
+impl ShadePass {
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        res: &Resources,
+    ) -> Result<Self, ShaderError> {
+        let dimension = wgpu::TextureViewDimension::D2Array;
+        let layout =
+            bind_group_layout(device, "shade outputs", &[Binding::StorageTexture { format: ATLAS_FORMAT, dimension }]);
+        let outputs =
+            bind_group(device, "shade outputs", &layout, &[wgpu::BindingResource::TextureView(&res.atlas_array)]);
+        let pipeline = compute_pipeline(device, shaders, SHADER, "shade", &[&scene.layout, &res.layout, &layout])?;
+        Ok(Self { pipeline, outputs })
+    }
+}
+
+/// Reads: the shade queue and its count, the triangle-index maps, the scene
+/// and its lights. Writes: the queued tiles of the atlas.
+pub fn shade_tiles(frame: &mut Frame, pass: &ShadePass, res: &Resources) {
+    let scene = frame.scene.bind_group();
+    let mut cp = frame.compute_pass("shade");
+    cp.set_pipeline(&pass.pipeline);
+    res.bind(&mut cp, scene);
+    cp.set_bind_group(2, &pass.outputs, &[]);
+    cp.dispatch_workgroups_indirect(&res.shade_dispatch, 0);
+}

@@ -1,0 +1,214 @@
+//! Passes that several pipelines call, one folder each (Rust beside its
+//! WGSL), and the small helpers every pass uses: the scene raster pipeline,
+//! the scene draw loop, the depth attachment, compute pipelines and
+//! bind-group layouts.
+
+pub mod depth_prepass;
+pub mod tonemap;
+pub mod visibility;
+
+use super::targets::{self, Targets};
+use crate::render::scene_gpu::SceneGpu;
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
+
+/// Depth state of a scene raster pass (reversed Z: nearer is greater).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthMode {
+    /// Test `Greater` and write: the first (or only) pass.
+    Write,
+    /// Test `Equal`, no write: after a depth pre-pass, one fragment per pixel.
+    EqualAfterPrepass,
+}
+
+impl DepthMode {
+    pub fn after(prepass: bool) -> Self {
+        if prepass { Self::EqualAfterPrepass } else { Self::Write }
+    }
+}
+
+/// A raster pipeline over the scene bind group (group 0) and `groups`:
+/// vertices pulled from storage (no vertex buffers), no face culling, a
+/// reversed-Z depth test, and a fragment stage writing `color` when given
+/// (none: depth only).
+pub fn scene_raster_pipeline(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    shader: ShaderSource,
+    scene: &SceneGpu,
+    vertex_entry: &str,
+    fragment: Option<(&str, wgpu::TextureFormat)>,
+    depth: DepthMode,
+) -> Result<wgpu::RenderPipeline, ShaderError> {
+    let module = shaders.module(device, shader)?;
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(shader.file),
+        bind_group_layouts: &[Some(&scene.layout)],
+        immediate_size: 0,
+    });
+    let targets = fragment.map(|(_, format)| [Some(format.into())]);
+    let (depth_write, compare) = match depth {
+        DepthMode::Write => (true, wgpu::CompareFunction::Greater),
+        DepthMode::EqualAfterPrepass => (false, wgpu::CompareFunction::Equal),
+    };
+    Ok(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(shader.file),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some(vertex_entry),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment: fragment.zip(targets.as_ref()).map(|((entry, _), targets)| wgpu::FragmentState {
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: targets::DEPTH_FORMAT,
+            depth_write_enabled: Some(depth_write),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        multiview_mask: None,
+        cache: None,
+    }))
+}
+
+/// Draws every visible object with `pipeline`: one instanced draw per object,
+/// the instance index being the object (the shaders read its table entry).
+pub fn draw_objects(pass: &mut wgpu::RenderPass, scene: &SceneGpu, visible: &[bool], pipeline: &wgpu::RenderPipeline) {
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, scene.bind_group(), &[]);
+    pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+    for (i, d) in scene.draws.iter().enumerate().filter(|(i, _)| visible[*i]) {
+        let i = i as u32;
+        pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, i..i + 1);
+    }
+}
+
+/// The depth target as an attachment: cleared (to far, 0 in reversed Z) or
+/// loaded, and stored.
+pub fn depth_attachment(targets: &Targets, clear: bool) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    let load = if clear { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load };
+    wgpu::RenderPassDepthStencilAttachment {
+        view: &targets.depth_view,
+        depth_ops: Some(wgpu::Operations { load, store: wgpu::StoreOp::Store }),
+        stencil_ops: None,
+    }
+}
+
+/// A colour attachment cleared to `clear` and stored.
+pub fn color_attachment(view: &wgpu::TextureView, clear: wgpu::Color) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+    Some(wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
+    })
+}
+
+/// A compute pipeline for entry point `entry` of `shader` over bind groups `groups`.
+pub fn compute_pipeline(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    shader: ShaderSource,
+    entry: &str,
+    groups: &[&wgpu::BindGroupLayout],
+) -> Result<wgpu::ComputePipeline, ShaderError> {
+    let module = shaders.module(device, shader)?;
+    let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().copied().map(Some).collect();
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(entry),
+        bind_group_layouts: &groups,
+        immediate_size: 0,
+    });
+    Ok(device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(&layout),
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    }))
+}
+
+/// What one binding of a compute bind group holds (its index is its place
+/// in the list given to [`bind_group_layout`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Binding {
+    Uniform,
+    /// A uniform bound at a dynamic offset, `size` bytes at a time.
+    DynamicUniform {
+        size: u64,
+    },
+    Storage {
+        read_only: bool,
+    },
+    /// A sampled texture without a sampler (read with `textureLoad`).
+    Texture {
+        sample: wgpu::TextureSampleType,
+        dimension: wgpu::TextureViewDimension,
+    },
+    /// A write-only storage texture.
+    StorageTexture {
+        format: wgpu::TextureFormat,
+        dimension: wgpu::TextureViewDimension,
+    },
+}
+
+/// A bind-group layout for compute passes; binding `i` is `bindings[i]`.
+pub fn bind_group_layout(device: &wgpu::Device, label: &str, bindings: &[Binding]) -> wgpu::BindGroupLayout {
+    let buffer = |ty, dynamic, size: Option<u64>| wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: dynamic,
+        min_binding_size: size.and_then(wgpu::BufferSize::new),
+    };
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = bindings
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupLayoutEntry {
+            binding: i as u32,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: match *b {
+                Binding::Uniform => buffer(wgpu::BufferBindingType::Uniform, false, None),
+                Binding::DynamicUniform { size } => buffer(wgpu::BufferBindingType::Uniform, true, Some(size)),
+                Binding::Storage { read_only } => buffer(wgpu::BufferBindingType::Storage { read_only }, false, None),
+                Binding::Texture { sample, dimension } => {
+                    wgpu::BindingType::Texture { sample_type: sample, view_dimension: dimension, multisampled: false }
+                }
+                Binding::StorageTexture { format, dimension } => wgpu::BindingType::StorageTexture {
+                    access: wgpu::StorageTextureAccess::WriteOnly,
+                    format,
+                    view_dimension: dimension,
+                },
+            },
+            count: None,
+        })
+        .collect();
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
+}
+
+/// A bind group whose binding `i` is `resources[i]`.
+pub fn bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    resources: &[wgpu::BindingResource],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = resources
+        .iter()
+        .enumerate()
+        .map(|(i, r)| wgpu::BindGroupEntry { binding: i as u32, resource: r.clone() })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+}
+
+/// A view of `texture` as `dimension` (all layers).
+pub fn view_as(texture: &wgpu::Texture, dimension: wgpu::TextureViewDimension) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor { dimension: Some(dimension), ..Default::default() })
+}

@@ -1,0 +1,74 @@
+//! Visibility pass: rasterizes the visible objects into a visibility buffer
+//! of (object + 1, triangle) per pixel, from which compute passes rebuild
+//! everything else a pixel needs.
+
+use super::{DepthMode, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline};
+use crate::render::frame::Frame;
+use crate::render::scene_gpu::SceneGpu;
+use crate::render::targets::Targets;
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
+
+pub const SHADER: ShaderSource = ShaderSource::new("visibility.wgsl", include_str!("visibility.wgsl"));
+
+/// Per pixel: (object + 1, triangle); (0, 0) is background.
+pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+
+/// The visibility buffer, one texel per pixel of the targets.
+pub struct VisibilityBuffer {
+    pub texture: wgpu::Texture,
+    pub view: wgpu::TextureView,
+}
+
+impl VisibilityBuffer {
+    pub fn new(device: &wgpu::Device, targets: &Targets) -> Self {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("visibility"),
+            size: wgpu::Extent3d { width: targets.width, height: targets.height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        Self { texture, view }
+    }
+
+    pub fn bytes(&self) -> u64 {
+        self.texture.width() as u64 * self.texture.height() as u64 * 8
+    }
+}
+
+pub struct VisibilityPass {
+    pipeline: wgpu::RenderPipeline,
+    after_prepass: bool,
+}
+
+impl VisibilityPass {
+    /// `after_prepass`: the depth target already holds the scene's depth
+    /// (test `Equal`, each pixel's ids written once); otherwise the pass
+    /// clears and writes depth itself.
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        after_prepass: bool,
+    ) -> Result<Self, ShaderError> {
+        let fragment = Some(("fs_main", FORMAT));
+        let depth = DepthMode::after(after_prepass);
+        let pipeline = scene_raster_pipeline(device, shaders, SHADER, scene, "vs_main", fragment, depth)?;
+        Ok(Self { pipeline, after_prepass })
+    }
+}
+
+/// Reads: the depth target when built `after_prepass`. Writes: `out`
+/// (cleared to background) and the depth target.
+pub fn visibility(frame: &mut Frame, pass: &VisibilityPass, out: &VisibilityBuffer) {
+    let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
+    let color = [color_attachment(&out.view, wgpu::Color::TRANSPARENT)];
+    let mut rp = frame.render_pass("visibility", &color, Some(depth_attachment(targets, !pass.after_prepass)));
+    draw_objects(&mut rp, scene, visible, &pass.pipeline);
+}
