@@ -127,7 +127,7 @@ struct ObjectSpaceArgs {
     mip_bias: f32,
     /// Variable rate: shade up to this many mip levels coarser where a
     /// triangle's normals do not vary (0 = off; at most 16).
-    #[arg(long, default_value_t = 0.0, value_parser = variable_rate)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = variable_rate)]
     variable_rate: f32,
     /// Atlas budget in Mi texels (all objects, mip chains included; 12 bytes
     /// each with the triangle maps); texture sizes are halved until they fit.

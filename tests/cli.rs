@@ -61,6 +61,28 @@ fn bad_options_say_what_is_wrong() {
     assert!(err.contains("nothing-called-this"), "{err}");
 }
 
+/// Numbers that would give NaN shading, an empty budget or overflowing
+/// texture sizes are refused with the flag and the accepted range.
+#[test]
+fn numeric_flags_must_be_finite_and_in_range() {
+    let cases: [(&[&str], &str); 7] = [
+        (&["--mip-bias", "nan"], "-16 to 16"),
+        (&["--mip-bias", "inf"], "-16 to 16"),
+        (&["--exposure", "inf"], "positive finite"),
+        (&["--exposure", "0"], "positive finite"),
+        (&["--atlas-budget", "0"], "--atlas-budget"),
+        (&["--texel-density", "1e30"], "at most 65536"),
+        (&["--variable-rate", "-1"], "0 to 16"),
+    ];
+    for (flags, expected) in cases {
+        let mut args = vec!["render", "--pipeline", "objectspace"];
+        args.extend_from_slice(flags);
+        let (code, err) = run(&args);
+        assert_eq!(code, 2, "{flags:?} was accepted:\n{err}");
+        assert!(err.contains(flags[1]) && err.contains(expected), "{flags:?}: {err}");
+    }
+}
+
 #[test]
 fn help_explains_every_command() {
     let out = Command::new(env!("CARGO_BIN_EXE_shadespace")).arg("--help").output().unwrap();
