@@ -11,6 +11,7 @@
 //! are copied out and read a few frames later.
 
 pub mod atlas;
+pub mod cpu;
 pub mod trimap;
 
 use bytemuck::{Pod, Zeroable};
