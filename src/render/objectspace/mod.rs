@@ -11,6 +11,7 @@
 //! inside the frame: the counters are copied out and read a few frames later.
 
 pub mod atlas;
+pub mod cpu;
 pub mod debug;
 pub mod gather;
 pub mod mark;

@@ -1,0 +1,597 @@
+//! CPU twin of tile marking: plain-Rust versions of the pixel reconstruction
+//! in `shaders/objectspace.wgsl` and of the marking pass in
+//! `shaders/mark.wgsl`, to check the GPU's marking state against (as Vello
+//! keeps CPU versions of its GPU stages).
+//!
+//! The functions use the WGSL's formulas in the same order, in `f32`. The GPU
+//! may still round differently (fused multiply-adds, approximate `log2`,
+//! `normalize` and `sqrt`), so a pixel close to a decision (its mip level
+//! within [`LOD_TOLERANCE`] of a rounding boundary, or a bilinear coordinate
+//! within [`TEXEL_TOLERANCE`] of a texel boundary) counts every outcome:
+//! [`visible_tiles`] returns the tiles every outcome marks (`must`) and the
+//! tiles some outcome marks (`may`), and the GPU's visible set must lie in
+//! between.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use glam::{IVec2, Mat4, UVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
+
+use super::atlas::{GpuAtlasEntry, GpuAtlasLevel};
+use crate::render::gpu_types::GpuView;
+use crate::scene::{Mesh, Scene};
+
+/// How far (in levels) a pixel's unrounded mip level may be from a rounding
+/// boundary (x.5) and still be rounded either way. The level is
+/// `log2(rho) + biases`, so 1.5e-4 levels is a relative error of 1e-4 in the
+/// footprint `rho`. On lavapipe no pixel of `tests/mark_twin.rs` rounds
+/// differently even with no tolerance (the closest came within 4e-6 of x.5),
+/// and the margin makes a few dozen pixels a frame ambiguous, a tile or two.
+pub const LOD_TOLERANCE: f32 = 1.5e-4;
+
+/// How far (as a fraction of the level's side) a bilinear coordinate
+/// `t = uv * size - 0.5` may be from an integer and still be floored either
+/// way. The chart UV's error is absolute (the barycentrics' rounding, from
+/// cross products of clip coordinates tens of units large, times the UV
+/// extent of the triangle), so the error of `t` grows with the side. On
+/// lavapipe one atrium pixel of `tests/mark_twin.rs` has `t` 8.6e-7 of the
+/// side from an integer (1.1e-4 texels at 128) and is floored the other way
+/// on the GPU; 1e-5 leaves a tenfold margin.
+pub const TEXEL_TOLERANCE: f32 = 1e-5;
+
+/// The `Params` fields that marking reads (`objectspace::resources::GpuParams`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MarkParams {
+    /// This frame's stamp (frames rendered so far, this one included).
+    pub stamp: u32,
+    pub reuse: u32,
+    pub tile_size: u32,
+    pub mip_bias: f32,
+    pub variable_rate: f32,
+}
+
+/// Everything the marking pass reads besides the visibility buffer.
+#[derive(Clone, Copy, Debug)]
+pub struct MarkInputs<'a> {
+    /// The scene as uploaded: positions, normals and chart UVs per mesh,
+    /// indices, object transforms.
+    pub scene: &'a Scene,
+    /// The frame's view uniform (`scene_gpu::gpu_view`).
+    pub view: &'a GpuView,
+    /// The atlas table as the GPU holds it this frame (`valid_since` included).
+    pub entries: &'a [GpuAtlasEntry],
+    pub params: MarkParams,
+}
+
+/// The chart UVs the GPU shades through: `uv1`, or else `uv0` (as
+/// `SceneGpu::new` uploads them).
+pub fn chart_uvs(mesh: &Mesh) -> &[Vec2] {
+    mesh.uv1.as_deref().unwrap_or(&mesh.uv0)
+}
+
+/// Mirrors `pixel_ndc`: the NDC point of a pixel's centre. `viewport` is
+/// (width, height, 1/width, 1/height).
+pub fn pixel_ndc(pixel: Vec2, viewport: Vec4) -> Vec2 {
+    let uv = (pixel + 0.5) * viewport.zw();
+    Vec2::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0)
+}
+
+/// Mirrors `barycentrics`: homogeneous, perspective-correct barycentrics of
+/// NDC point `q` for clip-space vertices (x, y, w).
+pub fn barycentrics(c0: Vec3, c1: Vec3, c2: Vec3, q: Vec2) -> Vec3 {
+    let r = q.extend(1.0);
+    let e = Vec3::new(c1.cross(c2).dot(r), c2.cross(c0).dot(r), c0.cross(c1).dot(r));
+    e / (e.x + e.y + e.z)
+}
+
+/// Mirrors `PixelSample`: what a visibility-buffer pixel sees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelSample {
+    pub object: usize,
+    pub triangle: usize,
+    /// The triangle's vertices, as indices into its mesh.
+    pub tri: [usize; 3],
+    /// Barycentrics at the pixel centre, one pixel right, one pixel down.
+    pub b: Vec3,
+    pub b_dx: Vec3,
+    pub b_dy: Vec3,
+}
+
+/// Mirrors `sample_pixel`: rebuilds pixel `pixel` whose visibility ids are
+/// `(object + 1, triangle)`, object non-zero. Panics on ids outside the scene.
+pub fn sample_pixel(scene: &Scene, view: &GpuView, pixel: UVec2, ids: [u32; 2]) -> PixelSample {
+    let object = ids[0] as usize - 1;
+    let triangle = ids[1] as usize;
+    let o = &scene.objects[object];
+    let mesh = &scene.meshes[o.mesh];
+    let tri = [0, 1, 2].map(|k| mesh.indices[3 * triangle + k] as usize);
+    let mvp: Mat4 = view.view_proj * o.transform;
+    let [c0, c1, c2] = tri.map(|v| (mvp * mesh.positions[v].extend(1.0)).xyw());
+    let q = pixel_ndc(pixel.as_vec2(), view.viewport);
+    let step = 2.0 * view.viewport.zw();
+    PixelSample {
+        object,
+        triangle,
+        tri,
+        b: barycentrics(c0, c1, c2, q),
+        b_dx: barycentrics(c0, c1, c2, q + Vec2::new(step.x, 0.0)),
+        b_dy: barycentrics(c0, c1, c2, q - Vec2::new(0.0, step.y)),
+    }
+}
+
+/// Mirrors `interpolate2`.
+fn interpolate2(b: Vec3, a: Vec2, c: Vec2, d: Vec2) -> Vec2 {
+    a * b.x + c * b.y + d * b.z
+}
+
+/// Mirrors `ChartFootprint`: chart UV of a pixel and its screen derivatives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChartFootprint {
+    pub uv: Vec2,
+    pub du_dx: Vec2,
+    pub du_dy: Vec2,
+}
+
+/// Mirrors `chart_footprint`.
+pub fn chart_footprint(scene: &Scene, p: &PixelSample) -> ChartFootprint {
+    let charts = chart_uvs(&scene.meshes[scene.objects[p.object].mesh]);
+    let [a, c, d] = p.tri.map(|v| charts[v]);
+    let uv = interpolate2(p.b, a, c, d);
+    ChartFootprint { uv, du_dx: interpolate2(p.b_dx, a, c, d) - uv, du_dy: interpolate2(p.b_dy, a, c, d) - uv }
+}
+
+/// Mirrors `variable_rate_bias`: up to `variable_rate` levels coarser where
+/// the triangle's vertex normals agree, none where they diverge.
+pub fn variable_rate_bias(variable_rate: f32, normals: [Vec3; 3]) -> f32 {
+    if variable_rate <= 0.0 {
+        return 0.0;
+    }
+    let [n0, n1, n2] = normals.map(Vec3::normalize);
+    let min_dot = n0.dot(n1).min(n1.dot(n2).min(n0.dot(n2)));
+    let curvature = ((1.0 - min_dot) * 8.0).clamp(0.0, 1.0);
+    variable_rate * (1.0 - curvature)
+}
+
+/// The unrounded level of `select_level`:
+/// `log2(max(|dUV/dx|, |dUV/dy|) * size) + biases`.
+pub fn level_of_detail(e: &GpuAtlasEntry, params: &MarkParams, f: &ChartFootprint, variable_rate_bias: f32) -> f32 {
+    let size = e.size as f32;
+    let rho = f.du_dx.length().max(f.du_dy.length()) * size;
+    rho.max(1e-8).log2() + params.mip_bias + e.mip_bias + variable_rate_bias
+}
+
+/// The rest of `select_level`: WGSL `round` (ties to even), clamped to the
+/// object's levels.
+pub fn select_level(lod: f32, level_count: u32) -> u32 {
+    lod.round_ties_even().clamp(0.0, (level_count - 1) as f32) as u32
+}
+
+/// Mirrors `Bilinear`: the footprint of a bilinear lookup in a level.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bilinear {
+    /// Top-left tap, level-local, clamped into the level.
+    pub texel: IVec2,
+    /// Bottom-right tap, clamped into the level.
+    pub texel_hi: IVec2,
+    /// Weight of the right and lower taps.
+    pub weight: Vec2,
+}
+
+/// Mirrors `bilinear` for a level of side `size`.
+pub fn bilinear(size: u32, uv: Vec2) -> Bilinear {
+    let t = uv * size as f32 - 0.5;
+    let base = t.floor();
+    let (texel, texel_hi) = bilinear_taps(size, base.as_ivec2());
+    Bilinear { texel, texel_hi, weight: t - base }
+}
+
+/// The clamped taps of `bilinear` for an unclamped top-left texel `base`.
+pub fn bilinear_taps(size: u32, base: IVec2) -> (IVec2, IVec2) {
+    let high = IVec2::splat(size as i32 - 1);
+    (base.clamp(IVec2::ZERO, high), (base + 1).clamp(IVec2::ZERO, high))
+}
+
+/// Mirrors the tile index of `mark_tile`: the global tile holding a texel of a level.
+pub fn tile_of(l: &GpuAtlasLevel, tile_size: u32, texel: IVec2) -> u32 {
+    let tiles_per_row = l.size / tile_size;
+    let t = texel.as_uvec2() / tile_size;
+    l.tile_base + t.y * tiles_per_row + t.x
+}
+
+/// Mirrors the calls of `mark_tile` in `mark`: the tiles of a bilinear
+/// footprint (the top-left tap's, plus those the other taps cross into).
+pub fn footprint_tiles(l: &GpuAtlasLevel, tile_size: u32, texel: IVec2, texel_hi: IVec2) -> Vec<u32> {
+    let lo = texel.as_uvec2() / tile_size;
+    let hi = texel_hi.as_uvec2() / tile_size;
+    let mut tiles = vec![tile_of(l, tile_size, texel)];
+    if hi.x != lo.x {
+        tiles.push(tile_of(l, tile_size, IVec2::new(texel_hi.x, texel.y)));
+    }
+    if hi.y != lo.y {
+        tiles.push(tile_of(l, tile_size, IVec2::new(texel.x, texel_hi.y)));
+    }
+    if hi.x != lo.x && hi.y != lo.y {
+        tiles.push(tile_of(l, tile_size, texel_hi));
+    }
+    tiles
+}
+
+/// The values `x` floors to when it may be off by up to `tolerance`.
+fn floor_candidates(x: f32, tolerance: f32) -> impl Iterator<Item = i32> {
+    let (low, high) = ((x - tolerance).floor() as i32, (x + tolerance).floor() as i32);
+    low..=high
+}
+
+/// The tiles one pixel marks.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PixelTiles {
+    /// Marked whichever way the GPU rounds.
+    pub must: Vec<u32>,
+    /// Marked by some way the GPU may round.
+    pub may: Vec<u32>,
+}
+
+/// What `mark` marks for one pixel, over every outcome of its near-boundary
+/// decisions (see [`LOD_TOLERANCE`], [`TEXEL_TOLERANCE`]). `None` for
+/// objects outside the atlas (shaded forward).
+pub fn pixel_tiles(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Option<PixelTiles> {
+    let p = sample_pixel(inputs.scene, inputs.view, pixel, ids);
+    let e = &inputs.entries[p.object];
+    if e.size == 0 {
+        return None;
+    }
+    let f = chart_footprint(inputs.scene, &p);
+    let normals = &inputs.scene.meshes[inputs.scene.objects[p.object].mesh].normals;
+    let bias = variable_rate_bias(inputs.params.variable_rate, p.tri.map(|v| normals[v]));
+    let lod = level_of_detail(e, &inputs.params, &f, bias);
+    let lowest = select_level(lod - LOD_TOLERANCE, e.level_count);
+    let highest = select_level(lod + LOD_TOLERANCE, e.level_count);
+    let mut outcomes: Vec<Vec<u32>> = Vec::new();
+    for level in lowest..=highest {
+        let l = &e.levels[level as usize];
+        // `t` as in `bilinear`, floored both ways when near an integer.
+        let t = f.uv * l.size as f32 - 0.5;
+        let tolerance = l.size as f32 * TEXEL_TOLERANCE;
+        for x in floor_candidates(t.x, tolerance) {
+            for y in floor_candidates(t.y, tolerance) {
+                let (texel, texel_hi) = bilinear_taps(l.size, IVec2::new(x, y));
+                outcomes.push(footprint_tiles(l, inputs.params.tile_size, texel, texel_hi));
+            }
+        }
+    }
+    let mut may: Vec<u32> = outcomes.concat();
+    may.sort_unstable();
+    may.dedup();
+    let must = may.iter().copied().filter(|t| outcomes.iter().all(|o| o.contains(t))).collect();
+    Some(PixelTiles { must, may })
+}
+
+/// The tiles a frame's marking pass marks visible.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct VisibleTiles {
+    /// Tiles marked whichever way each pixel rounds: some pixel marks them in
+    /// every one of its outcomes.
+    pub must: BTreeSet<u32>,
+    /// Tiles marked by some outcome of some pixel.
+    pub may: BTreeSet<u32>,
+    /// Pixels whose outcomes mark different tiles.
+    pub ambiguous_pixels: usize,
+}
+
+/// [`pixel_tiles`] over a visibility buffer (row-major, `width` pixels a row,
+/// `(object + 1, triangle)` per pixel, 0 = background).
+pub fn visible_tiles(inputs: &MarkInputs, visibility: &[[u32; 2]], width: u32) -> VisibleTiles {
+    let mut out = VisibleTiles::default();
+    for (i, ids) in visibility.iter().enumerate().filter(|(_, ids)| ids[0] != 0) {
+        let pixel = UVec2::new(i as u32 % width, i as u32 / width);
+        if let Some(p) = pixel_tiles(inputs, pixel, *ids) {
+            out.ambiguous_pixels += usize::from(p.must != p.may);
+            out.must.extend(p.must);
+            out.may.extend(p.may);
+        }
+    }
+    out
+}
+
+/// The `new` rule of `mark_tile`: not visible in the previous frame.
+pub fn is_new(previous_visible: u32, stamp: u32) -> bool {
+    previous_visible == 0 || previous_visible.wrapping_add(1) != stamp
+}
+
+/// The queueing rule of `mark_tile`: never shaded, shaded `reuse` or more
+/// frames ago, or shaded before the object's shades became stale.
+pub fn needs_shading(shaded: u32, stamp: u32, reuse: u32, valid_since: u32) -> bool {
+    shaded == 0 || stamp.wrapping_sub(shaded) >= reuse || shaded < valid_since
+}
+
+/// The object and level owning a global tile (the `object << 8 | level` of
+/// the queue entries, split), from the tile ranges of the atlas table.
+pub fn tile_owner(entries: &[GpuAtlasEntry], tile_size: u32, tile: u32) -> Option<(u32, u32)> {
+    entries.iter().enumerate().find_map(|(object, e)| {
+        e.levels[..e.level_count as usize].iter().enumerate().find_map(|(level, l)| {
+            let tiles = (l.size / tile_size) * (l.size / tile_size);
+            (l.tile_base..l.tile_base + tiles).contains(&tile).then_some((object as u32, level as u32))
+        })
+    })
+}
+
+/// Per-tile marking state: the `tile_visible` and `tile_shaded` buffers.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TileState {
+    /// Stamp of the last frame the tile was visible (0: never).
+    pub visible: Vec<u32>,
+    /// Stamp of the last frame the tile was shaded (0: never).
+    pub shaded: Vec<u32>,
+}
+
+impl TileState {
+    /// The state before the first frame: every tile never visible, never shaded.
+    pub fn new(tile_count: usize) -> Self {
+        Self { visible: vec![0; tile_count], shaded: vec![0; tile_count] }
+    }
+}
+
+/// What `mark_tile` does to a frame's visible tiles.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FrameMarks {
+    /// Visible tiles that were not visible in the previous frame.
+    pub new: BTreeSet<u32>,
+    /// Tiles queued for shading, each with its `object << 8 | level`.
+    pub queued: BTreeMap<u32, u32>,
+    /// The state after the frame.
+    pub next: TileState,
+}
+
+/// Mirrors `mark_tile` for every tile of `visible` at once: the first mark of
+/// a tile in a frame sees the state before the frame, and later marks of it
+/// do nothing, so the order of the pixels does not matter.
+pub fn mark_frame(
+    previous: &TileState,
+    visible: &BTreeSet<u32>,
+    params: &MarkParams,
+    entries: &[GpuAtlasEntry],
+) -> FrameMarks {
+    let stamp = params.stamp;
+    let mut next = previous.clone();
+    let mut new = BTreeSet::new();
+    let mut queued = BTreeMap::new();
+    for &tile in visible {
+        let t = tile as usize;
+        next.visible[t] = stamp;
+        if is_new(previous.visible[t], stamp) {
+            new.insert(tile);
+        }
+        let (object, level) = tile_owner(entries, params.tile_size, tile)
+            .unwrap_or_else(|| panic!("tile {tile} lies in no object's atlas levels"));
+        if needs_shading(previous.shaded[t], stamp, params.reuse, entries[object as usize].valid_since) {
+            next.shaded[t] = stamp;
+            queued.insert(tile, (object << 8) | level);
+        }
+    }
+    FrameMarks { new, queued, next }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Mat4;
+
+    use super::*;
+    use crate::render::objectspace::atlas::AtlasLayout;
+    use crate::scene::{Object, Scene};
+
+    /// A 2 x 2 quad at depth 0.5 with the chart filling the unit square: seen
+    /// through an identity view-projection it covers the whole viewport.
+    fn screen_quad(normals: [Vec3; 4]) -> Scene {
+        let positions = vec![
+            Vec3::new(-1.0, 1.0, 0.5),
+            Vec3::new(1.0, 1.0, 0.5),
+            Vec3::new(1.0, -1.0, 0.5),
+            Vec3::new(-1.0, -1.0, 0.5),
+        ];
+        let uv = vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)];
+        Scene {
+            meshes: vec![Mesh {
+                positions,
+                normals: normals.to_vec(),
+                uv0: uv.clone(),
+                uv1: Some(uv),
+                indices: vec![0, 1, 2, 0, 2, 3],
+                ..Default::default()
+            }],
+            objects: vec![Object {
+                name: "quad".into(),
+                mesh: 0,
+                material: 0,
+                transform: Mat4::IDENTITY,
+                forward_only: false,
+            }],
+            ..Default::default()
+        }
+    }
+
+    fn view(width: u32, height: u32) -> GpuView {
+        let (w, h) = (width as f32, height as f32);
+        GpuView { view_proj: Mat4::IDENTITY, viewport: Vec4::new(w, h, 1.0 / w, 1.0 / h), ..Default::default() }
+    }
+
+    fn params(mip_bias: f32, variable_rate: f32) -> MarkParams {
+        MarkParams { stamp: 1, reuse: 1, tile_size: 8, mip_bias, variable_rate }
+    }
+
+    /// One object of texture side 256 in tiles of 8, levels 256 down to 32.
+    fn entries() -> Vec<GpuAtlasEntry> {
+        AtlasLayout::new(&[Some(256)], 8, 4096, 32).unwrap().gpu_entries()
+    }
+
+    #[test]
+    fn pixel_centres_map_to_ndc() {
+        let viewport = Vec4::new(4.0, 2.0, 0.25, 0.5);
+        assert_eq!(pixel_ndc(Vec2::ZERO, viewport), Vec2::new(-0.75, 0.5));
+        assert_eq!(pixel_ndc(Vec2::new(3.0, 1.0), viewport), Vec2::new(0.75, -0.5));
+    }
+
+    #[test]
+    fn barycentrics_are_perspective_correct() {
+        let (c0, c1, c2) = (Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, -1.0, 1.0), Vec3::new(-1.0, 1.0, 1.0));
+        assert_eq!(barycentrics(c0, c1, c2, Vec2::new(-1.0, -1.0)), Vec3::X);
+        assert_eq!(barycentrics(c0, c1, c2, Vec2::new(0.0, 0.0)), Vec3::new(0.0, 0.5, 0.5));
+        // Vertex 1 twice as far (w = 2, same NDC point): the screen midpoint
+        // of edge 0-1 is a third of the way along it in space.
+        let far = Vec3::new(2.0, -2.0, 2.0);
+        let b = barycentrics(c0, far, c2, Vec2::new(0.0, -1.0));
+        assert!((b - Vec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0)).abs().max_element() < 1e-6, "{b}");
+    }
+
+    #[test]
+    fn a_quad_head_on_shades_at_the_matching_level() {
+        let scene = screen_quad([Vec3::Z; 4]);
+        let entries = entries();
+        // 64 pixels across a texture of 256: 4 texels per pixel, level 2.
+        let v = view(64, 64);
+        let p = sample_pixel(&scene, &v, UVec2::new(10, 20), [1, 0]);
+        let f = chart_footprint(&scene, &p);
+        assert!((f.uv - Vec2::new(10.5, 20.5) / 64.0).abs().max_element() < 1e-6, "{f:?}");
+        assert!((f.du_dx - Vec2::new(1.0 / 64.0, 0.0)).abs().max_element() < 1e-6, "{f:?}");
+        assert!((f.du_dy - Vec2::new(0.0, 1.0 / 64.0)).abs().max_element() < 1e-6, "{f:?}");
+        let lod = level_of_detail(&entries[0], &params(0.0, 0.0), &f, 0.0);
+        assert!((lod - 2.0).abs() < 1e-4, "{lod}");
+        assert_eq!(select_level(lod, entries[0].level_count), 2);
+        // Biases: a mip bias of -1, and a flat triangle's full variable rate of 0.7.
+        assert_eq!(select_level(level_of_detail(&entries[0], &params(-1.0, 0.0), &f, 0.0), 4), 1);
+        let bias = variable_rate_bias(0.7, [Vec3::Z; 3]);
+        assert_eq!(bias, 0.7);
+        assert_eq!(select_level(level_of_detail(&entries[0], &params(0.0, 0.7), &f, bias), 4), 3);
+        // Clamped to the levels there are.
+        assert_eq!(select_level(-3.2, 4), 0);
+        assert_eq!(select_level(9.0, 4), 3);
+        // WGSL rounds ties to even.
+        assert_eq!((select_level(0.5, 4), select_level(1.5, 4), select_level(2.5, 4)), (0, 2, 2));
+    }
+
+    #[test]
+    fn variable_rate_fades_out_where_normals_diverge() {
+        assert_eq!(variable_rate_bias(0.0, [Vec3::Z; 3]), 0.0);
+        // cos 45 degrees: 1 - 0.707 = 0.29, times 8 is above 1: no bias.
+        let tilted = Vec3::new(1.0, 0.0, 1.0);
+        assert_eq!(variable_rate_bias(1.0, [Vec3::Z, Vec3::Z, tilted]), 0.0);
+        // Unnormalized normals are normalized first; 1 - cos = 1/16: half the bias.
+        let slight = Vec3::new((1.0f32 - (15.0f32 / 16.0).powi(2)).sqrt(), 0.0, 15.0 / 16.0) * 3.0;
+        assert!((variable_rate_bias(1.0, [Vec3::Z, Vec3::Z, slight]) - 0.5).abs() < 1e-5);
+    }
+
+    #[test]
+    fn bilinear_taps_are_clamped_into_the_level() {
+        let inside = bilinear(16, Vec2::new(0.25, 0.5));
+        assert_eq!(
+            (inside.texel, inside.texel_hi, inside.weight),
+            (IVec2::new(3, 7), IVec2::new(4, 8), Vec2::splat(0.5))
+        );
+        let top_left = bilinear(16, Vec2::ZERO);
+        assert_eq!((top_left.texel, top_left.texel_hi, top_left.weight), (IVec2::ZERO, IVec2::ZERO, Vec2::splat(0.5)));
+        let bottom_right = bilinear(16, Vec2::ONE);
+        assert_eq!((bottom_right.texel, bottom_right.texel_hi), (IVec2::splat(15), IVec2::splat(15)));
+        let outside = bilinear(16, Vec2::new(-3.0, 7.0));
+        assert_eq!((outside.texel, outside.texel_hi), (IVec2::new(0, 15), IVec2::new(0, 15)));
+    }
+
+    #[test]
+    fn footprints_add_tiles_only_across_tile_edges() {
+        let l = GpuAtlasLevel { page: 0, origin: 0, size: 32, tile_base: 100 };
+        assert_eq!(footprint_tiles(&l, 8, IVec2::new(3, 3), IVec2::new(4, 4)), vec![100]);
+        assert_eq!(footprint_tiles(&l, 8, IVec2::new(7, 3), IVec2::new(8, 4)), vec![100, 101]);
+        assert_eq!(footprint_tiles(&l, 8, IVec2::new(2, 15), IVec2::new(3, 16)), vec![104, 108]);
+        assert_eq!(footprint_tiles(&l, 8, IVec2::new(15, 23), IVec2::new(16, 24)), vec![109, 110, 113, 114]);
+        // Clamped at the border: both taps on the last texel.
+        assert_eq!(footprint_tiles(&l, 8, IVec2::splat(31), IVec2::splat(31)), vec![115]);
+    }
+
+    #[test]
+    fn a_pixel_on_a_rounding_boundary_marks_both_outcomes() {
+        let scene = screen_quad([Vec3::Z; 4]);
+        let entries = entries();
+        let v = view(64, 64);
+        let pixel_tiles_with = |mip_bias| {
+            let inputs = MarkInputs { scene: &scene, view: &v, entries: &entries, params: params(mip_bias, 0.0) };
+            pixel_tiles(&inputs, UVec2::new(10, 20), [1, 0]).unwrap()
+        };
+        // Level 2 (64 texels, tiles of 8): uv * 64 - 0.5 = (10, 20), an
+        // integer, but taps 9-10 or 10-11 and 19-20 or 20-21 all lie in
+        // tile (1, 2): not ambiguous.
+        let level2 = entries[0].levels[2].tile_base + 2 * 8 + 1;
+        assert_eq!(pixel_tiles_with(0.0), PixelTiles { must: vec![level2], may: vec![level2] });
+        // Level 2.5: level 2, or level 3 (32 texels, t = (4.75, 9.75): tile (0, 1)).
+        let level3 = entries[0].levels[3].tile_base + 4;
+        assert_eq!(pixel_tiles_with(0.5), PixelTiles { must: vec![], may: vec![level2, level3] });
+        // Level 2.9: level 3 only.
+        assert_eq!(pixel_tiles_with(0.9), PixelTiles { must: vec![level3], may: vec![level3] });
+    }
+
+    #[test]
+    fn a_bilinear_coordinate_on_a_tile_edge_marks_both_outcomes() {
+        let scene = screen_quad([Vec3::Z; 4]);
+        let entries = entries();
+        let v = view(64, 64);
+        let inputs = MarkInputs { scene: &scene, view: &v, entries: &entries, params: params(0.0, 0.0) };
+        // Pixel 7 at level 2 (one texel a pixel): t.x = 7.5 * 1 - 0.5 = 7
+        // exactly, floored to 7 (taps 7-8: tiles 0 and 1) or to 6 (taps 6-7:
+        // tile 0 only).
+        let p = pixel_tiles(&inputs, UVec2::new(7, 2), [1, 0]).unwrap();
+        let base = entries[0].levels[2].tile_base;
+        assert_eq!(p, PixelTiles { must: vec![base], may: vec![base, base + 1] });
+        // Every pixel of the quad sits on a texel boundary; those next to a
+        // tile edge (7 and 8, ..., 55 and 56: 14 columns and 14 rows) are
+        // ambiguous, but each tile also holds pixels that mark it whichever
+        // way they floor: the frame's tiles are certain, all 64 of level 2.
+        let visibility: Vec<[u32; 2]> = (0..64 * 64).map(|i| [1, u32::from(i % 64 <= i / 64)]).collect();
+        let tiles = visible_tiles(&inputs, &visibility, 64);
+        assert_eq!(tiles.ambiguous_pixels, 64 * 64 - 50 * 50);
+        assert_eq!(tiles.must, (base..base + 64).collect());
+        assert_eq!(tiles.may, tiles.must);
+        // Background pixels mark nothing.
+        assert_eq!(visible_tiles(&inputs, &[[0, 0]; 4], 2), VisibleTiles::default());
+    }
+
+    #[test]
+    fn reuse_ages_and_valid_since_decide_the_queue() {
+        // Shaded at stamp 1: reuse N re-shades at stamp 1 + N.
+        for (reuse, stamps) in [(1, [true, true, true]), (2, [false, true, true]), (3, [false, false, true])] {
+            let queued = [2, 3, 4].map(|stamp| needs_shading(1, stamp, reuse, 1));
+            assert_eq!(queued, stamps, "reuse {reuse}");
+        }
+        assert!(needs_shading(0, 5, 3, 1), "never shaded");
+        assert!(needs_shading(3, 4, 3, 4), "shaded before the lights changed");
+        assert!(!needs_shading(4, 5, 3, 4), "shaded since");
+        assert!(is_new(0, 1) && is_new(2, 4) && !is_new(3, 4));
+    }
+
+    #[test]
+    fn mark_frame_updates_visible_tiles_only() {
+        // Object 0: 16 texels, 4 tiles; object 1: 32 then 16 texels, 16 + 4 tiles.
+        let mut entries = AtlasLayout::new(&[Some(16), None, Some(32)], 8, 64, 16).unwrap().gpu_entries();
+        entries[0].valid_since = 1;
+        entries[2].valid_since = 3;
+        assert_eq!(tile_owner(&entries, 8, 3), Some((0, 0)));
+        assert_eq!(tile_owner(&entries, 8, 4), Some((2, 0)));
+        assert_eq!(tile_owner(&entries, 8, 20), Some((2, 1)));
+        assert_eq!(tile_owner(&entries, 8, 24), None);
+        let previous = TileState {
+            visible: (0..24).map(|t| [0, 2, 1, 1][t % 4]).collect(),
+            shaded: (0..24).map(|t| [0, 2, 1, 2][t % 4]).collect(),
+        };
+        let params = MarkParams { stamp: 3, reuse: 2, tile_size: 8, mip_bias: 0.0, variable_rate: 0.0 };
+        let visible: BTreeSet<u32> = [0, 1, 2, 3, 21].into();
+        let marks = mark_frame(&previous, &visible, &params, &entries);
+        assert_eq!(marks.new, [0, 2, 3].into());
+        // Tiles 1 and 3 were shaded a frame ago (reuse 2), tile 2 two frames
+        // ago; tile 21 (object 2) at 2, before its valid_since 3.
+        assert_eq!(marks.queued, [(0, 0), (2, 0), (21, 2 << 8 | 1)].into());
+        for t in 0..24 {
+            let (v, s) = (marks.next.visible[t], marks.next.shaded[t]);
+            if visible.contains(&(t as u32)) {
+                assert_eq!(v, 3, "tile {t}");
+                assert_eq!(s, if t == 1 || t == 3 { 2 } else { 3 }, "tile {t}");
+            } else {
+                assert_eq!((v, s), (previous.visible[t], previous.shaded[t]), "tile {t}");
+            }
+        }
+    }
+}

@@ -1,0 +1,265 @@
+//! Tile marking on the GPU against its CPU twin (`render::objectspace::cpu`):
+//! after every frame the marking state is read back, the twin runs on the
+//! GPU's visibility buffer and on the tile state from before the frame, and
+//! the visible, new and queued tiles and the next state must agree.
+mod common;
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use glam::Vec3;
+use shadespace::gpu::GpuContext;
+use shadespace::render::objectspace::ObjectSpace;
+use shadespace::render::objectspace::atlas::GpuAtlasEntry;
+use shadespace::render::objectspace::cpu::{self, MarkInputs, MarkParams, TileState};
+use shadespace::render::scene_gpu::gpu_view;
+use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
+
+/// A sequence of frames to render and check.
+struct Run<'a> {
+    name: &'static str,
+    scene: &'a Scene,
+    texture_sizes: Vec<Option<u32>>,
+    width: u32,
+    height: u32,
+    reuse: u32,
+    variable_rate: f32,
+    /// One camera per frame.
+    cameras: Vec<Camera>,
+    lights: Vec<Light>,
+    /// The frame at which light 1 doubles its intensity (every shade goes stale).
+    lights_change_at: Option<usize>,
+}
+
+/// What the GPU marked in one frame (all checked against the twin).
+#[derive(Debug)]
+struct FrameReport {
+    visible: usize,
+    new: usize,
+    queued: usize,
+    /// Tiles some rounding of a near-boundary pixel marks and another does not.
+    ambiguous_tiles: usize,
+}
+
+/// "tile T (object O, level L), ..." for the first few tiles, for failure messages.
+fn describe(entries: &[GpuAtlasEntry], tile_size: u32, tiles: &[u32]) -> String {
+    let mut names: Vec<String> = tiles
+        .iter()
+        .take(4)
+        .map(|&t| match cpu::tile_owner(entries, tile_size, t) {
+            Some((o, l)) => format!("tile {t} (object {o}, level {l})"),
+            None => format!("tile {t} (outside the atlas)"),
+        })
+        .collect();
+    if tiles.len() > names.len() {
+        names.push("...".into());
+    }
+    names.join(", ")
+}
+
+/// Renders the run's frames and checks each against the twin.
+fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
+    let objectspace = ObjectSpaceConfig {
+        reuse: run.reuse,
+        variable_rate: run.variable_rate,
+        texture_sizes: run.texture_sizes.clone(),
+        ..Default::default()
+    };
+    let options =
+        RenderOptions { width: run.width, height: run.height, pipeline: PipelineConfig::ObjectSpace(objectspace) };
+    let mut renderer = Renderer::new(ctx, run.scene, &options).unwrap();
+    let mut lights = run.lights.clone();
+    let mut before = TileState::new(renderer.pipeline::<ObjectSpace>().unwrap().layout.tile_count as usize);
+    let mut reports = Vec::new();
+    for (frame, camera) in run.cameras.iter().enumerate() {
+        if run.lights_change_at == Some(frame) {
+            lights[1].intensity *= 2.0;
+        }
+        renderer.render(ctx, camera, &lights, frame as u64).unwrap();
+        let os = renderer.pipeline::<ObjectSpace>().unwrap();
+        let gpu = os.read_mark_state(ctx).unwrap();
+        let at = format!("{} frame {frame}", run.name);
+
+        // The twin sees what the GPU saw: the view, the atlas table with this
+        // frame's valid_since, the parameters.
+        let view = gpu_view(camera, run.width, run.height);
+        let mut entries = os.layout.gpu_entries();
+        for (e, valid_since) in entries.iter_mut().zip(&gpu.valid_since) {
+            e.valid_since = *valid_since;
+        }
+        let o = os.config();
+        let params = MarkParams {
+            stamp: gpu.stamp,
+            reuse: o.reuse,
+            tile_size: o.tile_size,
+            mip_bias: o.mip_bias,
+            variable_rate: o.variable_rate,
+        };
+        let inputs = MarkInputs { scene: run.scene, view: &view, entries: &entries, params };
+        let twin = cpu::visible_tiles(&inputs, &gpu.visibility, run.width);
+        let name = |tiles: Vec<u32>| describe(&entries, params.tile_size, &tiles);
+
+        let visible: BTreeSet<u32> =
+            (0..gpu.tile_visible.len() as u32).filter(|&t| gpu.tile_visible[t as usize] == gpu.stamp).collect();
+        let unmarked: Vec<u32> = twin.must.difference(&visible).copied().collect();
+        let unexplained: Vec<u32> = visible.difference(&twin.may).copied().collect();
+        assert!(
+            unmarked.is_empty() && unexplained.is_empty(),
+            "{at}: visible tiles: GPU {}, twin {} (must) to {} (may); {} unmarked that every rounding of some pixel \
+             marks: {}; {} marked that no rounding of any pixel marks: {}",
+            visible.len(),
+            twin.must.len(),
+            twin.may.len(),
+            unmarked.len(),
+            name(unmarked),
+            unexplained.len(),
+            name(unexplained)
+        );
+
+        // The age rules, applied to the GPU's own visible set.
+        let marks = cpu::mark_frame(&before, &visible, &params, &entries);
+        let [queued_count, visible_count, new_count, _] = gpu.counters;
+        assert_eq!(visible_count as usize, visible.len(), "{at}: visible counter against the tiles stamped visible");
+        assert_eq!(new_count as usize, marks.new.len(), "{at}: new counter against the tiles not visible last frame");
+        if gpu.tile_visible != marks.next.visible {
+            let wrong = (0..gpu.tile_visible.len() as u32)
+                .filter(|&t| gpu.tile_visible[t as usize] != marks.next.visible[t as usize]);
+            panic!("{at}: tile_visible differs from the twin's at {}", name(wrong.collect()));
+        }
+        let queue: BTreeMap<u32, u32> = gpu.queue.iter().map(|&[tile, code]| (tile, code)).collect();
+        assert_eq!(queue.len(), gpu.queue.len(), "{at}: a tile was queued twice");
+        assert_eq!(queued_count as usize, gpu.queue.len(), "{at}: queued counter against the queue entries");
+        if queue != marks.queued {
+            let missing: Vec<u32> = marks.queued.keys().filter(|t| !queue.contains_key(t)).copied().collect();
+            let extra: Vec<u32> = queue.keys().filter(|t| !marks.queued.contains_key(t)).copied().collect();
+            let miscoded: Vec<String> = queue
+                .iter()
+                .filter_map(|(t, c)| {
+                    marks.queued.get(t).filter(|want| *want != c).map(|want| format!("tile {t}: {c:#x}, not {want:#x}"))
+                })
+                .collect();
+            panic!(
+                "{at}: the queue differs from the twin's: {} missing ({}), {} not due ({}), {} with the wrong object/level ({})",
+                missing.len(),
+                name(missing),
+                extra.len(),
+                name(extra),
+                miscoded.len(),
+                miscoded.join(", ")
+            );
+        }
+        if gpu.tile_shaded != marks.next.shaded {
+            let wrong = (0..gpu.tile_shaded.len() as u32)
+                .filter(|&t| gpu.tile_shaded[t as usize] != marks.next.shaded[t as usize]);
+            panic!("{at}: tile_shaded differs from the twin's at {}", name(wrong.collect()));
+        }
+
+        let report = FrameReport {
+            visible: visible.len(),
+            new: marks.new.len(),
+            queued: marks.queued.len(),
+            ambiguous_tiles: twin.may.len() - twin.must.len(),
+        };
+        eprintln!("{at}: {report:?} ({} ambiguous pixels of {})", twin.ambiguous_pixels, gpu.visibility.len());
+        // The slack the twin allows must stay small, or the check would be weak.
+        assert!(
+            report.ambiguous_tiles * 100 <= report.visible,
+            "{at}: {} of {} visible tiles ambiguous",
+            report.ambiguous_tiles,
+            report.visible
+        );
+        reports.push(report);
+        before = TileState { visible: gpu.tile_visible, shaded: gpu.tile_shaded };
+    }
+    reports
+}
+
+/// The floor scene's camera looking at the origin from `start`, moved by `step` per frame.
+fn floor_cameras(start: Vec3, step: Vec3, frames: usize) -> Vec<Camera> {
+    let (_, camera, _) = common::floor_scene();
+    let forward = -start.normalize();
+    (0..frames).map(|f| Camera { position: start + step * f as f32, forward, ..camera }).collect()
+}
+
+#[test]
+fn static_floor_reuses_shades_until_they_age_or_the_lights_change() {
+    let ctx = common::gpu();
+    let (scene, _, lights) = common::floor_scene();
+    let reports = check(
+        &ctx,
+        Run {
+            name: "static floor, reuse 3",
+            scene: &scene,
+            texture_sizes: vec![Some(2048)],
+            width: 128,
+            height: 96,
+            reuse: 3,
+            variable_rate: 0.0,
+            cameras: floor_cameras(Vec3::new(0.0, 4.0, 6.0), Vec3::ZERO, 6),
+            lights,
+            lights_change_at: Some(5),
+        },
+    );
+    // The twin agreed frame by frame; make sure each rule was exercised: first
+    // shade, reuse, re-shade at age 3, re-shade after the lights changed (age 2).
+    let queued: Vec<usize> = reports.iter().map(|r| r.queued).collect();
+    let visible = reports[0].visible;
+    assert_eq!(queued, [visible, 0, 0, visible, 0, visible], "queued per frame");
+}
+
+#[test]
+fn moving_floor_marks_new_tiles() {
+    let ctx = common::gpu();
+    let (scene, _, lights) = common::floor_scene();
+    for (reuse, variable_rate) in [(1, 0.0), (2, 1.0)] {
+        let reports = check(
+            &ctx,
+            Run {
+                name: if reuse == 1 { "moving floor, reuse 1" } else { "moving floor, reuse 2, variable rate 1" },
+                scene: &scene,
+                texture_sizes: vec![Some(2048)],
+                width: 160,
+                height: 120,
+                reuse,
+                variable_rate,
+                // Low over the floor and nearing it: finer levels come into view.
+                cameras: floor_cameras(Vec3::new(0.0, 2.5, 5.0), Vec3::new(0.3, -0.2, -0.5), 5),
+                lights: lights.clone(),
+                lights_change_at: Some(3),
+            },
+        );
+        // Tiles come into view, but most stay.
+        assert!(reports[1..].iter().any(|r| r.new > 0), "{reports:?}");
+        assert!(reports[1..].iter().all(|r| r.new < r.visible), "{reports:?}");
+    }
+}
+
+#[test]
+fn atrium_along_its_camera_path() {
+    let ctx = common::gpu();
+    let scene = scene::load("atrium").unwrap();
+    let bounds = scene.bounds();
+    let path = path::cameras_for_scene("atrium", &bounds).unwrap().select(path::CameraChoice::Path).unwrap();
+    let cameras: Vec<Camera> = (0..5).map(|f| path.camera_at(f * 12)).collect();
+    let (width, height) = (128, 72);
+    let spec: LightSpec = "small:8".parse().unwrap();
+    let lights = lights::build_lights(&spec, &bounds, &cameras[0], width as f32 / height as f32, 7).unwrap();
+    let (scene, texture_sizes) = common::charted(&scene);
+    for (reuse, variable_rate) in [(1, 0.0), (3, 1.0)] {
+        check(
+            &ctx,
+            Run {
+                name: if reuse == 1 { "atrium, reuse 1" } else { "atrium, reuse 3, variable rate 1" },
+                scene: &scene,
+                texture_sizes: texture_sizes.clone(),
+                width,
+                height,
+                reuse,
+                variable_rate,
+                cameras: cameras.clone(),
+                lights: lights.clone(),
+                lights_change_at: Some(2),
+            },
+        );
+    }
+}
