@@ -1,5 +1,6 @@
 //! The command line on bad input: a clear message naming the file or value,
-//! exit status 2, and no panic. These fail before a GPU is opened.
+//! exit status 2, and no panic. These fail before a GPU is opened (but the
+//! warning test, which renders a tiny frame).
 
 use std::process::Command;
 
@@ -95,4 +96,16 @@ fn help_explains_every_command() {
     for flag in ["--scene", "--lights", "--camera", "--reuse", "--tile-size", "--view", "--atlas-out"] {
         assert!(text.contains(flag), "render --help lacks {flag}");
     }
+}
+
+/// Lights marked as shadow casters render, but say that nothing casts a
+/// shadow yet instead of pretending.
+#[test]
+fn shadowed_lights_warn_that_shadows_are_not_implemented() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("frame.png");
+    let (code, err) = run(&["render", "--lights", "shadowed:1", "--size", "32x18", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("shadows are not implemented yet"), "{err}");
+    assert!(out.is_file());
 }

@@ -90,6 +90,7 @@ fn check_golden(name: &str) {
         .unwrap_or_else(|e| panic!("{}: {e} (render it with SHADESPACE_BLESS=1)", path.display()))
         .to_rgba8();
     let (err, map) = metrics::compare(&golden, &actual);
+    eprintln!("{name}: against its golden image: {err:?}");
     if err.flip_mean > GOLDEN_FLIP {
         let out = common::out_dir();
         actual.save(out.join(format!("{name}-actual.png"))).unwrap();

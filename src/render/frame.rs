@@ -14,7 +14,6 @@ use wgpu_profiler::{GpuProfiler, OwningScope};
 
 use super::scene_gpu::SceneGpu;
 use super::targets::Targets;
-use crate::scene::Camera;
 
 /// A frame's inputs and its command encoder.
 pub struct Frame<'a> {
@@ -22,7 +21,6 @@ pub struct Frame<'a> {
     pub queue: &'a wgpu::Queue,
     pub scene: &'a SceneGpu,
     pub targets: &'a Targets,
-    pub camera: &'a Camera,
     /// Per object: inside the view frustum.
     pub visible: &'a [bool],
     /// Frame number (tags counters and timings).

@@ -191,7 +191,6 @@ impl Renderer {
                 queue: &ctx.queue,
                 scene: &self.scene,
                 targets: &self.targets,
-                camera,
                 visible: &visible,
                 number: frame,
                 lights_changed,

@@ -162,7 +162,7 @@ pub struct Texture {
     pub rgba8: Vec<u8>,
 }
 
-/// A Phong material (the shared lighting model of `shaders/lighting.wgsl`).
+/// A Phong material (the shared lighting model of `shaders/shared/lighting.wgsl`).
 /// glTF's metallic/roughness and emissive are kept for later pipelines; the
 /// Phong exponent is derived from roughness where a file gives one.
 #[derive(Clone, Debug)]

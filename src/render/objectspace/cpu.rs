@@ -1,6 +1,6 @@
 //! CPU twin of tile marking: plain-Rust versions of the pixel reconstruction
-//! in `shaders/objectspace.wgsl` and of the marking pass in
-//! `shaders/mark.wgsl`, to check the GPU's marking state against (as Vello
+//! in `objectspace.wgsl` and of the marking pass in
+//! `mark/mark.wgsl`, to check the GPU's marking state against (as Vello
 //! keeps CPU versions of its GPU stages).
 //!
 //! The functions use the WGSL's formulas in the same order, in `f32`. The GPU
