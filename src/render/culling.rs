@@ -125,6 +125,11 @@ pub struct LightLists {
 }
 
 impl LightLists {
+    /// No lights for any of `objects` objects (for pipelines that cull on the GPU).
+    pub fn empty(objects: usize) -> Self {
+        Self { offsets: vec![0; objects], counts: vec![0; objects], indices: Vec::new() }
+    }
+
     /// The light indices of object `object`.
     pub fn lights_of(&self, object: usize) -> &[u32] {
         let start = self.offsets[object] as usize;

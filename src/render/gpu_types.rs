@@ -48,6 +48,13 @@ gpu_struct! {
         pub camera_position: Vec4,
         /// width, height, 1/width, 1/height
         pub viewport: Vec4,
+        /// Lights in the light buffer.
+        pub light_count: u32,
+        /// The first `global_light_count` lights are ambient or directional:
+        /// they reach everywhere, so light grids list only the others.
+        pub global_light_count: u32,
+        pub pad_a: u32,
+        pub pad_b: u32,
     }
 }
 

@@ -72,6 +72,12 @@ pub struct RenderOptions {
 pub trait Pipeline: Any {
     /// Records the frame's passes, in order.
     fn encode(&mut self, frame: &mut Frame);
+    /// Whether its shaders read the per-object light lists that the CPU
+    /// culls every frame (`Object.light_offset/light_count`). Pipelines with
+    /// a GPU light grid say no, and the renderer skips that culling.
+    fn uses_object_light_lists(&self) -> bool {
+        true
+    }
     /// Called right after the frame's submit (to start read-backs).
     fn after_submit(&mut self) {}
     /// Counters of finished frames, by frame number, oldest first; `wait`
@@ -174,9 +180,16 @@ impl Renderer {
     ) -> Result<FrameStats, RenderError> {
         let start = Instant::now();
         let (w, h) = (self.targets.width, self.targets.height);
-        let view = scene_gpu::gpu_view(camera, w, h);
+        let (lights, global_lights) = scene_gpu::order_lights(lights);
+        let mut view = scene_gpu::gpu_view(camera, w, h);
+        view.light_count = lights.len() as u32;
+        view.global_light_count = global_lights;
         let frustum = Frustum::from_view_projection(view.view_proj);
-        let lists = culling::lights_per_object(lights, &self.scene.object_bounds, Some(&frustum));
+        let lists = if self.pipeline.uses_object_light_lists() {
+            culling::lights_per_object(&lights, &self.scene.object_bounds, Some(&frustum))
+        } else {
+            culling::LightLists::empty(self.scene.object_bounds.len())
+        };
         let visible: Vec<bool> = self.scene.object_bounds.iter().map(|b| frustum.intersects_aabb(b)).collect();
         let gpu_lights: Vec<gpu_types::GpuLight> = lights.iter().map(gpu_types::GpuLight::from).collect();
         let hash = fnv1a(bytemuck::cast_slice(&gpu_lights));

@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 
 use super::culling::LightLists;
 use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
-use crate::scene::{Aabb, Camera, Scene};
+use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
 pub const MAX_ALBEDO_SIZE: u32 = 1024;
@@ -219,14 +219,28 @@ impl SceneGpu {
     }
 }
 
-/// The view uniform for a camera and a target size.
+/// The view uniform for a camera and a target size (its light counts are
+/// filled in by [`order_lights`]'s caller).
 pub fn gpu_view(camera: &Camera, width: u32, height: u32) -> GpuView {
     let view_proj: Mat4 = camera.view_projection(width as f32 / height as f32);
     GpuView {
         view_proj,
         camera_position: camera.position.extend(1.0),
         viewport: Vec4::new(width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32),
+        ..Default::default()
     }
+}
+
+/// The lights in the order the GPU holds them: ambient and directional
+/// lights first (every pipeline applies them everywhere), then point and
+/// spot lights, each group in the given order. Returns them and the number
+/// of global (ambient and directional) lights.
+pub fn order_lights(lights: &[Light]) -> (Vec<Light>, u32) {
+    let global = |l: &&Light| matches!(l.kind, LightKind::Ambient | LightKind::Directional);
+    let mut ordered: Vec<Light> = lights.iter().filter(global).cloned().collect();
+    let globals = ordered.len() as u32;
+    ordered.extend(lights.iter().filter(|l| !global(l)).cloned());
+    (ordered, globals)
 }
 
 fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {

@@ -37,6 +37,13 @@ struct View {
     camera_position: vec4f,
     // width, height, 1/width, 1/height
     viewport: vec4f,
+    // Lights in the light buffer; the first `global_light_count` are ambient
+    // or directional (they reach everywhere, so light grids list only the
+    // others).
+    light_count: u32,
+    global_light_count: u32,
+    pad_a: u32,
+    pad_b: u32,
 }
 
 fn vertex_uv0(v: Vertex) -> vec2f {

@@ -7,8 +7,14 @@
 #import shadespace::scene_bindings::{view, vertices, lights, light_indices, albedo, albedo_sampler}
 
 // Shades the point with barycentrics `b` of the triangle with vertices `tri`,
-// sampling albedo at mip `albedo_lod`.
+// sampling albedo at mip `albedo_lod`, with the object's light list.
 fn shade_point(o: Object, tri: vec3u, b: vec3f, albedo_lod: f32) -> vec3f {
+    return light_surface(o, surface_point(o, tri, b, albedo_lod));
+}
+
+// The surface at barycentrics `b` of the triangle with vertices `tri`
+// (world position and normal, albedo sampled at mip `albedo_lod`).
+fn surface_point(o: Object, tri: vec3u, b: vec3f, albedo_lod: f32) -> Surface {
     let v0 = vertices[tri.x];
     let v1 = vertices[tri.y];
     let v2 = vertices[tri.z];
@@ -22,7 +28,7 @@ fn shade_point(o: Object, tri: vec3u, b: vec3f, albedo_lod: f32) -> vec3f {
     s.albedo = textureSampleLevel(albedo, albedo_sampler, uv0, o.albedo_layer, albedo_lod).rgb * o.base_color.rgb;
     s.specular = o.specular;
     s.shininess = o.shininess;
-    return light_surface(o, s);
+    return s;
 }
 
 // Emission plus every light the object's list holds, seen from the camera.
@@ -31,6 +37,16 @@ fn light_surface(o: Object, s: Surface) -> vec3f {
     var color = o.emissive;
     for (var i = 0u; i < o.light_count; i++) {
         color += light_radiance(lights[light_indices[o.light_offset + i]], s, to_eye);
+    }
+    return color;
+}
+
+// The ambient and directional lights: the first `view.global_light_count`
+// lights, which reach every point (light grids list only the others).
+fn light_globals(s: Surface, to_eye: vec3f) -> vec3f {
+    var color = vec3f(0.0);
+    for (var i = 0u; i < view.global_light_count; i++) {
+        color += light_radiance(lights[i], s, to_eye);
     }
     return color;
 }

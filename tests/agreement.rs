@@ -1,0 +1,60 @@
+//! Every conventional pipeline against single-pass forward (the reference)
+//! on the procedural scenes at a small size: they share the scene data and
+//! the lighting code, so they must agree within FLIP 0.02. (Object space,
+//! which filters texel shades, has its own looser bound in `golden.rs`.)
+mod common;
+
+use shadespace::metrics;
+use shadespace::render::{ForwardConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::scene::{self, LightSpec, lights, path};
+
+const WIDTH: u32 = 320;
+const HEIGHT: u32 = 180;
+/// Mean FLIP allowed between a conventional pipeline and forward.
+const AGREEMENT_FLIP: f32 = 0.02;
+
+/// The pipelines under test, each with the settings it is checked in.
+fn pipelines() -> Vec<PipelineConfig> {
+    vec![PipelineConfig::Forward(ForwardConfig { depth_prepass: false })]
+}
+
+fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: PipelineConfig) -> image::RgbaImage {
+    let scene = scene::load(name).unwrap();
+    let bounds = scene.bounds();
+    let cameras = path::cameras_for_scene(name, &bounds).unwrap();
+    let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
+    let spec: LightSpec = "small:24+big:2".parse().unwrap();
+    let lights = lights::build_lights(&spec, &bounds, &camera, WIDTH as f32 / HEIGHT as f32, 7).unwrap();
+    let mut r = Renderer::new(ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    r.render(ctx, &camera, &lights, 0).unwrap();
+    let image = r.read_image(ctx).unwrap();
+    ctx.check_errors().unwrap();
+    image
+}
+
+fn check(name: &str) {
+    let ctx = common::gpu();
+    let reference = render(&ctx, name, PipelineConfig::Forward(ForwardConfig::default()));
+    let out = common::out_dir();
+    for pipeline in pipelines() {
+        let label = format!("{name}-{}", pipeline.name());
+        let test = render(&ctx, name, pipeline);
+        let (err, map) = metrics::compare(&reference, &test);
+        eprintln!("{label}: against forward: {err:?}");
+        if err.flip_mean > AGREEMENT_FLIP {
+            test.save(out.join(format!("{label}.png"))).unwrap();
+            map.save(out.join(format!("{label}-flip.png"))).unwrap();
+            panic!("{label}: FLIP {} > {AGREEMENT_FLIP} against forward; images in {}", err.flip_mean, out.display());
+        }
+    }
+}
+
+#[test]
+fn conventional_pipelines_agree_with_forward_atrium() {
+    check("atrium");
+}
+
+#[test]
+fn conventional_pipelines_agree_with_forward_voxels() {
+    check("voxels");
+}
