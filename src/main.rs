@@ -28,7 +28,7 @@ enum Command {
     /// Render many frames along a camera path and report GPU time per pass
     /// (median and p95 after warm-up) as JSON.
     Bench(BenchArgs),
-    /// List the GPU adapters, and the features and limits of the chosen one.
+    /// List the pipelines, the GPU adapters, and the features and limits of the chosen adapter.
     Info(GpuArgs),
     /// Print, per object, where its unique UV layout (chart) comes from, its
     /// overlap, surface area, texel density and shading-texture size.
@@ -179,9 +179,9 @@ struct RenderArgs {
 /// The shading pipelines, for `--pipeline`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum PipelineName {
-    /// Single-pass forward shading (the reference image).
+    /// Single-pass forward: one draw per object, fragments loop over its CPU light list (the reference).
     Forward,
-    /// Object-space (texel) shading.
+    /// Object-space (texel) shading: visible tiles shaded by compute into an atlas, reused, gathered.
     Objectspace,
 }
 
@@ -538,6 +538,10 @@ fn compare(a: CompareArgs) -> Result<(), Failure> {
 }
 
 fn info(a: GpuArgs) -> Result<(), Failure> {
+    println!("pipelines (--pipeline):");
+    for p in PipelineName::value_variants().iter().filter_map(|v| v.to_possible_value()) {
+        println!("  {:<18} {}", p.get_name(), p.get_help().map(|h| h.to_string()).unwrap_or_default());
+    }
     println!("adapters:");
     for line in shadespace::gpu::list_adapters() {
         println!("  {line}");
