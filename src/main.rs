@@ -11,7 +11,9 @@ use shadespace::bench::{self, BenchPlan, BenchSetup, RunReport};
 use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
-use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::{
+    ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer,
+};
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
 #[derive(Parser)]
@@ -181,6 +183,8 @@ struct RenderArgs {
 enum PipelineName {
     /// Single-pass forward shading (the reference image).
     Forward,
+    /// Multi-pass forward: depth pre-pass, then one additive pass per light.
+    ForwardMultipass,
     /// Object-space (texel) shading.
     Objectspace,
 }
@@ -353,6 +357,7 @@ impl Setup {
 fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view: DebugView) -> RenderOptions {
     let pipeline = match a.pipeline {
         PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
+        PipelineName::ForwardMultipass => PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
         PipelineName::Objectspace => PipelineConfig::ObjectSpace(ObjectSpaceConfig {
             tile_size: a.objectspace.tile_size,
             reuse: a.objectspace.reuse,

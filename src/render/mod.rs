@@ -10,6 +10,7 @@
 
 pub mod culling;
 pub mod forward;
+pub mod forward_multipass;
 pub mod frame;
 pub mod gpu_types;
 pub mod objectspace;
@@ -30,6 +31,7 @@ use crate::scene::{Camera, Light, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
 use culling::Frustum;
 pub use forward::ForwardConfig;
+pub use forward_multipass::ForwardMultipassConfig;
 pub use frame::Frame;
 pub use objectspace::ObjectSpaceConfig;
 use passes::tonemap::{Tonemap, tonemap};
@@ -44,6 +46,9 @@ pub enum PipelineConfig {
     /// Single-pass forward shading (the reference image).
     #[serde(rename = "forward")]
     Forward(ForwardConfig),
+    /// Multi-pass forward: a depth pre-pass, then one additive pass per light.
+    #[serde(rename = "forward-multipass")]
+    ForwardMultipass(ForwardMultipassConfig),
     /// Object-space (texel) shading: visible tiles shaded by compute into
     /// per-object atlas squares, reused across frames, gathered per pixel.
     #[serde(rename = "objectspace")]
@@ -55,6 +60,7 @@ impl PipelineConfig {
     pub fn name(&self) -> &'static str {
         match self {
             Self::Forward(_) => "forward",
+            Self::ForwardMultipass(_) => "forward-multipass",
             Self::ObjectSpace(_) => "objectspace",
         }
     }
@@ -139,6 +145,9 @@ impl Renderer {
         let (device, queue) = (&ctx.device, &ctx.queue);
         let pipeline: Box<dyn Pipeline> = match &options.pipeline {
             PipelineConfig::Forward(c) => Box::new(forward::Forward::new(device, &mut shaders, &scene_gpu, *c)?),
+            PipelineConfig::ForwardMultipass(c) => {
+                Box::new(forward_multipass::ForwardMultipass::new(device, &mut shaders, &scene_gpu, *c)?)
+            }
             PipelineConfig::ObjectSpace(c) => {
                 let os = objectspace::ObjectSpace::new(ctx, &mut shaders, &scene_gpu, &targets, c.clone())?;
                 Box::new(os)
@@ -205,6 +214,7 @@ impl Renderer {
                 scene: &self.scene,
                 targets: &self.targets,
                 visible: &visible,
+                lights: &lights,
                 number: frame,
                 lights_changed,
                 encoder: &mut encoder,
