@@ -34,6 +34,7 @@ pub use forward::ForwardConfig;
 pub use forward_multipass::ForwardMultipassConfig;
 pub use frame::Frame;
 pub use objectspace::ObjectSpaceConfig;
+use passes::bloom::{Bloom, bloom};
 use passes::tonemap::{Tonemap, tonemap};
 pub use report::{Counters, PipelineReport};
 use scene_gpu::SceneGpu;
@@ -117,6 +118,10 @@ pub enum RenderError {
     BadSize(u32, u32, u32),
     #[error(transparent)]
     ObjectSpace(#[from] objectspace::ObjectSpaceError),
+    #[error("bloom strength {0} is not a number from 0 to 1")]
+    BadBloom(f32),
+    #[error("bloom needs read-write Rgba16Float storage textures, which {0} does not offer")]
+    BloomUnsupported(String),
 }
 
 /// Renders frames of one scene at one size with one pipeline.
@@ -126,8 +131,14 @@ pub struct Renderer {
     pipeline: Box<dyn Pipeline>,
     name: &'static str,
     tonemap: Tonemap,
+    /// None where the adapter cannot run it ([`Bloom::supported`]).
+    bloom_pass: Option<Bloom>,
     timer: GpuTimer,
     pub exposure: f32,
+    /// Bloom strength, 0..=1: the fraction of the light spread into the glow
+    /// (0, the default, skips the pass).
+    pub bloom: f32,
+    adapter: String,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
 }
@@ -154,6 +165,7 @@ impl Renderer {
             }
         };
         let tonemap = Tonemap::new(device, &mut shaders, &targets)?;
+        let bloom_pass = Bloom::supported(ctx).then(|| Bloom::new(device, &mut shaders, &targets)).transpose()?;
         let timer = GpuTimer::new(device, queue);
         ctx.check_errors()?;
         Ok(Self {
@@ -162,8 +174,11 @@ impl Renderer {
             pipeline,
             name: options.pipeline.name(),
             tonemap,
+            bloom_pass,
             timer,
             exposure: 1.0,
+            bloom: 0.0,
+            adapter: ctx.info.name.clone(),
             lights_hash: None,
         })
     }
@@ -188,6 +203,14 @@ impl Renderer {
         frame: u64,
     ) -> Result<FrameStats, RenderError> {
         let start = Instant::now();
+        if !(0.0..=1.0).contains(&self.bloom) {
+            return Err(RenderError::BadBloom(self.bloom));
+        }
+        let bloom_pass = match &self.bloom_pass {
+            _ if self.bloom == 0.0 => None,
+            Some(pass) => Some(pass),
+            None => return Err(RenderError::BloomUnsupported(self.adapter.clone())),
+        };
         let (w, h) = (self.targets.width, self.targets.height);
         let (lights, global_lights) = scene_gpu::order_lights(lights);
         let mut view = scene_gpu::gpu_view(camera, w, h);
@@ -221,6 +244,9 @@ impl Renderer {
                 profiler: self.timer.profiler(),
             };
             self.pipeline.encode(&mut f);
+            if let Some(pass) = bloom_pass {
+                bloom(&mut f, pass, self.bloom);
+            }
             tonemap(&mut f, &self.tonemap, self.exposure);
         }
         self.timer.resolve(&mut encoder);

@@ -48,7 +48,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     use crate::render::{forward, forward_multipass, objectspace, passes};
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
-    all.push(forward_multipass::SHADER);
+    all.extend([forward_multipass::SHADER, passes::bloom::SHADER]);
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all
 }
