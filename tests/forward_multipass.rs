@@ -1,6 +1,6 @@
-//! Multi-pass forward with many lights: 10,000 point lights over the floor
-//! scene render as 10,000+ draws in one frame, without validation errors,
-//! and match single-pass forward.
+//! Multi-pass forward against single-pass forward on the floor scene: with
+//! 10,000 point lights (10,000+ draws in one frame, no validation errors),
+//! and with an emissive floor (emission added once).
 mod common;
 
 use glam::Vec3;
@@ -50,4 +50,28 @@ fn ten_thousand_lights_match_forward() {
     let (ambient_only, _) = render(multipass, &lights[..1]);
     let lum = |i: &image::RgbaImage| i.pixels().map(|p| p[0] as u64 + p[1] as u64 + p[2] as u64).sum::<u64>();
     assert!(lum(&test) > 2 * lum(&ambient_only), "{} vs {}", lum(&test), lum(&ambient_only));
+}
+
+/// An emissive object's emission is drawn once (its own pair), not once per
+/// light: with and without lights the image matches forward's.
+#[test]
+fn emission_is_added_once() {
+    let ctx = common::gpu();
+    let (mut scene, camera, lights) = common::floor_scene();
+    scene.materials[0].emissive = Vec3::new(0.3, 0.15, 0.05);
+    let render = |pipeline, lights: &[Light]| {
+        let mut r = Renderer::new(&ctx, &scene, &RenderOptions { width: 64, height: 40, pipeline }).unwrap();
+        r.render(&ctx, &camera, lights, 0).unwrap();
+        (r.read_image(&ctx).unwrap(), r.collect_counters(&ctx, true))
+    };
+    for lights in [&lights[..], &[]] {
+        let (reference, _) = render(PipelineConfig::Forward(ForwardConfig::default()), lights);
+        let (test, counters) = render(PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()), lights);
+        assert_eq!(counters[0].1["light_draws"], (lights.len() + 1) as f64, "one draw per light and one emission");
+        let (err, _) = metrics::compare(&reference, &test);
+        eprintln!("emissive floor, {} lights, forward-multipass against forward: {err:?}", lights.len());
+        assert!(err.max_abs <= 1, "{err:?}");
+        assert!(reference.pixels().any(|p| p[0] > 60), "the floor glows");
+    }
+    ctx.check_errors().unwrap();
 }
