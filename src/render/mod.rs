@@ -138,7 +138,6 @@ pub struct Renderer {
     /// Bloom strength, 0..=1: the fraction of the light spread into the glow
     /// (0, the default, skips the pass).
     pub bloom: f32,
-    adapter: String,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
 }
@@ -178,7 +177,6 @@ impl Renderer {
             timer,
             exposure: 1.0,
             bloom: 0.0,
-            adapter: ctx.info.name.clone(),
             lights_hash: None,
         })
     }
@@ -209,7 +207,7 @@ impl Renderer {
         let bloom_pass = match &self.bloom_pass {
             _ if self.bloom == 0.0 => None,
             Some(pass) => Some(pass),
-            None => return Err(RenderError::BloomUnsupported(self.adapter.clone())),
+            None => return Err(RenderError::BloomUnsupported(ctx.info.name.clone())),
         };
         let (w, h) = (self.targets.width, self.targets.height);
         let (lights, global_lights) = scene_gpu::order_lights(lights);
