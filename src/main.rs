@@ -11,7 +11,9 @@ use shadespace::bench::{self, BenchPlan, BenchSetup, RunReport};
 use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
-use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::{
+    ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer,
+};
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
 #[derive(Parser)]
@@ -96,6 +98,11 @@ struct SceneArgs {
     /// Exposure multiplier applied before tone mapping (positive, finite).
     #[arg(long, default_value_t = 1.0, value_parser = positive_f32)]
     exposure: f32,
+    /// Bloom strength, 0 to 1: the fraction of the HDR image replaced by its
+    /// glow (an average of blurs from half to 1/64 of the image size) before
+    /// tone mapping; 0 (default) turns bloom off.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = bloom_strength)]
+    bloom: f32,
     /// Forward: skip the depth pre-pass (shade every rasterized fragment).
     #[arg(long)]
     no_depth_prepass: bool,
@@ -181,6 +188,8 @@ struct RenderArgs {
 enum PipelineName {
     /// Single-pass forward: one draw per object, fragments loop over its CPU light list (the reference).
     Forward,
+    /// Multi-pass forward: depth pre-pass, then one additive pass per light over the objects it reaches.
+    ForwardMultipass,
     /// Object-space (texel) shading: visible tiles shaded by compute into an atlas, reused, gathered.
     Objectspace,
 }
@@ -219,6 +228,10 @@ fn finite_in(s: &str, range: std::ops::RangeInclusive<f32>, what: &str) -> Resul
 
 fn positive_f32(s: &str) -> Result<f32, String> {
     finite_in(s, f32::MIN_POSITIVE..=f32::MAX, "a positive finite number")
+}
+
+fn bloom_strength(s: &str) -> Result<f32, String> {
+    finite_in(s, 0.0..=1.0, "a strength from 0 to 1")
 }
 
 fn texel_density(s: &str) -> Result<f32, String> {
@@ -353,6 +366,7 @@ impl Setup {
 fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view: DebugView) -> RenderOptions {
     let pipeline = match a.pipeline {
         PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
+        PipelineName::ForwardMultipass => PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
         PipelineName::Objectspace => PipelineConfig::ObjectSpace(ObjectSpaceConfig {
             tile_size: a.objectspace.tile_size,
             reuse: a.objectspace.reuse,
@@ -394,6 +408,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let (w, h) = a.scene.size;
     let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, a.view))?;
     renderer.exposure = a.scene.exposure;
+    renderer.bloom = a.scene.bloom;
     if a.atlas_out.is_some() && renderer.pipeline::<ObjectSpace>().is_none() {
         return input(Err(anyhow::anyhow!("--atlas-out needs --pipeline objectspace")));
     }
@@ -464,6 +479,7 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
     let (w, h) = a.scene.size;
     let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, DebugView::Shade))?;
     renderer.exposure = a.scene.exposure;
+    renderer.bloom = a.scene.bloom;
     if !renderer.timing_enabled() {
         tracing::warn!("{} has no timestamp queries: the result has CPU times only", ctx.info.name);
     }

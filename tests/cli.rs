@@ -84,6 +84,20 @@ fn numeric_flags_must_be_finite_and_in_range() {
     }
 }
 
+/// `--bloom` takes a finite strength from 0 to 1, and says so.
+#[test]
+fn bloom_strength_must_be_from_0_to_1() {
+    for value in ["nan", "inf", "-0.1", "1.5", "x"] {
+        let (code, err) = run(&["render", "--bloom", value]);
+        assert_eq!(code, 2, "--bloom {value} was accepted:\n{err}");
+        assert!(err.contains("--bloom") && err.contains(value), "{value}: {err}");
+        let expected = if value == "x" { "not a number" } else { "from 0 to 1" };
+        assert!(err.contains(expected), "{value}: {err}");
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_shadespace")).args(["render", "--help"]).output().unwrap();
+    assert!(String::from_utf8_lossy(&out.stdout).contains("--bloom"));
+}
+
 #[test]
 fn help_explains_every_command() {
     let out = Command::new(env!("CARGO_BIN_EXE_shadespace")).arg("--help").output().unwrap();

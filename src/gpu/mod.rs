@@ -23,7 +23,8 @@ pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::SHADER_BARYCENTRICS)
     .union(wgpu::Features::INDIRECT_FIRST_INSTANCE)
     .union(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT)
-    .union(wgpu::Features::FLOAT32_FILTERABLE);
+    .union(wgpu::Features::FLOAT32_FILTERABLE)
+    .union(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
 
 /// Environment variable that picks an adapter by name substring, like `--adapter`.
 pub const ADAPTER_ENV: &str = "SHADESPACE_ADAPTER";

@@ -14,6 +14,7 @@ use wgpu_profiler::{GpuProfiler, OwningScope};
 
 use super::scene_gpu::SceneGpu;
 use super::targets::Targets;
+use crate::scene::Light;
 
 /// A frame's inputs and its command encoder.
 pub struct Frame<'a> {
@@ -23,6 +24,9 @@ pub struct Frame<'a> {
     pub targets: &'a Targets,
     /// Per object: inside the view frustum.
     pub visible: &'a [bool],
+    /// The lights in the order the GPU holds them (globals first), for
+    /// pipelines that cull lights themselves.
+    pub lights: &'a [Light],
     /// Frame number (tags counters and timings).
     pub number: u64,
     /// The lights differ from the previous frame's (cached shades are stale).

@@ -10,6 +10,7 @@
 
 pub mod culling;
 pub mod forward;
+pub mod forward_multipass;
 pub mod frame;
 pub mod gpu_types;
 pub mod objectspace;
@@ -30,8 +31,10 @@ use crate::scene::{Camera, Light, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
 use culling::Frustum;
 pub use forward::ForwardConfig;
+pub use forward_multipass::ForwardMultipassConfig;
 pub use frame::Frame;
 pub use objectspace::ObjectSpaceConfig;
+use passes::bloom::{Bloom, bloom};
 use passes::tonemap::{Tonemap, tonemap};
 pub use report::{Counters, PipelineReport};
 use scene_gpu::SceneGpu;
@@ -44,6 +47,9 @@ pub enum PipelineConfig {
     /// Single-pass forward shading (the reference image).
     #[serde(rename = "forward")]
     Forward(ForwardConfig),
+    /// Multi-pass forward: a depth pre-pass, then one additive pass per light.
+    #[serde(rename = "forward-multipass")]
+    ForwardMultipass(ForwardMultipassConfig),
     /// Object-space (texel) shading: visible tiles shaded by compute into
     /// per-object atlas squares, reused across frames, gathered per pixel.
     #[serde(rename = "objectspace")]
@@ -55,6 +61,7 @@ impl PipelineConfig {
     pub fn name(&self) -> &'static str {
         match self {
             Self::Forward(_) => "forward",
+            Self::ForwardMultipass(_) => "forward-multipass",
             Self::ObjectSpace(_) => "objectspace",
         }
     }
@@ -111,6 +118,10 @@ pub enum RenderError {
     BadSize(u32, u32, u32),
     #[error(transparent)]
     ObjectSpace(#[from] objectspace::ObjectSpaceError),
+    #[error("bloom strength {0} is not a number from 0 to 1")]
+    BadBloom(f32),
+    #[error("bloom needs read-write Rgba16Float storage textures, which {0} does not offer")]
+    BloomUnsupported(String),
 }
 
 /// Renders frames of one scene at one size with one pipeline.
@@ -120,8 +131,13 @@ pub struct Renderer {
     pipeline: Box<dyn Pipeline>,
     name: &'static str,
     tonemap: Tonemap,
+    /// None where the adapter cannot run it ([`Bloom::supported`]).
+    bloom_pass: Option<Bloom>,
     timer: GpuTimer,
     pub exposure: f32,
+    /// Bloom strength, 0..=1: the fraction of the light spread into the glow
+    /// (0, the default, skips the pass).
+    pub bloom: f32,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
 }
@@ -139,12 +155,16 @@ impl Renderer {
         let (device, queue) = (&ctx.device, &ctx.queue);
         let pipeline: Box<dyn Pipeline> = match &options.pipeline {
             PipelineConfig::Forward(c) => Box::new(forward::Forward::new(device, &mut shaders, &scene_gpu, *c)?),
+            PipelineConfig::ForwardMultipass(c) => {
+                Box::new(forward_multipass::ForwardMultipass::new(device, &mut shaders, &scene_gpu, *c)?)
+            }
             PipelineConfig::ObjectSpace(c) => {
                 let os = objectspace::ObjectSpace::new(ctx, &mut shaders, &scene_gpu, &targets, c.clone())?;
                 Box::new(os)
             }
         };
         let tonemap = Tonemap::new(device, &mut shaders, &targets)?;
+        let bloom_pass = Bloom::supported(ctx).then(|| Bloom::new(device, &mut shaders, &targets)).transpose()?;
         let timer = GpuTimer::new(device, queue);
         ctx.check_errors()?;
         Ok(Self {
@@ -153,8 +173,10 @@ impl Renderer {
             pipeline,
             name: options.pipeline.name(),
             tonemap,
+            bloom_pass,
             timer,
             exposure: 1.0,
+            bloom: 0.0,
             lights_hash: None,
         })
     }
@@ -179,6 +201,14 @@ impl Renderer {
         frame: u64,
     ) -> Result<FrameStats, RenderError> {
         let start = Instant::now();
+        if !(0.0..=1.0).contains(&self.bloom) {
+            return Err(RenderError::BadBloom(self.bloom));
+        }
+        let bloom_pass = match &self.bloom_pass {
+            _ if self.bloom == 0.0 => None,
+            Some(pass) => Some(pass),
+            None => return Err(RenderError::BloomUnsupported(ctx.info.name.clone())),
+        };
         let (w, h) = (self.targets.width, self.targets.height);
         let (lights, global_lights) = scene_gpu::order_lights(lights);
         let mut view = scene_gpu::gpu_view(camera, w, h);
@@ -205,12 +235,16 @@ impl Renderer {
                 scene: &self.scene,
                 targets: &self.targets,
                 visible: &visible,
+                lights: &lights,
                 number: frame,
                 lights_changed,
                 encoder: &mut encoder,
                 profiler: self.timer.profiler(),
             };
             self.pipeline.encode(&mut f);
+            if let Some(pass) = bloom_pass {
+                bloom(&mut f, pass, self.bloom);
+            }
             tonemap(&mut f, &self.tonemap, self.exposure);
         }
         self.timer.resolve(&mut encoder);

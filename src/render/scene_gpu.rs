@@ -21,13 +21,13 @@ pub struct DrawRange {
 }
 
 /// A storage buffer that grows (and is then re-created) when written past its size.
-struct GrowableBuffer {
-    buffer: wgpu::Buffer,
+pub(crate) struct GrowableBuffer {
+    pub(crate) buffer: wgpu::Buffer,
     label: &'static str,
 }
 
 impl GrowableBuffer {
-    fn new(device: &wgpu::Device, label: &'static str, size: u64) -> Self {
+    pub(crate) fn new(device: &wgpu::Device, label: &'static str, size: u64) -> Self {
         Self { buffer: Self::create(device, label, size), label }
     }
 
@@ -41,7 +41,7 @@ impl GrowableBuffer {
     }
 
     /// Writes `data`; returns true when the buffer had to be re-created.
-    fn write(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, data: &[u8]) -> bool {
+    pub(crate) fn write(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, data: &[u8]) -> bool {
         let grew = data.len() as u64 > self.buffer.size();
         if grew {
             self.buffer = Self::create(device, self.label, data.len() as u64);

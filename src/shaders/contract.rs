@@ -12,6 +12,7 @@ use crate::render::objectspace::{DebugView, TileCounter};
 /// (WGSL name, value) of every shared `u32` constant.
 pub fn constants() -> Vec<(&'static str, u32)> {
     let mut c = vec![("MAX_LEVELS", MAX_LEVELS as u32), ("TILE_COUNTER_SLOTS", TileCounter::SLOTS as u32)];
+    c.push(("PAIR_EMISSION", crate::render::forward_multipass::EMISSION));
     c.extend(GpuLightKind::ALL.iter().map(|k| (k.wgsl_name(), *k as u32)));
     c.extend(DebugView::ALL.iter().map(|v| (v.wgsl_name(), *v as u32)));
     c.extend(TileCounter::ALL.iter().map(|t| (t.wgsl_name(), *t as u32)));

@@ -51,6 +51,7 @@ pub(crate) use gpu_struct;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::forward_multipass::LightPair;
     use crate::render::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
     use crate::render::objectspace::atlas::{GpuAtlasEntry, GpuAtlasLevel};
     use crate::render::objectspace::resources::GpuParams;
@@ -100,6 +101,7 @@ mod tests {
         check::<GpuAtlasEntry>(&modules);
         check::<GpuParams>(&modules);
         check::<Square>(&modules);
+        check::<LightPair>(&modules);
     }
 
     gpu_struct! {

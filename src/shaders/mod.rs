@@ -45,9 +45,10 @@ const SHARED: &[ShaderSource] = &[
 
 /// Every pass shader, for the test that validates them all.
 pub fn pass_shaders() -> Vec<ShaderSource> {
-    use crate::render::{forward, objectspace, passes};
+    use crate::render::{forward, forward_multipass, objectspace, passes};
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
+    all.extend([forward_multipass::SHADER, passes::bloom::SHADER]);
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all
 }

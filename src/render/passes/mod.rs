@@ -3,6 +3,7 @@
 //! the scene draw loop, the depth attachment, compute pipelines and
 //! bind-group layouts.
 
+pub mod bloom;
 pub mod depth_prepass;
 pub mod tonemap;
 pub mod visibility;
@@ -26,10 +27,9 @@ impl DepthMode {
     }
 }
 
-/// A raster pipeline over the scene bind group (group 0) and `groups`:
-/// vertices pulled from storage (no vertex buffers), no face culling, a
-/// reversed-Z depth test, and a fragment stage writing `color` when given
-/// (none: depth only).
+/// A raster pipeline over the scene bind group (group 0): vertices pulled
+/// from storage (no vertex buffers), no face culling, a reversed-Z depth
+/// test, and a fragment stage writing `color` when given (none: depth only).
 pub fn scene_raster_pipeline(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,
@@ -39,14 +39,45 @@ pub fn scene_raster_pipeline(
     fragment: Option<(&str, wgpu::TextureFormat)>,
     depth: DepthMode,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
+    let raster = SceneRaster { shader, vertex_entry, fragment, depth, groups: &[], blend: None };
+    scene_raster_pipeline_from(device, shaders, scene, &raster)
+}
+
+/// A scene raster pipeline with more than [`scene_raster_pipeline`]'s
+/// defaults: bind groups after the scene's, and blending.
+#[derive(Clone, Copy)]
+pub struct SceneRaster<'a> {
+    pub shader: ShaderSource,
+    pub vertex_entry: &'a str,
+    /// Fragment entry point and colour format (none: depth only).
+    pub fragment: Option<(&'a str, wgpu::TextureFormat)>,
+    pub depth: DepthMode,
+    /// Layouts of groups 1, 2, ... (group 0 is the scene's).
+    pub groups: &'a [&'a wgpu::BindGroupLayout],
+    /// Blending into the colour target (none: replace).
+    pub blend: Option<wgpu::BlendState>,
+}
+
+/// The raster pipeline `raster` describes (see [`scene_raster_pipeline`]).
+pub fn scene_raster_pipeline_from(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    scene: &SceneGpu,
+    raster: &SceneRaster,
+) -> Result<wgpu::RenderPipeline, ShaderError> {
+    let shader = raster.shader;
     let module = shaders.module(device, shader)?;
+    let groups: Vec<Option<&wgpu::BindGroupLayout>> =
+        std::iter::once(&scene.layout).chain(raster.groups.iter().copied()).map(Some).collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(shader.file),
-        bind_group_layouts: &[Some(&scene.layout)],
+        bind_group_layouts: &groups,
         immediate_size: 0,
     });
-    let targets = fragment.map(|(_, format)| [Some(format.into())]);
-    let (depth_write, compare) = match depth {
+    let targets = raster.fragment.map(|(_, format)| {
+        [Some(wgpu::ColorTargetState { format, blend: raster.blend, write_mask: wgpu::ColorWrites::ALL })]
+    });
+    let (depth_write, compare) = match raster.depth {
         DepthMode::Write => (true, wgpu::CompareFunction::Greater),
         DepthMode::EqualAfterPrepass => (false, wgpu::CompareFunction::Equal),
     };
@@ -55,11 +86,11 @@ pub fn scene_raster_pipeline(
         layout: Some(&layout),
         vertex: wgpu::VertexState {
             module: &module,
-            entry_point: Some(vertex_entry),
+            entry_point: Some(raster.vertex_entry),
             compilation_options: Default::default(),
             buffers: &[],
         },
-        fragment: fragment.zip(targets.as_ref()).map(|((entry, _), targets)| wgpu::FragmentState {
+        fragment: raster.fragment.zip(targets.as_ref()).map(|((entry, _), targets)| wgpu::FragmentState {
             module: &module,
             entry_point: Some(entry),
             compilation_options: Default::default(),
@@ -137,7 +168,7 @@ pub fn compute_pipeline(
     }))
 }
 
-/// What one binding of a compute bind group holds (its index is its place
+/// What one binding of a bind group holds (its index is its place
 /// in the list given to [`bind_group_layout`]).
 #[derive(Clone, Copy, Debug)]
 pub enum Binding {
@@ -159,10 +190,28 @@ pub enum Binding {
         format: wgpu::TextureFormat,
         dimension: wgpu::TextureViewDimension,
     },
+    /// A read-write storage texture (formats other than r32 need
+    /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`).
+    StorageTextureReadWrite {
+        format: wgpu::TextureFormat,
+        dimension: wgpu::TextureViewDimension,
+    },
+    /// A filtering sampler.
+    Sampler,
 }
 
 /// A bind-group layout for compute passes; binding `i` is `bindings[i]`.
 pub fn bind_group_layout(device: &wgpu::Device, label: &str, bindings: &[Binding]) -> wgpu::BindGroupLayout {
+    bind_group_layout_for(device, label, wgpu::ShaderStages::COMPUTE, bindings)
+}
+
+/// A bind-group layout seen by `stages`; binding `i` is `bindings[i]`.
+pub fn bind_group_layout_for(
+    device: &wgpu::Device,
+    label: &str,
+    stages: wgpu::ShaderStages,
+    bindings: &[Binding],
+) -> wgpu::BindGroupLayout {
     let buffer = |ty, dynamic, size: Option<u64>| wgpu::BindingType::Buffer {
         ty,
         has_dynamic_offset: dynamic,
@@ -173,7 +222,7 @@ pub fn bind_group_layout(device: &wgpu::Device, label: &str, bindings: &[Binding
         .enumerate()
         .map(|(i, b)| wgpu::BindGroupLayoutEntry {
             binding: i as u32,
-            visibility: wgpu::ShaderStages::COMPUTE,
+            visibility: stages,
             ty: match *b {
                 Binding::Uniform => buffer(wgpu::BufferBindingType::Uniform, false, None),
                 Binding::DynamicUniform { size } => buffer(wgpu::BufferBindingType::Uniform, true, Some(size)),
@@ -186,6 +235,12 @@ pub fn bind_group_layout(device: &wgpu::Device, label: &str, bindings: &[Binding
                     format,
                     view_dimension: dimension,
                 },
+                Binding::StorageTextureReadWrite { format, dimension } => wgpu::BindingType::StorageTexture {
+                    access: wgpu::StorageTextureAccess::ReadWrite,
+                    format,
+                    view_dimension: dimension,
+                },
+                Binding::Sampler => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
             },
             count: None,
         })
