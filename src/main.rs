@@ -11,7 +11,7 @@ use shadespace::bench::{self, BenchPlan, BenchSetup, RunReport};
 use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
-use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::{ClusteredConfig, ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
 #[derive(Parser)]
@@ -183,6 +183,8 @@ enum PipelineName {
     Forward,
     /// Object-space (texel) shading.
     Objectspace,
+    /// Clustered forward: fragments lit by GPU-built view-space light clusters.
+    Clustered,
 }
 
 #[derive(Args)]
@@ -353,6 +355,7 @@ impl Setup {
 fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view: DebugView) -> RenderOptions {
     let pipeline = match a.pipeline {
         PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
+        PipelineName::Clustered => PipelineConfig::Clustered(ClusteredConfig::default()),
         PipelineName::Objectspace => PipelineConfig::ObjectSpace(ObjectSpaceConfig {
             tile_size: a.objectspace.tile_size,
             reuse: a.objectspace.reuse,

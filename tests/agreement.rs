@@ -5,7 +5,7 @@
 mod common;
 
 use shadespace::metrics;
-use shadespace::render::{ForwardConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::{ClusteredConfig, ForwardConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::{self, LightSpec, lights, path};
 
 const WIDTH: u32 = 320;
@@ -15,7 +15,10 @@ const AGREEMENT_FLIP: f32 = 0.02;
 
 /// The pipelines under test, each with the settings it is checked in.
 fn pipelines() -> Vec<PipelineConfig> {
-    vec![PipelineConfig::Forward(ForwardConfig { depth_prepass: false })]
+    vec![
+        PipelineConfig::Forward(ForwardConfig { depth_prepass: false }),
+        PipelineConfig::Clustered(ClusteredConfig::default()),
+    ]
 }
 
 fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: PipelineConfig) -> image::RgbaImage {

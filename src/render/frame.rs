@@ -14,6 +14,7 @@ use wgpu_profiler::{GpuProfiler, OwningScope};
 
 use super::scene_gpu::SceneGpu;
 use super::targets::Targets;
+use crate::scene::{Camera, Light};
 
 /// A frame's inputs and its command encoder.
 pub struct Frame<'a> {
@@ -21,6 +22,10 @@ pub struct Frame<'a> {
     pub queue: &'a wgpu::Queue,
     pub scene: &'a SceneGpu,
     pub targets: &'a Targets,
+    pub camera: &'a Camera,
+    /// The frame's lights in GPU order: the `view.global_light_count`
+    /// ambient and directional lights first, then point and spot lights.
+    pub lights: &'a [Light],
     /// Per object: inside the view frustum.
     pub visible: &'a [bool],
     /// Frame number (tags counters and timings).

@@ -8,6 +8,7 @@
 //! from [`passes`], its WGSL beside it), one [`PipelineConfig`] variant and
 //! the line in [`Renderer::new`] that builds it.
 
+pub mod clustered;
 pub mod culling;
 pub mod forward;
 pub mod frame;
@@ -28,6 +29,7 @@ use crate::gpu::{GpuContext, GpuError, readback};
 use crate::hash::fnv1a;
 use crate::scene::{Camera, Light, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
+pub use clustered::ClusteredConfig;
 use culling::Frustum;
 pub use forward::ForwardConfig;
 pub use frame::Frame;
@@ -48,6 +50,10 @@ pub enum PipelineConfig {
     /// per-object atlas squares, reused across frames, gathered per pixel.
     #[serde(rename = "objectspace")]
     ObjectSpace(ObjectSpaceConfig),
+    /// Clustered forward: a depth pre-pass, view-space clusters of lights
+    /// built on the GPU, fragments lit by their cluster's lights.
+    #[serde(rename = "clustered")]
+    Clustered(ClusteredConfig),
 }
 
 impl PipelineConfig {
@@ -56,6 +62,7 @@ impl PipelineConfig {
         match self {
             Self::Forward(_) => "forward",
             Self::ObjectSpace(_) => "objectspace",
+            Self::Clustered(_) => "clustered",
         }
     }
 }
@@ -143,6 +150,7 @@ impl Renderer {
                 let os = objectspace::ObjectSpace::new(ctx, &mut shaders, &scene_gpu, &targets, c.clone())?;
                 Box::new(os)
             }
+            PipelineConfig::Clustered(c) => Box::new(clustered::Clustered::new(device, &mut shaders, &scene_gpu, *c)?),
         };
         let tonemap = Tonemap::new(device, &mut shaders, &targets)?;
         let timer = GpuTimer::new(device, queue);
@@ -204,6 +212,8 @@ impl Renderer {
                 queue: &ctx.queue,
                 scene: &self.scene,
                 targets: &self.targets,
+                camera,
+                lights: &lights,
                 visible: &visible,
                 number: frame,
                 lights_changed,

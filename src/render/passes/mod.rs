@@ -4,6 +4,7 @@
 //! bind-group layouts.
 
 pub mod depth_prepass;
+pub mod light_grid;
 pub mod tonemap;
 pub mod visibility;
 
@@ -39,10 +40,28 @@ pub fn scene_raster_pipeline(
     fragment: Option<(&str, wgpu::TextureFormat)>,
     depth: DepthMode,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
+    scene_raster_pipeline_with(device, shaders, shader, scene, &[], vertex_entry, fragment, depth)
+}
+
+/// [`scene_raster_pipeline`] with more bind groups after the scene's:
+/// `groups[i]` is group `i + 1` (`None` leaves a group unused).
+#[allow(clippy::too_many_arguments)]
+pub fn scene_raster_pipeline_with(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    shader: ShaderSource,
+    scene: &SceneGpu,
+    groups: &[Option<&wgpu::BindGroupLayout>],
+    vertex_entry: &str,
+    fragment: Option<(&str, wgpu::TextureFormat)>,
+    depth: DepthMode,
+) -> Result<wgpu::RenderPipeline, ShaderError> {
     let module = shaders.module(device, shader)?;
+    let layouts: Vec<Option<&wgpu::BindGroupLayout>> =
+        std::iter::once(Some(&scene.layout)).chain(groups.iter().copied()).collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(shader.file),
-        bind_group_layouts: &[Some(&scene.layout)],
+        bind_group_layouts: &layouts,
         immediate_size: 0,
     });
     let targets = fragment.map(|(_, format)| [Some(format.into())]);
@@ -163,6 +182,16 @@ pub enum Binding {
 
 /// A bind-group layout for compute passes; binding `i` is `bindings[i]`.
 pub fn bind_group_layout(device: &wgpu::Device, label: &str, bindings: &[Binding]) -> wgpu::BindGroupLayout {
+    bind_group_layout_for(device, label, wgpu::ShaderStages::COMPUTE, bindings)
+}
+
+/// [`bind_group_layout`] visible to `stages` (for groups that raster passes read too).
+pub fn bind_group_layout_for(
+    device: &wgpu::Device,
+    label: &str,
+    stages: wgpu::ShaderStages,
+    bindings: &[Binding],
+) -> wgpu::BindGroupLayout {
     let buffer = |ty, dynamic, size: Option<u64>| wgpu::BindingType::Buffer {
         ty,
         has_dynamic_offset: dynamic,
@@ -173,7 +202,7 @@ pub fn bind_group_layout(device: &wgpu::Device, label: &str, bindings: &[Binding
         .enumerate()
         .map(|(i, b)| wgpu::BindGroupLayoutEntry {
             binding: i as u32,
-            visibility: wgpu::ShaderStages::COMPUTE,
+            visibility: stages,
             ty: match *b {
                 Binding::Uniform => buffer(wgpu::BufferBindingType::Uniform, false, None),
                 Binding::DynamicUniform { size } => buffer(wgpu::BufferBindingType::Uniform, true, Some(size)),
