@@ -42,45 +42,50 @@ pub struct WorldGrid {
 
 impl WorldGrid {
     pub fn new(device: &wgpu::Device, shaders: &mut ShaderLibrary, scene: &SceneGpu) -> Result<Self, ShaderError> {
-        let mut bounds = scene.object_bounds.iter().fold(Aabb::EMPTY, |u, b| u.union(b));
-        if bounds.is_empty() {
-            bounds = Aabb { min: Vec3::ZERO, max: Vec3::ZERO };
-        }
-        let margin = 0.01 * bounds.extent().max_element() + 1e-3;
-        let bounds = Aabb { min: bounds.min - margin, max: bounds.max + margin };
+        let bounds = covered_bounds(&scene.object_bounds);
         let (dims, _) = dims_for(&bounds, finest_cell(&bounds));
         let grid = LightGrid::new(device, shaders, scene, "world grid", SHADER, dims.x * dims.y * dims.z)?;
         Ok(Self { grid, bounds, current: None })
     }
+}
 
-    /// The grid's geometry for `lights` (see the module's doc) and an upper
-    /// bound on its entries (every cell of every light's box).
-    pub fn geometry(&self, lights: &[Light]) -> (GpuLightGridParams, u64) {
-        let local: Vec<&Light> =
-            lights.iter().filter(|l| matches!(l.kind, LightKind::Point | LightKind::Spot)).collect();
-        let longest = self.bounds.extent().max_element();
-        let mut radii: Vec<f32> = local.iter().map(|l| l.radius).collect();
-        radii.sort_by(f32::total_cmp);
-        let mut size = match radii.get(radii.len() / 2) {
-            Some(median) => finest_cell(&self.bounds).max(0.5 * median),
-            None => longest,
+/// What the grid covers: the union of the objects' bounds with a margin of
+/// 1% of its longest side (and 1 mm).
+pub fn covered_bounds(objects: &[Aabb]) -> Aabb {
+    let mut bounds = objects.iter().fold(Aabb::EMPTY, |u, b| u.union(b));
+    if bounds.is_empty() {
+        bounds = Aabb { min: Vec3::ZERO, max: Vec3::ZERO };
+    }
+    let margin = 0.01 * bounds.extent().max_element() + 1e-3;
+    Aabb { min: bounds.min - margin, max: bounds.max + margin }
+}
+
+/// The geometry of a grid over `bounds` for `lights` (see the module's doc)
+/// and an upper bound on its entries (every cell of every light's box).
+pub fn geometry(bounds: &Aabb, lights: &[Light]) -> (GpuLightGridParams, u64) {
+    let local: Vec<&Light> = lights.iter().filter(|l| matches!(l.kind, LightKind::Point | LightKind::Spot)).collect();
+    let longest = bounds.extent().max_element();
+    let mut radii: Vec<f32> = local.iter().map(|l| l.radius).collect();
+    radii.sort_by(f32::total_cmp);
+    let mut size = match radii.get(radii.len() / 2) {
+        Some(median) => finest_cell(bounds).max(0.5 * median),
+        None => longest,
+    };
+    loop {
+        let (dims, cell_size) = dims_for(bounds, size);
+        let params = GpuLightGridParams {
+            to_grid: Mat4::IDENTITY,
+            dims,
+            cell_count: dims.x * dims.y * dims.z,
+            origin: bounds.min,
+            cell_size,
+            ..Default::default()
         };
-        loop {
-            let (dims, cell_size) = dims_for(&self.bounds, size);
-            let params = GpuLightGridParams {
-                to_grid: Mat4::IDENTITY,
-                dims,
-                cell_count: dims.x * dims.y * dims.z,
-                origin: self.bounds.min,
-                cell_size,
-                ..Default::default()
-            };
-            let entries: u64 = local.iter().map(|l| box_cells(&params, l.position, l.radius)).sum();
-            if entries <= ENTRY_BUDGET || size >= longest {
-                return (params, entries);
-            }
-            size *= 1.25;
+        let entries: u64 = local.iter().map(|l| box_cells(&params, l.position, l.radius)).sum();
+        if entries <= ENTRY_BUDGET || size >= longest {
+            return (params, entries);
         }
+        size *= 1.25;
     }
 }
 
@@ -90,7 +95,7 @@ impl WorldGrid {
 /// grown to its entry bound before the build.
 pub fn build_world_grid(frame: &mut Frame, world: &mut WorldGrid) {
     if frame.lights_changed || world.current.is_none() {
-        world.current = Some(world.geometry(frame.lights));
+        world.current = Some(geometry(&world.bounds, frame.lights));
     }
     let (params, bound) = world.current.expect("set above");
     world.grid.reserve(frame.device, bound);
@@ -125,4 +130,70 @@ pub fn cell_bounds(p: &GpuLightGridParams, cell: u32) -> Aabb {
     let c = UVec3::new(cell % p.dims.x, (cell / p.dims.x) % p.dims.y, cell / (p.dims.x * p.dims.y));
     let min = p.origin + c.as_vec3() * p.cell_size;
     Aabb { min, max: min + p.cell_size }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(position: Vec3, radius: f32) -> Light {
+        Light {
+            kind: LightKind::Point,
+            color: Vec3::ONE,
+            intensity: 1.0,
+            position,
+            direction: Vec3::NEG_Y,
+            radius,
+            cos_inner: 0.95,
+            cos_outer: 0.85,
+            casts_shadows: false,
+        }
+    }
+
+    fn scene_box() -> Aabb {
+        covered_bounds(&[Aabb { min: Vec3::new(-20.0, 0.0, -10.0), max: Vec3::new(20.0, 10.0, 10.0) }])
+    }
+
+    /// `n` lights spread through the box.
+    fn spread(n: usize, radius: f32) -> Vec<Light> {
+        let b = scene_box();
+        let step = Vec3::new(0.37, 0.61, 0.53);
+        (0..n).map(|i| point(b.min + b.extent() * (step * i as f32).fract(), radius)).collect()
+    }
+
+    fn covers(p: &GpuLightGridParams, b: &Aabb) -> bool {
+        p.origin == b.min && (p.origin + p.dims.as_vec3() * p.cell_size).cmpge(b.max).all()
+    }
+
+    #[test]
+    fn cells_are_half_the_median_radius_within_64_per_axis() {
+        let b = scene_box();
+        let (p, _) = geometry(&b, &spread(100, 2.0));
+        assert!((p.cell_size - 1.0).abs() < 1e-6, "{}", p.cell_size);
+        assert!(covers(&p, &b), "{p:?}");
+        // Tiny lights: the 64-cell limit wins along the longest side.
+        let (p, _) = geometry(&b, &spread(100, 0.01));
+        assert_eq!(p.dims.x, MAX_CELLS_PER_AXIS, "{p:?}");
+        assert!(p.dims.max_element() <= MAX_CELLS_PER_AXIS && covers(&p, &b), "{p:?}");
+        assert_eq!(p.cell_count, p.dims.x * p.dims.y * p.dims.z);
+        // No point or spot light: one coarse grid.
+        let (p, entries) = geometry(&b, &[]);
+        assert_eq!((entries, covers(&p, &b)), (0, true), "{p:?}");
+    }
+
+    #[test]
+    fn many_big_lights_coarsen_the_grid_to_the_budget() {
+        let b = scene_box();
+        // Many tiny lights set the median; 2000 lights reach the whole scene.
+        let mut lights = spread(10_000, 0.1);
+        lights.extend(spread(2_000, 30.0));
+        let finest = geometry(&b, &spread(10, 0.1)).0.cell_size;
+        let (p, entries) = geometry(&b, &lights);
+        assert!(entries <= ENTRY_BUDGET, "{entries}");
+        assert!(p.cell_size > 2.0 * finest, "cells did not grow: {} vs {finest}", p.cell_size);
+        assert!(covers(&p, &b));
+        // The bound counts the cells of each light's box.
+        let one = box_cells(&p, Vec3::new(0.0, 5.0, 0.0), 6.0);
+        assert!((8..=p.cell_count as u64).contains(&one), "{one}");
+    }
 }
