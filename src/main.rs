@@ -12,7 +12,7 @@ use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
 use shadespace::render::{
-    ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer,
+    ClusteredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer,
 };
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
@@ -192,6 +192,8 @@ enum PipelineName {
     ForwardMultipass,
     /// Object-space (texel) shading: visible tiles shaded by compute into an atlas, reused, gathered.
     Objectspace,
+    /// Clustered forward: fragments lit by GPU-built view-space light clusters.
+    Clustered,
 }
 
 #[derive(Args)]
@@ -367,6 +369,7 @@ fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view:
     let pipeline = match a.pipeline {
         PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::ForwardMultipass => PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
+        PipelineName::Clustered => PipelineConfig::Clustered(ClusteredConfig::default()),
         PipelineName::Objectspace => PipelineConfig::ObjectSpace(ObjectSpaceConfig {
             tile_size: a.objectspace.tile_size,
             reuse: a.objectspace.reuse,

@@ -5,7 +5,9 @@
 mod common;
 
 use shadespace::metrics;
-use shadespace::render::{ForwardConfig, ForwardMultipassConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::{
+    ClusteredConfig, ForwardConfig, ForwardMultipassConfig, PipelineConfig, RenderOptions, Renderer,
+};
 use shadespace::scene::{self, LightSpec, lights, path};
 
 const WIDTH: u32 = 320;
@@ -18,6 +20,7 @@ fn pipelines() -> Vec<PipelineConfig> {
     vec![
         PipelineConfig::Forward(ForwardConfig { depth_prepass: false }),
         PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
+        PipelineConfig::Clustered(ClusteredConfig::default()),
     ]
 }
 

@@ -14,7 +14,7 @@ use wgpu_profiler::{GpuProfiler, OwningScope};
 
 use super::scene_gpu::SceneGpu;
 use super::targets::Targets;
-use crate::scene::Light;
+use crate::scene::{Camera, Light};
 
 /// A frame's inputs and its command encoder.
 pub struct Frame<'a> {
@@ -22,11 +22,12 @@ pub struct Frame<'a> {
     pub queue: &'a wgpu::Queue,
     pub scene: &'a SceneGpu,
     pub targets: &'a Targets,
+    pub camera: &'a Camera,
+    /// The frame's lights in GPU order: the `view.global_light_count`
+    /// ambient and directional lights first, then point and spot lights.
+    pub lights: &'a [Light],
     /// Per object: inside the view frustum.
     pub visible: &'a [bool],
-    /// The lights in the order the GPU holds them (globals first), for
-    /// pipelines that cull lights themselves.
-    pub lights: &'a [Light],
     /// Frame number (tags counters and timings).
     pub number: u64,
     /// The lights differ from the previous frame's (cached shades are stale).

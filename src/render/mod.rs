@@ -8,6 +8,7 @@
 //! from [`passes`], its WGSL beside it), one [`PipelineConfig`] variant and
 //! the line in [`Renderer::new`] that builds it.
 
+pub mod clustered;
 pub mod culling;
 pub mod forward;
 pub mod forward_multipass;
@@ -29,6 +30,7 @@ use crate::gpu::{GpuContext, GpuError, readback};
 use crate::hash::fnv1a;
 use crate::scene::{Camera, Light, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
+pub use clustered::ClusteredConfig;
 use culling::Frustum;
 pub use forward::ForwardConfig;
 pub use forward_multipass::ForwardMultipassConfig;
@@ -54,6 +56,10 @@ pub enum PipelineConfig {
     /// per-object atlas squares, reused across frames, gathered per pixel.
     #[serde(rename = "objectspace")]
     ObjectSpace(ObjectSpaceConfig),
+    /// Clustered forward: a depth pre-pass, view-space clusters of lights
+    /// built on the GPU, fragments lit by their cluster's lights.
+    #[serde(rename = "clustered")]
+    Clustered(ClusteredConfig),
 }
 
 impl PipelineConfig {
@@ -63,6 +69,7 @@ impl PipelineConfig {
             Self::Forward(_) => "forward",
             Self::ForwardMultipass(_) => "forward-multipass",
             Self::ObjectSpace(_) => "objectspace",
+            Self::Clustered(_) => "clustered",
         }
     }
 }
@@ -162,6 +169,7 @@ impl Renderer {
                 let os = objectspace::ObjectSpace::new(ctx, &mut shaders, &scene_gpu, &targets, c.clone())?;
                 Box::new(os)
             }
+            PipelineConfig::Clustered(c) => Box::new(clustered::Clustered::new(device, &mut shaders, &scene_gpu, *c)?),
         };
         let tonemap = Tonemap::new(device, &mut shaders, &targets)?;
         let bloom_pass = Bloom::supported(ctx).then(|| Bloom::new(device, &mut shaders, &targets)).transpose()?;
@@ -234,8 +242,9 @@ impl Renderer {
                 queue: &ctx.queue,
                 scene: &self.scene,
                 targets: &self.targets,
-                visible: &visible,
+                camera,
                 lights: &lights,
+                visible: &visible,
                 number: frame,
                 lights_changed,
                 encoder: &mut encoder,

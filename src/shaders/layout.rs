@@ -56,6 +56,7 @@ mod tests {
     use crate::render::objectspace::atlas::{GpuAtlasEntry, GpuAtlasLevel};
     use crate::render::objectspace::resources::GpuParams;
     use crate::render::objectspace::trimap::Square;
+    use crate::render::passes::light_grid::GpuLightGridParams;
     use crate::shaders::{ShaderLibrary, pass_shaders};
     use wgpu::naga;
 
@@ -102,6 +103,7 @@ mod tests {
         check::<GpuParams>(&modules);
         check::<Square>(&modules);
         check::<LightPair>(&modules);
+        check::<GpuLightGridParams>(&modules);
     }
 
     gpu_struct! {

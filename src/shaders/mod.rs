@@ -40,16 +40,20 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
     ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
+    crate::render::passes::light_grid::SHARED_WGSL[0],
+    crate::render::passes::light_grid::SHARED_WGSL[1],
     crate::render::objectspace::SHARED_WGSL,
 ];
 
 /// Every pass shader, for the test that validates them all.
 pub fn pass_shaders() -> Vec<ShaderSource> {
-    use crate::render::{forward, forward_multipass, objectspace, passes};
+    use crate::render::{clustered, forward, forward_multipass, objectspace, passes};
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
     all.extend([forward_multipass::SHADER, passes::bloom::SHADER]);
     all.extend_from_slice(objectspace::PASS_SHADERS);
+    all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
+    all.push(clustered::SHADER);
     all
 }
 

@@ -87,7 +87,7 @@ impl ForwardMultipass {
             vertex_entry: "vs_main",
             fragment: Some(("fs_main", HDR_FORMAT)),
             depth: DepthMode::EqualAfterPrepass,
-            groups: &[&pairs_layout],
+            groups: &[Some(&pairs_layout)],
             blend: Some(wgpu::BlendState { color: additive, alpha: wgpu::BlendComponent::REPLACE }),
         };
         let shade = scene_raster_pipeline_from(device, shaders, scene, &raster)?;

@@ -7,8 +7,11 @@
 //! (compute per pixel: mip level, bilinear footprint, tiles marked visible;
 //! the first marker of a tile queues it when its shade is `reuse` frames old
 //! or stale) -> *shade* (one workgroup per queued tile, indirect) ->
-//! *gather* (compute per pixel: bilinear from the atlas). No CPU read-back
-//! inside the frame: the counters are copied out and read a few frames later.
+//! *gather* (compute per pixel: bilinear from the atlas). Texels are lit by
+//! the global lights and the lights of their cell of the world grid (Oxide's
+//! light matrix), built on the GPU before shading; no CPU light culling. No
+//! CPU read-back inside the frame: the counters are copied out and read a few
+//! frames later.
 
 pub mod atlas;
 pub mod cpu;
@@ -25,6 +28,8 @@ use serde::Serialize;
 
 use super::frame::Frame;
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
+use super::passes::light_grid::LightGrid;
+use super::passes::light_grid::world::{WorldGrid, build_world_grid};
 use super::passes::visibility::{VisibilityPass, visibility};
 use super::report::{Counters, ObjectMemory, PipelineReport};
 use super::scene_gpu::SceneGpu;
@@ -205,6 +210,7 @@ pub struct ObjectSpace {
     mark: MarkPass,
     shade: ShadePass,
     gather: GatherPass,
+    grid: WorldGrid,
     readback: ReadbackRing<u64>,
     /// Frames rendered so far; stamps are `frames + 1` so that 0 means never.
     frames: u32,
@@ -241,11 +247,13 @@ impl ObjectSpace {
         let triangle_map = trimap::build(device, &ctx.queue, shaders, scene, &layout)?;
         let res = Resources::new(device, &layout, &triangle_map, targets);
         let prepass = config.visibility_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
+        let grid = WorldGrid::new(device, shaders, scene)?;
         Ok(Self {
             visibility: VisibilityPass::new(device, shaders, scene, config.visibility_prepass)?,
             mark: MarkPass::new(device, shaders, scene, &res)?,
-            shade: ShadePass::new(device, shaders, scene, &res)?,
-            gather: GatherPass::new(device, shaders, scene, &res, targets)?,
+            shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
+            gather: GatherPass::new(device, shaders, scene, &res, targets, &grid.grid)?,
+            grid,
             prepass,
             res,
             layout,
@@ -258,6 +266,11 @@ impl ObjectSpace {
 
     pub fn config(&self) -> &ObjectSpaceConfig {
         &self.config
+    }
+
+    /// The world grid (its last build can be read back).
+    pub fn light_grid(&self) -> &LightGrid {
+        &self.grid.grid
     }
 }
 
@@ -272,14 +285,20 @@ impl Pipeline for ObjectSpace {
         }
         visibility(frame, &self.visibility, &self.res.visibility);
         mark_tiles(frame, &self.mark, &self.res);
-        shade_tiles(frame, &self.shade, &self.res);
-        gather(frame, &self.gather, &self.res);
+        build_world_grid(frame, &mut self.grid);
+        shade_tiles(frame, &self.shade, &self.res, &self.grid.grid);
+        gather(frame, &self.gather, &self.res, &self.grid.grid);
         let counter_bytes = TileCounter::SLOTS as u64 * 4;
         self.readback.copy(frame.device, frame.encoder, &self.res.counters, counter_bytes, frame.number);
     }
 
+    fn uses_object_light_lists(&self) -> bool {
+        false
+    }
+
     fn after_submit(&mut self) {
         self.readback.after_submit();
+        self.grid.grid.after_submit();
     }
 
     /// Per frame: `visible_tiles`, `shaded_tiles`, `reused_tiles`,
@@ -326,10 +345,13 @@ impl Pipeline for ObjectSpace {
             .memory("triangle_maps", texels * 4)
             .memory("tile_state", tiles * BYTES_PER_TILE)
             .memory("visibility", self.res.visibility.bytes())
+            .memory("world_grid", self.grid.grid.bytes())
             .setup("budget_halvings", self.budget_halvings as u64)
             .setup("atlas_pages", self.layout.pages as u64)
             .setup("page_size", self.layout.page_size as u64)
-            .setup("tile_count", tiles);
+            .setup("tile_count", tiles)
+            .setup("world_grid_list_capacity", self.grid.grid.capacity())
+            .setup("world_grid_list_peak", self.grid.grid.peak_entries());
         report.objects = (self.layout.objects.iter().enumerate())
             .filter_map(|(object, a)| {
                 let a = a.as_ref()?;

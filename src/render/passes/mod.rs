@@ -5,6 +5,7 @@
 
 pub mod bloom;
 pub mod depth_prepass;
+pub mod light_grid;
 pub mod tonemap;
 pub mod visibility;
 
@@ -52,8 +53,9 @@ pub struct SceneRaster<'a> {
     /// Fragment entry point and colour format (none: depth only).
     pub fragment: Option<(&'a str, wgpu::TextureFormat)>,
     pub depth: DepthMode,
-    /// Layouts of groups 1, 2, ... (group 0 is the scene's).
-    pub groups: &'a [&'a wgpu::BindGroupLayout],
+    /// Layouts of groups 1, 2, ... (group 0 is the scene's; `None` leaves a
+    /// group unused).
+    pub groups: &'a [Option<&'a wgpu::BindGroupLayout>],
     /// Blending into the colour target (none: replace).
     pub blend: Option<wgpu::BlendState>,
 }
@@ -68,7 +70,7 @@ pub fn scene_raster_pipeline_from(
     let shader = raster.shader;
     let module = shaders.module(device, shader)?;
     let groups: Vec<Option<&wgpu::BindGroupLayout>> =
-        std::iter::once(&scene.layout).chain(raster.groups.iter().copied()).map(Some).collect();
+        std::iter::once(Some(&scene.layout)).chain(raster.groups.iter().copied()).collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(shader.file),
         bind_group_layouts: &groups,

@@ -6,12 +6,6 @@
 #import shadespace::scene::{Object, vertex_uv0}
 #import shadespace::scene_bindings::{view, vertices, lights, light_indices, albedo, albedo_sampler}
 
-// Shades the point with barycentrics `b` of the triangle with vertices `tri`,
-// sampling albedo at mip `albedo_lod`, with the object's light list.
-fn shade_point(o: Object, tri: vec3u, b: vec3f, albedo_lod: f32) -> vec3f {
-    return light_surface(o, surface_point(o, tri, b, albedo_lod));
-}
-
 // The surface at barycentrics `b` of the triangle with vertices `tri`
 // (world position and normal, albedo sampled at mip `albedo_lod`).
 fn surface_point(o: Object, tri: vec3u, b: vec3f, albedo_lod: f32) -> Surface {

@@ -2,11 +2,13 @@
 // the same mip level as tile marking did and filters the object's shades
 // bilinearly (by hand, with taps clamped inside the level's square, so no tap
 // reads a neighbour in the atlas). Objects outside the atlas (forward-only)
-// are shaded here per pixel. Debug views replace the shade.
+// are shaded here per pixel, with the world grid's lights. Debug views replace
+// the shade.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene::vertex_uv0
 #import shadespace::scene_bindings::{objects, vertices}
-#import shadespace::surface::{shade_point, albedo_lod}
+#import shadespace::surface::{surface_point, albedo_lod}
+#import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, tile_shaded, visibility, sample_pixel, chart_footprint,
     select_level, bilinear, level_origin, interpolate2, AtlasLevel}
 
@@ -51,7 +53,8 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
         let t2 = vertex_uv0(vertices[p.tri.z]);
         let u = interpolate2(p.b, t0, t1, t2);
         let lod = albedo_lod(interpolate2(p.b_dx, t0, t1, t2) - u, interpolate2(p.b_dy, t0, t1, t2) - u);
-        textureStore(hdr, id.xy, vec4f(shade_point(o, p.tri, p.b, lod), 1.0));
+        let s = surface_point(o, p.tri, p.b, lod);
+        textureStore(hdr, id.xy, vec4f(light_surface_in_cell(o, s, world_cell_of(s.position)), 1.0));
         return;
     }
     let f = chart_footprint(p);

@@ -1,9 +1,11 @@
 //! Shade gathering (`gather.wgsl`): per pixel of the visibility buffer, the
 //! same mip level as marking chose, filtered bilinearly from the atlas into
-//! the HDR target (objects outside the atlas are shaded here per pixel).
+//! the HDR target (objects outside the atlas are shaded here per pixel, with
+//! the world grid's lights).
 
 use super::resources::Resources;
 use crate::render::frame::Frame;
+use crate::render::passes::light_grid::{LightGrid, READ_GROUP};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::targets::{HDR_FORMAT, Targets};
@@ -24,6 +26,7 @@ impl GatherPass {
         scene: &SceneGpu,
         res: &Resources,
         targets: &Targets,
+        grid: &LightGrid,
     ) -> Result<Self, ShaderError> {
         let layout = bind_group_layout(
             device,
@@ -45,19 +48,22 @@ impl GatherPass {
                 wgpu::BindingResource::TextureView(&targets.hdr_view),
             ],
         );
-        let pipeline = compute_pipeline(device, shaders, SHADER, "gather", &[&scene.layout, &res.layout, &layout])?;
+        let groups = [&scene.layout, &res.layout, &layout, &grid.layout];
+        let pipeline = compute_pipeline(device, shaders, SHADER, "gather", &groups)?;
         Ok(Self { pipeline, io })
     }
 }
 
 /// Reads: the visibility buffer, the atlas and its table (and the tile
-/// stamps for the debug views). Writes: `targets.hdr`.
-pub fn gather(frame: &mut Frame, pass: &GatherPass, res: &Resources) {
+/// stamps for the debug views; the world grid for forward-only objects).
+/// Writes: `targets.hdr`.
+pub fn gather(frame: &mut Frame, pass: &GatherPass, res: &Resources, grid: &LightGrid) {
     let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
     let scene = frame.scene.bind_group();
     let mut cp = frame.compute_pass("gather");
     cp.set_pipeline(&pass.pipeline);
     res.bind(&mut cp, scene);
     cp.set_bind_group(2, &pass.io, &[]);
+    cp.set_bind_group(READ_GROUP, grid.bind_group(), &[]);
     cp.dispatch_workgroups(w, h, 1);
 }

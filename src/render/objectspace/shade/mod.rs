@@ -1,9 +1,11 @@
 //! Shade evaluation (`shade.wgsl`): one workgroup per queued tile, through
 //! an indirect dispatch; each texel finds its triangle in the triangle-index
-//! map and runs the shared lighting model.
+//! map and runs the shared lighting model with the global lights and the
+//! lights of its world-grid cell.
 
 use super::resources::{ATLAS_FORMAT, Resources};
 use crate::render::frame::Frame;
+use crate::render::passes::light_grid::{LightGrid, READ_GROUP};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
 use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
@@ -22,24 +24,27 @@ impl ShadePass {
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         res: &Resources,
+        grid: &LightGrid,
     ) -> Result<Self, ShaderError> {
         let dimension = wgpu::TextureViewDimension::D2Array;
         let layout =
             bind_group_layout(device, "shade outputs", &[Binding::StorageTexture { format: ATLAS_FORMAT, dimension }]);
         let outputs =
             bind_group(device, "shade outputs", &layout, &[wgpu::BindingResource::TextureView(&res.atlas_array)]);
-        let pipeline = compute_pipeline(device, shaders, SHADER, "shade", &[&scene.layout, &res.layout, &layout])?;
+        let groups = [&scene.layout, &res.layout, &layout, &grid.layout];
+        let pipeline = compute_pipeline(device, shaders, SHADER, "shade", &groups)?;
         Ok(Self { pipeline, outputs })
     }
 }
 
-/// Reads: the shade queue and its count, the triangle-index maps, the scene
-/// and its lights. Writes: the queued tiles of the atlas.
-pub fn shade_tiles(frame: &mut Frame, pass: &ShadePass, res: &Resources) {
+/// Reads: the shade queue and its count, the triangle-index maps, the scene,
+/// its lights and the world grid. Writes: the queued tiles of the atlas.
+pub fn shade_tiles(frame: &mut Frame, pass: &ShadePass, res: &Resources, grid: &LightGrid) {
     let scene = frame.scene.bind_group();
     let mut cp = frame.compute_pass("shade");
     cp.set_pipeline(&pass.pipeline);
     res.bind(&mut cp, scene);
     cp.set_bind_group(2, &pass.outputs, &[]);
+    cp.set_bind_group(READ_GROUP, grid.bind_group(), &[]);
     cp.dispatch_workgroups_indirect(&res.shade_dispatch, 0);
 }

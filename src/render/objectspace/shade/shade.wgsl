@@ -2,10 +2,11 @@
 // (tiles larger than 8x8 loop over 8x8 blocks). Each texel finds its triangle
 // in the triangle-index map, interpolates the vertex attributes at the texel
 // centre in chart space, applies the object's current transform, and runs the
-// shared lighting model.
+// shared lighting model with the global lights and its world-grid cell's lights.
 #import shadespace::scene::vertex_uv0
 #import shadespace::scene_bindings::{objects, vertices, triangle_vertices}
-#import shadespace::surface::{shade_point, albedo_lod}
+#import shadespace::surface::{surface_point, albedo_lod}
+#import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::contract::COUNT_QUEUED
 #import shadespace::objectspace::{params, atlas_entries, queue, counters, triangle_map, level_origin}
 
@@ -66,7 +67,8 @@ fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
                 let u = t0 * b.x + t1 * b.y + t2 * b.z;
                 let du = t0 * bx1.x + t1 * bx1.y + t2 * bx1.z - u;
                 let dv = t0 * by1.x + t1 * by1.y + t2 * by1.z - u;
-                color = shade_point(o, tri, b, albedo_lod(du, dv));
+                let s = surface_point(o, tri, b, albedo_lod(du, dv));
+                color = light_surface_in_cell(o, s, world_cell_of(s.position));
             }
             textureStore(atlas, atlas_texel, l.page, vec4f(color, 1.0));
         }

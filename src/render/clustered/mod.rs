@@ -1,0 +1,98 @@
+//! Clustered forward shading: a depth pre-pass, the view-space cluster grid
+//! built on the GPU from the light buffer, then one raster pass whose
+//! fragments find their cluster (screen tile and depth slice) and loop over
+//! the global lights and that cluster's lights. No CPU light culling.
+
+use serde::Serialize;
+
+use super::frame::Frame;
+use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
+use super::passes::light_grid::clusters::{ClusterDims, Clusters, build_clusters};
+use super::passes::light_grid::{LightGrid, READ_GROUP};
+use super::passes::{
+    DepthMode, SceneRaster, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline_from,
+};
+use super::report::PipelineReport;
+use super::scene_gpu::SceneGpu;
+use super::targets::HDR_FORMAT;
+use super::{Pipeline, PipelineConfig, RenderError};
+use crate::shaders::{ShaderLibrary, ShaderSource};
+
+pub const SHADER: ShaderSource = ShaderSource::new("clustered.wgsl", include_str!("clustered.wgsl"));
+
+/// Settings of the clustered pipeline.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ClusteredConfig {
+    pub clusters: ClusterDims,
+}
+
+pub struct Clustered {
+    config: ClusteredConfig,
+    prepass: DepthPrepass,
+    clusters: Clusters,
+    shade: wgpu::RenderPipeline,
+}
+
+impl Clustered {
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        config: ClusteredConfig,
+    ) -> Result<Self, RenderError> {
+        let prepass = DepthPrepass::new(device, shaders, scene)?;
+        let clusters = Clusters::new(device, shaders, scene, config.clusters)?;
+        let mut groups = vec![None; READ_GROUP as usize];
+        groups[READ_GROUP as usize - 1] = Some(&clusters.grid.layout);
+        let raster = SceneRaster {
+            shader: SHADER,
+            vertex_entry: "vs_main",
+            fragment: Some(("fs_main", HDR_FORMAT)),
+            depth: DepthMode::EqualAfterPrepass,
+            groups: &groups,
+            blend: None,
+        };
+        let shade = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
+        Ok(Self { config, prepass, clusters, shade })
+    }
+
+    /// The cluster grid (its last build can be read back).
+    pub fn light_grid(&self) -> &LightGrid {
+        &self.clusters.grid
+    }
+}
+
+impl Pipeline for Clustered {
+    fn encode(&mut self, frame: &mut Frame) {
+        depth_prepass(frame, &self.prepass);
+        build_clusters(frame, &mut self.clusters);
+        clustered_shade(frame, &self.shade, &self.clusters.grid);
+    }
+
+    fn uses_object_light_lists(&self) -> bool {
+        false
+    }
+
+    fn after_submit(&mut self) {
+        self.clusters.grid.after_submit();
+    }
+
+    fn report(&self) -> PipelineReport {
+        let grid = &self.clusters.grid;
+        PipelineReport::new(PipelineConfig::Clustered(self.config))
+            .memory("clusters", grid.bytes())
+            .setup("cluster_count", self.config.clusters.cell_count() as u64)
+            .setup("cluster_list_capacity", grid.capacity())
+            .setup("cluster_list_peak", grid.peak_entries())
+    }
+}
+
+/// Reads: the scene, its lights, the clusters and the depth target. Writes:
+/// `targets.hdr` (cleared first).
+fn clustered_shade(frame: &mut Frame, pipeline: &wgpu::RenderPipeline, grid: &LightGrid) {
+    let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
+    let color = [color_attachment(&targets.hdr_view, wgpu::Color::BLACK)];
+    let mut rp = frame.render_pass("clustered shade", &color, Some(depth_attachment(targets, false)));
+    rp.set_bind_group(READ_GROUP, grid.bind_group(), &[]);
+    draw_objects(&mut rp, scene, visible, pipeline);
+}
