@@ -25,7 +25,9 @@ use super::report::{Counters, PipelineReport};
 use super::scene_gpu::{GrowableBuffer, SceneGpu};
 use super::targets::HDR_FORMAT;
 use super::{Pipeline, PipelineConfig, RenderError};
-use crate::scene::{Aabb, Light};
+use glam::{Mat4, Vec2, Vec3};
+
+use crate::scene::{Aabb, Light, LightKind};
 use crate::shaders::{ShaderLibrary, ShaderSource, gpu_struct};
 
 pub const SHADER: ShaderSource = ShaderSource::new("forward_multipass.wgsl", include_str!("forward_multipass.wgsl"));
@@ -140,25 +142,90 @@ impl Pipeline for ForwardMultipass {
 
 /// Reads: the depth target (from the pre-pass), the scene and its lights,
 /// and `pairs` (already uploaded to the buffer of `pairs_group`). Writes:
-/// `targets.hdr`, cleared, then one additive draw per pair.
+/// `targets.hdr`, cleared, then one additive draw per pair, each light's
+/// draws scissored to the screen rectangle its volume covers.
 fn light_passes(
     frame: &mut Frame,
     pipeline: &wgpu::RenderPipeline,
     pairs_group: &wgpu::BindGroup,
     pairs: &[LightPair],
 ) {
-    let (scene, targets) = (frame.scene, frame.targets);
+    let (scene, targets, lights) = (frame.scene, frame.targets, frame.lights);
+    let size = (targets.width, targets.height);
+    let view_proj = frame.camera.view_projection(size.0 as f32 / size.1 as f32);
     let color = [color_attachment(&targets.hdr_view, wgpu::Color::BLACK)];
     let mut rp = frame.render_pass("light passes", &color, Some(depth_attachment(targets, false)));
     rp.set_pipeline(pipeline);
     rp.set_bind_group(0, scene.bind_group(), &[]);
     rp.set_bind_group(1, pairs_group, &[]);
     rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+    let mut current = None;
+    let mut rect = None;
     for (i, pair) in pairs.iter().enumerate() {
+        if current != Some(pair.light) {
+            current = Some(pair.light);
+            rect = match lights.get(pair.light as usize) {
+                Some(l) if matches!(l.kind, LightKind::Point | LightKind::Spot) => {
+                    light_scissor(l.position, l.radius, view_proj, size)
+                }
+                _ => Some(ScissorRect { x: 0, y: 0, width: size.0, height: size.1 }),
+            };
+            if let Some(r) = rect {
+                rp.set_scissor_rect(r.x, r.y, r.width, r.height);
+            }
+        }
+        if rect.is_none() {
+            continue; // the light's volume is off screen
+        }
         let d = scene.draws[pair.object as usize];
         let i = i as u32;
         rp.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, i..i + 1);
     }
+}
+
+/// A rectangle of the target, in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct ScissorRect {
+    x: u32,
+    y: u32,
+    width: u32,
+    height: u32,
+}
+
+/// The pixels a light's sphere (`center`, `radius`) may cover: the projected
+/// corners of its bounding box, conservatively (the whole target when the
+/// box crosses the eye plane); `None` when it is wholly behind the eye or
+/// off screen. Classic multi-pass forward scissors each light this way, so
+/// a small light shades only its own rectangle of each object it reaches.
+fn light_scissor(center: Vec3, radius: f32, view_proj: Mat4, (w, h): (u32, u32)) -> Option<ScissorRect> {
+    let full = ScissorRect { x: 0, y: 0, width: w, height: h };
+    let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    let mut behind = 0u32;
+    for i in 0..8 {
+        let sign = Vec3::new(
+            if i & 1 == 0 { -1.0 } else { 1.0 },
+            if i & 2 == 0 { -1.0 } else { 1.0 },
+            if i & 4 == 0 { -1.0 } else { 1.0 },
+        );
+        let clip = view_proj * (center + sign * radius).extend(1.0);
+        if clip.w <= 1e-5 {
+            behind += 1;
+            continue;
+        }
+        let ndc = clip.truncate().truncate() / clip.w;
+        (lo, hi) = (lo.min(ndc), hi.max(ndc));
+    }
+    match behind {
+        8 => return None,
+        1.. => return Some(full),
+        0 => {}
+    }
+    // NDC y points up, pixel y down.
+    let x0 = ((lo.x * 0.5 + 0.5) * w as f32).floor().clamp(0.0, w as f32) as u32;
+    let x1 = ((hi.x * 0.5 + 0.5) * w as f32).ceil().clamp(0.0, w as f32) as u32;
+    let y0 = ((0.5 - hi.y * 0.5) * h as f32).floor().clamp(0.0, h as f32) as u32;
+    let y1 = ((0.5 - lo.y * 0.5) * h as f32).ceil().clamp(0.0, h as f32) as u32;
+    (x1 > x0 && y1 > y0).then_some(ScissorRect { x: x0, y: y0, width: x1 - x0, height: y1 - y0 })
 }
 
 /// Builds a frame's pairs, reusing its allocations from frame to frame.
@@ -208,10 +275,36 @@ impl PairBuilder {
 
 #[cfg(test)]
 mod tests {
-    use glam::Vec3;
-
     use super::*;
-    use crate::scene::LightKind;
+    use crate::scene::Camera;
+
+    /// A light in view gets a rectangle around its projected centre that
+    /// shrinks with distance; one behind the eye or off to the side gets
+    /// none; one around the eye gets the whole target.
+    #[test]
+    fn scissor_covers_the_light_and_culls_what_is_off_screen() {
+        let camera = Camera {
+            position: Vec3::ZERO,
+            forward: Vec3::NEG_Z,
+            up: Vec3::Y,
+            fov_y: 60f32.to_radians(),
+            near: 0.1,
+            far: 100.0,
+        };
+        let size = (320, 180);
+        let vp = camera.view_projection(320.0 / 180.0);
+        let near = light_scissor(Vec3::new(0.0, 0.0, -5.0), 1.0, vp, size).unwrap();
+        let far = light_scissor(Vec3::new(0.0, 0.0, -20.0), 1.0, vp, size).unwrap();
+        for r in [near, far] {
+            assert!(r.x < 160 && r.x + r.width > 160 && r.y < 90 && r.y + r.height > 90, "{r:?}");
+        }
+        assert!(far.width < near.width && far.height < near.height, "{near:?} {far:?}");
+        assert!(near.width < 320, "a small light does not cover the screen: {near:?}");
+        assert_eq!(light_scissor(Vec3::new(0.0, 0.0, 5.0), 1.0, vp, size), None, "behind the eye");
+        assert_eq!(light_scissor(Vec3::new(50.0, 0.0, -5.0), 1.0, vp, size), None, "off to the side");
+        let around = light_scissor(Vec3::ZERO, 2.0, vp, size).unwrap();
+        assert_eq!((around.width, around.height), size);
+    }
 
     fn light(kind: LightKind, position: Vec3, direction: Vec3, radius: f32) -> Light {
         Light {
