@@ -12,6 +12,7 @@
 
 use wgpu_profiler::{GpuProfiler, OwningScope};
 
+use super::gpu_types::GpuView;
 use super::scene_gpu::SceneGpu;
 use super::targets::Targets;
 
@@ -21,6 +22,8 @@ pub struct Frame<'a> {
     pub queue: &'a wgpu::Queue,
     pub scene: &'a SceneGpu,
     pub targets: &'a Targets,
+    /// This frame's view uniform as uploaded (camera, light counts).
+    pub view: &'a GpuView,
     /// Per object: inside the view frustum.
     pub visible: &'a [bool],
     /// Frame number (tags counters and timings).

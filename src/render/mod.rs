@@ -204,6 +204,7 @@ impl Renderer {
                 queue: &ctx.queue,
                 scene: &self.scene,
                 targets: &self.targets,
+                view: &view,
                 visible: &visible,
                 number: frame,
                 lights_changed,

@@ -39,13 +39,28 @@ pub fn scene_raster_pipeline(
     fragment: Option<(&str, wgpu::TextureFormat)>,
     depth: DepthMode,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
+    let fragment = fragment.as_ref().map(|(entry, format)| (*entry, std::slice::from_ref(format)));
+    scene_raster_pipeline_targets(device, shaders, shader, scene, vertex_entry, fragment, depth)
+}
+
+/// [`scene_raster_pipeline`] with several colour targets (a G-buffer).
+pub fn scene_raster_pipeline_targets(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    shader: ShaderSource,
+    scene: &SceneGpu,
+    vertex_entry: &str,
+    fragment: Option<(&str, &[wgpu::TextureFormat])>,
+    depth: DepthMode,
+) -> Result<wgpu::RenderPipeline, ShaderError> {
     let module = shaders.module(device, shader)?;
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(shader.file),
         bind_group_layouts: &[Some(&scene.layout)],
         immediate_size: 0,
     });
-    let targets = fragment.map(|(_, format)| [Some(format.into())]);
+    let targets: Option<Vec<Option<wgpu::ColorTargetState>>> =
+        fragment.map(|(_, formats)| formats.iter().map(|f| Some((*f).into())).collect());
     let (depth_write, compare) = match depth {
         DepthMode::Write => (true, wgpu::CompareFunction::Greater),
         DepthMode::EqualAfterPrepass => (false, wgpu::CompareFunction::Equal),
@@ -63,7 +78,7 @@ pub fn scene_raster_pipeline(
             module: &module,
             entry_point: Some(entry),
             compilation_options: Default::default(),
-            targets,
+            targets: targets.as_slice(),
         }),
         primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
         depth_stencil: Some(wgpu::DepthStencilState {
@@ -100,6 +115,12 @@ pub fn depth_attachment(targets: &Targets, clear: bool) -> wgpu::RenderPassDepth
         depth_ops: Some(wgpu::Operations { load, store: wgpu::StoreOp::Store }),
         stencil_ops: None,
     }
+}
+
+/// The depth target as a read-only attachment: depth-tested against, and
+/// sampled in the same pass (light volumes read it to rebuild positions).
+pub fn depth_attachment_read_only(targets: &Targets) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment { view: &targets.depth_view, depth_ops: None, stencil_ops: None }
 }
 
 /// A colour attachment cleared to `clear` and stored.
@@ -163,6 +184,16 @@ pub enum Binding {
 
 /// A bind-group layout for compute passes; binding `i` is `bindings[i]`.
 pub fn bind_group_layout(device: &wgpu::Device, label: &str, bindings: &[Binding]) -> wgpu::BindGroupLayout {
+    bind_group_layout_for(device, label, wgpu::ShaderStages::COMPUTE, bindings)
+}
+
+/// [`bind_group_layout`] visible to `stages` (for raster passes that read it).
+pub fn bind_group_layout_for(
+    device: &wgpu::Device,
+    label: &str,
+    stages: wgpu::ShaderStages,
+    bindings: &[Binding],
+) -> wgpu::BindGroupLayout {
     let buffer = |ty, dynamic, size: Option<u64>| wgpu::BindingType::Buffer {
         ty,
         has_dynamic_offset: dynamic,
@@ -173,7 +204,7 @@ pub fn bind_group_layout(device: &wgpu::Device, label: &str, bindings: &[Binding
         .enumerate()
         .map(|(i, b)| wgpu::BindGroupLayoutEntry {
             binding: i as u32,
-            visibility: wgpu::ShaderStages::COMPUTE,
+            visibility: stages,
             ty: match *b {
                 Binding::Uniform => buffer(wgpu::BufferBindingType::Uniform, false, None),
                 Binding::DynamicUniform { size } => buffer(wgpu::BufferBindingType::Uniform, true, Some(size)),
