@@ -40,7 +40,9 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
     ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
+    ShaderSource::new("shared/octahedral.wgsl", include_str!("shared/octahedral.wgsl")),
     crate::render::objectspace::SHARED_WGSL,
+    crate::render::passes::gbuffer::SHARED_WGSL,
 ];
 
 /// Every pass shader, for the test that validates them all.
@@ -49,6 +51,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
     all.extend_from_slice(objectspace::PASS_SHADERS);
+    all.push(passes::gbuffer::SHADER);
     all
 }
 

@@ -4,6 +4,7 @@
 //! bind-group layouts.
 
 pub mod depth_prepass;
+pub mod gbuffer;
 pub mod tonemap;
 pub mod visibility;
 
