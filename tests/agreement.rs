@@ -5,7 +5,7 @@
 mod common;
 
 use shadespace::metrics;
-use shadespace::render::{ForwardConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::{DeferredComputeConfig, ForwardConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::{self, LightSpec, lights, path};
 
 const WIDTH: u32 = 320;
@@ -15,7 +15,11 @@ const AGREEMENT_FLIP: f32 = 0.02;
 
 /// The pipelines under test, each with the settings it is checked in.
 fn pipelines() -> Vec<PipelineConfig> {
-    vec![PipelineConfig::Forward(ForwardConfig { depth_prepass: false })]
+    vec![
+        PipelineConfig::Forward(ForwardConfig { depth_prepass: false }),
+        PipelineConfig::DeferredCompute(DeferredComputeConfig::default()),
+        PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: false }),
+    ]
 }
 
 fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: PipelineConfig) -> image::RgbaImage {
@@ -36,11 +40,12 @@ fn check(name: &str) {
     let ctx = common::gpu();
     let reference = render(&ctx, name, PipelineConfig::Forward(ForwardConfig::default()));
     let out = common::out_dir();
-    for pipeline in pipelines() {
-        let label = format!("{name}-{}", pipeline.name());
+    for (i, pipeline) in pipelines().into_iter().enumerate() {
+        let label = format!("{name}-{i}-{}", pipeline.name());
+        let settings = format!("{pipeline:?}");
         let test = render(&ctx, name, pipeline);
         let (err, map) = metrics::compare(&reference, &test);
-        eprintln!("{label}: against forward: {err:?}");
+        eprintln!("{label} ({settings}): against forward: {err:?}");
         if err.flip_mean > AGREEMENT_FLIP {
             test.save(out.join(format!("{label}.png"))).unwrap();
             map.save(out.join(format!("{label}-flip.png"))).unwrap();

@@ -9,6 +9,7 @@
 //! the line in [`Renderer::new`] that builds it.
 
 pub mod culling;
+pub mod deferred_compute;
 pub mod forward;
 pub mod frame;
 pub mod gpu_types;
@@ -29,6 +30,7 @@ use crate::hash::fnv1a;
 use crate::scene::{Camera, Light, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
 use culling::Frustum;
+pub use deferred_compute::DeferredComputeConfig;
 pub use forward::ForwardConfig;
 pub use frame::Frame;
 pub use objectspace::ObjectSpaceConfig;
@@ -48,6 +50,9 @@ pub enum PipelineConfig {
     /// per-object atlas squares, reused across frames, gathered per pixel.
     #[serde(rename = "objectspace")]
     ObjectSpace(ObjectSpaceConfig),
+    /// Tiled deferred shading: one compute pass culls and shades per tile.
+    #[serde(rename = "deferred-compute")]
+    DeferredCompute(DeferredComputeConfig),
 }
 
 impl PipelineConfig {
@@ -56,6 +61,7 @@ impl PipelineConfig {
         match self {
             Self::Forward(_) => "forward",
             Self::ObjectSpace(_) => "objectspace",
+            Self::DeferredCompute(_) => "deferred-compute",
         }
     }
 }
@@ -142,6 +148,9 @@ impl Renderer {
             PipelineConfig::ObjectSpace(c) => {
                 let os = objectspace::ObjectSpace::new(ctx, &mut shaders, &scene_gpu, &targets, c.clone())?;
                 Box::new(os)
+            }
+            PipelineConfig::DeferredCompute(c) => {
+                Box::new(deferred_compute::DeferredCompute::new(device, &mut shaders, &scene_gpu, &targets, *c)?)
             }
         };
         let tonemap = Tonemap::new(device, &mut shaders, &targets)?;

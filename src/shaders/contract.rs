@@ -5,6 +5,7 @@
 
 use std::fmt::Write;
 
+use crate::render::deferred_compute;
 use crate::render::gpu_types::GpuLightKind;
 use crate::render::objectspace::atlas::MAX_LEVELS;
 use crate::render::objectspace::{DebugView, TileCounter};
@@ -15,6 +16,7 @@ pub fn constants() -> Vec<(&'static str, u32)> {
     c.extend(GpuLightKind::ALL.iter().map(|k| (k.wgsl_name(), *k as u32)));
     c.extend(DebugView::ALL.iter().map(|v| (v.wgsl_name(), *v as u32)));
     c.extend(TileCounter::ALL.iter().map(|t| (t.wgsl_name(), *t as u32)));
+    c.extend(deferred_compute::wgsl_constants());
     c
 }
 

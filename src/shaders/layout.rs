@@ -55,6 +55,7 @@ mod tests {
     use crate::render::objectspace::atlas::{GpuAtlasEntry, GpuAtlasLevel};
     use crate::render::objectspace::resources::GpuParams;
     use crate::render::objectspace::trimap::Square;
+    use crate::render::passes::gbuffer::GpuUnproject;
     use crate::shaders::{ShaderLibrary, pass_shaders};
     use wgpu::naga;
 
@@ -100,6 +101,7 @@ mod tests {
         check::<GpuAtlasEntry>(&modules);
         check::<GpuParams>(&modules);
         check::<Square>(&modules);
+        check::<GpuUnproject>(&modules);
     }
 
     gpu_struct! {

@@ -41,17 +41,18 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
     ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
     ShaderSource::new("shared/octahedral.wgsl", include_str!("shared/octahedral.wgsl")),
+    ShaderSource::new("shared/light_bounds.wgsl", include_str!("shared/light_bounds.wgsl")),
     crate::render::objectspace::SHARED_WGSL,
     crate::render::passes::gbuffer::SHARED_WGSL,
 ];
 
 /// Every pass shader, for the test that validates them all.
 pub fn pass_shaders() -> Vec<ShaderSource> {
-    use crate::render::{forward, objectspace, passes};
+    use crate::render::{deferred_compute, forward, objectspace, passes};
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
     all.extend_from_slice(objectspace::PASS_SHADERS);
-    all.push(passes::gbuffer::SHADER);
+    all.extend([passes::gbuffer::SHADER, deferred_compute::SHADER]);
     all
 }
 
