@@ -12,7 +12,7 @@ use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
 use shadespace::render::{
-    DeferredComputeConfig, ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer,
+    DeferredComputeConfig, DeferredConfig, ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer,
 };
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
@@ -98,7 +98,7 @@ struct SceneArgs {
     /// Exposure multiplier applied before tone mapping (positive, finite).
     #[arg(long, default_value_t = 1.0, value_parser = positive_f32)]
     exposure: f32,
-    /// Forward, deferred-compute: skip the depth pre-pass (shade or
+    /// Forward, deferred, deferred-compute: skip the depth pre-pass (shade or
     /// write the G-buffer for every rasterized fragment).
     #[arg(long)]
     no_depth_prepass: bool,
@@ -186,6 +186,8 @@ enum PipelineName {
     Forward,
     /// Object-space (texel) shading.
     Objectspace,
+    /// Deferred shading: G-buffer, then light volumes (spheres, cones) blended per light.
+    Deferred,
     /// Tiled deferred shading: G-buffer, then one compute pass culls and shades 16x16 tiles.
     DeferredCompute,
 }
@@ -368,6 +370,7 @@ fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view:
             atlas_budget_texels: a.objectspace.atlas_budget << 20,
             visibility_prepass: !a.objectspace.no_visibility_prepass,
         }),
+        PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::DeferredCompute => {
             PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: !a.no_depth_prepass })
         }

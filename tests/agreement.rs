@@ -5,7 +5,9 @@
 mod common;
 
 use shadespace::metrics;
-use shadespace::render::{DeferredComputeConfig, ForwardConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::{
+    DeferredComputeConfig, DeferredConfig, ForwardConfig, PipelineConfig, RenderOptions, Renderer,
+};
 use shadespace::scene::{self, LightSpec, lights, path};
 
 const WIDTH: u32 = 320;
@@ -17,6 +19,8 @@ const AGREEMENT_FLIP: f32 = 0.02;
 fn pipelines() -> Vec<PipelineConfig> {
     vec![
         PipelineConfig::Forward(ForwardConfig { depth_prepass: false }),
+        PipelineConfig::Deferred(DeferredConfig::default()),
+        PipelineConfig::Deferred(DeferredConfig { depth_prepass: false }),
         PipelineConfig::DeferredCompute(DeferredComputeConfig::default()),
         PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: false }),
     ]

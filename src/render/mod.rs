@@ -9,6 +9,7 @@
 //! the line in [`Renderer::new`] that builds it.
 
 pub mod culling;
+pub mod deferred;
 pub mod deferred_compute;
 pub mod forward;
 pub mod frame;
@@ -30,6 +31,7 @@ use crate::hash::fnv1a;
 use crate::scene::{Camera, Light, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
 use culling::Frustum;
+pub use deferred::DeferredConfig;
 pub use deferred_compute::DeferredComputeConfig;
 pub use forward::ForwardConfig;
 pub use frame::Frame;
@@ -50,6 +52,9 @@ pub enum PipelineConfig {
     /// per-object atlas squares, reused across frames, gathered per pixel.
     #[serde(rename = "objectspace")]
     ObjectSpace(ObjectSpaceConfig),
+    /// Deferred shading with light volumes (spheres, cones) blended per light.
+    #[serde(rename = "deferred")]
+    Deferred(DeferredConfig),
     /// Tiled deferred shading: one compute pass culls and shades per tile.
     #[serde(rename = "deferred-compute")]
     DeferredCompute(DeferredComputeConfig),
@@ -61,6 +66,7 @@ impl PipelineConfig {
         match self {
             Self::Forward(_) => "forward",
             Self::ObjectSpace(_) => "objectspace",
+            Self::Deferred(_) => "deferred",
             Self::DeferredCompute(_) => "deferred-compute",
         }
     }
@@ -148,6 +154,9 @@ impl Renderer {
             PipelineConfig::ObjectSpace(c) => {
                 let os = objectspace::ObjectSpace::new(ctx, &mut shaders, &scene_gpu, &targets, c.clone())?;
                 Box::new(os)
+            }
+            PipelineConfig::Deferred(c) => {
+                Box::new(deferred::Deferred::new(device, &mut shaders, &scene_gpu, &targets, *c)?)
             }
             PipelineConfig::DeferredCompute(c) => {
                 Box::new(deferred_compute::DeferredCompute::new(device, &mut shaders, &scene_gpu, &targets, *c)?)

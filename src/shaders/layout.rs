@@ -51,6 +51,7 @@ pub(crate) use gpu_struct;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::deferred::volumes::GpuVolumeParams;
     use crate::render::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
     use crate::render::objectspace::atlas::{GpuAtlasEntry, GpuAtlasLevel};
     use crate::render::objectspace::resources::GpuParams;
@@ -102,6 +103,7 @@ mod tests {
         check::<GpuParams>(&modules);
         check::<Square>(&modules);
         check::<GpuUnproject>(&modules);
+        check::<GpuVolumeParams>(&modules);
     }
 
     gpu_struct! {

@@ -44,15 +44,17 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/light_bounds.wgsl", include_str!("shared/light_bounds.wgsl")),
     crate::render::objectspace::SHARED_WGSL,
     crate::render::passes::gbuffer::SHARED_WGSL,
+    crate::render::deferred::SHARED_WGSL,
 ];
 
 /// Every pass shader, for the test that validates them all.
 pub fn pass_shaders() -> Vec<ShaderSource> {
-    use crate::render::{deferred_compute, forward, objectspace, passes};
+    use crate::render::{deferred, deferred_compute, forward, objectspace, passes};
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend([passes::gbuffer::SHADER, deferred_compute::SHADER]);
+    all.extend_from_slice(deferred::PASS_SHADERS);
     all
 }
 
