@@ -12,7 +12,8 @@ use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
 use shadespace::render::{
-    ClusteredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer,
+    ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,
+    PipelineConfig, RenderOptions, Renderer,
 };
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
@@ -103,7 +104,8 @@ struct SceneArgs {
     /// tone mapping; 0 (default) turns bloom off.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = bloom_strength)]
     bloom: f32,
-    /// Forward: skip the depth pre-pass (shade every rasterized fragment).
+    /// Forward, deferred, deferred-compute: skip the depth pre-pass (shade or
+    /// write the G-buffer for every rasterized fragment).
     #[arg(long)]
     no_depth_prepass: bool,
     #[command(flatten)]
@@ -194,6 +196,10 @@ enum PipelineName {
     Objectspace,
     /// Clustered forward: fragments lit by GPU-built view-space light clusters.
     Clustered,
+    /// Deferred shading: G-buffer, then light volumes (spheres, cones) blended per light.
+    Deferred,
+    /// Tiled deferred shading: G-buffer, then one compute pass culls and shades 16x16 tiles.
+    DeferredCompute,
 }
 
 #[derive(Args)]
@@ -380,6 +386,10 @@ fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view:
             atlas_budget_texels: a.objectspace.atlas_budget << 20,
             visibility_prepass: !a.objectspace.no_visibility_prepass,
         }),
+        PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
+        PipelineName::DeferredCompute => {
+            PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: !a.no_depth_prepass })
+        }
     };
     RenderOptions { width: a.size.0, height: a.size.1, pipeline }
 }

@@ -6,7 +6,8 @@ mod common;
 
 use shadespace::metrics;
 use shadespace::render::{
-    ClusteredConfig, ForwardConfig, ForwardMultipassConfig, PipelineConfig, RenderOptions, Renderer,
+    ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, PipelineConfig,
+    RenderOptions, Renderer,
 };
 use shadespace::scene::{self, LightSpec, lights, path};
 
@@ -21,6 +22,10 @@ fn pipelines() -> Vec<PipelineConfig> {
         PipelineConfig::Forward(ForwardConfig { depth_prepass: false }),
         PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
         PipelineConfig::Clustered(ClusteredConfig::default()),
+        PipelineConfig::Deferred(DeferredConfig::default()),
+        PipelineConfig::Deferred(DeferredConfig { depth_prepass: false }),
+        PipelineConfig::DeferredCompute(DeferredComputeConfig::default()),
+        PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: false }),
     ]
 }
 
@@ -42,11 +47,12 @@ fn check(name: &str) {
     let ctx = common::gpu();
     let reference = render(&ctx, name, PipelineConfig::Forward(ForwardConfig::default()));
     let out = common::out_dir();
-    for pipeline in pipelines() {
-        let label = format!("{name}-{}", pipeline.name());
+    for (i, pipeline) in pipelines().into_iter().enumerate() {
+        let label = format!("{name}-{i}-{}", pipeline.name());
+        let settings = format!("{pipeline:?}");
         let test = render(&ctx, name, pipeline);
         let (err, map) = metrics::compare(&reference, &test);
-        eprintln!("{label}: against forward: {err:?}");
+        eprintln!("{label} ({settings}): against forward: {err:?}");
         if err.flip_mean > AGREEMENT_FLIP {
             test.save(out.join(format!("{label}.png"))).unwrap();
             map.save(out.join(format!("{label}-flip.png"))).unwrap();

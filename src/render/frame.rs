@@ -12,6 +12,7 @@
 
 use wgpu_profiler::{GpuProfiler, OwningScope};
 
+use super::gpu_types::GpuView;
 use super::scene_gpu::SceneGpu;
 use super::targets::Targets;
 use crate::scene::{Camera, Light};
@@ -26,6 +27,8 @@ pub struct Frame<'a> {
     /// The frame's lights in GPU order: the `view.global_light_count`
     /// ambient and directional lights first, then point and spot lights.
     pub lights: &'a [Light],
+    /// This frame's view uniform as uploaded (camera, light counts).
+    pub view: &'a GpuView,
     /// Per object: inside the view frustum.
     pub visible: &'a [bool],
     /// Frame number (tags counters and timings).

@@ -10,6 +10,8 @@
 
 pub mod clustered;
 pub mod culling;
+pub mod deferred;
+pub mod deferred_compute;
 pub mod forward;
 pub mod forward_multipass;
 pub mod frame;
@@ -32,6 +34,8 @@ use crate::scene::{Camera, Light, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
 pub use clustered::ClusteredConfig;
 use culling::Frustum;
+pub use deferred::DeferredConfig;
+pub use deferred_compute::DeferredComputeConfig;
 pub use forward::ForwardConfig;
 pub use forward_multipass::ForwardMultipassConfig;
 pub use frame::Frame;
@@ -60,6 +64,12 @@ pub enum PipelineConfig {
     /// built on the GPU, fragments lit by their cluster's lights.
     #[serde(rename = "clustered")]
     Clustered(ClusteredConfig),
+    /// Deferred shading with light volumes (spheres, cones) blended per light.
+    #[serde(rename = "deferred")]
+    Deferred(DeferredConfig),
+    /// Tiled deferred shading: one compute pass culls and shades per tile.
+    #[serde(rename = "deferred-compute")]
+    DeferredCompute(DeferredComputeConfig),
 }
 
 impl PipelineConfig {
@@ -70,6 +80,8 @@ impl PipelineConfig {
             Self::ForwardMultipass(_) => "forward-multipass",
             Self::ObjectSpace(_) => "objectspace",
             Self::Clustered(_) => "clustered",
+            Self::Deferred(_) => "deferred",
+            Self::DeferredCompute(_) => "deferred-compute",
         }
     }
 }
@@ -170,6 +182,12 @@ impl Renderer {
                 Box::new(os)
             }
             PipelineConfig::Clustered(c) => Box::new(clustered::Clustered::new(device, &mut shaders, &scene_gpu, *c)?),
+            PipelineConfig::Deferred(c) => {
+                Box::new(deferred::Deferred::new(device, &mut shaders, &scene_gpu, &targets, *c)?)
+            }
+            PipelineConfig::DeferredCompute(c) => {
+                Box::new(deferred_compute::DeferredCompute::new(device, &mut shaders, &scene_gpu, &targets, *c)?)
+            }
         };
         let tonemap = Tonemap::new(device, &mut shaders, &targets)?;
         let bloom_pass = Bloom::supported(ctx).then(|| Bloom::new(device, &mut shaders, &targets)).transpose()?;
@@ -244,6 +262,7 @@ impl Renderer {
                 targets: &self.targets,
                 camera,
                 lights: &lights,
+                view: &view,
                 visible: &visible,
                 number: frame,
                 lights_changed,

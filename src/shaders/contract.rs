@@ -5,6 +5,8 @@
 
 use std::fmt::Write;
 
+use crate::render::deferred::volumes::VolumeList;
+use crate::render::deferred_compute;
 use crate::render::gpu_types::GpuLightKind;
 use crate::render::objectspace::atlas::MAX_LEVELS;
 use crate::render::objectspace::{DebugView, TileCounter};
@@ -16,6 +18,9 @@ pub fn constants() -> Vec<(&'static str, u32)> {
     c.extend(GpuLightKind::ALL.iter().map(|k| (k.wgsl_name(), *k as u32)));
     c.extend(DebugView::ALL.iter().map(|v| (v.wgsl_name(), *v as u32)));
     c.extend(TileCounter::ALL.iter().map(|t| (t.wgsl_name(), *t as u32)));
+    c.extend(VolumeList::ALL.iter().map(|l| (l.wgsl_name(), *l as u32)));
+    c.push(("VOLUME_LISTS", VolumeList::ALL.len() as u32));
+    c.extend(deferred_compute::wgsl_constants());
     c
 }
 

@@ -51,11 +51,13 @@ pub(crate) use gpu_struct;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::deferred::volumes::GpuVolumeParams;
     use crate::render::forward_multipass::LightPair;
     use crate::render::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
     use crate::render::objectspace::atlas::{GpuAtlasEntry, GpuAtlasLevel};
     use crate::render::objectspace::resources::GpuParams;
     use crate::render::objectspace::trimap::Square;
+    use crate::render::passes::gbuffer::GpuUnproject;
     use crate::render::passes::light_grid::GpuLightGridParams;
     use crate::shaders::{ShaderLibrary, pass_shaders};
     use wgpu::naga;
@@ -104,6 +106,8 @@ mod tests {
         check::<Square>(&modules);
         check::<LightPair>(&modules);
         check::<GpuLightGridParams>(&modules);
+        check::<GpuUnproject>(&modules);
+        check::<GpuVolumeParams>(&modules);
     }
 
     gpu_struct! {

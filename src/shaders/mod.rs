@@ -42,18 +42,24 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
     crate::render::passes::light_grid::SHARED_WGSL[0],
     crate::render::passes::light_grid::SHARED_WGSL[1],
+    ShaderSource::new("shared/octahedral.wgsl", include_str!("shared/octahedral.wgsl")),
+    ShaderSource::new("shared/light_bounds.wgsl", include_str!("shared/light_bounds.wgsl")),
     crate::render::objectspace::SHARED_WGSL,
+    crate::render::passes::gbuffer::SHARED_WGSL,
+    crate::render::deferred::SHARED_WGSL,
 ];
 
 /// Every pass shader, for the test that validates them all.
 pub fn pass_shaders() -> Vec<ShaderSource> {
-    use crate::render::{clustered, forward, forward_multipass, objectspace, passes};
+    use crate::render::{clustered, deferred, deferred_compute, forward, forward_multipass, objectspace, passes};
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
     all.extend([forward_multipass::SHADER, passes::bloom::SHADER]);
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
     all.push(clustered::SHADER);
+    all.extend([passes::gbuffer::SHADER, deferred_compute::SHADER]);
+    all.extend_from_slice(deferred::PASS_SHADERS);
     all
 }
 

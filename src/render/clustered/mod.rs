@@ -47,7 +47,7 @@ impl Clustered {
         let raster = SceneRaster {
             shader: SHADER,
             vertex_entry: "vs_main",
-            fragment: Some(("fs_main", HDR_FORMAT)),
+            fragment: Some(("fs_main", &[HDR_FORMAT])),
             depth: DepthMode::EqualAfterPrepass,
             groups: &groups,
             blend: None,

@@ -87,7 +87,7 @@ impl ForwardMultipass {
         let raster = SceneRaster {
             shader: SHADER,
             vertex_entry: "vs_main",
-            fragment: Some(("fs_main", HDR_FORMAT)),
+            fragment: Some(("fs_main", &[HDR_FORMAT])),
             depth: DepthMode::EqualAfterPrepass,
             groups: &[Some(&pairs_layout)],
             blend: Some(wgpu::BlendState { color: additive, alpha: wgpu::BlendComponent::REPLACE }),
@@ -152,7 +152,7 @@ fn light_passes(
 ) {
     let (scene, targets, lights) = (frame.scene, frame.targets, frame.lights);
     let size = (targets.width, targets.height);
-    let view_proj = frame.camera.view_projection(size.0 as f32 / size.1 as f32);
+    let view_proj = frame.view.view_proj;
     let color = [color_attachment(&targets.hdr_view, wgpu::Color::BLACK)];
     let mut rp = frame.render_pass("light passes", &color, Some(depth_attachment(targets, false)));
     rp.set_pipeline(pipeline);

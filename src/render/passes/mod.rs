@@ -5,6 +5,7 @@
 
 pub mod bloom;
 pub mod depth_prepass;
+pub mod gbuffer;
 pub mod light_grid;
 pub mod tonemap;
 pub mod visibility;
@@ -40,23 +41,25 @@ pub fn scene_raster_pipeline(
     fragment: Option<(&str, wgpu::TextureFormat)>,
     depth: DepthMode,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
+    let fragment = fragment.as_ref().map(|(entry, format)| (*entry, std::slice::from_ref(format)));
     let raster = SceneRaster { shader, vertex_entry, fragment, depth, groups: &[], blend: None };
     scene_raster_pipeline_from(device, shaders, scene, &raster)
 }
 
 /// A scene raster pipeline with more than [`scene_raster_pipeline`]'s
-/// defaults: bind groups after the scene's, and blending.
+/// defaults: several colour targets (a G-buffer), bind groups after the
+/// scene's, and blending.
 #[derive(Clone, Copy)]
 pub struct SceneRaster<'a> {
     pub shader: ShaderSource,
     pub vertex_entry: &'a str,
-    /// Fragment entry point and colour format (none: depth only).
-    pub fragment: Option<(&'a str, wgpu::TextureFormat)>,
+    /// Fragment entry point and colour target formats (none: depth only).
+    pub fragment: Option<(&'a str, &'a [wgpu::TextureFormat])>,
     pub depth: DepthMode,
     /// Layouts of groups 1, 2, ... (group 0 is the scene's; `None` leaves a
     /// group unused).
     pub groups: &'a [Option<&'a wgpu::BindGroupLayout>],
-    /// Blending into the colour target (none: replace).
+    /// Blending into every colour target (none: replace).
     pub blend: Option<wgpu::BlendState>,
 }
 
@@ -76,8 +79,10 @@ pub fn scene_raster_pipeline_from(
         bind_group_layouts: &groups,
         immediate_size: 0,
     });
-    let targets = raster.fragment.map(|(_, format)| {
-        [Some(wgpu::ColorTargetState { format, blend: raster.blend, write_mask: wgpu::ColorWrites::ALL })]
+    let targets: Option<Vec<Option<wgpu::ColorTargetState>>> = raster.fragment.map(|(_, formats)| {
+        let target =
+            |format| Some(wgpu::ColorTargetState { format, blend: raster.blend, write_mask: wgpu::ColorWrites::ALL });
+        formats.iter().map(|f| target(*f)).collect()
     });
     let (depth_write, compare) = match raster.depth {
         DepthMode::Write => (true, wgpu::CompareFunction::Greater),
@@ -96,7 +101,7 @@ pub fn scene_raster_pipeline_from(
             module: &module,
             entry_point: Some(entry),
             compilation_options: Default::default(),
-            targets,
+            targets: targets.as_slice(),
         }),
         primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
         depth_stencil: Some(wgpu::DepthStencilState {
@@ -133,6 +138,12 @@ pub fn depth_attachment(targets: &Targets, clear: bool) -> wgpu::RenderPassDepth
         depth_ops: Some(wgpu::Operations { load, store: wgpu::StoreOp::Store }),
         stencil_ops: None,
     }
+}
+
+/// The depth target as a read-only attachment: depth-tested against, and
+/// sampled in the same pass (light volumes read it to rebuild positions).
+pub fn depth_attachment_read_only(targets: &Targets) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment { view: &targets.depth_view, depth_ops: None, stencil_ops: None }
 }
 
 /// A colour attachment cleared to `clear` and stored.

@@ -1,0 +1,151 @@
+//! Deferred shading with light volumes, as in the forward-versus-deferred
+//! study: the shared G-buffer pass, then the lights, added into the HDR
+//! target one light at a time where its volume covers the screen:
+//!
+//! 1. *lights ambient+directional*: every pixel, emission plus the ambient
+//!    and directional lights (the study's full-screen pass; in compute here,
+//!    since it writes every pixel anyway, which also clears the target);
+//! 2. *light volumes*: one workgroup sorts the point and spot lights that
+//!    may be in view into four instance lists (sphere or cone, eye outside
+//!    or inside the volume) and sets the instance counts of four indirect
+//!    draws, so 10,000+ lights take four draw calls ([`volumes`]);
+//! 3. *lights point*, *lights spot*: a low-poly sphere enclosing each point
+//!    light's range, a cone enclosing each spot light's cone, instanced, each
+//!    fragment lighting the G-buffer surface behind it with its light,
+//!    blended additively. From outside a volume, front faces tested against
+//!    the scene's depth; from inside, back faces, untested.
+//!
+//! Simplified: no stencil marking of the pixels inside a volume (the
+//! lighting model's range cut-off leaves pixels in front of or behind the
+//! lit region unlit, at the cost of shading them); no shadows (the lighting
+//! model has none yet); spot lights wider than about 63 degrees use the
+//! sphere.
+
+pub mod volumes;
+
+use serde::Serialize;
+
+use super::frame::Frame;
+use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
+use super::passes::gbuffer::{self, GBuffer, GbufferPass, gbuffer};
+use super::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use super::report::PipelineReport;
+use super::scene_gpu::SceneGpu;
+use super::targets::{HDR_FORMAT, Targets};
+use super::{Pipeline, PipelineConfig, RenderError};
+use crate::shaders::{ShaderLibrary, ShaderSource};
+use volumes::{LightVolumes, VolumeList, classify_volumes, draw_volumes};
+
+/// The module the light-volume shaders import (`shadespace::deferred`).
+pub const SHARED_WGSL: ShaderSource = ShaderSource::new("deferred.wgsl", include_str!("deferred.wgsl"));
+pub const GLOBALS_SHADER: ShaderSource = ShaderSource::new("globals.wgsl", include_str!("globals.wgsl"));
+/// The pass shaders, for the test that validates every shader.
+pub const PASS_SHADERS: &[ShaderSource] = &[GLOBALS_SHADER, volumes::CLASSIFY_SHADER, volumes::VOLUMES_SHADER];
+
+/// Settings of the deferred (light volume) pipeline.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct DeferredConfig {
+    /// Lay down depth first, so that the G-buffer pass runs one fragment per
+    /// pixel (`Equal` test): on by default because fragment work is what the
+    /// H100 is slow at, and the same pre-pass measured faster there before the
+    /// (lighter) visibility pass.
+    pub depth_prepass: bool,
+}
+
+impl Default for DeferredConfig {
+    fn default() -> Self {
+        Self { depth_prepass: true }
+    }
+}
+
+/// The deferred (light volume) pipeline.
+pub struct Deferred {
+    config: DeferredConfig,
+    prepass: Option<DepthPrepass>,
+    gbuffer_pass: GbufferPass,
+    gbuffer: GBuffer,
+    globals: wgpu::ComputePipeline,
+    /// The HDR target, written by the full-screen pass.
+    output: wgpu::BindGroup,
+    volumes: LightVolumes,
+}
+
+impl Deferred {
+    /// Builds its passes for `scene` and `targets`.
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+        config: DeferredConfig,
+    ) -> Result<Self, RenderError> {
+        let prepass = config.depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
+        let gbuffer_pass = GbufferPass::new(device, shaders, scene, config.depth_prepass)?;
+        let gbuffer = GBuffer::new(device, targets);
+        let d2 = wgpu::TextureViewDimension::D2;
+        let layout = bind_group_layout(
+            device,
+            "deferred output",
+            &[Binding::StorageTexture { format: HDR_FORMAT, dimension: d2 }],
+        );
+        let output =
+            bind_group(device, "deferred output", &layout, &[wgpu::BindingResource::TextureView(&targets.hdr_view)]);
+        let groups = [&scene.layout, &gbuffer.read_layout, &layout];
+        let globals = compute_pipeline(device, shaders, GLOBALS_SHADER, "lights_globals", &groups)?;
+        let volumes = LightVolumes::new(device, shaders, scene, &gbuffer)?;
+        Ok(Self { config, prepass, gbuffer_pass, gbuffer, globals, output, volumes })
+    }
+}
+
+impl Deferred {
+    /// The light volumes (for their debug read-backs).
+    pub fn volumes(&self) -> &LightVolumes {
+        &self.volumes
+    }
+}
+
+impl Pipeline for Deferred {
+    fn encode(&mut self, frame: &mut Frame) {
+        if let Some(prepass) = &self.prepass {
+            depth_prepass(frame, prepass);
+        }
+        gbuffer(frame, &self.gbuffer_pass, &self.gbuffer);
+        lights_globals(frame, &self.globals, &self.gbuffer, &self.output);
+        classify_volumes(frame, &mut self.volumes);
+        let (point, spot) =
+            ([VolumeList::PointOutside, VolumeList::PointInside], [VolumeList::SpotOutside, VolumeList::SpotInside]);
+        draw_volumes(frame, &self.volumes, &self.gbuffer, point, "lights point");
+        draw_volumes(frame, &self.volumes, &self.gbuffer, spot, "lights spot");
+    }
+
+    /// Lights come from the volume lists, not the CPU's per-object ones.
+    fn uses_object_light_lists(&self) -> bool {
+        false
+    }
+
+    /// Memory: the G-buffer and the light volumes (meshes, lists, draws);
+    /// setup: the G-buffer's bytes per pixel (with depth) and the meshes'
+    /// triangles.
+    fn report(&self) -> PipelineReport {
+        let (sphere, cone) = LightVolumes::triangles();
+        PipelineReport::new(PipelineConfig::Deferred(self.config))
+            .memory("gbuffer", self.gbuffer.bytes())
+            .memory("light_volumes", self.volumes.bytes())
+            .setup("gbuffer_bytes_per_pixel", gbuffer::BYTES_PER_PIXEL_WITH_DEPTH)
+            .setup("sphere_triangles", sphere)
+            .setup("cone_triangles", cone)
+    }
+}
+
+/// Reads: the G-buffer (with depth) and the ambient and directional lights.
+/// Writes: every pixel of `targets.hdr` (through `output`).
+fn lights_globals(frame: &mut Frame, pipeline: &wgpu::ComputePipeline, gbuffer: &GBuffer, output: &wgpu::BindGroup) {
+    let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
+    let scene = frame.scene.bind_group();
+    let mut cp = frame.compute_pass("lights ambient+directional");
+    cp.set_pipeline(pipeline);
+    cp.set_bind_group(0, scene, &[]);
+    cp.set_bind_group(1, &gbuffer.read_group, &[]);
+    cp.set_bind_group(2, output, &[]);
+    cp.dispatch_workgroups(w, h, 1);
+}

@@ -1,0 +1,136 @@
+//! Tiled deferred shading, lit in compute: the shared G-buffer pass, then
+//! one compute pass over 16x16 screen tiles (`tiled.wgsl`). Each workgroup
+//! reduces its tile's depth range, builds the tile's frustum, culls every
+//! point and spot light against it in chunks of 256 into a workgroup list
+//! (in light order, so the image is deterministic), shades its pixels with
+//! the ambient and directional lights and the listed ones, and writes
+//! `targets.hdr`. A tile reached by more lights than the list holds shades in
+//! batches (no light is dropped). This is the conventional pipeline the H100
+//! favours (lighting on every SM, fragment work only in the G-buffer pass).
+//!
+//! Simplified: lights are culled by bounding spheres (a spot light by its
+//! sector's), not by exact cone tests; one depth range per tile (no 2.5D
+//! depth masks or clusters), so tiles across depth discontinuities keep
+//! lights of the gap; no shadows (the lighting model has none yet).
+
+use serde::Serialize;
+
+use super::frame::Frame;
+use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
+use super::passes::gbuffer::{self, GBuffer, GbufferPass, gbuffer};
+use super::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use super::report::PipelineReport;
+use super::scene_gpu::SceneGpu;
+use super::targets::{HDR_FORMAT, Targets};
+use super::{Pipeline, PipelineConfig, RenderError};
+use crate::shaders::{ShaderLibrary, ShaderSource};
+
+pub const SHADER: ShaderSource = ShaderSource::new("tiled.wgsl", include_str!("tiled.wgsl"));
+
+/// Tile side in pixels (one workgroup of `TILE_SIZE`² threads per tile).
+pub const TILE_SIZE: u32 = 16;
+/// Lights culled per step, one per thread of a tile.
+pub const LIGHT_CHUNK: u32 = TILE_SIZE * TILE_SIZE;
+/// Lights a tile's workgroup list holds; when fewer than a chunk's worth of
+/// places are left, the tile shades the listed lights and starts again.
+pub const TILE_LIGHT_CAPACITY: u32 = 512;
+
+/// The constants `tiled.wgsl` shares with Rust (`shaders::contract`).
+pub fn wgsl_constants() -> [(&'static str, u32); 3] {
+    [("TILED_TILE_SIZE", TILE_SIZE), ("TILED_CHUNK", LIGHT_CHUNK), ("TILED_LIST_CAPACITY", TILE_LIGHT_CAPACITY)]
+}
+
+/// Settings of the tiled deferred pipeline.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct DeferredComputeConfig {
+    /// Lay down depth first, so that the G-buffer pass runs one fragment per
+    /// pixel (`Equal` test): on by default because fragment work is what the
+    /// H100 is slow at, and the same pre-pass measured faster there before the
+    /// (lighter) visibility pass.
+    pub depth_prepass: bool,
+}
+
+impl Default for DeferredComputeConfig {
+    fn default() -> Self {
+        Self { depth_prepass: true }
+    }
+}
+
+/// The tiled deferred pipeline.
+pub struct DeferredCompute {
+    config: DeferredComputeConfig,
+    prepass: Option<DepthPrepass>,
+    gbuffer_pass: GbufferPass,
+    gbuffer: GBuffer,
+    lighting: wgpu::ComputePipeline,
+    /// The HDR target, written.
+    output: wgpu::BindGroup,
+}
+
+impl DeferredCompute {
+    /// Builds its passes for `scene` and `targets`.
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+        config: DeferredComputeConfig,
+    ) -> Result<Self, RenderError> {
+        let prepass = config.depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
+        let gbuffer_pass = GbufferPass::new(device, shaders, scene, config.depth_prepass)?;
+        let gbuffer = GBuffer::new(device, targets);
+        let d2 = wgpu::TextureViewDimension::D2;
+        let layout = bind_group_layout(
+            device,
+            "tiled lighting output",
+            &[Binding::StorageTexture { format: HDR_FORMAT, dimension: d2 }],
+        );
+        let output = bind_group(
+            device,
+            "tiled lighting output",
+            &layout,
+            &[wgpu::BindingResource::TextureView(&targets.hdr_view)],
+        );
+        let groups = [&scene.layout, &gbuffer.read_layout, &layout];
+        let lighting = compute_pipeline(device, shaders, SHADER, "tiled_lighting", &groups)?;
+        Ok(Self { config, prepass, gbuffer_pass, gbuffer, lighting, output })
+    }
+}
+
+impl Pipeline for DeferredCompute {
+    fn encode(&mut self, frame: &mut Frame) {
+        if let Some(prepass) = &self.prepass {
+            depth_prepass(frame, prepass);
+        }
+        gbuffer(frame, &self.gbuffer_pass, &self.gbuffer);
+        tiled_lighting(frame, &self.lighting, &self.gbuffer, &self.output);
+    }
+
+    /// Lights come from the tiles' own lists, not the CPU's per-object ones.
+    fn uses_object_light_lists(&self) -> bool {
+        false
+    }
+
+    /// Memory: the G-buffer; setup: its bytes per pixel (with depth), the
+    /// tile size and the tile list's capacity.
+    fn report(&self) -> PipelineReport {
+        PipelineReport::new(PipelineConfig::DeferredCompute(self.config))
+            .memory("gbuffer", self.gbuffer.bytes())
+            .setup("gbuffer_bytes_per_pixel", gbuffer::BYTES_PER_PIXEL_WITH_DEPTH)
+            .setup("tile_size", TILE_SIZE as u64)
+            .setup("tile_light_capacity", TILE_LIGHT_CAPACITY as u64)
+    }
+}
+
+/// Reads: the G-buffer (with depth) and the lights. Writes: every pixel of
+/// `targets.hdr` (through `output`).
+fn tiled_lighting(frame: &mut Frame, pipeline: &wgpu::ComputePipeline, gbuffer: &GBuffer, output: &wgpu::BindGroup) {
+    let (w, h) = (frame.targets.width.div_ceil(TILE_SIZE), frame.targets.height.div_ceil(TILE_SIZE));
+    let scene = frame.scene.bind_group();
+    let mut cp = frame.compute_pass("tiled lighting");
+    cp.set_pipeline(pipeline);
+    cp.set_bind_group(0, scene, &[]);
+    cp.set_bind_group(1, &gbuffer.read_group, &[]);
+    cp.set_bind_group(2, output, &[]);
+    cp.dispatch_workgroups(w, h, 1);
+}

@@ -1,0 +1,183 @@
+// Tiled deferred lighting, one workgroup per 16x16 screen tile, one thread
+// per pixel:
+// 1. the tile's depth range: workgroup atomic min/max over its pixels' depths
+//    (background pixels, depth 0, are left out; an all-background tile is
+//    written black and leaves);
+// 2. the tile's frustum: four side planes through its pixel edges and two
+//    depth planes at its range, taken from rows of the view-projection;
+// 3. the point and spot lights (every light after the global ones), in
+//    chunks of 256 (one per thread), tested against it by bounding sphere
+//    (`light_bounds`: a point light's range, a spot light's sector);
+//    survivors are appended to a workgroup list in light order (a ballot of
+//    bits and population counts, so the image does not depend on thread
+//    timing);
+// 4. when the list could not take another whole chunk, and after the last
+//    chunk, every pixel shades with the lights listed so far and the list is
+//    emptied: so no light is ever dropped, however many reach a tile;
+// 5. each pixel adds emission and the ambient and directional lights.
+#import shadespace::contract::{TILED_TILE_SIZE, TILED_CHUNK, TILED_LIST_CAPACITY}
+#import shadespace::lighting::light_radiance
+#import shadespace::light_bounds::{light_bounds, sphere_touches}
+#import shadespace::scene_bindings::{view, lights}
+#import shadespace::surface::light_globals
+#import shadespace::gbuffer::{GbufferTexel, gbuffer_depth_at, gbuffer_texel}
+
+@group(2) @binding(0) var hdr: texture_storage_2d<rgba16float, write>;
+
+// Bit patterns of the tile's smallest and largest non-background depth
+// (positive floats order like their bits).
+var<workgroup> depth_min_bits: atomic<u32>;
+var<workgroup> depth_max_bits: atomic<u32>;
+// The tile's device-depth range (x: min, y: max), or (1, 0) when empty.
+var<workgroup> tile_range: vec2f;
+// This chunk's lights that touch the tile, one bit per thread.
+var<workgroup> chunk_bits: array<atomic<u32>, 8>;
+var<workgroup> list: array<u32, TILED_LIST_CAPACITY>;
+var<workgroup> list_count: u32;
+
+// Row `i` of the view-projection (WGSL matrices are column-major).
+fn view_proj_row(i: u32) -> vec4f {
+    let m = view.view_proj;
+    return vec4f(m[0][i], m[1][i], m[2][i], m[3][i]);
+}
+
+// A world-space plane (unit normal, offset) from a clip-space half-space
+// `dot(row, p) >= 0` (Gribb-Hartmann).
+fn normalized(p: vec4f) -> vec4f {
+    return p / length(p.xyz);
+}
+
+// The tile's frustum: pixels `lo` to `hi` (exclusive), device depths
+// `range.x` (farthest) to `range.y` (nearest).
+fn tile_frustum(lo: vec2f, hi: vec2f, range: vec2f) -> array<vec4f, 6> {
+    let ndc_lo = lo * view.viewport.zw * vec2f(2.0, -2.0) + vec2f(-1.0, 1.0);
+    let ndc_hi = hi * view.viewport.zw * vec2f(2.0, -2.0) + vec2f(-1.0, 1.0);
+    let rx = view_proj_row(0u);
+    let ry = view_proj_row(1u);
+    let rz = view_proj_row(2u);
+    let rw = view_proj_row(3u);
+    // Pixel rows grow downwards, NDC y upwards: ndc_hi.y is the bottom.
+    // Reversed Z: depth falls with distance.
+    return array<vec4f, 6>(
+        normalized(rx - ndc_lo.x * rw),
+        normalized(ndc_hi.x * rw - rx),
+        normalized(ry - ndc_hi.y * rw),
+        normalized(ndc_lo.y * rw - ry),
+        normalized(rz - range.x * rw),
+        normalized(range.y * rw - rz),
+    );
+}
+
+// Shades `texel` with the first `count` listed lights.
+fn shade_listed(texel: GbufferTexel, count: u32) -> vec3f {
+    var color = vec3f(0.0);
+    for (var i = 0u; i < count; i++) {
+        color += light_radiance(lights[list[i]], texel.surface, texel.to_eye);
+    }
+    return color;
+}
+
+@compute @workgroup_size(TILED_TILE_SIZE, TILED_TILE_SIZE)
+fn tiled_lighting(
+    @builtin(global_invocation_id) id: vec3u,
+    @builtin(local_invocation_index) thread: u32,
+    @builtin(workgroup_id) tile: vec3u,
+) {
+    let size = vec2u(view.viewport.xy);
+    let in_image = all(id.xy < size);
+    if thread == 0u {
+        atomicStore(&depth_min_bits, 0xffffffffu);
+        atomicStore(&depth_max_bits, 0u);
+        list_count = 0u;
+    }
+    if thread < 8u {
+        atomicStore(&chunk_bits[thread], 0u);
+    }
+    workgroupBarrier();
+    var depth = 0.0;
+    if in_image {
+        depth = gbuffer_depth_at(id.xy);
+    }
+    let lit = depth > 0.0;
+    if lit {
+        atomicMin(&depth_min_bits, bitcast<u32>(depth));
+        atomicMax(&depth_max_bits, bitcast<u32>(depth));
+    }
+    workgroupBarrier();
+    if thread == 0u {
+        tile_range = vec2f(bitcast<f32>(atomicLoad(&depth_min_bits)), bitcast<f32>(atomicLoad(&depth_max_bits)));
+        if atomicLoad(&depth_max_bits) == 0u {
+            tile_range = vec2f(1.0, 0.0);
+        }
+    }
+    let range = workgroupUniformLoad(&tile_range);
+    if range.x > range.y {
+        if in_image {
+            textureStore(hdr, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
+        }
+        return;
+    }
+    let lo = vec2f(tile.xy * TILED_TILE_SIZE);
+    let hi = vec2f(min((tile.xy + 1u) * TILED_TILE_SIZE, size));
+    let frustum = tile_frustum(lo, hi, range);
+    var texel: GbufferTexel;
+    var color = vec3f(0.0);
+    if lit {
+        texel = gbuffer_texel(id.xy, depth);
+        color = texel.emissive + light_globals(texel.surface, texel.to_eye);
+    }
+    let word = thread / 32u;
+    let bit = 1u << (thread % 32u);
+    let count = view.light_count;
+    for (var first = view.global_light_count; first < count; first += TILED_CHUNK) {
+        // Cull: one light per thread.
+        let index = first + thread;
+        var touches = false;
+        if index < count {
+            touches = sphere_touches(frustum, light_bounds(lights[index]));
+        }
+        if touches {
+            atomicOr(&chunk_bits[word], bit);
+        }
+        let listed = workgroupUniformLoad(&list_count);
+        // Append in light order: this light's place is the number of
+        // survivors on lower threads.
+        var total = 0u;
+        var below = 0u;
+        for (var w = 0u; w < 8u; w++) {
+            let bits = atomicLoad(&chunk_bits[w]);
+            total += countOneBits(bits);
+            if w < word {
+                below += countOneBits(bits);
+            } else if w == word {
+                below += countOneBits(bits & (bit - 1u));
+            }
+        }
+        if touches {
+            list[listed + below] = index;
+        }
+        workgroupBarrier();
+        if thread < 8u {
+            atomicStore(&chunk_bits[thread], 0u);
+        }
+        if thread == 0u {
+            list_count = listed + total;
+        }
+        // Shade the list when another chunk might not fit, and at the end.
+        let filled = workgroupUniformLoad(&list_count);
+        let last = first + TILED_CHUNK >= count;
+        if filled > TILED_LIST_CAPACITY - TILED_CHUNK || (last && filled > 0u) {
+            if lit {
+                color += shade_listed(texel, filled);
+            }
+            // Everyone has read the list before the next chunk writes it:
+            // the next `workgroupUniformLoad` is a barrier.
+            if thread == 0u {
+                list_count = 0u;
+            }
+        }
+    }
+    if in_image {
+        textureStore(hdr, id.xy, vec4f(color, 1.0));
+    }
+}

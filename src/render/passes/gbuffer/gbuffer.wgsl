@@ -1,0 +1,42 @@
+// G-buffer pass: rasterize the scene and store, per pixel, what lighting
+// needs besides depth: the octahedral-encoded unit normal, the albedo, and the
+// object (its specular, shininess and emission are per object, so the index
+// carries them exactly). Positions come back from depth. Its clip position is
+// `object_clip_position`, so after a depth pre-pass the `Equal` test passes.
+#import shadespace::octahedral::oct_encode
+#import shadespace::scene::vertex_uv0
+#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, object_clip_position}
+
+struct VertexOut {
+    @builtin(position) @invariant clip: vec4f,
+    @location(0) normal: vec3f,
+    @location(1) uv0: vec2f,
+    @location(2) @interpolate(flat) object: u32,
+}
+
+struct GbufferOut {
+    @location(0) normal: vec2f,
+    @location(1) albedo_color: vec4f,
+    @location(2) object: u32,
+}
+
+@vertex
+fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
+    let v = vertices[vi];
+    var out: VertexOut;
+    out.clip = object_clip_position(object, vi);
+    out.normal = (objects[object].normal_model * vec4f(v.normal, 0.0)).xyz;
+    out.uv0 = vertex_uv0(v);
+    out.object = object;
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> GbufferOut {
+    let o = objects[in.object];
+    var out: GbufferOut;
+    out.normal = oct_encode(normalize(in.normal));
+    out.albedo_color = vec4f(textureSample(albedo, albedo_sampler, in.uv0, o.albedo_layer).rgb * o.base_color.rgb, 1.0);
+    out.object = in.object;
+    return out;
+}

@@ -1,0 +1,54 @@
+// Reading the G-buffer (group 1 of every deferred lighting pass; mirrors
+// `render::passes::gbuffer::GBuffer::read_layout`): the surface at a pixel,
+// its position rebuilt from depth with the inverse view-projection.
+#define_import_path shadespace::gbuffer
+#import shadespace::lighting::Surface
+#import shadespace::octahedral::oct_decode
+#import shadespace::scene_bindings::{view, objects}
+
+// Mirrors `render::passes::gbuffer::GpuUnproject`.
+struct Unproject {
+    inv_view_proj: mat4x4f,
+}
+
+@group(1) @binding(0) var gbuffer_depth: texture_depth_2d;
+@group(1) @binding(1) var gbuffer_normal: texture_2d<f32>;
+@group(1) @binding(2) var gbuffer_albedo: texture_2d<f32>;
+@group(1) @binding(3) var gbuffer_object: texture_2d<u32>;
+@group(1) @binding(4) var<uniform> unproject: Unproject;
+
+// A lit pixel of the G-buffer.
+struct GbufferTexel {
+    surface: Surface,
+    emissive: vec3f,
+    // Unit vector from the surface to the eye.
+    to_eye: vec3f,
+}
+
+// Device depth of a pixel; 0 (the cleared far plane, reversed Z) is background.
+fn gbuffer_depth_at(pixel: vec2u) -> f32 {
+    return textureLoad(gbuffer_depth, pixel, 0);
+}
+
+// World position of the centre of `pixel` at device depth `depth`.
+fn world_position(pixel: vec2u, depth: f32) -> vec3f {
+    let uv = (vec2f(pixel) + 0.5) * view.viewport.zw;
+    let ndc = vec4f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
+    let p = unproject.inv_view_proj * ndc;
+    return p.xyz / p.w;
+}
+
+// The surface at `pixel`, whose depth `depth` is not background.
+fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
+    let object = textureLoad(gbuffer_object, pixel, 0).x;
+    let o = objects[object];
+    var t: GbufferTexel;
+    t.surface.position = world_position(pixel, depth);
+    t.surface.normal = oct_decode(textureLoad(gbuffer_normal, pixel, 0).xy);
+    t.surface.albedo = textureLoad(gbuffer_albedo, pixel, 0).rgb;
+    t.surface.specular = o.specular;
+    t.surface.shininess = o.shininess;
+    t.emissive = o.emissive;
+    t.to_eye = normalize(view.camera_position.xyz - t.surface.position);
+    return t;
+}

@@ -1,0 +1,236 @@
+//! G-buffer pass, shared by the deferred pipelines: rasterizes the visible
+//! objects (after an optional depth pre-pass, testing `Equal`) into a slim
+//! G-buffer, 16 bytes per pixel with the frame's depth:
+//!
+//! | target | format | holds |
+//! | --- | --- | --- |
+//! | `targets.depth` | `Depth32Float` | reversed-Z depth (positions are rebuilt from it) |
+//! | normal | `Rg16Float` | the unit normal, octahedral-encoded ([`octahedral`]) |
+//! | albedo | `Rgb10a2Unorm` | albedo (texture times base colour), linear; alpha unused |
+//! | object | `R32Uint` | the object, whose table entry holds specular, shininess and emission |
+//!
+//! Why these: 10-bit linear albedo costs the 4 bytes of `Rgba8Unorm` and is
+//! finer than 8-bit sRGB above a linear albedo of about 0.02 (up to 9x at
+//! white) and than 8-bit linear everywhere. Against forward at 320x180 (mean
+//! FLIP, atrium / voxels; `tests/agreement.rs`): 8-bit sRGB 0.0072 / 0.0013,
+//! 8-bit linear 0.0043 / 0.0095, 10-bit linear 0.0022 / 0.0033, half floats
+//! (8 bytes) 0.0017 / 0.0009. Specular, shininess and emission are per
+//! object in this renderer, so one object index carries all three exactly
+//! (emission in HDR) in 4 bytes, where storing them would take 8 or more
+//! and quantize shininess. Half floats keep the encoded normal within 0.06
+//! degrees (tested); `Rg16Snorm` would be finer but needs an optional
+//! feature. The lighting passes read it through `gbuffer_read.wgsl`
+//! (`shadespace::gbuffer`, bind group 1).
+
+pub mod octahedral;
+
+use glam::{DVec4, Mat4};
+
+use super::{
+    Binding, DepthMode, SceneRaster, bind_group, bind_group_layout_for, color_attachment, depth_attachment,
+    draw_objects, scene_raster_pipeline_from,
+};
+use crate::render::frame::Frame;
+use crate::render::gpu_types::GpuView;
+use crate::render::scene_gpu::SceneGpu;
+use crate::render::targets::Targets;
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
+
+pub const SHADER: ShaderSource = ShaderSource::new("gbuffer.wgsl", include_str!("gbuffer.wgsl"));
+/// The module lighting passes import to read the G-buffer (`shadespace::gbuffer`).
+pub const SHARED_WGSL: ShaderSource = ShaderSource::new("gbuffer_read.wgsl", include_str!("gbuffer_read.wgsl"));
+
+/// Octahedral-encoded unit normal.
+pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
+/// Linear albedo, 10 bits per channel.
+pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
+/// The object index (its material is in the object table).
+pub const OBJECT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// Bytes per pixel of the G-buffer's own targets (normal, albedo, object).
+pub const BYTES_PER_PIXEL: u64 = 12;
+/// Bytes per pixel including the frame's depth target, which it shares.
+pub const BYTES_PER_PIXEL_WITH_DEPTH: u64 = BYTES_PER_PIXEL + 4;
+
+gpu_struct! {
+    /// What the lighting passes need to rebuild positions from depth
+    /// (`Unproject` in `gbuffer_read.wgsl`).
+    pub struct GpuUnproject as "Unproject" {
+        /// Inverse of the view's `view_proj`: (NDC x, y, device depth, 1) -> world.
+        pub inv_view_proj: Mat4,
+    }
+}
+
+impl GpuUnproject {
+    /// The inverse of `view.view_proj`, computed in double precision (the
+    /// reversed-Z projection's depth row is small next to the others).
+    pub fn new(view: &GpuView) -> Self {
+        Self { inv_view_proj: view.view_proj.as_dmat4().inverse().as_mat4() }
+    }
+
+    /// World position of NDC point (`x`, `y`) at device depth `depth`.
+    pub fn world(&self, x: f32, y: f32, depth: f32) -> glam::Vec3 {
+        let p = self.inv_view_proj.as_dmat4() * DVec4::new(x as f64, y as f64, depth as f64, 1.0);
+        (p.truncate() / p.w).as_vec3()
+    }
+}
+
+/// The G-buffer's targets, its unproject uniform, and the bind group that
+/// lighting passes read it through.
+pub struct GBuffer {
+    /// [`NORMAL_FORMAT`], one texel per pixel (as are the others).
+    pub normal: wgpu::Texture,
+    /// [`ALBEDO_FORMAT`].
+    pub albedo: wgpu::Texture,
+    /// [`OBJECT_FORMAT`].
+    pub object: wgpu::Texture,
+    normal_view: wgpu::TextureView,
+    albedo_view: wgpu::TextureView,
+    object_view: wgpu::TextureView,
+    unproject: wgpu::Buffer,
+    /// Group 1 of the lighting passes (`gbuffer_read.wgsl`): depth, normal,
+    /// albedo, object, unproject; visible to fragment and compute stages.
+    pub read_layout: wgpu::BindGroupLayout,
+    pub read_group: wgpu::BindGroup,
+}
+
+impl GBuffer {
+    /// Targets of the size of `targets`, read together with its depth.
+    pub fn new(device: &wgpu::Device, targets: &Targets) -> Self {
+        let make = |label, format| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d { width: targets.width, height: targets.height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        };
+        let (normal, albedo, object) = (
+            make("gbuffer normal", NORMAL_FORMAT),
+            make("gbuffer albedo", ALBEDO_FORMAT),
+            make("gbuffer object", OBJECT_FORMAT),
+        );
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let (normal_view, albedo_view, object_view) = (view(&normal), view(&albedo), view(&object));
+        let unproject = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("gbuffer unproject"),
+            size: size_of::<GpuUnproject>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let d2 = wgpu::TextureViewDimension::D2;
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        let read_layout = bind_group_layout_for(
+            device,
+            "gbuffer read",
+            wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            &[
+                Binding::Texture { sample: wgpu::TextureSampleType::Depth, dimension: d2 },
+                Binding::Texture { sample: float, dimension: d2 },
+                Binding::Texture { sample: float, dimension: d2 },
+                Binding::Texture { sample: wgpu::TextureSampleType::Uint, dimension: d2 },
+                Binding::Uniform,
+            ],
+        );
+        let read_group = bind_group(
+            device,
+            "gbuffer read",
+            &read_layout,
+            &[
+                wgpu::BindingResource::TextureView(&targets.depth_view),
+                wgpu::BindingResource::TextureView(&normal_view),
+                wgpu::BindingResource::TextureView(&albedo_view),
+                wgpu::BindingResource::TextureView(&object_view),
+                unproject.as_entire_binding(),
+            ],
+        );
+        Self { normal, albedo, object, normal_view, albedo_view, object_view, unproject, read_layout, read_group }
+    }
+
+    /// GPU memory of the G-buffer's own targets (depth belongs to the frame).
+    pub fn bytes(&self) -> u64 {
+        self.normal.width() as u64 * self.normal.height() as u64 * BYTES_PER_PIXEL
+    }
+}
+
+/// The G-buffer raster pipeline.
+pub struct GbufferPass {
+    pipeline: wgpu::RenderPipeline,
+    after_prepass: bool,
+}
+
+impl GbufferPass {
+    /// `after_prepass`: the depth target already holds the scene's depth
+    /// (test `Equal`: each pixel's fragment runs once); otherwise the pass
+    /// clears and writes depth itself.
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        after_prepass: bool,
+    ) -> Result<Self, ShaderError> {
+        let formats = [NORMAL_FORMAT, ALBEDO_FORMAT, OBJECT_FORMAT];
+        let depth = DepthMode::after(after_prepass);
+        let raster = SceneRaster {
+            shader: SHADER,
+            vertex_entry: "vs_main",
+            fragment: Some(("fs_main", &formats)),
+            depth,
+            groups: &[],
+            blend: None,
+        };
+        let pipeline = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
+        Ok(Self { pipeline, after_prepass })
+    }
+}
+
+/// Reads: the visible objects, and the depth target when built after a
+/// pre-pass. Writes: `out`'s targets (cleared first) and unproject uniform
+/// (this frame's view), and the depth target.
+pub fn gbuffer(frame: &mut Frame, pass: &GbufferPass, out: &GBuffer) {
+    frame.queue.write_buffer(&out.unproject, 0, bytemuck::bytes_of(&GpuUnproject::new(frame.view)));
+    let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
+    let color = [
+        color_attachment(&out.normal_view, wgpu::Color::TRANSPARENT),
+        color_attachment(&out.albedo_view, wgpu::Color::TRANSPARENT),
+        color_attachment(&out.object_view, wgpu::Color::TRANSPARENT),
+    ];
+    let mut rp = frame.render_pass("gbuffer", &color, Some(depth_attachment(targets, !pass.after_prepass)));
+    draw_objects(&mut rp, scene, visible, &pass.pipeline);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::scene_gpu::gpu_view;
+    use crate::scene::Camera;
+    use glam::Vec3;
+
+    fn camera() -> Camera {
+        Camera {
+            position: Vec3::new(1.0, 2.0, 3.0),
+            forward: Vec3::new(0.3, -0.2, -1.0).normalize(),
+            up: Vec3::Y,
+            fov_y: 1.0,
+            near: 0.1,
+            far: 1000.0,
+        }
+    }
+
+    /// Unprojecting a projected point gives it back, near and far.
+    #[test]
+    fn unproject_inverts_the_view_projection() {
+        let view = gpu_view(&camera(), 320, 180);
+        let u = GpuUnproject::new(&view);
+        for p in [Vec3::new(1.2, 1.9, 2.0), Vec3::new(5.0, -3.0, -40.0), Vec3::new(80.0, -50.0, -600.0)] {
+            let clip = view.view_proj * p.extend(1.0);
+            let ndc = clip.truncate() / clip.w;
+            let back = u.world(ndc.x, ndc.y, ndc.z);
+            let error = back.distance(p) / p.distance(camera().position);
+            assert!(error < 1e-4, "{p} -> {back} (relative error {error})");
+        }
+    }
+}
