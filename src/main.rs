@@ -192,14 +192,14 @@ enum PipelineName {
     Forward,
     /// Multi-pass forward: depth pre-pass, then one additive pass per light over the objects it reaches.
     ForwardMultipass,
-    /// Object-space (texel) shading: visible tiles shaded by compute into an atlas, reused, gathered.
-    Objectspace,
     /// Clustered forward: fragments lit by GPU-built view-space light clusters.
     Clustered,
     /// Deferred shading: G-buffer, then light volumes (spheres, cones) blended per light.
     Deferred,
     /// Tiled deferred shading: G-buffer, then one compute pass culls and shades 16x16 tiles.
     DeferredCompute,
+    /// Object-space (texel) shading: visible tiles shaded by compute into an atlas, reused, gathered.
+    Objectspace,
 }
 
 #[derive(Args)]

@@ -26,12 +26,11 @@ pub mod volumes;
 use serde::Serialize;
 
 use super::frame::Frame;
-use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
-use super::passes::gbuffer::{self, GBuffer, GbufferPass, gbuffer};
-use super::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use super::passes::gbuffer::{self, GBuffer, GbufferStage, geometry};
+use super::passes::{compute_pipeline, hdr_output};
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
-use super::targets::{HDR_FORMAT, Targets};
+use super::targets::Targets;
 use super::{Pipeline, PipelineConfig, RenderError};
 use crate::shaders::{ShaderLibrary, ShaderSource};
 use volumes::{LightVolumes, VolumeList, classify_volumes, draw_volumes};
@@ -61,9 +60,7 @@ impl Default for DeferredConfig {
 /// The deferred (light volume) pipeline.
 pub struct Deferred {
     config: DeferredConfig,
-    prepass: Option<DepthPrepass>,
-    gbuffer_pass: GbufferPass,
-    gbuffer: GBuffer,
+    geometry: GbufferStage,
     globals: wgpu::ComputePipeline,
     /// The HDR target, written by the full-screen pass.
     output: wgpu::BindGroup,
@@ -79,21 +76,12 @@ impl Deferred {
         targets: &Targets,
         config: DeferredConfig,
     ) -> Result<Self, RenderError> {
-        let prepass = config.depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
-        let gbuffer_pass = GbufferPass::new(device, shaders, scene, config.depth_prepass)?;
-        let gbuffer = GBuffer::new(device, targets);
-        let d2 = wgpu::TextureViewDimension::D2;
-        let layout = bind_group_layout(
-            device,
-            "deferred output",
-            &[Binding::StorageTexture { format: HDR_FORMAT, dimension: d2 }],
-        );
-        let output =
-            bind_group(device, "deferred output", &layout, &[wgpu::BindingResource::TextureView(&targets.hdr_view)]);
-        let groups = [&scene.layout, &gbuffer.read_layout, &layout];
+        let geometry = GbufferStage::new(device, shaders, scene, targets, config.depth_prepass)?;
+        let (layout, output) = hdr_output(device, targets, "deferred output");
+        let groups = [&scene.layout, &geometry.gbuffer.read_layout, &layout];
         let globals = compute_pipeline(device, shaders, GLOBALS_SHADER, "lights_globals", &groups)?;
-        let volumes = LightVolumes::new(device, shaders, scene, &gbuffer)?;
-        Ok(Self { config, prepass, gbuffer_pass, gbuffer, globals, output, volumes })
+        let volumes = LightVolumes::new(device, shaders, scene, &geometry.gbuffer)?;
+        Ok(Self { config, geometry, globals, output, volumes })
     }
 }
 
@@ -106,16 +94,14 @@ impl Deferred {
 
 impl Pipeline for Deferred {
     fn encode(&mut self, frame: &mut Frame) {
-        if let Some(prepass) = &self.prepass {
-            depth_prepass(frame, prepass);
-        }
-        gbuffer(frame, &self.gbuffer_pass, &self.gbuffer);
-        lights_globals(frame, &self.globals, &self.gbuffer, &self.output);
+        let gbuffer = &self.geometry.gbuffer;
+        geometry(frame, &self.geometry);
+        lights_globals(frame, &self.globals, gbuffer, &self.output);
         classify_volumes(frame, &mut self.volumes);
         let (point, spot) =
             ([VolumeList::PointOutside, VolumeList::PointInside], [VolumeList::SpotOutside, VolumeList::SpotInside]);
-        draw_volumes(frame, &self.volumes, &self.gbuffer, point, "lights point");
-        draw_volumes(frame, &self.volumes, &self.gbuffer, spot, "lights spot");
+        draw_volumes(frame, &self.volumes, gbuffer, point, "lights point");
+        draw_volumes(frame, &self.volumes, gbuffer, spot, "lights spot");
     }
 
     /// Lights come from the volume lists, not the CPU's per-object ones.
@@ -129,7 +115,7 @@ impl Pipeline for Deferred {
     fn report(&self) -> PipelineReport {
         let (sphere, cone) = LightVolumes::triangles();
         PipelineReport::new(PipelineConfig::Deferred(self.config))
-            .memory("gbuffer", self.gbuffer.bytes())
+            .memory("gbuffer", self.geometry.gbuffer.bytes())
             .memory("light_volumes", self.volumes.bytes())
             .setup("gbuffer_bytes_per_pixel", gbuffer::BYTES_PER_PIXEL_WITH_DEPTH)
             .setup("sphere_triangles", sphere)

@@ -16,12 +16,11 @@
 use serde::Serialize;
 
 use super::frame::Frame;
-use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
-use super::passes::gbuffer::{self, GBuffer, GbufferPass, gbuffer};
-use super::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use super::passes::gbuffer::{self, GBuffer, GbufferStage, geometry};
+use super::passes::{compute_pipeline, hdr_output};
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
-use super::targets::{HDR_FORMAT, Targets};
+use super::targets::Targets;
 use super::{Pipeline, PipelineConfig, RenderError};
 use crate::shaders::{ShaderLibrary, ShaderSource};
 
@@ -59,9 +58,7 @@ impl Default for DeferredComputeConfig {
 /// The tiled deferred pipeline.
 pub struct DeferredCompute {
     config: DeferredComputeConfig,
-    prepass: Option<DepthPrepass>,
-    gbuffer_pass: GbufferPass,
-    gbuffer: GBuffer,
+    geometry: GbufferStage,
     lighting: wgpu::ComputePipeline,
     /// The HDR target, written.
     output: wgpu::BindGroup,
@@ -76,34 +73,18 @@ impl DeferredCompute {
         targets: &Targets,
         config: DeferredComputeConfig,
     ) -> Result<Self, RenderError> {
-        let prepass = config.depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
-        let gbuffer_pass = GbufferPass::new(device, shaders, scene, config.depth_prepass)?;
-        let gbuffer = GBuffer::new(device, targets);
-        let d2 = wgpu::TextureViewDimension::D2;
-        let layout = bind_group_layout(
-            device,
-            "tiled lighting output",
-            &[Binding::StorageTexture { format: HDR_FORMAT, dimension: d2 }],
-        );
-        let output = bind_group(
-            device,
-            "tiled lighting output",
-            &layout,
-            &[wgpu::BindingResource::TextureView(&targets.hdr_view)],
-        );
-        let groups = [&scene.layout, &gbuffer.read_layout, &layout];
+        let geometry = GbufferStage::new(device, shaders, scene, targets, config.depth_prepass)?;
+        let (layout, output) = hdr_output(device, targets, "tiled lighting output");
+        let groups = [&scene.layout, &geometry.gbuffer.read_layout, &layout];
         let lighting = compute_pipeline(device, shaders, SHADER, "tiled_lighting", &groups)?;
-        Ok(Self { config, prepass, gbuffer_pass, gbuffer, lighting, output })
+        Ok(Self { config, geometry, lighting, output })
     }
 }
 
 impl Pipeline for DeferredCompute {
     fn encode(&mut self, frame: &mut Frame) {
-        if let Some(prepass) = &self.prepass {
-            depth_prepass(frame, prepass);
-        }
-        gbuffer(frame, &self.gbuffer_pass, &self.gbuffer);
-        tiled_lighting(frame, &self.lighting, &self.gbuffer, &self.output);
+        geometry(frame, &self.geometry);
+        tiled_lighting(frame, &self.lighting, &self.geometry.gbuffer, &self.output);
     }
 
     /// Lights come from the tiles' own lists, not the CPU's per-object ones.
@@ -115,7 +96,7 @@ impl Pipeline for DeferredCompute {
     /// tile size and the tile list's capacity.
     fn report(&self) -> PipelineReport {
         PipelineReport::new(PipelineConfig::DeferredCompute(self.config))
-            .memory("gbuffer", self.gbuffer.bytes())
+            .memory("gbuffer", self.geometry.gbuffer.bytes())
             .setup("gbuffer_bytes_per_pixel", gbuffer::BYTES_PER_PIXEL_WITH_DEPTH)
             .setup("tile_size", TILE_SIZE as u64)
             .setup("tile_light_capacity", TILE_LIGHT_CAPACITY as u64)

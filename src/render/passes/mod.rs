@@ -276,6 +276,16 @@ pub fn bind_group(
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
 }
 
+/// The HDR target as a compute pass's output: a layout holding one
+/// write-only storage texture and the bind group binding `targets.hdr` to it.
+pub fn hdr_output(device: &wgpu::Device, targets: &Targets, label: &str) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let dimension = wgpu::TextureViewDimension::D2;
+    let layout =
+        bind_group_layout(device, label, &[Binding::StorageTexture { format: targets::HDR_FORMAT, dimension }]);
+    let group = bind_group(device, label, &layout, &[wgpu::BindingResource::TextureView(&targets.hdr_view)]);
+    (layout, group)
+}
+
 /// A view of `texture` as `dimension` (all layers).
 pub fn view_as(texture: &wgpu::Texture, dimension: wgpu::TextureViewDimension) -> wgpu::TextureView {
     texture.create_view(&wgpu::TextureViewDescriptor { dimension: Some(dimension), ..Default::default() })

@@ -26,6 +26,7 @@ pub mod octahedral;
 
 use glam::{DVec4, Mat4};
 
+use super::depth_prepass::{DepthPrepass, depth_prepass};
 use super::{
     Binding, DepthMode, SceneRaster, bind_group, bind_group_layout_for, color_attachment, depth_attachment,
     draw_objects, scene_raster_pipeline_from,
@@ -200,6 +201,39 @@ pub fn gbuffer(frame: &mut Frame, pass: &GbufferPass, out: &GBuffer) {
     ];
     let mut rp = frame.render_pass("gbuffer", &color, Some(depth_attachment(targets, !pass.after_prepass)));
     draw_objects(&mut rp, scene, visible, &pass.pipeline);
+}
+
+/// The geometry stage both deferred pipelines share: an optional depth
+/// pre-pass, the G-buffer pass, and the G-buffer it fills.
+pub struct GbufferStage {
+    prepass: Option<DepthPrepass>,
+    pass: GbufferPass,
+    pub gbuffer: GBuffer,
+}
+
+impl GbufferStage {
+    /// With `depth_prepass`, depth is laid down first and the G-buffer pass
+    /// runs one fragment per pixel.
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+        depth_prepass: bool,
+    ) -> Result<Self, ShaderError> {
+        let prepass = depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
+        let pass = GbufferPass::new(device, shaders, scene, depth_prepass)?;
+        Ok(Self { prepass, pass, gbuffer: GBuffer::new(device, targets) })
+    }
+}
+
+/// Reads: the visible objects. Writes: the depth target and the G-buffer
+/// (the depth pre-pass, when the stage has one, then the G-buffer pass).
+pub fn geometry(frame: &mut Frame, stage: &GbufferStage) {
+    if let Some(prepass) = &stage.prepass {
+        depth_prepass(frame, prepass);
+    }
+    gbuffer(frame, &stage.pass, &stage.gbuffer);
 }
 
 #[cfg(test)]
