@@ -1,5 +1,5 @@
 //! Structs whose bytes cross between Rust and WGSL. Each is declared with
-//! [`gpu_struct!`], which also records its members (name, offset, size), so a
+//! `gpu_struct!`, which also records its members (name, offset, size), so a
 //! test can compare every member, by name, with the layout naga computes for
 //! the WGSL struct of the same name: a swapped, renamed, missing or
 //! misaligned field fails, not only a wrong total size.

@@ -6,7 +6,7 @@
 //! `render/objectspace/mark/mark.wgsl`); the modules every pipeline imports
 //! live in `shaders/shared/`; the constants WGSL shares with Rust are
 //! generated from the Rust definitions ([`contract`]), and every struct whose
-//! bytes cross between the two is declared with [`gpu_struct!`] so that a
+//! bytes cross between the two is declared with `gpu_struct!` so that a
 //! test can compare it member by member ([`layout`]).
 
 pub mod contract;

@@ -144,7 +144,7 @@ impl MeshBuilder {
         self.triangle(a, c, d);
     }
 
-    /// A flat rectangle `corner + s*ea + t*eb` (s, t in [0,1]) facing
+    /// A flat rectangle `corner + s*ea + t*eb` (s, t in `[0, 1]`) facing
     /// `ea x eb`, cut into quads of at most `cell` metres, as its own chart.
     /// uv0 is the world position projected on the face axes, times `tiling`
     /// (repeats per metre).
