@@ -13,7 +13,7 @@ use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,
-    PipelineConfig, RenderOptions, Renderer,
+    PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
 };
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
@@ -146,6 +146,10 @@ struct ObjectSpaceArgs {
     /// pixel's ids are written once; measured faster on the H100).
     #[arg(long)]
     no_visibility_prepass: bool,
+    /// How the visibility buffer is filled: `raster` (hardware) or `compute`
+    /// (software rasterizer with 64-bit atomics).
+    #[arg(long, default_value = "raster", value_parser = VisibilityMethod::from_str)]
+    visibility: VisibilityMethod,
     /// Shade these objects (comma-separated names) forward instead of in object space.
     #[arg(long, value_delimiter = ',')]
     forward_only: Vec<String>,
@@ -385,6 +389,7 @@ fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view:
             texture_sizes: texture_sizes.clone().unwrap_or_default(),
             atlas_budget_texels: a.objectspace.atlas_budget << 20,
             visibility_prepass: !a.objectspace.no_visibility_prepass,
+            visibility: a.objectspace.visibility,
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::DeferredCompute => {

@@ -42,6 +42,7 @@ pub use frame::Frame;
 pub use objectspace::ObjectSpaceConfig;
 use passes::bloom::{Bloom, bloom};
 use passes::tonemap::{Tonemap, tonemap};
+pub use passes::visibility::VisibilityMethod;
 pub use report::{Counters, PipelineReport};
 use scene_gpu::SceneGpu;
 use targets::Targets;

@@ -56,6 +56,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
     all.extend([forward_multipass::SHADER, passes::bloom::SHADER]);
+    all.extend([passes::visibility::compute::RASTER, passes::visibility::compute::RESOLVE]);
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
     all.push(clustered::SHADER);
