@@ -10,8 +10,9 @@
 //! big` (one workgroup per queued tile) and `vis: resolve` (payload to
 //! (object + 1, triangle)).
 //!
-//! Payload: 1 + the triangle's index in this frame's list of visible
-//! triangles, object by object. The same per-frame list of (object, first
+//! Payload: the complement of the triangle's index in this frame's list of
+//! visible triangles, object by object (at equal depth the first drawn wins,
+//! as in the raster path; 0 stays background). The same per-frame list of (object, first
 //! index) ranges drives the dispatch (a thread finds its object by binary
 //! search), so culled objects cost nothing and the 32 bits hold any mix of
 //! object and triangle counts up to 2^32 - 1 visible triangles, where packing

@@ -1,15 +1,22 @@
 // Compute rasterizer of the visibility pass: one thread per triangle of the
 // visible objects writes, per covered pixel, one 64-bit
 // `atomicMax(depth_bits << 32 | payload)` (reversed Z: nearer is greater, and
-// positive floats order like their bits). The payload is 1 + the triangle's
-// index in this frame's list of visible triangles (0 = background); the
-// resolve pass turns it back into (object, triangle) through `ranges`.
+// positive floats order like their bits). The payload is the complement of
+// the triangle's index in this frame's list of visible triangles, so that at
+// equal depth the triangle drawn first wins, as with the raster path's
+// `Greater` test, and 0 (background) is no triangle's; the resolve pass turns
+// it back into (object, triangle) through `ranges`.
 //
-// Triangles are rasterized in homogeneous coordinates (Olano and Greer 1997):
-// the edge functions of clip-space (x, y, w) vertices are exact for vertices
-// behind the eye, so no triangle is split; the near and far planes are
-// clipped per pixel by the interpolated depth, and the bounding box comes
-// from the triangle clipped against the near plane.
+// Coverage, as the hardware decides it: a triangle wholly in front of the
+// near plane and inside the guard band is snapped to 1/256 pixel (8
+// sub-pixel bits, as NVIDIA GPUs and llvmpipe snap) and its edge functions
+// are evaluated exactly in 64-bit integers, with the top-left rule: watertight,
+// and the same pixels as the raster path. A triangle crossing the near plane
+// is rasterized in homogeneous coordinates instead (Olano and Greer 1997): the
+// edge functions of clip-space (x, y, w) vertices stay exact for vertices
+// behind the eye, so no triangle is split; the bounding box comes from the
+// triangle clipped against the near plane. Either way the near and far planes
+// are clipped per pixel by the interpolated depth.
 #import shadespace::scene_bindings::{view, object_clip_position, objects, triangle_vertices}
 
 // Mirrors `visibility::compute::GpuRasterParams`.
@@ -45,14 +52,31 @@ const BIG_TILE: i32 = 32;
 const BIG_WORKGROUP: u32 = 64u;
 const BIG_WORKGROUPS: u32 = 1024u;
 
+// Sub-pixel steps of snapped vertices (8 bits), and the guard band in pixels
+// beyond which a triangle is rasterized in homogeneous coordinates (keeps the
+// fixed-point edge functions below 2^46).
+const SUBPIXELS: f32 = 256.0;
+const GUARD_BAND: f32 = 8192.0;
+
 // A triangle ready to rasterize.
 struct Setup {
+    // 1: fixed-point edges (`fixed_*`), 0: homogeneous ones (`edge_*`).
+    fixed: u32,
+    // Per edge of the near-clipped polygon, in sub-pixels: the value at pixel (0, 0)'s centre (less one
+    // where the edge does not own its pixels, so inside is >= 0), and the
+    // steps one pixel right and one pixel down.
+    fixed_origin: vec4<i64>,
+    fixed_dx: vec4<i64>,
+    fixed_dy: vec4<i64>,
     // Edge functions over (ndc.x, ndc.y, 1), oriented so that inside is >= 0.
     edge_a: vec3f,
     edge_b: vec3f,
     edge_c: vec3f,
-    // NDC depth (z / w) over (ndc.x, ndc.y, 1): affine in screen space.
+    // NDC depth (z / w), affine in screen space. Fixed: over sub-pixel
+    // offsets from `depth_origin`, from the snapped vertices (as the hardware
+    // interpolates it); homogeneous: over (ndc.x, ndc.y, 1).
     depth: vec3f,
+    depth_origin: vec2<i64>,
     // Inclusive pixel bounds (min x, min y, max x, max y); empty when min > max.
     bounds: vec4i,
     // Bit i: edge i owns the pixels it passes through exactly (top-left rule).
@@ -143,6 +167,108 @@ fn near_clipped_bounds(h: array<vec4f, 3>) -> vec4i {
     return vec4i(min_px, max_px);
 }
 
+// Sets up `s`'s fixed-point edges: the triangle is clipped against the near
+// plane (z <= w) into a convex polygon of up to four vertices, as the
+// hardware clips it, then snapped. Coverage is the intersection of the
+// polygon's edges, each with the top-left rule: the same pixels as the
+// hardware's fan of triangles, whose inner edges cover each pixel once.
+// Returns false (and leaves `s`) when a vertex lies beyond the guard band.
+fn cross_i64(a: vec2<i64>, b: vec2<i64>) -> i64 {
+    return a.x * b.y - a.y * b.x;
+}
+
+fn setup_fixed(h: array<vec4f, 3>, s: ptr<function, Setup>) -> bool {
+    let half = 0.5 * view.viewport.xy;
+    var v: array<vec2<i64>, 4>;
+    var z: array<f32, 4>;
+    var n = 0u;
+    var lo = vec2f(3.0e38);
+    var hi = vec2f(-3.0e38);
+    for (var i = 0u; i < 3u; i++) {
+        let a = h[i];
+        let b = h[(i + 1u) % 3u];
+        let da = a.w - a.z;
+        let db = b.w - b.z;
+        var points = array<vec4f, 2>(a, mix(a, b, da / (da - db)));
+        let keep = vec2<bool>(da >= 0.0, (da < 0.0) != (db < 0.0));
+        for (var k = 0u; k < 2u; k++) {
+            if !keep[k] {
+                continue;
+            }
+            let c = points[k];
+            if !(c.w > 0.0) {
+                return false;
+            }
+            // The viewport transform (y down), then the snap.
+            let ndc = c.xy / c.w;
+            let p = vec2f(ndc.x, -ndc.y) * half + half;
+            if !all(abs(p - half) <= vec2f(GUARD_BAND)) {
+                return false;
+            }
+            v[n] = vec2<i64>(round(p * SUBPIXELS));
+            z[n] = c.z / c.w;
+            lo = min(lo, p);
+            hi = max(hi, p);
+            n++;
+        }
+    }
+    (*s).fixed = 1u;
+    (*s).bounds = vec4i(0, 0, -1, -1);
+    if n < 3u {
+        return true;
+    }
+    // Twice the signed area (shoelace): 0 is degenerate after snapping, no
+    // pixels, as in the hardware; clockwise polygons get their edges flipped
+    // (both facings are drawn).
+    var area = 0li;
+    for (var i = 0u; i < n; i++) {
+        let a = v[i];
+        let b = v[(i + 1u) % n];
+        area += a.x * b.y - a.y * b.x;
+    }
+    if area == 0li {
+        return true;
+    }
+    let facing = select(1li, -1li, area > 0li);
+    let unit = i64(SUBPIXELS);
+    let centre = unit / 2li;
+    // A missing fourth edge, or one of zero length, passes every pixel.
+    var origin = vec4<i64>(0li);
+    var step_x = vec4<i64>(0li);
+    var step_y = vec4<i64>(0li);
+    for (var i = 0u; i < n; i++) {
+        let a = v[i];
+        let d = (v[(i + 1u) % n] - a) * facing;
+        if all(d == vec2<i64>(0li)) {
+            continue;
+        }
+        // E(p) = d.y (p.x - a.x) - d.x (p.y - a.y): positive inside.
+        step_x[i] = d.y * unit;
+        step_y[i] = -d.x * unit;
+        // Top-left rule (y down): an edge owns its pixels when the inside
+        // lies to its right (a left edge) or straight below it (a top edge).
+        let owns = step_x[i] > 0li || (step_x[i] == 0li && step_y[i] > 0li);
+        origin[i] = d.y * (centre - a.x) - d.x * (centre - a.y) - select(1li, 0li, owns);
+    }
+    // The depth plane through vertex 0 and the larger of the fan's triangles.
+    let a1 = cross_i64(v[1] - v[0], v[2] - v[0]);
+    let a2 = cross_i64(v[2] - v[0], v[3] - v[0]);
+    let k = select(1u, 2u, n == 4u && abs(a2) > abs(a1));
+    let e1 = vec2f(v[k] - v[0]);
+    let e2 = vec2f(v[k + 1u] - v[0]);
+    let dz = vec2f(z[k] - z[0], z[k + 1u] - z[0]);
+    let det = f32(select(a1, a2, k == 2u));
+    (*s).depth = vec3f((dz.x * e2.y - dz.y * e1.y) / det, (e1.x * dz.y - e2.x * dz.x) / det, z[0]);
+    (*s).depth_origin = v[0];
+    (*s).fixed_origin = origin;
+    (*s).fixed_dx = step_x;
+    (*s).fixed_dy = step_y;
+    // Pixels whose centres the polygon's box holds, one more on each side.
+    let last = vec2i(view.viewport.xy) - 1;
+    (*s).bounds = vec4i(max(vec2i(ceil(lo - 0.5)) - 1, vec2i(0)), min(vec2i(floor(hi - 0.5)) + 1, last));
+    return true;
+}
+
 fn setup_triangle(index: u32) -> Setup {
     let range = ranges[find_range(index)];
     let object = range.x;
@@ -154,25 +280,28 @@ fn setup_triangle(index: u32) -> Setup {
     );
     var s: Setup;
     s.bounds = vec4i(0, 0, -1, -1);
-    // Behind the far plane (z < 0) or the near plane (z > w) as a whole.
+    // Wholly behind the far plane (z < 0).
     if all(vec3f(h[0].z, h[1].z, h[2].z) < vec3f(0.0)) {
         return s;
     }
     let c = array<vec3f, 3>(h[0].xyw, h[1].xyw, h[2].xyw);
     let n = array<vec3f, 3>(edge_plane(c[1], c[2]), edge_plane(c[2], c[0]), edge_plane(c[0], c[1]));
     // det > 0: counter-clockwise on screen; 0: the triangle's plane holds the
-    // eye (seen edge-on, nothing to draw). Both facings are drawn, as the
-    // raster path draws with no face culling.
+    // eye (seen edge-on: no pixels, as in the hardware).
     let det = dot(c[0], n[0]);
     if det == 0.0 {
         return s;
     }
+    // sum_i e_i(q) c_i = det (q, 1), so the depth is sum_i e_i(q) z_i / det.
+    s.depth = (n[0] * h[0].z + n[1] * h[1].z + n[2] * h[2].z) / det;
+    if setup_fixed(h, &s) {
+        return s;
+    }
+    // Both facings are drawn, as the raster path draws with no face culling.
     let inward = sign(det);
     s.edge_a = n[0] * inward;
     s.edge_b = n[1] * inward;
     s.edge_c = n[2] * inward;
-    // sum_i e_i(q) c_i = det (q, 1), so the depth is sum_i e_i(q) z_i / det.
-    s.depth = (n[0] * h[0].z + n[1] * h[1].z + n[2] * h[2].z) / det;
     s.owns = select(0u, 1u, owns_pixels(s.edge_a)) | select(0u, 2u, owns_pixels(s.edge_b))
         | select(0u, 4u, owns_pixels(s.edge_c));
     s.bounds = near_clipped_bounds(h);
@@ -185,16 +314,26 @@ fn inside(e: f32, owns: bool) -> bool {
 
 // Tests pixel p against the triangle and keeps the nearest surface.
 fn raster_pixel(s: Setup, payload: u32, p: vec2i) {
-    let uv = (vec2f(p) + 0.5) * view.viewport.zw;
-    let q = vec3f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0);
-    let a = dot(s.edge_a, q);
-    let b = dot(s.edge_b, q);
-    let c = dot(s.edge_c, q);
-    if !(inside(a, (s.owns & 1u) != 0u) && inside(b, (s.owns & 2u) != 0u) && inside(c, (s.owns & 4u) != 0u)) {
-        return;
+    var depth: f32;
+    if s.fixed != 0u {
+        let e = s.fixed_origin + s.fixed_dx * i64(p.x) + s.fixed_dy * i64(p.y);
+        if any(e < vec4<i64>(0li)) {
+            return;
+        }
+        let offset = vec2f(vec2<i64>(p) * i64(SUBPIXELS) + i64(SUBPIXELS / 2.0) - s.depth_origin);
+        depth = dot(s.depth, vec3f(offset, 1.0));
+    } else {
+        let uv = (vec2f(p) + 0.5) * view.viewport.zw;
+        let q = vec3f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0);
+        let a = dot(s.edge_a, q);
+        let b = dot(s.edge_b, q);
+        let c = dot(s.edge_c, q);
+        if !(inside(a, (s.owns & 1u) != 0u) && inside(b, (s.owns & 2u) != 0u) && inside(c, (s.owns & 4u) != 0u)) {
+            return;
+        }
+        depth = dot(s.depth, q);
     }
     // Clip to the depth range, as the hardware does (the background is 0).
-    let depth = dot(s.depth, q);
     if !(depth > 0.0 && depth <= 1.0) {
         return;
     }
@@ -232,7 +371,7 @@ fn raster(
     if any(extent <= vec2i(0)) {
         return;
     }
-    let payload = index + 1u;
+    let payload = ~index;
     if extent.x * extent.y <= SMALL_AREA {
         raster_rect(s, payload, s.bounds.xy, s.bounds.zw);
         return;
@@ -267,7 +406,7 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_ind
     for (var i = group.x; i < count; i += BIG_WORKGROUPS) {
         let item = big_tiles[i];
         if local == 0u {
-            shared_setup = setup_triangle(item.x - 1u);
+            shared_setup = setup_triangle(~item.x);
         }
         let s = workgroupUniformLoad(&shared_setup);
         let r = big_tile_rect(s.bounds, item.y);

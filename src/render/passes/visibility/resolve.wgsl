@@ -35,8 +35,9 @@ fn resolve(@builtin(global_invocation_id) id: vec3u) {
     let payload = depth_ids[id.y * params.width + id.x].x;
     var ids = vec2u(0u);
     if payload != 0u {
-        // The last visible object whose first triangle is at most index.
-        let index = payload - 1u;
+        // The payload is the complement of the index in the frame's list; the
+        // entry is the last visible object whose first triangle is at most it.
+        let index = ~payload;
         var lo = 0u;
         var hi = params.range_count - 1u;
         while lo < hi {
