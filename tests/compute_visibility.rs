@@ -127,11 +127,17 @@ fn ids_agree_inside_objects_and_across_the_near_plane() {
         }
     }
     // Eye 2 cm above the 8 m floor, near plane 10 cm: the floor's two
-    // triangles both cross the near plane (corners lie behind the eye) and
-    // cover the bottom of the image.
+    // triangles both cross the near plane (corners lie behind the eye); what
+    // is left is a band below the horizon (nearer floor is clipped away).
     let (floor, camera, _) = common::floor_scene();
     let camera =
         Camera { position: Vec3::new(0.3, 0.02, 1.0), forward: Vec3::new(0.1, -0.2, -1.0).normalize(), ..camera };
     let (covered, _) = compare(&ctx, "eye on the floor", &floor, &camera, (160, 120));
+    assert!(covered > 160 * 120 / 8, "the floor covers only {covered} pixels");
+    // A 2 km floor: its near-clipped corners project far beyond the guard
+    // band, so it takes the homogeneous path.
+    let mut huge = floor.clone();
+    huge.meshes[0] = common::floor_quad(2000.0, 0.0);
+    let (covered, _) = compare(&ctx, "eye on a 2 km floor", &huge, &camera, (160, 120));
     assert!(covered > 160 * 120 / 8, "the floor covers only {covered} pixels");
 }

@@ -312,27 +312,13 @@ fn inside(e: f32, owns: bool) -> bool {
     return e > 0.0 || (e == 0.0 && owns);
 }
 
-// Tests pixel p against the triangle and keeps the nearest surface.
-fn raster_pixel(s: Setup, payload: u32, p: vec2i) {
-    var depth: f32;
-    if s.fixed != 0u {
-        let e = s.fixed_origin + s.fixed_dx * i64(p.x) + s.fixed_dy * i64(p.y);
-        if any(e < vec4<i64>(0li)) {
-            return;
-        }
-        let offset = vec2f(vec2<i64>(p) * i64(SUBPIXELS) + i64(SUBPIXELS / 2.0) - s.depth_origin);
-        depth = dot(s.depth, vec3f(offset, 1.0));
-    } else {
-        let uv = (vec2f(p) + 0.5) * view.viewport.zw;
-        let q = vec3f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0);
-        let a = dot(s.edge_a, q);
-        let b = dot(s.edge_b, q);
-        let c = dot(s.edge_c, q);
-        if !(inside(a, (s.owns & 1u) != 0u) && inside(b, (s.owns & 2u) != 0u) && inside(c, (s.owns & 4u) != 0u)) {
-            return;
-        }
-        depth = dot(s.depth, q);
-    }
+fn fixed_depth(s: Setup, p: vec2i) -> f32 {
+    let offset = vec2f(vec2<i64>(p) * i64(SUBPIXELS) + i64(SUBPIXELS / 2.0) - s.depth_origin);
+    return dot(s.depth, vec3f(offset, 1.0));
+}
+
+// Keeps the nearer of pixel p's surface and this triangle at `depth`.
+fn keep_nearest(payload: u32, p: vec2i, depth: f32) {
     // Clip to the depth range, as the hardware does (the background is 0).
     if !(depth > 0.0 && depth <= 1.0) {
         return;
@@ -341,11 +327,46 @@ fn raster_pixel(s: Setup, payload: u32, p: vec2i) {
     atomicMax(&depth_ids[pixel], (u64(bitcast<u32>(depth)) << 32u) | u64(payload));
 }
 
-fn raster_rect(s: Setup, payload: u32, lo: vec2i, hi: vec2i) {
-    for (var y = lo.y; y <= hi.y; y++) {
-        for (var x = lo.x; x <= hi.x; x++) {
-            raster_pixel(s, payload, vec2i(x, y));
+// Tests pixel p against the triangle and keeps the nearest surface.
+fn raster_pixel(s: Setup, payload: u32, p: vec2i) {
+    if s.fixed != 0u {
+        let e = s.fixed_origin + s.fixed_dx * i64(p.x) + s.fixed_dy * i64(p.y);
+        if all(e >= vec4<i64>(0li)) {
+            keep_nearest(payload, p, fixed_depth(s, p));
         }
+        return;
+    }
+    let uv = (vec2f(p) + 0.5) * view.viewport.zw;
+    let q = vec3f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0);
+    let a = dot(s.edge_a, q);
+    let b = dot(s.edge_b, q);
+    let c = dot(s.edge_c, q);
+    if inside(a, (s.owns & 1u) != 0u) && inside(b, (s.owns & 2u) != 0u) && inside(c, (s.owns & 4u) != 0u) {
+        keep_nearest(payload, p, dot(s.depth, q));
+    }
+}
+
+// Rasterizes the pixels of [lo, hi]; fixed-point edges step by additions
+// (64-bit multiplies are several instructions on GPUs).
+fn raster_rect(s: Setup, payload: u32, lo: vec2i, hi: vec2i) {
+    if s.fixed == 0u {
+        for (var y = lo.y; y <= hi.y; y++) {
+            for (var x = lo.x; x <= hi.x; x++) {
+                raster_pixel(s, payload, vec2i(x, y));
+            }
+        }
+        return;
+    }
+    var row = s.fixed_origin + s.fixed_dx * i64(lo.x) + s.fixed_dy * i64(lo.y);
+    for (var y = lo.y; y <= hi.y; y++) {
+        var e = row;
+        for (var x = lo.x; x <= hi.x; x++) {
+            if all(e >= vec4<i64>(0li)) {
+                keep_nearest(payload, vec2i(x, y), fixed_depth(s, vec2i(x, y)));
+            }
+            e += s.fixed_dx;
+        }
+        row += s.fixed_dy;
     }
 }
 
