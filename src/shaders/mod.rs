@@ -40,6 +40,7 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
     ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
+    ShaderSource::new("shared/pixel_surface.wgsl", include_str!("shared/pixel_surface.wgsl")),
     ShaderSource::new("shared/raster_surface.wgsl", include_str!("shared/raster_surface.wgsl")),
     crate::render::passes::light_grid::SHARED_WGSL[0],
     crate::render::passes::light_grid::SHARED_WGSL[1],
