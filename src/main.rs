@@ -108,6 +108,11 @@ struct SceneArgs {
     /// write the G-buffer for every rasterized fragment).
     #[arg(long)]
     no_depth_prepass: bool,
+    /// Objectspace, deferred-compute: how pixels find their surface:
+    /// `raster` (hardware visibility or G-buffer pass) or `compute` (software
+    /// rasterizer with 64-bit atomics; surfaces rebuilt from triangle ids).
+    #[arg(long, default_value = "raster", value_parser = VisibilityMethod::from_str)]
+    visibility: VisibilityMethod,
     #[command(flatten)]
     objectspace: ObjectSpaceArgs,
     #[command(flatten)]
@@ -146,10 +151,6 @@ struct ObjectSpaceArgs {
     /// pixel's ids are written once; measured faster on the H100).
     #[arg(long)]
     no_visibility_prepass: bool,
-    /// How the visibility buffer is filled: `raster` (hardware) or `compute`
-    /// (software rasterizer with 64-bit atomics).
-    #[arg(long, default_value = "raster", value_parser = VisibilityMethod::from_str)]
-    visibility: VisibilityMethod,
     /// Shade these objects (comma-separated names) forward instead of in object space.
     #[arg(long, value_delimiter = ',')]
     forward_only: Vec<String>,
@@ -389,12 +390,13 @@ fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view:
             texture_sizes: texture_sizes.clone().unwrap_or_default(),
             atlas_budget_texels: a.objectspace.atlas_budget << 20,
             visibility_prepass: !a.objectspace.no_visibility_prepass,
-            visibility: a.objectspace.visibility,
+            visibility: a.visibility,
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
-        PipelineName::DeferredCompute => {
-            PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: !a.no_depth_prepass })
-        }
+        PipelineName::DeferredCompute => PipelineConfig::DeferredCompute(DeferredComputeConfig {
+            depth_prepass: !a.no_depth_prepass,
+            visibility: a.visibility,
+        }),
     };
     RenderOptions { width: a.size.0, height: a.size.1, pipeline }
 }

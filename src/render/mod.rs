@@ -138,6 +138,8 @@ pub enum RenderError {
     BadSize(u32, u32, u32),
     #[error(transparent)]
     ObjectSpace(#[from] objectspace::ObjectSpaceError),
+    #[error(transparent)]
+    ComputeVisibility(#[from] passes::visibility::compute::ComputeVisibilityError),
     #[error("bloom strength {0} is not a number from 0 to 1")]
     BadBloom(f32),
     #[error("bloom needs read-write Rgba16Float storage textures, which {0} does not offer")]

@@ -265,14 +265,9 @@ impl ObjectSpace {
                 prepass: config.visibility_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?,
                 ids: VisibilityPass::new(device, shaders, scene, config.visibility_prepass)?,
             },
-            VisibilityMethod::Compute => Visibility::Compute(ComputeVisibility::new(
-                device,
-                &ctx.info.name,
-                shaders,
-                scene,
-                targets,
-                &res.visibility,
-            )?),
+            VisibilityMethod::Compute => {
+                Visibility::Compute(ComputeVisibility::new(device, shaders, scene, targets, &res.visibility)?)
+            }
         };
         let grid = WorldGrid::new(device, shaders, scene)?;
         Ok(Self {

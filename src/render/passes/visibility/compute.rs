@@ -18,9 +18,10 @@
 //! object and triangle counts up to 2^32 - 1 visible triangles, where packing
 //! fixed bit fields would have to cap one of them.
 //!
-//! The depth target is not written: no consumer of the ids reads it (object
-//! space's passes are all compute), and a full-screen depth write would be a
-//! fragment pass, the slow kind on the H100.
+//! The depth target is not written: the consumers are all compute passes
+//! (object space's, tiled deferred's), which read depth, where they need it,
+//! from the rasterizer's own 64-bit buffer (`visibility_read.wgsl`); a
+//! full-screen depth write would be a fragment pass, the slow kind on the H100.
 
 use super::VisibilityBuffer;
 use crate::render::frame::Frame;
@@ -31,6 +32,9 @@ use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
 
 pub const RASTER: ShaderSource = ShaderSource::new("raster.wgsl", include_str!("raster.wgsl"));
 pub const RESOLVE: ShaderSource = ShaderSource::new("resolve.wgsl", include_str!("resolve.wgsl"));
+/// The module lighting passes import to read the output as a G-buffer
+/// (`shadespace::visibility_read`, group 1: [`ComputeVisibility::read_layout`]).
+pub const SHARED_WGSL: ShaderSource = ShaderSource::new("visibility_read.wgsl", include_str!("visibility_read.wgsl"));
 
 /// Threads per workgroup of `raster` (`RASTER_WORKGROUP` in `raster.wgsl`).
 const RASTER_WORKGROUP: u32 = 64;
@@ -72,8 +76,10 @@ gpu_struct! {
 pub enum ComputeVisibilityError {
     #[error(transparent)]
     Shader(#[from] ShaderError),
-    #[error("compute visibility needs 64-bit atomics (SHADER_INT64, SHADER_INT64_ATOMIC_MIN_MAX), which {0} lacks")]
-    NoInt64Atomics(String),
+    #[error(
+        "compute visibility needs 64-bit atomics (SHADER_INT64, SHADER_INT64_ATOMIC_MIN_MAX), which this adapter lacks"
+    )]
+    NoInt64Atomics,
 }
 
 /// The compute rasterizer's pipelines, buffers and bind groups, for one
@@ -92,22 +98,25 @@ pub struct ComputeVisibility {
     big_capacity: u32,
     raster_group: wgpu::BindGroup,
     resolve_group: wgpu::BindGroup,
+    /// Group 1 of passes that import `shadespace::visibility_read`: the ids
+    /// and the 64-bit buffer.
+    pub read_layout: wgpu::BindGroupLayout,
+    pub read_group: wgpu::BindGroup,
     width: u32,
     height: u32,
 }
 
 impl ComputeVisibility {
-    /// `adapter_name` names the device in the error when it lacks [`FEATURES`].
+    /// Fails where the device lacks [`FEATURES`].
     pub fn new(
         device: &wgpu::Device,
-        adapter_name: &str,
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         targets: &Targets,
         out: &VisibilityBuffer,
     ) -> Result<Self, ComputeVisibilityError> {
         if !device.features().contains(FEATURES) {
-            return Err(ComputeVisibilityError::NoInt64Atomics(adapter_name.to_string()));
+            return Err(ComputeVisibilityError::NoInt64Atomics);
         }
         let (width, height) = (targets.width, targets.height);
         let buffer = |label, size: u64, usage| {
@@ -154,6 +163,18 @@ impl ComputeVisibility {
                 wgpu::BindingResource::TextureView(&out.view),
             ],
         );
+        let uint = wgpu::TextureSampleType::Uint;
+        let read_layout = bind_group_layout(
+            device,
+            "visibility read",
+            &[Binding::Texture { sample: uint, dimension }, Binding::Storage { read_only: true }],
+        );
+        let read_group = bind_group(
+            device,
+            "visibility read",
+            &read_layout,
+            &[wgpu::BindingResource::TextureView(&out.view), depth_ids.as_entire_binding()],
+        );
         let raster_groups = [&scene.layout, &raster_layout];
         Ok(Self {
             clear: compute_pipeline(device, shaders, RESOLVE, "clear", &[&resolve_layout])?,
@@ -167,9 +188,18 @@ impl ComputeVisibility {
             big_capacity,
             raster_group,
             resolve_group,
+            read_layout,
+            read_group,
             width,
             height,
         })
+    }
+}
+
+impl ComputeVisibility {
+    /// Bytes of its buffers (the 64-bit one, the big-tile queue, the ranges).
+    pub fn bytes(&self) -> u64 {
+        self.width as u64 * self.height as u64 * 8 + self.big_capacity as u64 * 8 + self.ranges.size()
     }
 }
 
