@@ -13,7 +13,7 @@ use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,
-    PipelineConfig, RenderOptions, Renderer,
+    PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
 };
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
@@ -108,6 +108,11 @@ struct SceneArgs {
     /// write the G-buffer for every rasterized fragment).
     #[arg(long)]
     no_depth_prepass: bool,
+    /// Objectspace, deferred-compute: how pixels find their surface:
+    /// `raster` (hardware visibility or G-buffer pass) or `compute` (software
+    /// rasterizer with 64-bit atomics; surfaces rebuilt from triangle ids).
+    #[arg(long, default_value = "raster", value_parser = VisibilityMethod::from_str)]
+    visibility: VisibilityMethod,
     #[command(flatten)]
     objectspace: ObjectSpaceArgs,
     #[command(flatten)]
@@ -385,11 +390,13 @@ fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view:
             texture_sizes: texture_sizes.clone().unwrap_or_default(),
             atlas_budget_texels: a.objectspace.atlas_budget << 20,
             visibility_prepass: !a.objectspace.no_visibility_prepass,
+            visibility: a.visibility,
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
-        PipelineName::DeferredCompute => {
-            PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: !a.no_depth_prepass })
-        }
+        PipelineName::DeferredCompute => PipelineConfig::DeferredCompute(DeferredComputeConfig {
+            depth_prepass: !a.no_depth_prepass,
+            visibility: a.visibility,
+        }),
     };
     RenderOptions { width: a.size.0, height: a.size.1, pipeline }
 }

@@ -7,7 +7,7 @@ mod common;
 use shadespace::metrics;
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, PipelineConfig,
-    RenderOptions, Renderer,
+    RenderOptions, Renderer, VisibilityMethod,
 };
 use shadespace::scene::{self, LightSpec, lights, path};
 
@@ -25,7 +25,11 @@ fn pipelines() -> Vec<PipelineConfig> {
         PipelineConfig::Deferred(DeferredConfig::default()),
         PipelineConfig::Deferred(DeferredConfig { depth_prepass: false }),
         PipelineConfig::DeferredCompute(DeferredComputeConfig::default()),
-        PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: false }),
+        PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: false, ..Default::default() }),
+        PipelineConfig::DeferredCompute(DeferredComputeConfig {
+            visibility: VisibilityMethod::Compute,
+            ..Default::default()
+        }),
     ]
 }
 

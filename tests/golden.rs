@@ -9,7 +9,7 @@ mod common;
 use std::path::PathBuf;
 
 use shadespace::metrics;
-use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
 use shadespace::scene::{self, LightSpec, lights, path};
 
 const WIDTH: u32 = 192;
@@ -27,7 +27,7 @@ const AGREEMENT_PSNR: f64 = 30.0;
 #[derive(Clone, Copy)]
 enum Pipeline {
     Forward,
-    ObjectSpace,
+    ObjectSpace(VisibilityMethod),
 }
 
 fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: Pipeline) -> image::RgbaImage {
@@ -50,7 +50,9 @@ fn render_at(
     let (scene, texture_sizes) = common::charted(&scene);
     let pipeline = match pipeline {
         Pipeline::Forward => PipelineConfig::Forward(ForwardConfig::default()),
-        Pipeline::ObjectSpace => PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes, ..Default::default() }),
+        Pipeline::ObjectSpace(visibility) => {
+            PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes, visibility, ..Default::default() })
+        }
     };
     let options = RenderOptions { width, height, pipeline };
     let image = render_with(ctx, &scene, &options, &camera, &lights);
@@ -124,25 +126,36 @@ fn same_inputs_give_the_same_image() {
     assert!(a == b, "two renders of the same frame differ");
 }
 
-fn check_agreement(name: &str) {
+fn check_agreement(name: &str, visibility: VisibilityMethod) {
     let ctx = common::gpu();
     let reference = render_at(&ctx, name, Pipeline::Forward, 320, 180);
-    let test = render_at(&ctx, name, Pipeline::ObjectSpace, 320, 180);
+    let test = render_at(&ctx, name, Pipeline::ObjectSpace(visibility), 320, 180);
     let (err, map) = metrics::compare(&reference, &test);
     let out = common::out_dir();
-    test.save(out.join(format!("{name}-objectspace.png"))).unwrap();
+    let vis = visibility.name();
+    test.save(out.join(format!("{name}-objectspace-{vis}.png"))).unwrap();
     reference.save(out.join(format!("{name}-forward.png"))).unwrap();
-    map.save(out.join(format!("{name}-objectspace-flip.png"))).unwrap();
-    eprintln!("{name}: object space vs forward: {err:?}");
+    map.save(out.join(format!("{name}-objectspace-{vis}-flip.png"))).unwrap();
+    eprintln!("{name}: object space ({vis} visibility) vs forward: {err:?}");
     assert!(err.flip_mean <= AGREEMENT_FLIP && err.psnr_db >= AGREEMENT_PSNR, "{name}: {err:?}");
 }
 
 #[test]
 fn objectspace_agrees_with_forward_atrium() {
-    check_agreement("atrium");
+    check_agreement("atrium", VisibilityMethod::Raster);
 }
 
 #[test]
 fn objectspace_agrees_with_forward_voxels() {
-    check_agreement("voxels");
+    check_agreement("voxels", VisibilityMethod::Raster);
+}
+
+#[test]
+fn objectspace_with_compute_visibility_agrees_with_forward_atrium() {
+    check_agreement("atrium", VisibilityMethod::Compute);
+}
+
+#[test]
+fn objectspace_with_compute_visibility_agrees_with_forward_voxels() {
+    check_agreement("voxels", VisibilityMethod::Compute);
 }

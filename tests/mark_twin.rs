@@ -12,7 +12,7 @@ use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::objectspace::atlas::GpuAtlasEntry;
 use shadespace::render::objectspace::cpu::{self, MarkInputs, MarkParams, TileState};
 use shadespace::render::scene_gpu::gpu_view;
-use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
 use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
 
 /// A sequence of frames to render and check.
@@ -24,6 +24,8 @@ struct Run<'a> {
     height: u32,
     reuse: u32,
     variable_rate: f32,
+    /// How the visibility buffer the twin reads is filled.
+    visibility: VisibilityMethod,
     /// One camera per frame.
     cameras: Vec<Camera>,
     lights: Vec<Light>,
@@ -62,6 +64,7 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
     let objectspace = ObjectSpaceConfig {
         reuse: run.reuse,
         variable_rate: run.variable_rate,
+        visibility: run.visibility,
         texture_sizes: run.texture_sizes.clone(),
         ..Default::default()
     };
@@ -195,6 +198,7 @@ fn static_floor_reuses_shades_until_they_age_or_the_lights_change() {
             height: 96,
             reuse: 3,
             variable_rate: 0.0,
+            visibility: VisibilityMethod::Raster,
             cameras: floor_cameras(Vec3::new(0.0, 4.0, 6.0), Vec3::ZERO, 6),
             lights,
             lights_change_at: Some(5),
@@ -222,6 +226,7 @@ fn moving_floor_marks_new_tiles() {
                 height: 120,
                 reuse,
                 variable_rate,
+                visibility: VisibilityMethod::Raster,
                 // Low over the floor and nearing it: finer levels come into view.
                 cameras: floor_cameras(Vec3::new(0.0, 2.5, 5.0), Vec3::new(0.3, -0.2, -0.5), 5),
                 lights: lights.clone(),
@@ -245,17 +250,23 @@ fn atrium_along_its_camera_path() {
     let spec: LightSpec = "small:8".parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &cameras[0], width as f32 / height as f32, 7).unwrap();
     let (scene, texture_sizes) = common::charted(&scene);
-    for (reuse, variable_rate) in [(1, 0.0), (3, 1.0)] {
+    let runs = [
+        ("atrium, reuse 1", 1, 0.0, VisibilityMethod::Raster),
+        ("atrium, reuse 3, variable rate 1", 3, 1.0, VisibilityMethod::Raster),
+        ("atrium, reuse 2, compute visibility", 2, 0.0, VisibilityMethod::Compute),
+    ];
+    for (name, reuse, variable_rate, visibility) in runs {
         check(
             &ctx,
             Run {
-                name: if reuse == 1 { "atrium, reuse 1" } else { "atrium, reuse 3, variable rate 1" },
+                name,
                 scene: &scene,
                 texture_sizes: texture_sizes.clone(),
                 width,
                 height,
                 reuse,
                 variable_rate,
+                visibility,
                 cameras: cameras.clone(),
                 lights: lights.clone(),
                 lights_change_at: Some(2),

@@ -42,6 +42,7 @@ pub use frame::Frame;
 pub use objectspace::ObjectSpaceConfig;
 use passes::bloom::{Bloom, bloom};
 use passes::tonemap::{Tonemap, tonemap};
+pub use passes::visibility::VisibilityMethod;
 pub use report::{Counters, PipelineReport};
 use scene_gpu::SceneGpu;
 use targets::Targets;
@@ -137,6 +138,8 @@ pub enum RenderError {
     BadSize(u32, u32, u32),
     #[error(transparent)]
     ObjectSpace(#[from] objectspace::ObjectSpaceError),
+    #[error(transparent)]
+    ComputeVisibility(#[from] passes::visibility::compute::ComputeVisibilityError),
     #[error("bloom strength {0} is not a number from 0 to 1")]
     BadBloom(f32),
     #[error("bloom needs read-write Rgba16Float storage textures, which {0} does not offer")]

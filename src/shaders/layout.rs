@@ -59,6 +59,7 @@ mod tests {
     use crate::render::objectspace::trimap::Square;
     use crate::render::passes::gbuffer::GpuUnproject;
     use crate::render::passes::light_grid::GpuLightGridParams;
+    use crate::render::passes::visibility::compute::{GpuRasterParams, GpuResolveParams};
     use crate::shaders::{ShaderLibrary, pass_shaders};
     use wgpu::naga;
 
@@ -108,6 +109,8 @@ mod tests {
         check::<GpuLightGridParams>(&modules);
         check::<GpuUnproject>(&modules);
         check::<GpuVolumeParams>(&modules);
+        check::<GpuRasterParams>(&modules);
+        check::<GpuResolveParams>(&modules);
     }
 
     gpu_struct! {

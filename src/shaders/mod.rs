@@ -15,21 +15,29 @@ pub mod layout;
 use std::borrow::Cow;
 
 use naga_oil::compose::{
-    ComposableModuleDescriptor, Composer, ComposerError, NagaModuleDescriptor, ShaderLanguage, ShaderType,
+    ComposableModuleDescriptor, Composer, ComposerError, NagaModuleDescriptor, ShaderDefValue, ShaderLanguage,
+    ShaderType,
 };
 
 pub(crate) use layout::gpu_struct;
 
-/// One WGSL file: its name (for error messages) and source.
+/// One WGSL file: its name (for error messages) and source, and the
+/// naga_oil shader definitions (`#ifdef NAME`) it is composed with.
 #[derive(Clone, Copy, Debug)]
 pub struct ShaderSource {
     pub file: &'static str,
     pub source: &'static str,
+    pub defs: &'static [&'static str],
 }
 
 impl ShaderSource {
     pub const fn new(file: &'static str, source: &'static str) -> Self {
-        Self { file, source }
+        Self { file, source, defs: &[] }
+    }
+
+    /// The same file composed with `defs` defined (one variant of it).
+    pub const fn with_defs(self, defs: &'static [&'static str]) -> Self {
+        Self { defs, ..self }
     }
 }
 
@@ -40,6 +48,7 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
     ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
+    ShaderSource::new("shared/pixel_surface.wgsl", include_str!("shared/pixel_surface.wgsl")),
     ShaderSource::new("shared/raster_surface.wgsl", include_str!("shared/raster_surface.wgsl")),
     crate::render::passes::light_grid::SHARED_WGSL[0],
     crate::render::passes::light_grid::SHARED_WGSL[1],
@@ -47,6 +56,7 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/light_bounds.wgsl", include_str!("shared/light_bounds.wgsl")),
     crate::render::objectspace::SHARED_WGSL,
     crate::render::passes::gbuffer::SHARED_WGSL,
+    crate::render::passes::visibility::compute::SHARED_WGSL,
     crate::render::deferred::SHARED_WGSL,
 ];
 
@@ -56,10 +66,11 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
     all.extend([forward_multipass::SHADER, passes::bloom::SHADER]);
+    all.extend([passes::visibility::compute::RASTER, passes::visibility::compute::RESOLVE]);
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
     all.push(clustered::SHADER);
-    all.extend([passes::gbuffer::SHADER, deferred_compute::SHADER]);
+    all.extend([passes::gbuffer::SHADER, deferred_compute::SHADER, deferred_compute::SHADER_VISIBILITY]);
     all.extend_from_slice(deferred::PASS_SHADERS);
     all
 }
@@ -97,10 +108,12 @@ impl ShaderLibrary {
 
     /// The composed, validated naga module of a pass shader.
     pub fn compose(&mut self, shader: ShaderSource) -> Result<wgpu::naga::Module, ShaderError> {
+        let shader_defs = shader.defs.iter().map(|d| (d.to_string(), ShaderDefValue::Bool(true))).collect();
         let module = self.composer.make_naga_module(NagaModuleDescriptor {
             source: shader.source,
             file_path: shader.file,
             shader_type: ShaderType::Wgsl,
+            shader_defs,
             ..Default::default()
         });
         module.map_err(|e| error(&self.composer, shader.file, e))

@@ -8,6 +8,10 @@
 //! batches (no light is dropped). This is the conventional pipeline the H100
 //! favours (lighting on every SM, fragment work only in the G-buffer pass).
 //!
+//! With `visibility: compute` the G-buffer pass is replaced by the compute
+//! visibility pass, and each pixel's surface is rebuilt from its triangle
+//! ids (`shadespace::visibility_read`), as object space rebuilds it.
+//!
 //! Simplified: lights are culled by bounding spheres (a spot light by its
 //! sector's), not by exact cone tests; one depth range per tile (no 2.5D
 //! depth masks or clusters), so tiles across depth discontinuities keep
@@ -16,7 +20,9 @@
 use serde::Serialize;
 
 use super::frame::Frame;
-use super::passes::gbuffer::{self, GBuffer, GbufferStage, geometry};
+use super::passes::gbuffer::{self, GbufferStage, geometry};
+use super::passes::visibility::compute::{ComputeVisibility, compute_visibility};
+use super::passes::visibility::{VisibilityBuffer, VisibilityMethod};
 use super::passes::{compute_pipeline, hdr_output};
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
@@ -25,6 +31,8 @@ use super::{Pipeline, PipelineConfig, RenderError};
 use crate::shaders::{ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("tiled.wgsl", include_str!("tiled.wgsl"));
+/// `tiled.wgsl` reading the compute visibility pass instead of the G-buffer.
+pub const SHADER_VISIBILITY: ShaderSource = SHADER.with_defs(&["VISIBILITY_BUFFER"]);
 
 /// Tile side in pixels (one workgroup of `TILE_SIZE`² threads per tile).
 pub const TILE_SIZE: u32 = 16;
@@ -45,20 +53,30 @@ pub struct DeferredComputeConfig {
     /// Lay down depth first, so that the G-buffer pass runs one fragment per
     /// pixel (`Equal` test): on by default because fragment work is what the
     /// H100 is slow at, and the same pre-pass measured faster there before the
-    /// (lighter) visibility pass.
+    /// (lighter) visibility pass. Raster visibility only.
     pub depth_prepass: bool,
+    /// Raster: the G-buffer pass. Compute: the compute visibility pass, the
+    /// surfaces rebuilt from ids (no G-buffer). Raster stays the default until
+    /// measured on the H100.
+    pub visibility: VisibilityMethod,
 }
 
 impl Default for DeferredComputeConfig {
     fn default() -> Self {
-        Self { depth_prepass: true }
+        Self { depth_prepass: true, visibility: VisibilityMethod::Raster }
     }
+}
+
+/// Where the lighting pass reads its pixels from.
+enum Surfaces {
+    Gbuffer(GbufferStage),
+    Visibility { ids: VisibilityBuffer, pass: ComputeVisibility },
 }
 
 /// The tiled deferred pipeline.
 pub struct DeferredCompute {
     config: DeferredComputeConfig,
-    geometry: GbufferStage,
+    surfaces: Surfaces,
     lighting: wgpu::ComputePipeline,
     /// The HDR target, written.
     output: wgpu::BindGroup,
@@ -73,18 +91,40 @@ impl DeferredCompute {
         targets: &Targets,
         config: DeferredComputeConfig,
     ) -> Result<Self, RenderError> {
-        let geometry = GbufferStage::new(device, shaders, scene, targets, config.depth_prepass)?;
+        let surfaces = match config.visibility {
+            VisibilityMethod::Raster => {
+                Surfaces::Gbuffer(GbufferStage::new(device, shaders, scene, targets, config.depth_prepass)?)
+            }
+            VisibilityMethod::Compute => {
+                let ids = VisibilityBuffer::new(device, targets);
+                let pass = ComputeVisibility::new(device, shaders, scene, targets, &ids)?;
+                Surfaces::Visibility { ids, pass }
+            }
+        };
         let (layout, output) = hdr_output(device, targets, "tiled lighting output");
-        let groups = [&scene.layout, &geometry.gbuffer.read_layout, &layout];
-        let lighting = compute_pipeline(device, shaders, SHADER, "tiled_lighting", &groups)?;
-        Ok(Self { config, geometry, lighting, output })
+        let (shader, read_layout) = match &surfaces {
+            Surfaces::Gbuffer(stage) => (SHADER, &stage.gbuffer.read_layout),
+            Surfaces::Visibility { pass, .. } => (SHADER_VISIBILITY, &pass.read_layout),
+        };
+        let groups = [&scene.layout, read_layout, &layout];
+        let lighting = compute_pipeline(device, shaders, shader, "tiled_lighting", &groups)?;
+        Ok(Self { config, surfaces, lighting, output })
     }
 }
 
 impl Pipeline for DeferredCompute {
     fn encode(&mut self, frame: &mut Frame) {
-        geometry(frame, &self.geometry);
-        tiled_lighting(frame, &self.lighting, &self.geometry.gbuffer, &self.output);
+        let read = match &self.surfaces {
+            Surfaces::Gbuffer(stage) => {
+                geometry(frame, stage);
+                &stage.gbuffer.read_group
+            }
+            Surfaces::Visibility { pass, .. } => {
+                compute_visibility(frame, pass);
+                &pass.read_group
+            }
+        };
+        tiled_lighting(frame, &self.lighting, read, &self.output);
     }
 
     /// Lights come from the tiles' own lists, not the CPU's per-object ones.
@@ -92,26 +132,36 @@ impl Pipeline for DeferredCompute {
         false
     }
 
-    /// Memory: the G-buffer; setup: its bytes per pixel (with depth), the
-    /// tile size and the tile list's capacity.
+    /// Memory: the G-buffer (or the visibility buffers); setup: its bytes
+    /// per pixel (with depth), the tile size and the tile list's capacity.
     fn report(&self) -> PipelineReport {
-        PipelineReport::new(PipelineConfig::DeferredCompute(self.config))
-            .memory("gbuffer", self.geometry.gbuffer.bytes())
-            .setup("gbuffer_bytes_per_pixel", gbuffer::BYTES_PER_PIXEL_WITH_DEPTH)
-            .setup("tile_size", TILE_SIZE as u64)
-            .setup("tile_light_capacity", TILE_LIGHT_CAPACITY as u64)
+        let report = PipelineReport::new(PipelineConfig::DeferredCompute(self.config));
+        let report = match &self.surfaces {
+            Surfaces::Gbuffer(stage) => report
+                .memory("gbuffer", stage.gbuffer.bytes())
+                .setup("gbuffer_bytes_per_pixel", gbuffer::BYTES_PER_PIXEL_WITH_DEPTH),
+            Surfaces::Visibility { ids, pass } => {
+                report.memory("visibility", ids.bytes()).memory("visibility_raster", pass.bytes())
+            }
+        };
+        report.setup("tile_size", TILE_SIZE as u64).setup("tile_light_capacity", TILE_LIGHT_CAPACITY as u64)
     }
 }
 
-/// Reads: the G-buffer (with depth) and the lights. Writes: every pixel of
-/// `targets.hdr` (through `output`).
-fn tiled_lighting(frame: &mut Frame, pipeline: &wgpu::ComputePipeline, gbuffer: &GBuffer, output: &wgpu::BindGroup) {
+/// Reads: the surfaces (`read`: the G-buffer with depth, or the visibility
+/// buffers) and the lights. Writes: every pixel of `targets.hdr` (through `output`).
+fn tiled_lighting(
+    frame: &mut Frame,
+    pipeline: &wgpu::ComputePipeline,
+    read: &wgpu::BindGroup,
+    output: &wgpu::BindGroup,
+) {
     let (w, h) = (frame.targets.width.div_ceil(TILE_SIZE), frame.targets.height.div_ceil(TILE_SIZE));
     let scene = frame.scene.bind_group();
     let mut cp = frame.compute_pass("tiled lighting");
     cp.set_pipeline(pipeline);
     cp.set_bind_group(0, scene, &[]);
-    cp.set_bind_group(1, &gbuffer.read_group, &[]);
+    cp.set_bind_group(1, read, &[]);
     cp.set_bind_group(2, output, &[]);
     cp.dispatch_workgroups(w, h, 1);
 }

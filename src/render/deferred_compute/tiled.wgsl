@@ -15,12 +15,18 @@
 //    chunk, every pixel shades with the lights listed so far and the list is
 //    emptied: so no light is ever dropped, however many reach a tile;
 // 5. each pixel adds emission and the ambient and directional lights.
+// Pixels come from the G-buffer, or, with VISIBILITY_BUFFER defined, from the
+// compute visibility pass (`shadespace::visibility_read`).
 #import shadespace::contract::{TILED_TILE_SIZE, TILED_CHUNK, TILED_LIST_CAPACITY}
 #import shadespace::lighting::light_radiance
 #import shadespace::light_bounds::{light_bounds, sphere_touches}
 #import shadespace::scene_bindings::{view, lights}
 #import shadespace::surface::light_globals
+#ifdef VISIBILITY_BUFFER
+#import shadespace::visibility_read::{GbufferTexel, gbuffer_depth_at, gbuffer_texel}
+#else
 #import shadespace::gbuffer::{GbufferTexel, gbuffer_depth_at, gbuffer_texel}
+#endif
 
 @group(2) @binding(0) var hdr: texture_storage_2d<rgba16float, write>;
 

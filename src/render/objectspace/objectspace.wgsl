@@ -3,7 +3,8 @@
 // gathering must compute identically.
 #define_import_path shadespace::objectspace
 #import shadespace::contract::{MAX_LEVELS, TILE_COUNTER_SLOTS}
-#import shadespace::scene_bindings::{view, objects, vertices, triangle_vertices}
+#import shadespace::scene_bindings::vertices
+#import shadespace::pixel_surface::{PixelSample, interpolate2}
 
 struct AtlasLevel {
     page: u32,
@@ -53,58 +54,6 @@ struct Params {
 @group(1) @binding(6) var visibility: texture_2d<u32>;
 // Per atlas texel: triangle + 1 covering it; 0 = empty.
 @group(1) @binding(7) var triangle_map: texture_2d_array<u32>;
-
-// What a pixel of the visibility buffer sees, rebuilt from the triangle.
-struct PixelSample {
-    object: u32,
-    triangle: u32,
-    tri: vec3u,
-    // Perspective-correct barycentrics at the pixel centre, and at the
-    // centres one pixel right and one pixel down (for derivatives).
-    b: vec3f,
-    b_dx: vec3f,
-    b_dy: vec3f,
-}
-
-// Homogeneous barycentrics: for clip-space vertices (x, y, w) and the ray
-// through NDC point q, the weights cross(v_j, v_k) . (q, 1) are perspective
-// correct and stay valid when a vertex lies behind the eye.
-fn barycentrics(c0: vec3f, c1: vec3f, c2: vec3f, q: vec2f) -> vec3f {
-    let r = vec3f(q, 1.0);
-    let e = vec3f(dot(cross(c1, c2), r), dot(cross(c2, c0), r), dot(cross(c0, c1), r));
-    return e / (e.x + e.y + e.z);
-}
-
-fn pixel_ndc(pixel: vec2f) -> vec2f {
-    let uv = (pixel + 0.5) * view.viewport.zw;
-    return vec2f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-}
-
-// Rebuilds a visibility-buffer pixel; `ids` = (object + 1, triangle), non-zero.
-fn sample_pixel(pixel: vec2u, ids: vec2u) -> PixelSample {
-    var p: PixelSample;
-    p.object = ids.x - 1u;
-    p.triangle = ids.y;
-    let o = objects[p.object];
-    p.tri = triangle_vertices(o, p.triangle);
-    let mvp = view.view_proj * o.model;
-    let h0 = mvp * vec4f(vertices[p.tri.x].position, 1.0);
-    let h1 = mvp * vec4f(vertices[p.tri.y].position, 1.0);
-    let h2 = mvp * vec4f(vertices[p.tri.z].position, 1.0);
-    let c0 = h0.xyw;
-    let c1 = h1.xyw;
-    let c2 = h2.xyw;
-    let q = pixel_ndc(vec2f(pixel));
-    let step = 2.0 * view.viewport.zw;
-    p.b = barycentrics(c0, c1, c2, q);
-    p.b_dx = barycentrics(c0, c1, c2, q + vec2f(step.x, 0.0));
-    p.b_dy = barycentrics(c0, c1, c2, q - vec2f(0.0, step.y));
-    return p;
-}
-
-fn interpolate2(b: vec3f, a: vec2f, c: vec2f, d: vec2f) -> vec2f {
-    return a * b.x + c * b.y + d * b.z;
-}
 
 // Chart UV of the pixel and its screen derivatives.
 struct ChartFootprint {

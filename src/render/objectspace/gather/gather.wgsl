@@ -5,12 +5,11 @@
 // are shaded here per pixel, with the world grid's lights. Debug views replace
 // the shade.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
-#import shadespace::scene::vertex_uv0
-#import shadespace::scene_bindings::{objects, vertices}
-#import shadespace::surface::{surface_point, albedo_lod}
+#import shadespace::scene_bindings::objects
+#import shadespace::pixel_surface::{sample_pixel, pixel_surface}
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
-#import shadespace::objectspace::{params, atlas_entries, tile_shaded, visibility, sample_pixel, chart_footprint,
-    select_level, bilinear, level_origin, interpolate2, AtlasLevel}
+#import shadespace::objectspace::{params, atlas_entries, tile_shaded, visibility, chart_footprint, select_level,
+    bilinear, level_origin, AtlasLevel}
 
 @group(2) @binding(0) var atlas: texture_2d_array<f32>;
 @group(2) @binding(1) var hdr: texture_storage_2d<rgba16float, write>;
@@ -48,12 +47,7 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
     let e = atlas_entries[p.object];
     if e.size == 0u {
         let o = objects[p.object];
-        let t0 = vertex_uv0(vertices[p.tri.x]);
-        let t1 = vertex_uv0(vertices[p.tri.y]);
-        let t2 = vertex_uv0(vertices[p.tri.z]);
-        let u = interpolate2(p.b, t0, t1, t2);
-        let lod = albedo_lod(interpolate2(p.b_dx, t0, t1, t2) - u, interpolate2(p.b_dy, t0, t1, t2) - u);
-        let s = surface_point(o, p.tri, p.b, lod);
+        let s = pixel_surface(p);
         textureStore(hdr, id.xy, vec4f(light_surface_in_cell(o, s, world_cell_of(s.position)), 1.0));
         return;
     }

@@ -4,8 +4,9 @@
 // this frame decides whether the tile's cached shade is still good (younger
 // than N frames and not invalidated) or queues it for shading.
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW}
+#import shadespace::pixel_surface::sample_pixel
 #import shadespace::objectspace::{params, atlas_entries, tile_visible, tile_shaded, queue, counters, visibility,
-    sample_pixel, chart_footprint, select_level, bilinear, AtlasLevel}
+    chart_footprint, select_level, bilinear, AtlasLevel}
 
 fn mark_tile(object: u32, level_index: u32, l: AtlasLevel, valid_since: u32, texel: vec2i) {
     let tiles_per_row = l.size / params.tile_size;

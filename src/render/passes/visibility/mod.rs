@@ -1,6 +1,13 @@
 //! Visibility pass: rasterizes the visible objects into a visibility buffer
 //! of (object + 1, triangle) per pixel, from which compute passes rebuild
-//! everything else a pixel needs.
+//! everything else a pixel needs. [`compute`] fills the same buffer with a
+//! software rasterizer instead.
+
+pub mod compute;
+
+use std::str::FromStr;
+
+use serde::Serialize;
 
 use super::{DepthMode, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline};
 use crate::render::frame::Frame;
@@ -9,6 +16,38 @@ use crate::render::targets::Targets;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("visibility.wgsl", include_str!("visibility.wgsl"));
+
+/// How a pipeline fills its visibility buffer (`--visibility`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VisibilityMethod {
+    /// The hardware rasterizer ([`visibility`], after an optional depth pre-pass).
+    #[default]
+    Raster,
+    /// The compute rasterizer ([`compute::compute_visibility`]); needs
+    /// [`compute::FEATURES`].
+    Compute,
+}
+
+impl VisibilityMethod {
+    pub const ALL: [Self; 2] = [Self::Raster, Self::Compute];
+
+    /// The name `--visibility` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Raster => "raster",
+            Self::Compute => "compute",
+        }
+    }
+}
+
+impl FromStr for VisibilityMethod {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL.into_iter().find(|v| v.name() == s).ok_or_else(|| format!("'{s}' is not raster or compute"))
+    }
+}
 
 /// Per pixel: (object + 1, triangle); (0, 0) is background.
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
@@ -28,7 +67,9 @@ impl VisibilityBuffer {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: FORMAT,
+            // STORAGE_BINDING: the compute rasterizer's resolve writes it.
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],

@@ -1,0 +1,260 @@
+//! Compute visibility: a software rasterizer that fills the same
+//! [`VisibilityBuffer`] as the raster pass, with no vertex or fragment work
+//! (the H100 runs those on a few of its SMs only).
+//!
+//! Passes, each timed under its name: `vis: clear` (the 64-bit buffer to
+//! background), `vis: raster` (one thread per visible triangle: near-plane
+//! clipped bounds, homogeneous edge functions with the top-left rule, and one
+//! 64-bit `atomicMax(depth << 32 | payload)` per covered pixel; triangles
+//! whose bounds exceed 256 pixels are queued as 32x32 tiles), `vis: raster
+//! big` (one workgroup per queued tile) and `vis: resolve` (payload to
+//! (object + 1, triangle)).
+//!
+//! Payload: the complement of the triangle's index in this frame's list of
+//! visible triangles, object by object (at equal depth the first drawn wins,
+//! as in the raster path; 0 stays background). The same per-frame list of (object, first
+//! index) ranges drives the dispatch (a thread finds its object by binary
+//! search), so culled objects cost nothing and the 32 bits hold any mix of
+//! object and triangle counts up to 2^32 - 1 visible triangles, where packing
+//! fixed bit fields would have to cap one of them.
+//!
+//! The depth target is not written: the consumers are all compute passes
+//! (object space's, tiled deferred's), which read depth, where they need it,
+//! from the rasterizer's own 64-bit buffer (`visibility_read.wgsl`); a
+//! full-screen depth write would be a fragment pass, the slow kind on the H100.
+
+use super::VisibilityBuffer;
+use crate::render::frame::Frame;
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use crate::render::scene_gpu::SceneGpu;
+use crate::render::targets::Targets;
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
+
+pub const RASTER: ShaderSource = ShaderSource::new("raster.wgsl", include_str!("raster.wgsl"));
+pub const RESOLVE: ShaderSource = ShaderSource::new("resolve.wgsl", include_str!("resolve.wgsl"));
+/// The module lighting passes import to read the output as a G-buffer
+/// (`shadespace::visibility_read`, group 1: [`ComputeVisibility::read_layout`]).
+pub const SHARED_WGSL: ShaderSource = ShaderSource::new("visibility_read.wgsl", include_str!("visibility_read.wgsl"));
+
+/// Threads per workgroup of `raster` (`RASTER_WORKGROUP` in `raster.wgsl`).
+const RASTER_WORKGROUP: u32 = 64;
+/// Workgroups of `raster_big`, which loop over the queued tiles
+/// (`BIG_WORKGROUPS` in `raster.wgsl`).
+const BIG_WORKGROUPS: u32 = 1024;
+/// Most workgroups along x of one dispatch (WebGPU's limit is 65535).
+const MAX_GROUPS_X: u32 = 32768;
+
+/// The features the compute rasterizer needs: 64-bit integers and 64-bit
+/// atomic max on storage buffers (lavapipe and the H100 have both).
+pub const FEATURES: wgpu::Features = wgpu::Features::SHADER_INT64.union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX);
+
+gpu_struct! {
+    /// Per-frame settings of `raster.wgsl` (`RasterParams`).
+    pub struct GpuRasterParams as "RasterParams" {
+        /// Visible objects (entries of the range list).
+        pub range_count: u32,
+        /// Visible triangles: the threads of `raster`.
+        pub triangle_count: u32,
+        /// Entries of the big-tile queue.
+        pub big_capacity: u32,
+        pub pad: u32,
+    }
+}
+
+gpu_struct! {
+    /// Settings of `resolve.wgsl` (`ResolveParams`).
+    pub struct GpuResolveParams as "ResolveParams" {
+        pub width: u32,
+        pub height: u32,
+        /// Visible objects (entries of the range list).
+        pub range_count: u32,
+        pub pad: u32,
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ComputeVisibilityError {
+    #[error(transparent)]
+    Shader(#[from] ShaderError),
+    #[error(
+        "compute visibility needs 64-bit atomics (SHADER_INT64, SHADER_INT64_ATOMIC_MIN_MAX), which this adapter lacks"
+    )]
+    NoInt64Atomics,
+}
+
+/// The compute rasterizer's pipelines, buffers and bind groups, for one
+/// resolution and one output buffer.
+pub struct ComputeVisibility {
+    clear: wgpu::ComputePipeline,
+    raster: wgpu::ComputePipeline,
+    raster_big: wgpu::ComputePipeline,
+    resolve: wgpu::ComputePipeline,
+    raster_params: wgpu::Buffer,
+    resolve_params: wgpu::Buffer,
+    /// Per visible object: (object, first triangle in the frame's list).
+    ranges: wgpu::Buffer,
+    /// Entries of the big-tile queue (cleared every frame).
+    big_count: wgpu::Buffer,
+    big_capacity: u32,
+    raster_group: wgpu::BindGroup,
+    resolve_group: wgpu::BindGroup,
+    /// Group 1 of passes that import `shadespace::visibility_read`: the ids
+    /// and the 64-bit buffer.
+    pub read_layout: wgpu::BindGroupLayout,
+    pub read_group: wgpu::BindGroup,
+    width: u32,
+    height: u32,
+}
+
+impl ComputeVisibility {
+    /// Fails where the device lacks [`FEATURES`].
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+        out: &VisibilityBuffer,
+    ) -> Result<Self, ComputeVisibilityError> {
+        if !device.features().contains(FEATURES) {
+            return Err(ComputeVisibilityError::NoInt64Atomics);
+        }
+        let (width, height) = (targets.width, targets.height);
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+        };
+        use wgpu::BufferUsages as U;
+        let raster_params = buffer("vis raster params", size_of::<GpuRasterParams>() as u64, U::UNIFORM | U::COPY_DST);
+        let resolve_params =
+            buffer("vis resolve params", size_of::<GpuResolveParams>() as u64, U::UNIFORM | U::COPY_DST);
+        let ranges = buffer("vis ranges", (scene.draws.len().max(1) * 8) as u64, U::STORAGE | U::COPY_DST);
+        let depth_ids = buffer("vis depth and ids", width as u64 * height as u64 * 8, U::STORAGE);
+        // Room for every pixel covered 16 times over by big triangles' tiles
+        // (a tile holds up to 1024 pixels); past it, threads rasterize alone.
+        let big_capacity = ((width as u64 * height as u64 / 64).max(1 << 14) as u32).min(1 << 22);
+        let big_tiles = buffer("vis big tiles", big_capacity as u64 * 8, U::STORAGE);
+        let big_count = buffer("vis big count", 4, U::STORAGE | U::COPY_DST);
+
+        let read = Binding::Storage { read_only: true };
+        let rw = Binding::Storage { read_only: false };
+        let raster_layout = bind_group_layout(device, "vis raster", &[Binding::Uniform, read, rw, rw, rw]);
+        let dimension = wgpu::TextureViewDimension::D2;
+        let out_binding = Binding::StorageTexture { format: super::FORMAT, dimension };
+        let resolve_layout = bind_group_layout(device, "vis resolve", &[Binding::Uniform, read, rw, out_binding]);
+        let raster_group = bind_group(
+            device,
+            "vis raster",
+            &raster_layout,
+            &[
+                raster_params.as_entire_binding(),
+                ranges.as_entire_binding(),
+                depth_ids.as_entire_binding(),
+                big_tiles.as_entire_binding(),
+                big_count.as_entire_binding(),
+            ],
+        );
+        let resolve_group = bind_group(
+            device,
+            "vis resolve",
+            &resolve_layout,
+            &[
+                resolve_params.as_entire_binding(),
+                ranges.as_entire_binding(),
+                depth_ids.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&out.view),
+            ],
+        );
+        let uint = wgpu::TextureSampleType::Uint;
+        let read_layout = bind_group_layout(
+            device,
+            "visibility read",
+            &[Binding::Texture { sample: uint, dimension }, Binding::Storage { read_only: true }],
+        );
+        let read_group = bind_group(
+            device,
+            "visibility read",
+            &read_layout,
+            &[wgpu::BindingResource::TextureView(&out.view), depth_ids.as_entire_binding()],
+        );
+        let raster_groups = [&scene.layout, &raster_layout];
+        Ok(Self {
+            clear: compute_pipeline(device, shaders, RESOLVE, "clear", &[&resolve_layout])?,
+            resolve: compute_pipeline(device, shaders, RESOLVE, "resolve", &[&resolve_layout])?,
+            raster: compute_pipeline(device, shaders, RASTER, "raster", &raster_groups)?,
+            raster_big: compute_pipeline(device, shaders, RASTER, "raster_big", &raster_groups)?,
+            raster_params,
+            resolve_params,
+            ranges,
+            big_count,
+            big_capacity,
+            raster_group,
+            resolve_group,
+            read_layout,
+            read_group,
+            width,
+            height,
+        })
+    }
+}
+
+impl ComputeVisibility {
+    /// Bytes of its buffers (the 64-bit one, the big-tile queue, the ranges).
+    pub fn bytes(&self) -> u64 {
+        self.width as u64 * self.height as u64 * 8 + self.big_capacity as u64 * 8 + self.ranges.size()
+    }
+}
+
+/// This frame's (object, first triangle) ranges of the visible objects, and
+/// the number of visible triangles.
+pub fn visible_ranges(scene: &SceneGpu, visible: &[bool]) -> (Vec<[u32; 2]>, u32) {
+    let mut ranges = Vec::new();
+    let mut total = 0u32;
+    for (object, d) in scene.draws.iter().enumerate().filter(|(i, _)| visible[*i]) {
+        ranges.push([object as u32, total]);
+        total += d.index_count / 3;
+    }
+    (ranges, total)
+}
+
+/// Reads: the scene and the frame's visible objects. Writes: `pass`'s output
+/// visibility buffer (every pixel). The depth target is left untouched.
+pub fn compute_visibility(frame: &mut Frame, pass: &ComputeVisibility) {
+    let (ranges, triangles) = visible_ranges(frame.scene, frame.visible);
+    let range_count = ranges.len() as u32;
+    if !ranges.is_empty() {
+        frame.queue.write_buffer(&pass.ranges, 0, bytemuck::cast_slice(&ranges));
+    }
+    let raster = GpuRasterParams { range_count, triangle_count: triangles, big_capacity: pass.big_capacity, pad: 0 };
+    frame.queue.write_buffer(&pass.raster_params, 0, bytemuck::bytes_of(&raster));
+    let resolve = GpuResolveParams { width: pass.width, height: pass.height, range_count, pad: 0 };
+    frame.queue.write_buffer(&pass.resolve_params, 0, bytemuck::bytes_of(&resolve));
+    frame.encoder.clear_buffer(&pass.big_count, 0, None);
+
+    let pixel_groups = (pass.width.div_ceil(8), pass.height.div_ceil(8));
+    {
+        let mut cp = frame.compute_pass("vis: clear");
+        cp.set_pipeline(&pass.clear);
+        cp.set_bind_group(0, &pass.resolve_group, &[]);
+        cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1);
+    }
+    if triangles > 0 {
+        let scene = frame.scene.bind_group();
+        let groups = triangles.div_ceil(RASTER_WORKGROUP);
+        let groups_x = groups.min(MAX_GROUPS_X);
+        {
+            let mut cp = frame.compute_pass("vis: raster");
+            cp.set_pipeline(&pass.raster);
+            cp.set_bind_group(0, scene, &[]);
+            cp.set_bind_group(1, &pass.raster_group, &[]);
+            cp.dispatch_workgroups(groups_x, groups.div_ceil(groups_x), 1);
+        }
+        let mut cp = frame.compute_pass("vis: raster big");
+        cp.set_pipeline(&pass.raster_big);
+        cp.set_bind_group(0, scene, &[]);
+        cp.set_bind_group(1, &pass.raster_group, &[]);
+        cp.dispatch_workgroups(BIG_WORKGROUPS, 1, 1);
+    }
+    let mut cp = frame.compute_pass("vis: resolve");
+    cp.set_pipeline(&pass.resolve);
+    cp.set_bind_group(0, &pass.resolve_group, &[]);
+    cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1);
+}

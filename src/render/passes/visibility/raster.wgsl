@@ -1,0 +1,442 @@
+// Compute rasterizer of the visibility pass: one thread per triangle of the
+// visible objects writes, per covered pixel, one 64-bit
+// `atomicMax(depth_bits << 32 | payload)` (reversed Z: nearer is greater, and
+// positive floats order like their bits). The payload is the complement of
+// the triangle's index in this frame's list of visible triangles, so that at
+// equal depth the triangle drawn first wins, as with the raster path's
+// `Greater` test, and 0 (background) is no triangle's; the resolve pass turns
+// it back into (object, triangle) through `ranges`.
+//
+// Coverage, as the hardware decides it: a triangle wholly in front of the
+// near plane and inside the guard band is snapped to 1/256 pixel (8
+// sub-pixel bits, as NVIDIA GPUs and llvmpipe snap) and its edge functions
+// are evaluated exactly in 64-bit integers, with the top-left rule: watertight,
+// and the same pixels as the raster path. A triangle crossing the near plane
+// is rasterized in homogeneous coordinates instead (Olano and Greer 1997): the
+// edge functions of clip-space (x, y, w) vertices stay exact for vertices
+// behind the eye, so no triangle is split; the bounding box comes from the
+// triangle clipped against the near plane. Either way the near and far planes
+// are clipped per pixel by the interpolated depth.
+#import shadespace::scene_bindings::{view, object_clip_position, objects, triangle_vertices}
+
+// Mirrors `visibility::compute::GpuRasterParams`.
+struct RasterParams {
+    // Entries of `ranges` (visible objects).
+    range_count: u32,
+    // Visible triangles: the threads of `raster`.
+    triangle_count: u32,
+    // Entries of `big_tiles`.
+    big_capacity: u32,
+    pad: u32,
+}
+
+@group(1) @binding(0) var<uniform> params: RasterParams;
+// Per visible object: (object, index of its first triangle in this frame's
+// list), ascending.
+@group(1) @binding(1) var<storage, read> ranges: array<vec2u>;
+// Per pixel: depth bits << 32 | payload; 0 = background.
+@group(1) @binding(2) var<storage, read_write> depth_ids: array<atomic<u64>>;
+// Big triangles' work: (payload, tile of the triangle's bounding box).
+@group(1) @binding(3) var<storage, read_write> big_tiles: array<vec2u>;
+// Entries appended to `big_tiles` (may exceed the capacity: see `raster`).
+@group(1) @binding(4) var<storage, read_write> big_count: atomic<u32>;
+
+// Threads per workgroup of `raster` (`compute::RASTER_WORKGROUP`).
+const RASTER_WORKGROUP: u32 = 64u;
+// A thread rasterizes its triangle itself when the bounding box has at most
+// this many pixels; bigger ones go to `raster_big` in BIG_TILE squares.
+const SMALL_AREA: i32 = 256;
+const BIG_TILE: i32 = 32;
+// Threads per workgroup of `raster_big` (`compute::BIG_WORKGROUP`), and its
+// fixed number of workgroups, which loop over the big tiles.
+const BIG_WORKGROUP: u32 = 64u;
+const BIG_WORKGROUPS: u32 = 1024u;
+
+// Sub-pixel steps of snapped vertices (8 bits), and the guard band in pixels
+// beyond which a triangle is rasterized in homogeneous coordinates (keeps the
+// fixed-point edge functions below 2^46).
+const SUBPIXELS: f32 = 256.0;
+const GUARD_BAND: f32 = 8192.0;
+
+// A triangle ready to rasterize.
+struct Setup {
+    // 1: fixed-point edges (`fixed_*`), 0: homogeneous ones (`edge_*`).
+    fixed: u32,
+    // Per edge of the near-clipped polygon, in sub-pixels: the value at pixel (0, 0)'s centre (less one
+    // where the edge does not own its pixels, so inside is >= 0), and the
+    // steps one pixel right and one pixel down.
+    fixed_origin: vec4<i64>,
+    fixed_dx: vec4<i64>,
+    fixed_dy: vec4<i64>,
+    // Edge functions over (ndc.x, ndc.y, 1), oriented so that inside is >= 0.
+    edge_a: vec3f,
+    edge_b: vec3f,
+    edge_c: vec3f,
+    // NDC depth (z / w), affine in screen space. Fixed: over sub-pixel
+    // offsets from `depth_origin`, from the snapped vertices (as the hardware
+    // interpolates it); homogeneous: over (ndc.x, ndc.y, 1).
+    depth: vec3f,
+    depth_origin: vec2<i64>,
+    // Inclusive pixel bounds (min x, min y, max x, max y); empty when min > max.
+    bounds: vec4i,
+    // Bit i: edge i owns the pixels it passes through exactly (top-left rule).
+    owns: u32,
+}
+
+// Index of the entry of `ranges` holding list triangle `index`.
+fn find_range(index: u32) -> u32 {
+    var lo = 0u;
+    var hi = params.range_count - 1u;
+    while lo < hi {
+        let mid = (lo + hi + 1u) / 2u;
+        if ranges[mid].y <= index {
+            lo = mid;
+        } else {
+            hi = mid - 1u;
+        }
+    }
+    return lo;
+}
+
+// Whether a comes before b in a fixed order of points (lexicographic).
+fn before(a: vec3f, b: vec3f) -> bool {
+    if a.x != b.x {
+        return a.x < b.x;
+    }
+    if a.y != b.y {
+        return a.y < b.y;
+    }
+    return a.z < b.z;
+}
+
+// The edge plane through the eye and clip points a and b, cross(a, b),
+// computed from the two points in a fixed order: the triangle on the other
+// side of the edge gets the exact negation, so no pixel centre on a shared
+// edge is lost to rounding (and the top-left rule gives it to one of them).
+fn edge_plane(a: vec3f, b: vec3f) -> vec3f {
+    if before(a, b) {
+        return cross(a, b);
+    }
+    return -cross(b, a);
+}
+
+// Top-left rule in NDC (y up): an edge owns its pixels when its inward normal
+// points right (a left edge), or straight down on screen (a top edge).
+fn owns_pixels(edge: vec3f) -> bool {
+    return edge.x > 0.0 || (edge.x == 0.0 && edge.y < 0.0);
+}
+
+fn ndc_to_pixel(ndc: vec2f) -> vec2f {
+    return vec2f(ndc.x + 1.0, 1.0 - ndc.y) * 0.5 * view.viewport.xy - 0.5;
+}
+
+// Pixel bounds of the part of the triangle in front of the near plane
+// (z <= w), one pixel wider on each side (the edge functions decide).
+fn near_clipped_bounds(h: array<vec4f, 3>) -> vec4i {
+    var lo = vec2f(3.0e38);
+    var hi = vec2f(-3.0e38);
+    for (var i = 0u; i < 3u; i++) {
+        let a = h[i];
+        let b = h[(i + 1u) % 3u];
+        let da = a.w - a.z;
+        let db = b.w - b.z;
+        if da >= 0.0 && a.w > 0.0 {
+            let p = a.xy / a.w;
+            lo = min(lo, p);
+            hi = max(hi, p);
+        }
+        if (da < 0.0) != (db < 0.0) {
+            let c = mix(a, b, da / (da - db));
+            if c.w > 0.0 {
+                let p = c.xy / c.w;
+                lo = min(lo, p);
+                hi = max(hi, p);
+            }
+        }
+    }
+    if lo.x > hi.x {
+        return vec4i(0, 0, -1, -1);
+    }
+    // NDC y grows up, pixel rows down; clamp before converting to integers.
+    let size = view.viewport.xy;
+    let p_lo = clamp(ndc_to_pixel(vec2f(lo.x, hi.y)), vec2f(-2.0), size + 1.0);
+    let p_hi = clamp(ndc_to_pixel(vec2f(hi.x, lo.y)), vec2f(-2.0), size + 1.0);
+    let last = vec2i(size) - 1;
+    let min_px = max(vec2i(ceil(p_lo)) - 1, vec2i(0));
+    let max_px = min(vec2i(floor(p_hi)) + 1, last);
+    return vec4i(min_px, max_px);
+}
+
+// Sets up `s`'s fixed-point edges: the triangle is clipped against the near
+// plane (z <= w) into a convex polygon of up to four vertices, as the
+// hardware clips it, then snapped. Coverage is the intersection of the
+// polygon's edges, each with the top-left rule: the same pixels as the
+// hardware's fan of triangles, whose inner edges cover each pixel once.
+// Returns false (and leaves `s`) when a vertex lies beyond the guard band.
+fn cross_i64(a: vec2<i64>, b: vec2<i64>) -> i64 {
+    return a.x * b.y - a.y * b.x;
+}
+
+fn setup_fixed(h: array<vec4f, 3>, s: ptr<function, Setup>) -> bool {
+    let half = 0.5 * view.viewport.xy;
+    var v: array<vec2<i64>, 4>;
+    var z: array<f32, 4>;
+    var n = 0u;
+    var lo = vec2f(3.0e38);
+    var hi = vec2f(-3.0e38);
+    for (var i = 0u; i < 3u; i++) {
+        let a = h[i];
+        let b = h[(i + 1u) % 3u];
+        let da = a.w - a.z;
+        let db = b.w - b.z;
+        var points = array<vec4f, 2>(a, mix(a, b, da / (da - db)));
+        let keep = vec2<bool>(da >= 0.0, (da < 0.0) != (db < 0.0));
+        for (var k = 0u; k < 2u; k++) {
+            if !keep[k] {
+                continue;
+            }
+            let c = points[k];
+            if !(c.w > 0.0) {
+                return false;
+            }
+            // The viewport transform (y down), then the snap.
+            let ndc = c.xy / c.w;
+            let p = vec2f(ndc.x, -ndc.y) * half + half;
+            if !all(abs(p - half) <= vec2f(GUARD_BAND)) {
+                return false;
+            }
+            v[n] = vec2<i64>(round(p * SUBPIXELS));
+            z[n] = c.z / c.w;
+            lo = min(lo, p);
+            hi = max(hi, p);
+            n++;
+        }
+    }
+    (*s).fixed = 1u;
+    (*s).bounds = vec4i(0, 0, -1, -1);
+    if n < 3u {
+        return true;
+    }
+    // Twice the signed area (shoelace): 0 is degenerate after snapping, no
+    // pixels, as in the hardware; clockwise polygons get their edges flipped
+    // (both facings are drawn).
+    var area = 0li;
+    for (var i = 0u; i < n; i++) {
+        let a = v[i];
+        let b = v[(i + 1u) % n];
+        area += a.x * b.y - a.y * b.x;
+    }
+    if area == 0li {
+        return true;
+    }
+    let facing = select(1li, -1li, area > 0li);
+    let unit = i64(SUBPIXELS);
+    let centre = unit / 2li;
+    // A missing fourth edge, or one of zero length, passes every pixel.
+    var origin = vec4<i64>(0li);
+    var step_x = vec4<i64>(0li);
+    var step_y = vec4<i64>(0li);
+    for (var i = 0u; i < n; i++) {
+        let a = v[i];
+        let d = (v[(i + 1u) % n] - a) * facing;
+        if all(d == vec2<i64>(0li)) {
+            continue;
+        }
+        // E(p) = d.y (p.x - a.x) - d.x (p.y - a.y): positive inside.
+        step_x[i] = d.y * unit;
+        step_y[i] = -d.x * unit;
+        // Top-left rule (y down): an edge owns its pixels when the inside
+        // lies to its right (a left edge) or straight below it (a top edge).
+        let owns = step_x[i] > 0li || (step_x[i] == 0li && step_y[i] > 0li);
+        origin[i] = d.y * (centre - a.x) - d.x * (centre - a.y) - select(1li, 0li, owns);
+    }
+    // The depth plane through vertex 0 and the larger of the fan's triangles.
+    let a1 = cross_i64(v[1] - v[0], v[2] - v[0]);
+    let a2 = cross_i64(v[2] - v[0], v[3] - v[0]);
+    let k = select(1u, 2u, n == 4u && abs(a2) > abs(a1));
+    let e1 = vec2f(v[k] - v[0]);
+    let e2 = vec2f(v[k + 1u] - v[0]);
+    let dz = vec2f(z[k] - z[0], z[k + 1u] - z[0]);
+    let det = f32(select(a1, a2, k == 2u));
+    (*s).depth = vec3f((dz.x * e2.y - dz.y * e1.y) / det, (e1.x * dz.y - e2.x * dz.x) / det, z[0]);
+    (*s).depth_origin = v[0];
+    (*s).fixed_origin = origin;
+    (*s).fixed_dx = step_x;
+    (*s).fixed_dy = step_y;
+    // Pixels whose centres the polygon's box holds, one more on each side.
+    let last = vec2i(view.viewport.xy) - 1;
+    (*s).bounds = vec4i(max(vec2i(ceil(lo - 0.5)) - 1, vec2i(0)), min(vec2i(floor(hi - 0.5)) + 1, last));
+    return true;
+}
+
+fn setup_triangle(index: u32) -> Setup {
+    let range = ranges[find_range(index)];
+    let object = range.x;
+    let tri = triangle_vertices(objects[object], index - range.y);
+    let h = array<vec4f, 3>(
+        object_clip_position(object, tri.x),
+        object_clip_position(object, tri.y),
+        object_clip_position(object, tri.z),
+    );
+    var s: Setup;
+    s.bounds = vec4i(0, 0, -1, -1);
+    // Wholly behind the far plane (z < 0).
+    if all(vec3f(h[0].z, h[1].z, h[2].z) < vec3f(0.0)) {
+        return s;
+    }
+    let c = array<vec3f, 3>(h[0].xyw, h[1].xyw, h[2].xyw);
+    let n = array<vec3f, 3>(edge_plane(c[1], c[2]), edge_plane(c[2], c[0]), edge_plane(c[0], c[1]));
+    // det > 0: counter-clockwise on screen; 0: the triangle's plane holds the
+    // eye (seen edge-on: no pixels, as in the hardware).
+    let det = dot(c[0], n[0]);
+    if det == 0.0 {
+        return s;
+    }
+    // sum_i e_i(q) c_i = det (q, 1), so the depth is sum_i e_i(q) z_i / det.
+    s.depth = (n[0] * h[0].z + n[1] * h[1].z + n[2] * h[2].z) / det;
+    if setup_fixed(h, &s) {
+        return s;
+    }
+    // Both facings are drawn, as the raster path draws with no face culling.
+    let inward = sign(det);
+    s.edge_a = n[0] * inward;
+    s.edge_b = n[1] * inward;
+    s.edge_c = n[2] * inward;
+    s.owns = select(0u, 1u, owns_pixels(s.edge_a)) | select(0u, 2u, owns_pixels(s.edge_b))
+        | select(0u, 4u, owns_pixels(s.edge_c));
+    s.bounds = near_clipped_bounds(h);
+    return s;
+}
+
+fn inside(e: f32, owns: bool) -> bool {
+    return e > 0.0 || (e == 0.0 && owns);
+}
+
+fn fixed_depth(s: Setup, p: vec2i) -> f32 {
+    let offset = vec2f(vec2<i64>(p) * i64(SUBPIXELS) + i64(SUBPIXELS / 2.0) - s.depth_origin);
+    return dot(s.depth, vec3f(offset, 1.0));
+}
+
+// Keeps the nearer of pixel p's surface and this triangle at `depth`.
+fn keep_nearest(payload: u32, p: vec2i, depth: f32) {
+    // Clip to the depth range, as the hardware does (the background is 0).
+    if !(depth > 0.0 && depth <= 1.0) {
+        return;
+    }
+    let pixel = u32(p.y) * u32(view.viewport.x) + u32(p.x);
+    atomicMax(&depth_ids[pixel], (u64(bitcast<u32>(depth)) << 32u) | u64(payload));
+}
+
+// Tests pixel p against the triangle and keeps the nearest surface.
+fn raster_pixel(s: Setup, payload: u32, p: vec2i) {
+    if s.fixed != 0u {
+        let e = s.fixed_origin + s.fixed_dx * i64(p.x) + s.fixed_dy * i64(p.y);
+        if all(e >= vec4<i64>(0li)) {
+            keep_nearest(payload, p, fixed_depth(s, p));
+        }
+        return;
+    }
+    let uv = (vec2f(p) + 0.5) * view.viewport.zw;
+    let q = vec3f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0);
+    let a = dot(s.edge_a, q);
+    let b = dot(s.edge_b, q);
+    let c = dot(s.edge_c, q);
+    if inside(a, (s.owns & 1u) != 0u) && inside(b, (s.owns & 2u) != 0u) && inside(c, (s.owns & 4u) != 0u) {
+        keep_nearest(payload, p, dot(s.depth, q));
+    }
+}
+
+// Rasterizes the pixels of [lo, hi]; fixed-point edges step by additions
+// (64-bit multiplies are several instructions on GPUs).
+fn raster_rect(s: Setup, payload: u32, lo: vec2i, hi: vec2i) {
+    if s.fixed == 0u {
+        for (var y = lo.y; y <= hi.y; y++) {
+            for (var x = lo.x; x <= hi.x; x++) {
+                raster_pixel(s, payload, vec2i(x, y));
+            }
+        }
+        return;
+    }
+    var row = s.fixed_origin + s.fixed_dx * i64(lo.x) + s.fixed_dy * i64(lo.y);
+    for (var y = lo.y; y <= hi.y; y++) {
+        var e = row;
+        for (var x = lo.x; x <= hi.x; x++) {
+            if all(e >= vec4<i64>(0li)) {
+                keep_nearest(payload, vec2i(x, y), fixed_depth(s, vec2i(x, y)));
+            }
+            e += s.fixed_dx;
+        }
+        row += s.fixed_dy;
+    }
+}
+
+// Pixel bounds of tile `t` of a big triangle's bounding box.
+fn big_tile_rect(bounds: vec4i, t: u32) -> vec4i {
+    let tiles_x = u32((bounds.z - bounds.x) / BIG_TILE + 1);
+    let lo = bounds.xy + vec2i(vec2u(t % tiles_x, t / tiles_x)) * BIG_TILE;
+    return vec4i(lo, min(lo + BIG_TILE - 1, bounds.zw));
+}
+
+@compute @workgroup_size(RASTER_WORKGROUP)
+fn raster(
+    @builtin(workgroup_id) group: vec3u,
+    @builtin(num_workgroups) groups: vec3u,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let index = (group.y * groups.x + group.x) * RASTER_WORKGROUP + local;
+    if index >= params.triangle_count {
+        return;
+    }
+    let s = setup_triangle(index);
+    let extent = s.bounds.zw - s.bounds.xy + 1;
+    if any(extent <= vec2i(0)) {
+        return;
+    }
+    let payload = ~index;
+    if extent.x * extent.y <= SMALL_AREA {
+        raster_rect(s, payload, s.bounds.xy, s.bounds.zw);
+        return;
+    }
+    // Big: queue its tiles for whole workgroups; tiles past the queue's
+    // capacity are rasterized here (slow, but no pixel is lost).
+    let tiles = vec2u((extent + BIG_TILE - 1) / BIG_TILE);
+    let count = tiles.x * tiles.y;
+    let first = atomicAdd(&big_count, count);
+    for (var t = 0u; t < count; t++) {
+        if first + t < params.big_capacity {
+            big_tiles[first + t] = vec2u(payload, t);
+        } else {
+            let r = big_tile_rect(s.bounds, t);
+            raster_rect(s, payload, r.xy, r.zw);
+        }
+    }
+}
+
+var<workgroup> shared_setup: Setup;
+var<workgroup> shared_count: u32;
+
+// One workgroup per big-triangle tile (BIG_WORKGROUPS workgroups looping over
+// the queue): the first thread sets the triangle up, every thread then tests
+// BIG_TILE^2 / BIG_WORKGROUP pixels.
+@compute @workgroup_size(BIG_WORKGROUP)
+fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_index) local: u32) {
+    if local == 0u {
+        shared_count = min(atomicLoad(&big_count), params.big_capacity);
+    }
+    let count = workgroupUniformLoad(&shared_count);
+    for (var i = group.x; i < count; i += BIG_WORKGROUPS) {
+        let item = big_tiles[i];
+        if local == 0u {
+            shared_setup = setup_triangle(~item.x);
+        }
+        let s = workgroupUniformLoad(&shared_setup);
+        let r = big_tile_rect(s.bounds, item.y);
+        let width = r.z - r.x + 1;
+        let pixels = width * (r.w - r.y + 1);
+        for (var k = i32(local); k < pixels; k += i32(BIG_WORKGROUP)) {
+            raster_pixel(s, item.x, r.xy + vec2i(k % width, k / width));
+        }
+        // `shared_setup` is rewritten next iteration.
+        workgroupBarrier();
+    }
+}

@@ -1,0 +1,54 @@
+// The compute rasterizer's other passes: `clear` empties the 64-bit
+// depth-and-payload buffer before `raster.wgsl` runs, `resolve` turns it into
+// the visibility buffer every consumer reads: (object + 1, triangle), 0 =
+// background. Here the buffer is read as plain (payload, depth bits) pairs:
+// 64-bit atomics other than min/max are optional (`SHADER_INT64_ATOMIC_ALL_OPS`).
+
+// Mirrors `visibility::compute::GpuResolveParams`.
+struct ResolveParams {
+    width: u32,
+    height: u32,
+    // Entries of `ranges`.
+    range_count: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: ResolveParams;
+// Per visible object: (object, index of its first triangle in this frame's list).
+@group(0) @binding(1) var<storage, read> ranges: array<vec2u>;
+// Per pixel: (payload, depth bits), the halves of `raster.wgsl`'s `depth_ids`.
+@group(0) @binding(2) var<storage, read_write> depth_ids: array<vec2u>;
+@group(0) @binding(3) var visibility: texture_storage_2d<rg32uint, write>;
+
+@compute @workgroup_size(8, 8)
+fn clear(@builtin(global_invocation_id) id: vec3u) {
+    if all(id.xy < vec2u(params.width, params.height)) {
+        depth_ids[id.y * params.width + id.x] = vec2u(0u);
+    }
+}
+
+@compute @workgroup_size(8, 8)
+fn resolve(@builtin(global_invocation_id) id: vec3u) {
+    if any(id.xy >= vec2u(params.width, params.height)) {
+        return;
+    }
+    let payload = depth_ids[id.y * params.width + id.x].x;
+    var ids = vec2u(0u);
+    if payload != 0u {
+        // The payload is the complement of the index in the frame's list; the
+        // entry is the last visible object whose first triangle is at most it.
+        let index = ~payload;
+        var lo = 0u;
+        var hi = params.range_count - 1u;
+        while lo < hi {
+            let mid = (lo + hi + 1u) / 2u;
+            if ranges[mid].y <= index {
+                lo = mid;
+            } else {
+                hi = mid - 1u;
+            }
+        }
+        ids = vec2u(ranges[lo].x + 1u, index - ranges[lo].y);
+    }
+    textureStore(visibility, id.xy, vec4u(ids, 0u, 0u));
+}
