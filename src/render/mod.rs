@@ -41,6 +41,8 @@ pub use forward_multipass::ForwardMultipassConfig;
 pub use frame::Frame;
 pub use objectspace::ObjectSpaceConfig;
 use passes::bloom::{Bloom, bloom};
+pub use passes::shadows::ShadowRefresh;
+use passes::shadows::{ShadowMaps, shadow_maps};
 use passes::tonemap::{Tonemap, tonemap};
 pub use report::{Counters, PipelineReport};
 use scene_gpu::SceneGpu;
@@ -157,6 +159,9 @@ pub struct Renderer {
     /// Bloom strength, 0..=1: the fraction of the light spread into the glow
     /// (0, the default, skips the pass).
     pub bloom: f32,
+    /// When the shadow maps are re-rendered (default: when the lights change).
+    pub shadow_refresh: ShadowRefresh,
+    shadows: ShadowMaps,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
 }
@@ -191,6 +196,7 @@ impl Renderer {
         };
         let tonemap = Tonemap::new(device, &mut shaders, &targets)?;
         let bloom_pass = Bloom::supported(ctx).then(|| Bloom::new(device, &mut shaders, &targets)).transpose()?;
+        let shadows = ShadowMaps::new(device, &mut shaders, &scene_gpu)?;
         let timer = GpuTimer::new(device, queue);
         ctx.check_errors()?;
         Ok(Self {
@@ -203,6 +209,8 @@ impl Renderer {
             timer,
             exposure: 1.0,
             bloom: 0.0,
+            shadow_refresh: ShadowRefresh::default(),
+            shadows,
             lights_hash: None,
         })
     }
@@ -247,11 +255,25 @@ impl Renderer {
             culling::LightLists::empty(self.scene.object_bounds.len())
         };
         let visible: Vec<bool> = self.scene.object_bounds.iter().map(|b| frustum.intersects_aabb(b)).collect();
-        let gpu_lights: Vec<gpu_types::GpuLight> = lights.iter().map(gpu_types::GpuLight::from).collect();
+        let shadow_plan = passes::shadows::plan(&lights);
+        let gpu_lights: Vec<gpu_types::GpuLight> = lights
+            .iter()
+            .zip(&shadow_plan.lights)
+            .map(|(l, &(shadow_face, shadow_faces))| gpu_types::GpuLight {
+                shadow_face,
+                shadow_faces,
+                ..gpu_types::GpuLight::from(l)
+            })
+            .collect();
         let hash = fnv1a(bytemuck::cast_slice(&gpu_lights));
         let lights_changed = self.lights_hash != Some(hash);
         self.lights_hash = Some(hash);
         let changed = lights_changed.then_some(gpu_lights.as_slice());
+        if lights_changed {
+            self.shadows.set_plan(&ctx.device, &ctx.queue, &mut self.scene, &lights, &shadow_plan);
+        }
+        // Objects never move, so maps of unchanged lights are still valid.
+        let render_shadows = lights_changed || self.shadow_refresh == ShadowRefresh::EveryFrame;
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         {
@@ -269,6 +291,9 @@ impl Renderer {
                 encoder: &mut encoder,
                 profiler: self.timer.profiler(),
             };
+            if render_shadows {
+                shadow_maps(&mut f, &self.shadows);
+            }
             self.pipeline.encode(&mut f);
             if let Some(pass) = bloom_pass {
                 bloom(&mut f, pass, self.bloom);
@@ -298,9 +323,14 @@ impl Renderer {
         self.pipeline.collect_counters(&ctx.device, wait)
     }
 
-    /// The pipeline's settings, memory and setup.
+    /// The pipeline's settings, memory and setup, with what the renderer
+    /// holds for every pipeline: the shadow maps (`shadow_maps` bytes, and
+    /// `shadow_faces`, the faces of the last frame's lights).
     pub fn report(&self) -> PipelineReport {
-        self.pipeline.report()
+        self.pipeline
+            .report()
+            .memory("shadow_maps", self.scene.shadow_atlas.bytes())
+            .setup("shadow_faces", self.shadows.faces() as u64)
     }
 
     /// Whether the adapter can time passes.
