@@ -324,13 +324,16 @@ impl Renderer {
     }
 
     /// The pipeline's settings, memory and setup, with what the renderer
-    /// holds for every pipeline: the shadow maps (`shadow_maps` bytes, and
-    /// `shadow_faces`, the faces of the last frame's lights).
+    /// holds for every pipeline: the shadow maps (`shadow_maps` bytes,
+    /// `shadow_faces`, the faces of the last frame's lights, and
+    /// `shadow_refresh_every_frame`, 1 for `--shadow-refresh every-frame`).
     pub fn report(&self) -> PipelineReport {
+        let every_frame = self.shadow_refresh == ShadowRefresh::EveryFrame;
         self.pipeline
             .report()
             .memory("shadow_maps", self.scene.shadow_atlas.bytes())
             .setup("shadow_faces", self.shadows.faces() as u64)
+            .setup("shadow_refresh_every_frame", every_frame as u64)
     }
 
     /// Whether the adapter can time passes.
