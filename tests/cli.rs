@@ -132,7 +132,7 @@ fn shadowed_lights_render_shadow_maps() {
     let pipeline = &report["pipeline"];
     let faces = pipeline["setup"]["shadow_faces"].as_u64().unwrap();
     assert!((2..=12).contains(&faces), "{pipeline}");
-    assert!(pipeline["memory"]["shadow_maps"].as_u64().unwrap() >= faces * 4 << 20, "{pipeline}");
+    assert!(pipeline["memory"]["shadow_maps"].as_u64().unwrap() >= faces * (4 << 20), "{pipeline}");
     assert_eq!(pipeline["setup"]["shadow_refresh_every_frame"], 1);
     let (code, err) = run(&["render", "--shadow-refresh", "sometimes", "--size", "32x18", "--out", out_s]);
     assert_ne!(code, 0);
