@@ -1,7 +1,9 @@
 //! Every conventional pipeline against single-pass forward (the reference)
 //! on the procedural scenes at a small size: they share the scene data and
-//! the lighting code, so they must agree within FLIP 0.02. (Object space,
-//! which filters texel shades, has its own looser bound in `golden.rs`.)
+//! the lighting code, so they must agree within FLIP 0.02, with shadowed
+//! lights too (one shadow term in the shared lighting code, one set of shadow
+//! maps). (Object space, which filters texel shades, has its own looser
+//! bound in `golden.rs`.)
 mod common;
 
 use shadespace::metrics;
@@ -29,12 +31,17 @@ fn pipelines() -> Vec<PipelineConfig> {
     ]
 }
 
-fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: PipelineConfig) -> image::RgbaImage {
+/// The light set of the unshadowed checks.
+const LIGHTS: &str = "small:24+big:2";
+/// Three big shadowed lights (point and spot faces) among small ones.
+const SHADOWED_LIGHTS: &str = "shadowed:3+small:8";
+
+fn render(ctx: &shadespace::gpu::GpuContext, name: &str, spec: &str, pipeline: PipelineConfig) -> image::RgbaImage {
     let scene = scene::load(name).unwrap();
     let bounds = scene.bounds();
     let cameras = path::cameras_for_scene(name, &bounds).unwrap();
     let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
-    let spec: LightSpec = "small:24+big:2".parse().unwrap();
+    let spec: LightSpec = spec.parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &camera, WIDTH as f32 / HEIGHT as f32, 7).unwrap();
     let mut r = Renderer::new(ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
     r.render(ctx, &camera, &lights, 0).unwrap();
@@ -43,14 +50,14 @@ fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: PipelineConfi
     image
 }
 
-fn check(name: &str) {
+fn check(name: &str, spec: &str) {
     let ctx = common::gpu();
-    let reference = render(&ctx, name, PipelineConfig::Forward(ForwardConfig::default()));
+    let reference = render(&ctx, name, spec, PipelineConfig::Forward(ForwardConfig::default()));
     let out = common::out_dir();
     for (i, pipeline) in pipelines().into_iter().enumerate() {
-        let label = format!("{name}-{i}-{}", pipeline.name());
+        let label = format!("{name}-{spec}-{i}-{}", pipeline.name());
         let settings = format!("{pipeline:?}");
-        let test = render(&ctx, name, pipeline);
+        let test = render(&ctx, name, spec, pipeline);
         let (err, map) = metrics::compare(&reference, &test);
         eprintln!("{label} ({settings}): against forward: {err:?}");
         if err.flip_mean > AGREEMENT_FLIP {
@@ -63,10 +70,20 @@ fn check(name: &str) {
 
 #[test]
 fn conventional_pipelines_agree_with_forward_atrium() {
-    check("atrium");
+    check("atrium", LIGHTS);
 }
 
 #[test]
 fn conventional_pipelines_agree_with_forward_voxels() {
-    check("voxels");
+    check("voxels", LIGHTS);
+}
+
+#[test]
+fn conventional_pipelines_agree_with_forward_shadowed_atrium() {
+    check("atrium", SHADOWED_LIGHTS);
+}
+
+#[test]
+fn conventional_pipelines_agree_with_forward_shadowed_voxels() {
+    check("voxels", SHADOWED_LIGHTS);
 }
