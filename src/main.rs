@@ -103,11 +103,17 @@ struct SceneArgs {
     /// tone mapping; 0 (default) turns bloom off.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = bloom_strength)]
     bloom: f32,
-    /// When shadow maps are rendered: `on-change` (default: once, and again
-    /// when the lights change; objects never move) or `every-frame` (the
+    /// When shadow maps are rendered: `on-change` (default: a face again only
+    /// when its view changes, i.e. its light changed or, for the sun's
+    /// cascades, the camera moved; objects never move) or `every-frame` (the
     /// cost dynamic casters would have).
     #[arg(long, default_value = "on-change", value_parser = ShadowRefresh::from_str)]
     shadow_refresh: ShadowRefresh,
+    /// `on`: the directional light (the sun) casts cascaded shadows (4
+    /// cascades of 2048x2048 fitted to the view, 64 MiB, re-rendered when
+    /// the camera moves). Default `off`: the generated sets' sun is a dim fill.
+    #[arg(long, default_value = "off", value_parser = on_off, action = clap::ArgAction::Set)]
+    sun_shadow: bool,
     /// Forward, deferred, deferred-compute: skip the depth pre-pass (shade or
     /// write the G-buffer for every rasterized fragment).
     #[arg(long)]
@@ -240,6 +246,14 @@ fn finite_in(s: &str, range: std::ops::RangeInclusive<f32>, what: &str) -> Resul
 
 fn positive_f32(s: &str) -> Result<f32, String> {
     finite_in(s, f32::MIN_POSITIVE..=f32::MAX, "a positive finite number")
+}
+
+fn on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("'{s}' is not on or off")),
+    }
 }
 
 fn bloom_strength(s: &str) -> Result<f32, String> {
@@ -424,6 +438,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     renderer.exposure = a.scene.exposure;
     renderer.bloom = a.scene.bloom;
     renderer.shadow_refresh = a.scene.shadow_refresh;
+    renderer.sun_shadow = a.scene.sun_shadow;
     if a.atlas_out.is_some() && renderer.pipeline::<ObjectSpace>().is_none() {
         return input(Err(anyhow::anyhow!("--atlas-out needs --pipeline objectspace")));
     }
@@ -496,6 +511,7 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
     renderer.exposure = a.scene.exposure;
     renderer.bloom = a.scene.bloom;
     renderer.shadow_refresh = a.scene.shadow_refresh;
+    renderer.sun_shadow = a.scene.sun_shadow;
     if !renderer.timing_enabled() {
         tracing::warn!("{} has no timestamp queries: the result has CPU times only", ctx.info.name);
     }

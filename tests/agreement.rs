@@ -36,7 +36,14 @@ const LIGHTS: &str = "small:24+big:2";
 /// Three big shadowed lights (point and spot faces) among small ones.
 const SHADOWED_LIGHTS: &str = "shadowed:3+small:8";
 
-fn render(ctx: &shadespace::gpu::GpuContext, name: &str, spec: &str, pipeline: PipelineConfig) -> image::RgbaImage {
+/// Renders `name` lit by `spec` with `pipeline`; `sun`: the sun casts shadows.
+fn render(
+    ctx: &shadespace::gpu::GpuContext,
+    name: &str,
+    spec: &str,
+    sun: bool,
+    pipeline: PipelineConfig,
+) -> image::RgbaImage {
     let scene = scene::load(name).unwrap();
     let bounds = scene.bounds();
     let cameras = path::cameras_for_scene(name, &bounds).unwrap();
@@ -44,20 +51,22 @@ fn render(ctx: &shadespace::gpu::GpuContext, name: &str, spec: &str, pipeline: P
     let spec: LightSpec = spec.parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &camera, WIDTH as f32 / HEIGHT as f32, 7).unwrap();
     let mut r = Renderer::new(ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    r.sun_shadow = sun;
     r.render(ctx, &camera, &lights, 0).unwrap();
     let image = r.read_image(ctx).unwrap();
     ctx.check_errors().unwrap();
     image
 }
 
-fn check(name: &str, spec: &str) {
+fn check(name: &str, spec: &str, sun: bool) {
     let ctx = common::gpu();
-    let reference = render(&ctx, name, spec, PipelineConfig::Forward(ForwardConfig::default()));
+    let reference = render(&ctx, name, spec, sun, PipelineConfig::Forward(ForwardConfig::default()));
     let out = common::out_dir();
     for (i, pipeline) in pipelines().into_iter().enumerate() {
-        let label = format!("{name}-{spec}-{i}-{}", pipeline.name());
+        let sun = if sun { "-sun" } else { "" };
+        let label = format!("{name}-{spec}{sun}-{i}-{}", pipeline.name());
         let settings = format!("{pipeline:?}");
-        let test = render(&ctx, name, spec, pipeline);
+        let test = render(&ctx, name, spec, !sun.is_empty(), pipeline);
         let (err, map) = metrics::compare(&reference, &test);
         eprintln!("{label} ({settings}): against forward: {err:?}");
         if err.flip_mean > AGREEMENT_FLIP {
@@ -70,20 +79,20 @@ fn check(name: &str, spec: &str) {
 
 #[test]
 fn conventional_pipelines_agree_with_forward_atrium() {
-    check("atrium", LIGHTS);
+    check("atrium", LIGHTS, false);
 }
 
 #[test]
 fn conventional_pipelines_agree_with_forward_voxels() {
-    check("voxels", LIGHTS);
+    check("voxels", LIGHTS, false);
 }
 
 #[test]
-fn conventional_pipelines_agree_with_forward_shadowed_atrium() {
-    check("atrium", SHADOWED_LIGHTS);
+fn conventional_pipelines_agree_with_forward_shadowed_atrium_with_sun() {
+    check("atrium", SHADOWED_LIGHTS, true);
 }
 
 #[test]
 fn conventional_pipelines_agree_with_forward_shadowed_voxels() {
-    check("voxels", SHADOWED_LIGHTS);
+    check("voxels", SHADOWED_LIGHTS, false);
 }

@@ -1,6 +1,7 @@
-//! Shadow maps: a quad held above the floor shadows it from a spot and from
-//! a point light, in forward and in object space; cached maps are rendered
-//! once for a static scene and every frame when asked.
+//! Shadow maps: a quad held above the floor shadows it from a spot light, a
+//! point light and the sun, in forward and in object space; cached maps are
+//! rendered once for a static scene (the sun's again when the camera moves)
+//! and every frame when asked.
 mod common;
 
 use glam::{Mat4, Vec3};
@@ -37,12 +38,13 @@ fn occluder_scene() -> (Scene, Camera) {
 }
 
 /// An ambient fill and one white light of `kind` at `LIGHT`, casting shadows
-/// when `shadows` (a spot aims at the shadow's centre, 40-degree cone).
+/// when `shadows` (a spot aims at the shadow's centre, 40-degree cone; the
+/// sun shines the same way, and its shadow is the renderer's `sun_shadow`).
 fn lights(kind: LightKind, shadows: bool) -> Vec<Light> {
     let light = Light {
         kind,
         color: Vec3::ONE,
-        intensity: 8.0,
+        intensity: if kind == LightKind::Directional { 0.6 } else { 8.0 },
         position: LIGHT,
         direction: (IN_SHADOW - LIGHT).normalize(),
         radius: 8.0,
@@ -79,6 +81,7 @@ fn render(
     lights: &[Light],
 ) -> image::RgbaImage {
     let mut r = Renderer::new(ctx, scene, &RenderOptions { width: SIZE, height: SIZE, pipeline }).unwrap();
+    r.sun_shadow = lights.iter().any(|l| l.kind == LightKind::Directional && l.casts_shadows);
     r.render(ctx, camera, lights, 0).unwrap();
     let image = r.read_image(ctx).unwrap();
     ctx.check_errors().unwrap();
@@ -127,32 +130,49 @@ fn point_light_shadow_objectspace() {
     check(LightKind::Point, objectspace());
 }
 
-/// How many frames of `frames` rendered the shadow maps (their timing scope).
-fn frames_rendering_shadows(refresh: ShadowRefresh, frames: u64) -> usize {
+#[test]
+fn sun_shadow_forward() {
+    check(LightKind::Directional, forward());
+}
+
+#[test]
+fn sun_shadow_objectspace() {
+    check(LightKind::Directional, objectspace());
+}
+
+/// Per frame of `frames` (the camera moving sideways from frame `move_from`
+/// on): how many point-light faces and sun cascades were rendered, from the
+/// timing scopes, for a shadowed point light and the sun.
+fn faces_rendered(refresh: ShadowRefresh, frames: u64, move_from: u64) -> Vec<(usize, usize)> {
     let ctx = common::gpu();
     let (scene, camera) = occluder_scene();
     let options = RenderOptions { width: 32, height: 32, pipeline: forward() };
     let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
     assert!(r.timing_enabled(), "the test adapter times passes");
     r.shadow_refresh = refresh;
+    r.sun_shadow = true;
+    let mut lights = lights(LightKind::Point, true);
+    lights.push(Light { kind: LightKind::Directional, intensity: 0.3, ..lights[1] });
     for frame in 0..frames {
-        r.render(&ctx, &camera, &lights(LightKind::Point, true), frame).unwrap();
+        let mut camera = camera;
+        camera.position.x += frame.saturating_sub(move_from - 1) as f32 * 0.5;
+        r.render(&ctx, &camera, &lights, frame).unwrap();
     }
     let timings = r.collect_timings(&ctx, true);
     assert_eq!(timings.len() as u64, frames);
-    let faces = |t: &shadespace::gpu::timing::FrameTimings| {
-        t.passes.iter().filter(|(name, _)| name.starts_with("shadow maps/face ")).count()
+    let count = |t: &shadespace::gpu::timing::FrameTimings, prefix: &str| {
+        t.passes.iter().filter(|(name, _)| name.starts_with(prefix)).count()
     };
-    for t in &timings {
-        assert!(faces(t) == 0 || faces(t) == 6, "a point light renders six faces: {:?}", t.passes);
-    }
-    timings.iter().filter(|t| faces(t) > 0).count()
+    timings.iter().map(|t| (count(t, "shadow maps/face "), count(t, "shadow maps/cascade "))).collect()
 }
 
 #[test]
 fn static_shadows_render_once_on_change_and_every_frame_when_asked() {
-    assert_eq!(frames_rendering_shadows(ShadowRefresh::OnChange, 3), 1);
-    assert_eq!(frames_rendering_shadows(ShadowRefresh::EveryFrame, 3), 3);
+    // Static camera and lights: once; the camera moves at frame 3: only the
+    // sun's cascades follow it.
+    let on_change = faces_rendered(ShadowRefresh::OnChange, 5, 3);
+    assert_eq!(on_change, vec![(6, 4), (0, 0), (0, 0), (0, 4), (0, 4)]);
+    assert_eq!(faces_rendered(ShadowRefresh::EveryFrame, 3, 3), vec![(6, 4); 3]);
 }
 
 /// The run report carries the shadow maps' memory: six 1024² faces of 4 bytes.
@@ -164,6 +184,6 @@ fn report_counts_shadow_map_memory() {
     let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
     r.render(&ctx, &camera, &lights(LightKind::Point, true), 0).unwrap();
     let report = r.report();
-    assert!(report.memory["shadow_maps"] >= 6 * 1024 * 1024 * 4, "{report:?}");
+    assert_eq!(report.memory["shadow_maps"], 6 * 1024 * 1024 * 4 + 4 + 512, "{report:?}");
     assert_eq!(report.setup["shadow_faces"], 6);
 }

@@ -70,9 +70,10 @@ gpu_struct! {
         pub radiance: Vec3,
         pub cos_inner: f32,
         pub cos_outer: f32,
-        /// Its first face in the shadow atlas (`render::passes::shadows`).
+        /// Its first shadow face (`render::passes::shadows`).
         pub shadow_face: u32,
-        /// Its number of shadow faces: 0 (casts no shadow), 1 (spot) or 6 (cube).
+        /// Its number of shadow faces: 0 (casts no shadow), 1 (spot), 6
+        /// (cube) or, for the sun, its cascades.
         pub shadow_faces: u32,
         pub pad_c: u32,
     }

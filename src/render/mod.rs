@@ -30,7 +30,7 @@ use serde::Serialize;
 use crate::gpu::timing::{FrameTimings, GpuTimer};
 use crate::gpu::{GpuContext, GpuError, readback};
 use crate::hash::fnv1a;
-use crate::scene::{Camera, Light, Scene};
+use crate::scene::{Aabb, Camera, Light, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
 pub use clustered::ClusteredConfig;
 use culling::Frustum;
@@ -42,7 +42,7 @@ pub use frame::Frame;
 pub use objectspace::ObjectSpaceConfig;
 use passes::bloom::{Bloom, bloom};
 pub use passes::shadows::ShadowRefresh;
-use passes::shadows::{ShadowMaps, shadow_maps};
+use passes::shadows::{ShadowMaps, SunView, shadow_maps};
 use passes::tonemap::{Tonemap, tonemap};
 pub use report::{Counters, PipelineReport};
 use scene_gpu::SceneGpu;
@@ -159,8 +159,12 @@ pub struct Renderer {
     /// Bloom strength, 0..=1: the fraction of the light spread into the glow
     /// (0, the default, skips the pass).
     pub bloom: f32,
-    /// When the shadow maps are re-rendered (default: when the lights change).
+    /// When the shadow maps are re-rendered (default: when they change).
     pub shadow_refresh: ShadowRefresh,
+    /// Whether the first directional light casts cascaded shadows (default
+    /// off: the generated sets' sun is a dim fill meant to cost nothing, and
+    /// the goldens are rendered without it).
+    pub sun_shadow: bool,
     shadows: ShadowMaps,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
@@ -210,6 +214,7 @@ impl Renderer {
             exposure: 1.0,
             bloom: 0.0,
             shadow_refresh: ShadowRefresh::default(),
+            sun_shadow: false,
             shadows,
             lights_hash: None,
         })
@@ -255,7 +260,12 @@ impl Renderer {
             culling::LightLists::empty(self.scene.object_bounds.len())
         };
         let visible: Vec<bool> = self.scene.object_bounds.iter().map(|b| frustum.intersects_aabb(b)).collect();
-        let shadow_plan = passes::shadows::plan(&lights);
+        let sun = self.sun_shadow.then(|| SunView {
+            camera,
+            aspect: w as f32 / h as f32,
+            scene: self.scene.object_bounds.iter().fold(Aabb::EMPTY, |b, o| b.union(o)),
+        });
+        let shadow_plan = passes::shadows::plan(&lights, sun.as_ref());
         let gpu_lights: Vec<gpu_types::GpuLight> = lights
             .iter()
             .zip(&shadow_plan.lights)
@@ -269,11 +279,7 @@ impl Renderer {
         let lights_changed = self.lights_hash != Some(hash);
         self.lights_hash = Some(hash);
         let changed = lights_changed.then_some(gpu_lights.as_slice());
-        if lights_changed {
-            self.shadows.set_plan(&ctx.device, &ctx.queue, &mut self.scene, &lights, &shadow_plan);
-        }
-        // Objects never move, so maps of unchanged lights are still valid.
-        let render_shadows = lights_changed || self.shadow_refresh == ShadowRefresh::EveryFrame;
+        self.shadows.set_plan(&ctx.device, &ctx.queue, &mut self.scene, &lights, &shadow_plan);
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         {
@@ -291,9 +297,7 @@ impl Renderer {
                 encoder: &mut encoder,
                 profiler: self.timer.profiler(),
             };
-            if render_shadows {
-                shadow_maps(&mut f, &self.shadows);
-            }
+            shadow_maps(&mut f, &mut self.shadows, self.shadow_refresh == ShadowRefresh::EveryFrame);
             self.pipeline.encode(&mut f);
             if let Some(pass) = bloom_pass {
                 bloom(&mut f, pass, self.bloom);
@@ -325,8 +329,9 @@ impl Renderer {
 
     /// The pipeline's settings, memory and setup, with what the renderer
     /// holds for every pipeline: the shadow maps (`shadow_maps` bytes,
-    /// `shadow_faces`, the faces of the last frame's lights, and
-    /// `shadow_refresh_every_frame`, 1 for `--shadow-refresh every-frame`).
+    /// `shadow_faces`, the faces of the last frame's lights (the sun's
+    /// cascades included), `shadow_refresh_every_frame` and `sun_shadow`,
+    /// 1 when set).
     pub fn report(&self) -> PipelineReport {
         let every_frame = self.shadow_refresh == ShadowRefresh::EveryFrame;
         self.pipeline
@@ -334,6 +339,7 @@ impl Renderer {
             .memory("shadow_maps", self.scene.shadow_atlas.bytes())
             .setup("shadow_faces", self.shadows.faces() as u64)
             .setup("shadow_refresh_every_frame", every_frame as u64)
+            .setup("sun_shadow", self.sun_shadow as u64)
     }
 
     /// Whether the adapter can time passes.

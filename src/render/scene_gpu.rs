@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 
 use super::culling::LightLists;
 use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
-use super::passes::shadows::ShadowAtlas;
+use super::passes::shadows::{ShadowAtlas, ShadowPlan};
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
@@ -66,7 +66,7 @@ pub struct SceneGpu {
     /// CPU copy of the object table; light ranges are rewritten per frame.
     pub object_data: Vec<GpuObject>,
     pub triangle_count: u64,
-    /// Shadow maps of the shadowed lights (bindings 8-10).
+    /// Shadow maps of the shadowed lights (bindings 8-11).
     pub shadow_atlas: ShadowAtlas,
     lights: GrowableBuffer,
     light_indices: GrowableBuffer,
@@ -212,8 +212,8 @@ impl SceneGpu {
     }
 
     /// Uploads the shadow faces' view-projections, growing the atlas to hold them.
-    pub fn update_shadows(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, faces: &[Mat4]) {
-        if self.shadow_atlas.update(device, queue, faces) {
+    pub fn update_shadows(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, plan: &ShadowPlan) {
+        if self.shadow_atlas.update(device, queue, plan) {
             self.rebuild_bind_group(device);
         }
     }
@@ -317,11 +317,21 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
                 count: None,
             },
             storage(10),
+            wgpu::BindGroupLayoutEntry {
+                binding: 11,
+                visibility: vis,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                count: None,
+            },
         ],
     })
 }
 
-/// Buffers in binding order 0, 1, 2, 3, 4, 7; the shadow atlas is 8-10.
+/// Buffers in binding order 0, 1, 2, 3, 4, 7; the shadow maps are 8-11.
 fn make_bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
@@ -343,9 +353,10 @@ fn make_bind_group(
             wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(albedo) },
             wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(sampler) },
             wgpu::BindGroupEntry { binding: 7, resource: indices.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::TextureView(&shadows.view) },
+            wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::TextureView(shadows.atlas_view()) },
             wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::Sampler(&shadows.sampler) },
             wgpu::BindGroupEntry { binding: 10, resource: shadows.faces_buffer().as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 11, resource: wgpu::BindingResource::TextureView(shadows.cascades_view()) },
         ],
     })
 }

@@ -21,8 +21,8 @@ struct Light {
     radiance: vec3f,
     cos_inner: f32,
     cos_outer: f32,
-    // Its first face in the shadow atlas, and how many it has (0: casts no
-    // shadow, 1: spot, 6: cube).
+    // Its first shadow face, and how many it has (0: casts no shadow, 1:
+    // spot, 6: cube, else the sun's cascades).
     shadow_face: u32,
     shadow_faces: u32,
     pad_c: u32,
@@ -73,7 +73,7 @@ fn light_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
         return vec3f(0.0);
     }
     if light.shadow_faces != 0u {
-        falloff *= shadow_factor(light.shadow_face, light.shadow_faces, light.position, s.position, s.normal, to_light, n_dot_l);
+        falloff *= shadow_factor(light.kind, light.shadow_face, light.shadow_faces, light.position, s.position, s.normal, to_light, n_dot_l);
     }
     let r = reflect(-to_light, s.normal);
     let spec = s.specular * pow(max(dot(r, to_eye), 0.0), s.shininess);

@@ -13,7 +13,7 @@
 @group(0) @binding(6) var albedo_sampler: sampler;
 // Mesh-local indices; add the object's base_vertex.
 @group(0) @binding(7) var<storage, read> indices: array<u32>;
-// Bindings 8-10 (the shadow atlas) are declared in `shadows.wgsl`, which the
+// Bindings 8-11 (the shadow maps) are declared in `shadows.wgsl`, which the
 // lighting model imports.
 
 // The three (global) vertex indices of an object's triangle.

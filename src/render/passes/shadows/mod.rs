@@ -9,15 +9,21 @@
 //! [`MAX_SPOT_HALF_ANGLE_DEG`]) six cube faces. Every layer is
 //! [`FACE_SIZE`]² `Depth32Float`, reversed Z like the camera's depth (near
 //! 1, far at the light's radius 0), whose float precision is then nearly
-//! uniform over the range. Each face draws only its casters: the objects
-//! whose bounds touch both the face's frustum and the light's volume.
+//! uniform over the range. The sun (the first directional light, when
+//! [`SunView`] is given) gets cascades ([`cascades`]) in a second array of
+//! [`cascades::CASCADE_SIZE`]² layers. Each face draws only its casters:
+//! the objects whose bounds touch both the face's frustum and the light's
+//! volume.
+
+pub mod cascades;
 
 use glam::{Mat4, Vec3};
 
 use crate::render::frame::Frame;
 use crate::render::scene_gpu::{GrowableBuffer, SceneGpu};
-use crate::scene::{Light, LightKind};
+use crate::scene::{Aabb, Camera, Light, LightKind};
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
+use cascades::{CASCADE_SIZE, CASCADES, cascade_view_projections};
 
 use super::{Binding, bind_group, bind_group_layout_for};
 use crate::render::culling::{Frustum, light_affects_aabb};
@@ -46,8 +52,9 @@ const FACE_UNIFORM_STRIDE: u64 = 256;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ShadowRefresh {
-    /// Once, and again only when the lights change: scene objects never move,
-    /// so maps of unchanged lights stay valid.
+    /// A face again only when its view-projection changes (its light
+    /// changed; for the sun's cascades, the camera moved): scene objects
+    /// never move, so the other maps stay valid.
     #[default]
     OnChange,
     /// Every frame (what dynamic casters would need; the cost to measure).
@@ -66,30 +73,71 @@ impl std::str::FromStr for ShadowRefresh {
     }
 }
 
-/// The shadow faces of a frame's lights.
+/// Where a face is rendered: a layer of the atlas or of the sun's cascades.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceTarget {
+    Atlas(u32),
+    Cascade(u32),
+}
+
+/// One shadow-map face.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Face {
+    /// Index of its light.
+    pub light: u32,
+    pub view_proj: Mat4,
+    pub target: FaceTarget,
+}
+
+/// The shadow faces of a frame's lights. A face's index is also its
+/// view-projection's index in the faces buffer the lighting model reads.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ShadowPlan {
     /// Per light (in the given order): its first face and its number of
     /// faces (0 for lights that cast no shadow).
     pub lights: Vec<(u32, u32)>,
-    /// Per face: its light's index and its view-projection.
-    pub faces: Vec<(u32, Mat4)>,
+    pub faces: Vec<Face>,
+    /// Layers used in the atlas and in the cascades.
+    pub atlas_layers: u32,
+    pub cascade_layers: u32,
 }
 
-/// Which faces each shadow-casting light gets, and their view-projections.
-/// Directional and ambient lights get none.
-pub fn plan(lights: &[Light]) -> ShadowPlan {
+/// What the sun's cascades are fitted to: the camera and the scene's bounds.
+#[derive(Clone, Copy, Debug)]
+pub struct SunView<'a> {
+    pub camera: &'a Camera,
+    pub aspect: f32,
+    pub scene: Aabb,
+}
+
+/// Which faces each shadow-casting light gets, and their view-projections:
+/// point and spot lights marked `casts_shadows`, and with `sun`, the first
+/// directional light (cascades). Ambient lights get none.
+pub fn plan(lights: &[Light], sun: Option<&SunView>) -> ShadowPlan {
     let mut plan = ShadowPlan::default();
+    let sun_light = sun.and_then(|_| lights.iter().position(|l| l.kind == LightKind::Directional));
     for (i, l) in lights.iter().enumerate() {
         let first = plan.faces.len() as u32;
-        let shadowed = l.casts_shadows && matches!(l.kind, LightKind::Point | LightKind::Spot) && l.radius > 0.0;
-        if shadowed {
+        let light = i as u32;
+        let mut atlas = |view_proj| {
+            plan.faces.push(Face { light, view_proj, target: FaceTarget::Atlas(plan.atlas_layers) });
+            plan.atlas_layers += 1;
+        };
+        let local = l.casts_shadows && matches!(l.kind, LightKind::Point | LightKind::Spot) && l.radius > 0.0;
+        if local {
             let spot_half = l.cos_outer.clamp(-1.0, 1.0).acos();
             if l.kind == LightKind::Spot && spot_half <= MAX_SPOT_HALF_ANGLE_DEG.to_radians() {
-                plan.faces.push((i as u32, face_view_proj(l, l.direction, spot_half.tan())));
+                atlas(face_view_proj(l, l.direction, spot_half.tan()));
             } else {
-                plan.faces.extend(CUBE_DIRECTIONS.iter().map(|d| (i as u32, face_view_proj(l, *d, 1.0))));
+                CUBE_DIRECTIONS.iter().for_each(|d| atlas(face_view_proj(l, *d, 1.0)));
             }
+        }
+        if let Some(view) = sun.filter(|_| sun_light == Some(i)) {
+            let cascades = cascade_view_projections(l.direction, view.camera, view.aspect, &view.scene);
+            for (c, view_proj) in cascades.into_iter().enumerate() {
+                plan.faces.push(Face { light, view_proj, target: FaceTarget::Cascade(c as u32) });
+            }
+            plan.cascade_layers = CASCADES as u32;
         }
         plan.lights.push((first, plan.faces.len() as u32 - first));
     }
@@ -114,21 +162,57 @@ fn face_view_proj(light: &Light, direction: Vec3, tan_half: f32) -> Mat4 {
     projection * view
 }
 
-/// The shadow atlas and what the lighting model reads with it: one
-/// `Depth32Float` layer per face, a comparison sampler and the faces'
-/// view-projections. Part of the scene bind group (bindings 8-10).
-pub struct ShadowAtlas {
+/// A `Depth32Float` array of square layers: all layers for sampling, one
+/// view per layer for rendering.
+struct DepthArray {
     texture: wgpu::Texture,
-    /// All layers, for sampling.
-    pub view: wgpu::TextureView,
-    /// One view per layer, for rendering.
+    view: wgpu::TextureView,
     layers: Vec<wgpu::TextureView>,
+}
+
+impl DepthArray {
+    /// One 1x1 layer that nothing renders: a valid binding before any face.
+    fn placeholder(device: &wgpu::Device, label: &str) -> Self {
+        let texture = ShadowAtlas::texture(device, label, 1, 1);
+        Self { view: ShadowAtlas::array_view(&texture), texture, layers: Vec::new() }
+    }
+
+    fn new(device: &wgpu::Device, label: &str, size: u32, layers: u32) -> Self {
+        let texture = ShadowAtlas::texture(device, label, size, layers);
+        let layers = (0..layers)
+            .map(|layer| {
+                texture.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: layer,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        Self { view: ShadowAtlas::array_view(&texture), texture, layers }
+    }
+
+    fn bytes(&self) -> u64 {
+        let s = self.texture.size();
+        s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64 * 4
+    }
+}
+
+/// The shadow maps and what the lighting model reads with them: the atlas
+/// (one `Depth32Float` layer per spot or cube face), the sun's cascades, a
+/// comparison sampler and the faces' view-projections. Part of the scene
+/// bind group (bindings 8-11).
+pub struct ShadowAtlas {
+    atlas: DepthArray,
+    cascades: DepthArray,
     pub sampler: wgpu::Sampler,
     faces: GrowableBuffer,
+    /// Counts re-creations of the textures (their contents are then lost).
+    generation: u64,
 }
 
 impl ShadowAtlas {
-    /// An atlas holding no face yet: one 1x1 layer, so the bind group is valid.
+    /// An atlas holding no face yet (1x1 placeholders: a valid bind group).
     pub fn new(device: &wgpu::Device) -> Self {
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("shadow atlas"),
@@ -137,19 +221,18 @@ impl ShadowAtlas {
             compare: Some(wgpu::CompareFunction::GreaterEqual),
             ..Default::default()
         });
-        let texture = Self::texture(device, 1, 1);
         Self {
-            view: Self::array_view(&texture),
-            texture,
-            layers: Vec::new(),
+            atlas: DepthArray::placeholder(device, "shadow atlas"),
+            cascades: DepthArray::placeholder(device, "sun cascades"),
             sampler,
             faces: GrowableBuffer::new(device, "shadow faces", 256),
+            generation: 0,
         }
     }
 
-    fn texture(device: &wgpu::Device, size: u32, layers: u32) -> wgpu::Texture {
+    fn texture(device: &wgpu::Device, label: &str, size: u32, layers: u32) -> wgpu::Texture {
         device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow atlas"),
+            label: Some(label),
             size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
             mip_level_count: 1,
             sample_count: 1,
@@ -164,28 +247,41 @@ impl ShadowAtlas {
         super::view_as(texture, wgpu::TextureViewDimension::D2Array)
     }
 
-    /// Uploads the faces' view-projections, growing the atlas to hold them
-    /// (it never shrinks). Returns true when a resource was re-created, so
-    /// that the scene bind group must be too.
-    pub fn update(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, faces: &[Mat4]) -> bool {
-        let needed = faces.len() as u32;
-        let grow = needed > self.layers.len() as u32;
-        if grow {
-            self.texture = Self::texture(device, FACE_SIZE, needed);
-            self.view = Self::array_view(&self.texture);
-            self.layers = (0..needed)
-                .map(|layer| {
-                    self.texture.create_view(&wgpu::TextureViewDescriptor {
-                        dimension: Some(wgpu::TextureViewDimension::D2),
-                        base_array_layer: layer,
-                        array_layer_count: Some(1),
-                        ..Default::default()
-                    })
-                })
-                .collect();
+    /// Uploads the plan's view-projections, growing the arrays to hold its
+    /// faces (they never shrink). Returns true when a resource was
+    /// re-created, so that the scene bind group must be too.
+    pub fn update(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, plan: &ShadowPlan) -> bool {
+        let grow_atlas = plan.atlas_layers > self.atlas.layers.len() as u32;
+        if grow_atlas {
+            self.atlas = DepthArray::new(device, "shadow atlas", FACE_SIZE, plan.atlas_layers);
         }
-        let grew_faces = self.faces.write(device, queue, bytemuck::cast_slice(faces));
-        grow || grew_faces
+        let grow_cascades = plan.cascade_layers > self.cascades.layers.len() as u32;
+        if grow_cascades {
+            self.cascades = DepthArray::new(device, "sun cascades", CASCADE_SIZE, plan.cascade_layers);
+        }
+        if grow_atlas || grow_cascades {
+            self.generation += 1;
+        }
+        let matrices: Vec<Mat4> = plan.faces.iter().map(|f| f.view_proj).collect();
+        let grew_faces = self.faces.write(device, queue, bytemuck::cast_slice(&matrices));
+        grow_atlas || grow_cascades || grew_faces
+    }
+
+    /// The atlas's layers, for sampling.
+    pub fn atlas_view(&self) -> &wgpu::TextureView {
+        &self.atlas.view
+    }
+
+    /// The sun's cascades, for sampling.
+    pub fn cascades_view(&self) -> &wgpu::TextureView {
+        &self.cascades.view
+    }
+
+    fn layer(&self, target: FaceTarget) -> &wgpu::TextureView {
+        match target {
+            FaceTarget::Atlas(layer) => &self.atlas.layers[layer as usize],
+            FaceTarget::Cascade(layer) => &self.cascades.layers[layer as usize],
+        }
     }
 
     /// The faces' view-projections (storage, one `mat4x4f` per face).
@@ -195,8 +291,7 @@ impl ShadowAtlas {
 
     /// GPU bytes held: the depth layers and the face matrices.
     pub fn bytes(&self) -> u64 {
-        let s = self.texture.size();
-        s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64 * 4 + self.faces.buffer.size()
+        self.atlas.bytes() + self.cascades.bytes() + self.faces.buffer.size()
     }
 }
 
@@ -207,8 +302,13 @@ pub struct ShadowMaps {
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
     uniforms: wgpu::Buffer,
-    /// Per face: the objects it draws.
+    /// The faces of the last plan, and per face the objects it draws.
+    faces: Vec<Face>,
     casters: Vec<Vec<u32>>,
+    /// Faces whose map is out of date (new view-projection, or new texture).
+    stale: Vec<bool>,
+    /// The atlas generation the maps were rendered into.
+    generation: u64,
 }
 
 impl ShadowMaps {
@@ -252,7 +352,16 @@ impl ShadowMaps {
         });
         let uniforms = Self::uniforms(device, 1);
         let group = Self::group(device, &layout, scene, &uniforms);
-        Ok(Self { pipeline, layout, group, uniforms, casters: Vec::new() })
+        Ok(Self {
+            pipeline,
+            layout,
+            group,
+            uniforms,
+            faces: Vec::new(),
+            casters: Vec::new(),
+            stale: Vec::new(),
+            generation: 0,
+        })
     }
 
     fn uniforms(device: &wgpu::Device, faces: usize) -> wgpu::Buffer {
@@ -283,8 +392,10 @@ impl ShadowMaps {
         )
     }
 
-    /// Takes a new plan (the lights changed): uploads its faces to the scene's
-    /// atlas and to the pass's uniforms, and finds each face's casters.
+    /// Takes this frame's plan: uploads its faces to the scene's atlas and to
+    /// the pass's uniforms, and finds the casters of the faces that changed
+    /// (objects never move, so a face whose view-projection is unchanged
+    /// keeps its map). Returns whether anything changed.
     pub fn set_plan(
         &mut self,
         device: &wgpu::Device,
@@ -292,65 +403,86 @@ impl ShadowMaps {
         scene: &mut SceneGpu,
         lights: &[Light],
         plan: &ShadowPlan,
-    ) {
-        let matrices: Vec<Mat4> = plan.faces.iter().map(|(_, m)| *m).collect();
-        scene.update_shadows(device, queue, &matrices);
-        if matrices.len() as u64 * FACE_UNIFORM_STRIDE > self.uniforms.size() {
-            self.uniforms = Self::uniforms(device, matrices.len());
+    ) -> bool {
+        if plan.faces == self.faces {
+            return false;
+        }
+        scene.update_shadows(device, queue, plan);
+        let count = plan.faces.len();
+        if count as u64 * FACE_UNIFORM_STRIDE > self.uniforms.size() {
+            self.uniforms = Self::uniforms(device, count);
             self.group = Self::group(device, &self.layout, scene, &self.uniforms);
         }
-        let mut bytes = vec![0u8; matrices.len() * FACE_UNIFORM_STRIDE as usize];
-        for (slot, m) in bytes.chunks_exact_mut(FACE_UNIFORM_STRIDE as usize).zip(&matrices) {
-            slot[..64].copy_from_slice(bytemuck::bytes_of(m));
+        let mut bytes = vec![0u8; count * FACE_UNIFORM_STRIDE as usize];
+        for (slot, face) in bytes.chunks_exact_mut(FACE_UNIFORM_STRIDE as usize).zip(&plan.faces) {
+            slot[..64].copy_from_slice(bytemuck::bytes_of(&face.view_proj));
         }
         if !bytes.is_empty() {
             queue.write_buffer(&self.uniforms, 0, &bytes);
         }
-        self.casters = plan
-            .faces
-            .iter()
-            .map(|(light, m)| {
-                let frustum = Frustum::from_view_projection(*m);
-                let light = &lights[*light as usize];
-                let bounds = scene.object_bounds.iter().enumerate();
-                bounds
-                    .filter(|(_, b)| frustum.intersects_aabb(b) && light_affects_aabb(light, b))
-                    .map(|(i, _)| i as u32)
-                    .collect()
-            })
-            .collect();
+        let new_textures = scene.shadow_atlas.generation != self.generation;
+        self.generation = scene.shadow_atlas.generation;
+        self.casters.resize(count, Vec::new());
+        self.stale.resize(count, true);
+        for (i, face) in plan.faces.iter().enumerate() {
+            if new_textures || self.faces.get(i) != Some(face) {
+                self.stale[i] = true;
+                self.casters[i] = casters(face, &lights[face.light as usize], &scene.object_bounds);
+            }
+        }
+        self.faces = plan.faces.clone();
+        true
     }
 
-    /// Number of faces the pass renders.
+    /// Number of faces of the last plan.
     pub fn faces(&self) -> usize {
-        self.casters.len()
+        self.faces.len()
     }
 }
 
-/// Reads: the casters' vertices and transforms. Writes: every face's layer
-/// of the shadow atlas (cleared to the far plane first). Timed as
-/// `shadow maps`, each face as `shadow maps/face N`.
-pub fn shadow_maps(frame: &mut Frame, maps: &ShadowMaps) {
-    if maps.casters.is_empty() {
+/// The objects whose bounds touch both the face's frustum and the light's
+/// volume (only those can shadow a point the light reaches; the sun reaches
+/// everything, and its cascades' depth range holds the whole scene).
+fn casters(face: &Face, light: &Light, bounds: &[Aabb]) -> Vec<u32> {
+    let frustum = Frustum::from_view_projection(face.view_proj);
+    let touches = |b: &Aabb| frustum.intersects_aabb(b) && light_affects_aabb(light, b);
+    bounds.iter().enumerate().filter(|(_, b)| touches(b)).map(|(i, _)| i as u32).collect()
+}
+
+/// Reads: the casters' vertices and transforms. Writes: the layers of the
+/// stale faces (all faces with `every_frame`), cleared to the far plane
+/// first. Timed as `shadow maps`, each face as `shadow maps/face N` (N: its
+/// index in the plan) or, for the sun, `shadow maps/cascade K`.
+pub fn shadow_maps(frame: &mut Frame, maps: &mut ShadowMaps, every_frame: bool) {
+    let faces: Vec<usize> = (0..maps.faces.len()).filter(|i| every_frame || maps.stale[*i]).collect();
+    if faces.is_empty() {
         return;
     }
     let scene = frame.scene;
     let mut scope = frame.scope("shadow maps");
-    for (face, casters) in maps.casters.iter().enumerate() {
+    for &i in &faces {
+        let target = maps.faces[i].target;
         let depth = wgpu::RenderPassDepthStencilAttachment {
-            view: &scene.shadow_atlas.layers[face],
+            view: scene.shadow_atlas.layer(target),
             depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
             stencil_ops: None,
         };
         let descriptor = wgpu::RenderPassDescriptor { depth_stencil_attachment: Some(depth), ..Default::default() };
-        let mut rp = scope.scoped_render_pass(format!("face {face}"), descriptor);
+        let label = match target {
+            FaceTarget::Atlas(_) => format!("face {i}"),
+            FaceTarget::Cascade(k) => format!("cascade {k}"),
+        };
+        let mut rp = scope.scoped_render_pass(label, descriptor);
         rp.set_pipeline(&maps.pipeline);
-        rp.set_bind_group(0, &maps.group, &[(face as u64 * FACE_UNIFORM_STRIDE) as u32]);
+        rp.set_bind_group(0, &maps.group, &[(i as u64 * FACE_UNIFORM_STRIDE) as u32]);
         rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for &object in casters {
+        for &object in &maps.casters[i] {
             let d = scene.draws[object as usize];
             rp.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, object..object + 1);
         }
+    }
+    for i in faces {
+        maps.stale[i] = false;
     }
 }
 
@@ -382,11 +514,36 @@ mod tests {
             Light { casts_shadows: false, ..light(LightKind::Point, 0.8) },
             light(LightKind::Spot, 80f32.to_radians().cos()),
         ];
-        let p = plan(&lights);
+        let p = plan(&lights, None);
         assert_eq!(p.lights, vec![(0, 0), (0, 6), (6, 1), (7, 0), (7, 6)]);
-        assert_eq!(p.faces.len(), 13);
-        assert!(p.faces[..6].iter().all(|(l, _)| *l == 1));
-        assert_eq!(p.faces[6].0, 2);
+        assert_eq!((p.faces.len(), p.atlas_layers, p.cascade_layers), (13, 13, 0));
+        assert!(p.faces[..6].iter().all(|f| f.light == 1));
+        assert_eq!(p.faces[6].light, 2);
+        assert_eq!(p.faces[12].target, FaceTarget::Atlas(12));
+    }
+
+    /// With a sun view, the first directional light gets the cascades,
+    /// after the faces of the lights before it.
+    #[test]
+    fn plan_gives_the_first_directional_light_cascades() {
+        let sun = Light { kind: LightKind::Directional, ..default_ambient() };
+        let lights = [sun, sun, light(LightKind::Spot, 0.8)];
+        let camera = Camera {
+            position: Vec3::new(0.0, 1.0, 5.0),
+            forward: Vec3::NEG_Z,
+            up: Vec3::Y,
+            fov_y: 1.0,
+            near: 0.1,
+            far: 50.0,
+        };
+        let view =
+            SunView { camera: &camera, aspect: 1.0, scene: Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) } };
+        let p = plan(&lights, Some(&view));
+        assert_eq!(p.lights, vec![(0, CASCADES as u32), (4, 0), (4, 1)]);
+        assert_eq!((p.atlas_layers, p.cascade_layers), (1, CASCADES as u32));
+        assert_eq!(p.faces[3].target, FaceTarget::Cascade(3));
+        assert_eq!(p.faces[4].target, FaceTarget::Atlas(0));
+        assert_eq!(plan(&lights, None).lights[0], (0, 0));
     }
 
     /// A point on a cube face's axis projects to the face's centre, reversed
@@ -395,8 +552,8 @@ mod tests {
     #[test]
     fn faces_cover_their_directions_in_reversed_z() {
         let l = light(LightKind::Point, 0.8);
-        let p = plan(&[l]);
-        for (face, (_, m)) in p.faces.iter().enumerate() {
+        let p = plan(&[l], None);
+        for (face, Face { view_proj: m, .. }) in p.faces.iter().enumerate() {
             let dir = CUBE_DIRECTIONS[face];
             let near = m.project_point3(l.position + dir * 0.01);
             let far = m.project_point3(l.position + dir * l.radius);
