@@ -265,7 +265,8 @@ impl Renderer {
             aspect: w as f32 / h as f32,
             scene: self.scene.object_bounds.iter().fold(Aabb::EMPTY, |b, o| b.union(o)),
         });
-        let shadow_plan = passes::shadows::plan(&lights, sun.as_ref());
+        let shadow_plan = passes::shadows::plan(&lights, sun.as_ref(), ctx.limits.max_texture_array_layers);
+
         let gpu_lights: Vec<gpu_types::GpuLight> = lights
             .iter()
             .zip(&shadow_plan.lights)
@@ -279,6 +280,10 @@ impl Renderer {
         let lights_changed = self.lights_hash != Some(hash);
         self.lights_hash = Some(hash);
         let changed = lights_changed.then_some(gpu_lights.as_slice());
+        if lights_changed && shadow_plan.unshadowed > 0 {
+            let max = ctx.limits.max_texture_array_layers;
+            tracing::warn!("{} shadowed lights cast no shadow: the atlas holds {max} faces", shadow_plan.unshadowed);
+        }
         self.shadows.set_plan(&ctx.device, &ctx.queue, &mut self.scene, &lights, &shadow_plan);
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });

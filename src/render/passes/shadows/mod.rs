@@ -100,6 +100,8 @@ pub struct ShadowPlan {
     /// Layers used in the atlas and in the cascades.
     pub atlas_layers: u32,
     pub cascade_layers: u32,
+    /// Shadow-casting lights left without shadows: the atlas was full.
+    pub unshadowed: u32,
 }
 
 /// What the sun's cascades are fitted to: the camera and the scene's bounds.
@@ -112,24 +114,30 @@ pub struct SunView<'a> {
 
 /// Which faces each shadow-casting light gets, and their view-projections:
 /// point and spot lights marked `casts_shadows`, and with `sun`, the first
-/// directional light (cascades). Ambient lights get none.
-pub fn plan(lights: &[Light], sun: Option<&SunView>) -> ShadowPlan {
+/// directional light (cascades). Ambient lights get none. The atlas holds
+/// at most `max_layers` faces (the device's array-layer limit): lights
+/// beyond it cast no shadow, and are counted in `unshadowed`.
+pub fn plan(lights: &[Light], sun: Option<&SunView>, max_layers: u32) -> ShadowPlan {
     let mut plan = ShadowPlan::default();
     let sun_light = sun.and_then(|_| lights.iter().position(|l| l.kind == LightKind::Directional));
     for (i, l) in lights.iter().enumerate() {
         let first = plan.faces.len() as u32;
         let light = i as u32;
-        let mut atlas = |view_proj| {
-            plan.faces.push(Face { light, view_proj, target: FaceTarget::Atlas(plan.atlas_layers) });
-            plan.atlas_layers += 1;
-        };
         let local = l.casts_shadows && matches!(l.kind, LightKind::Point | LightKind::Spot) && l.radius > 0.0;
         if local {
             let spot_half = l.cos_outer.clamp(-1.0, 1.0).acos();
-            if l.kind == LightKind::Spot && spot_half <= MAX_SPOT_HALF_ANGLE_DEG.to_radians() {
-                atlas(face_view_proj(l, l.direction, spot_half.tan()));
+            let views: Vec<Mat4> = if l.kind == LightKind::Spot && spot_half <= MAX_SPOT_HALF_ANGLE_DEG.to_radians() {
+                vec![face_view_proj(l, l.direction, spot_half.tan())]
             } else {
-                CUBE_DIRECTIONS.iter().for_each(|d| atlas(face_view_proj(l, *d, 1.0)));
+                CUBE_DIRECTIONS.iter().map(|d| face_view_proj(l, *d, 1.0)).collect()
+            };
+            if plan.atlas_layers + views.len() as u32 > max_layers {
+                plan.unshadowed += 1;
+            } else {
+                for view_proj in views {
+                    plan.faces.push(Face { light, view_proj, target: FaceTarget::Atlas(plan.atlas_layers) });
+                    plan.atlas_layers += 1;
+                }
             }
         }
         if let Some(view) = sun.filter(|_| sun_light == Some(i)) {
@@ -395,7 +403,7 @@ impl ShadowMaps {
     /// Takes this frame's plan: uploads its faces to the scene's atlas and to
     /// the pass's uniforms, and finds the casters of the faces that changed
     /// (objects never move, so a face whose view-projection is unchanged
-    /// keeps its map). Returns whether anything changed.
+    /// keeps its map).
     pub fn set_plan(
         &mut self,
         device: &wgpu::Device,
@@ -403,9 +411,9 @@ impl ShadowMaps {
         scene: &mut SceneGpu,
         lights: &[Light],
         plan: &ShadowPlan,
-    ) -> bool {
+    ) {
         if plan.faces == self.faces {
-            return false;
+            return;
         }
         scene.update_shadows(device, queue, plan);
         let count = plan.faces.len();
@@ -431,7 +439,6 @@ impl ShadowMaps {
             }
         }
         self.faces = plan.faces.clone();
-        true
     }
 
     /// Number of faces of the last plan.
@@ -514,12 +521,15 @@ mod tests {
             Light { casts_shadows: false, ..light(LightKind::Point, 0.8) },
             light(LightKind::Spot, 80f32.to_radians().cos()),
         ];
-        let p = plan(&lights, None);
+        let p = plan(&lights, None, 2048);
         assert_eq!(p.lights, vec![(0, 0), (0, 6), (6, 1), (7, 0), (7, 6)]);
         assert_eq!((p.faces.len(), p.atlas_layers, p.cascade_layers), (13, 13, 0));
         assert!(p.faces[..6].iter().all(|f| f.light == 1));
         assert_eq!(p.faces[6].light, 2);
         assert_eq!(p.faces[12].target, FaceTarget::Atlas(12));
+        // With room for 8 layers: the second cube no longer fits.
+        let p = plan(&lights, None, 8);
+        assert_eq!((p.lights[4], p.atlas_layers, p.unshadowed), ((7, 0), 7, 1));
     }
 
     /// With a sun view, the first directional light gets the cascades,
@@ -538,12 +548,12 @@ mod tests {
         };
         let view =
             SunView { camera: &camera, aspect: 1.0, scene: Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) } };
-        let p = plan(&lights, Some(&view));
+        let p = plan(&lights, Some(&view), 2048);
         assert_eq!(p.lights, vec![(0, CASCADES as u32), (4, 0), (4, 1)]);
         assert_eq!((p.atlas_layers, p.cascade_layers), (1, CASCADES as u32));
         assert_eq!(p.faces[3].target, FaceTarget::Cascade(3));
         assert_eq!(p.faces[4].target, FaceTarget::Atlas(0));
-        assert_eq!(plan(&lights, None).lights[0], (0, 0));
+        assert_eq!(plan(&lights, None, 2048).lights[0], (0, 0));
     }
 
     /// A point on a cube face's axis projects to the face's centre, reversed
@@ -552,7 +562,7 @@ mod tests {
     #[test]
     fn faces_cover_their_directions_in_reversed_z() {
         let l = light(LightKind::Point, 0.8);
-        let p = plan(&[l], None);
+        let p = plan(&[l], None, 2048);
         for (face, Face { view_proj: m, .. }) in p.faces.iter().enumerate() {
             let dir = CUBE_DIRECTIONS[face];
             let near = m.project_point3(l.position + dir * 0.01);
