@@ -28,6 +28,7 @@ use cascades::{CASCADE_SIZE, CASCADES, cascade_view_projections};
 use super::{Binding, bind_group, bind_group_layout_for};
 use crate::render::culling::{Frustum, light_affects_aabb};
 
+/// The depth-only raster shader of the shadow-map faces.
 pub const SHADER: ShaderSource = ShaderSource::new("shadow_map.wgsl", include_str!("shadow_map.wgsl"));
 
 /// Side of every shadow-map face, in texels. One texture array holds spot
@@ -76,7 +77,9 @@ impl std::str::FromStr for ShadowRefresh {
 /// Where a face is rendered: a layer of the atlas or of the sun's cascades.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FaceTarget {
+    /// A layer of the atlas (spot and cube faces).
     Atlas(u32),
+    /// A layer of the sun's cascades.
     Cascade(u32),
 }
 
@@ -85,7 +88,9 @@ pub enum FaceTarget {
 pub struct Face {
     /// Index of its light.
     pub light: u32,
+    /// The light's view-projection (reversed Z).
     pub view_proj: Mat4,
+    /// Where its map is rendered.
     pub target: FaceTarget,
 }
 
@@ -96,6 +101,7 @@ pub struct ShadowPlan {
     /// Per light (in the given order): its first face and its number of
     /// faces (0 for lights that cast no shadow).
     pub lights: Vec<(u32, u32)>,
+    /// Every face, lights' faces contiguous, in light order.
     pub faces: Vec<Face>,
     /// Layers used in the atlas and in the cascades.
     pub atlas_layers: u32,
@@ -108,7 +114,9 @@ pub struct ShadowPlan {
 #[derive(Clone, Copy, Debug)]
 pub struct SunView<'a> {
     pub camera: &'a Camera,
+    /// Width over height of the image.
     pub aspect: f32,
+    /// Bounds of every object (the casters the cascades' depth must hold).
     pub scene: Aabb,
 }
 
@@ -213,6 +221,7 @@ impl DepthArray {
 pub struct ShadowAtlas {
     atlas: DepthArray,
     cascades: DepthArray,
+    /// The comparison sampler (`GreaterEqual`, bilinear).
     pub sampler: wgpu::Sampler,
     faces: GrowableBuffer,
     /// Counts re-creations of the textures (their contents are then lost).
@@ -320,6 +329,8 @@ pub struct ShadowMaps {
 }
 
 impl ShadowMaps {
+    /// The pass's pipeline and bind group (over the scene's objects and
+    /// vertices); no faces until [`ShadowMaps::set_plan`].
     pub fn new(device: &wgpu::Device, shaders: &mut ShaderLibrary, scene: &SceneGpu) -> Result<Self, ShaderError> {
         let stages = wgpu::ShaderStages::VERTEX;
         let bindings = [
