@@ -13,7 +13,7 @@ use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,
-    PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
+    PipelineConfig, RenderOptions, Renderer, ShadowRefresh, VisibilityMethod,
 };
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
@@ -87,8 +87,7 @@ struct SceneArgs {
     camera: String,
     /// Lights besides the ambient and directional light that every set has:
     /// `small:N` (each covers 0.25-5% of the screen), `big:N` (20-100%),
-    /// `shadowed:N` (big lights meant to cast shadows; shadows are not
-    /// implemented yet, so they light unshadowed and a warning says so),
+    /// `shadowed:N` (big lights that cast shadows: a quarter are spots),
     /// `mixed:N:R` (N such big lights, R small ones per big one), `none`,
     /// several joined with `+` (`small:100+big:2`), or a JSON light file.
     #[arg(long, default_value = "small:32")]
@@ -104,6 +103,17 @@ struct SceneArgs {
     /// tone mapping; 0 (default) turns bloom off.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = bloom_strength)]
     bloom: f32,
+    /// When shadow maps are rendered: `on-change` (default: a face again only
+    /// when its view changes, i.e. its light changed or, for the sun's
+    /// cascades, the camera moved; objects never move) or `every-frame` (the
+    /// cost dynamic casters would have).
+    #[arg(long, default_value = "on-change", value_parser = ShadowRefresh::from_str)]
+    shadow_refresh: ShadowRefresh,
+    /// `on`: the directional light (the sun) casts cascaded shadows (4
+    /// cascades of 2048x2048 fitted to the view, 64 MiB, re-rendered when
+    /// the camera moves). Default `off`: the generated sets' sun is a dim fill.
+    #[arg(long, default_value = "off", value_parser = on_off, action = clap::ArgAction::Set)]
+    sun_shadow: bool,
     /// Forward, deferred, deferred-compute: skip the depth pre-pass (shade or
     /// write the G-buffer for every rasterized fragment).
     #[arg(long)]
@@ -243,6 +253,14 @@ fn positive_f32(s: &str) -> Result<f32, String> {
     finite_in(s, f32::MIN_POSITIVE..=f32::MAX, "a positive finite number")
 }
 
+fn on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("'{s}' is not on or off")),
+    }
+}
+
 fn bloom_strength(s: &str) -> Result<f32, String> {
     finite_in(s, 0.0..=1.0, "a strength from 0 to 1")
 }
@@ -350,9 +368,6 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     let aspect = a.size.0 as f32 / a.size.1 as f32;
     let reference: Camera = path.camera_at(0);
     let lights = input(lights::build_lights(&spec, &bounds, &reference, aspect, a.seed))?;
-    if lights.iter().any(|l| l.casts_shadows) {
-        tracing::warn!("--lights {spec}: shadows are not implemented yet; shadowed lights light without shadows");
-    }
     let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {
         let (charted, charts) = chart(&scene, &a.objectspace)?;
         (charted, Some(charts.texture_sizes()))
@@ -429,6 +444,8 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, a.view))?;
     renderer.exposure = a.scene.exposure;
     renderer.bloom = a.scene.bloom;
+    renderer.shadow_refresh = a.scene.shadow_refresh;
+    renderer.sun_shadow = a.scene.sun_shadow;
     if a.atlas_out.is_some() && renderer.pipeline::<ObjectSpace>().is_none() {
         return input(Err(anyhow::anyhow!("--atlas-out needs --pipeline objectspace")));
     }
@@ -500,6 +517,8 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
     let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, DebugView::Shade))?;
     renderer.exposure = a.scene.exposure;
     renderer.bloom = a.scene.bloom;
+    renderer.shadow_refresh = a.scene.shadow_refresh;
+    renderer.sun_shadow = a.scene.sun_shadow;
     if !renderer.timing_enabled() {
         tracing::warn!("{} has no timestamp queries: the result has CPU times only", ctx.info.name);
     }

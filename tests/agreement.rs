@@ -1,7 +1,9 @@
 //! Every conventional pipeline against single-pass forward (the reference)
 //! on the procedural scenes at a small size: they share the scene data and
-//! the lighting code, so they must agree within FLIP 0.02. (Object space,
-//! which filters texel shades, has its own looser bound in `golden.rs`.)
+//! the lighting code, so they must agree within FLIP 0.02, with shadowed
+//! lights too (one shadow term in the shared lighting code, one set of shadow
+//! maps). (Object space, which filters texel shades, has its own looser
+//! bound in `golden.rs`.)
 mod common;
 
 use shadespace::metrics;
@@ -33,28 +35,42 @@ fn pipelines() -> Vec<PipelineConfig> {
     ]
 }
 
-fn render(ctx: &shadespace::gpu::GpuContext, name: &str, pipeline: PipelineConfig) -> image::RgbaImage {
+/// The light set of the unshadowed checks.
+const LIGHTS: &str = "small:24+big:2";
+/// Three big shadowed lights (point and spot faces) among small ones.
+const SHADOWED_LIGHTS: &str = "shadowed:3+small:8";
+
+/// Renders `name` lit by `spec` with `pipeline`; `sun`: the sun casts shadows.
+fn render(
+    ctx: &shadespace::gpu::GpuContext,
+    name: &str,
+    spec: &str,
+    sun: bool,
+    pipeline: PipelineConfig,
+) -> image::RgbaImage {
     let scene = scene::load(name).unwrap();
     let bounds = scene.bounds();
     let cameras = path::cameras_for_scene(name, &bounds).unwrap();
     let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
-    let spec: LightSpec = "small:24+big:2".parse().unwrap();
+    let spec: LightSpec = spec.parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &camera, WIDTH as f32 / HEIGHT as f32, 7).unwrap();
     let mut r = Renderer::new(ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    r.sun_shadow = sun;
     r.render(ctx, &camera, &lights, 0).unwrap();
     let image = r.read_image(ctx).unwrap();
     ctx.check_errors().unwrap();
     image
 }
 
-fn check(name: &str) {
+fn check(name: &str, spec: &str, sun: bool) {
     let ctx = common::gpu();
-    let reference = render(&ctx, name, PipelineConfig::Forward(ForwardConfig::default()));
+    let reference = render(&ctx, name, spec, sun, PipelineConfig::Forward(ForwardConfig::default()));
     let out = common::out_dir();
     for (i, pipeline) in pipelines().into_iter().enumerate() {
-        let label = format!("{name}-{i}-{}", pipeline.name());
+        let sun = if sun { "-sun" } else { "" };
+        let label = format!("{name}-{spec}{sun}-{i}-{}", pipeline.name());
         let settings = format!("{pipeline:?}");
-        let test = render(&ctx, name, pipeline);
+        let test = render(&ctx, name, spec, !sun.is_empty(), pipeline);
         let (err, map) = metrics::compare(&reference, &test);
         eprintln!("{label} ({settings}): against forward: {err:?}");
         if err.flip_mean > AGREEMENT_FLIP {
@@ -67,10 +83,20 @@ fn check(name: &str) {
 
 #[test]
 fn conventional_pipelines_agree_with_forward_atrium() {
-    check("atrium");
+    check("atrium", LIGHTS, false);
 }
 
 #[test]
 fn conventional_pipelines_agree_with_forward_voxels() {
-    check("voxels");
+    check("voxels", LIGHTS, false);
+}
+
+#[test]
+fn conventional_pipelines_agree_with_forward_shadowed_atrium_with_sun() {
+    check("atrium", SHADOWED_LIGHTS, true);
+}
+
+#[test]
+fn conventional_pipelines_agree_with_forward_shadowed_voxels() {
+    check("voxels", SHADOWED_LIGHTS, false);
 }

@@ -110,19 +110,45 @@ fn help_explains_every_command() {
     }
     let out = Command::new(env!("CARGO_BIN_EXE_shadespace")).args(["render", "--help"]).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    for flag in ["--scene", "--lights", "--camera", "--reuse", "--tile-size", "--view", "--atlas-out"] {
+    for flag in [
+        "--scene",
+        "--lights",
+        "--camera",
+        "--reuse",
+        "--tile-size",
+        "--view",
+        "--atlas-out",
+        "--shadow-refresh",
+        "--sun-shadow",
+    ] {
         assert!(text.contains(flag), "render --help lacks {flag}");
     }
 }
 
-/// Lights marked as shadow casters render, but say that nothing casts a
-/// shadow yet instead of pretending.
+/// Shadowed lights render with shadows: no warning any more, and the stats
+/// carry the shadow maps' memory (one spot face or six cube faces of 4 MiB
+/// each per shadowed light, the sun's cascades) and the settings; a bad
+/// refresh is refused.
 #[test]
-fn shadowed_lights_warn_that_shadows_are_not_implemented() {
+fn shadowed_lights_render_shadow_maps() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("frame.png");
-    let (code, err) = run(&["render", "--lights", "shadowed:1", "--size", "32x18", "--out", out.to_str().unwrap()]);
+    let stats = dir.path().join("stats.json");
+    let (out_s, stats_s) = (out.to_str().unwrap(), stats.to_str().unwrap());
+    let args = ["render", "--lights", "shadowed:2", "--size", "32x18", "--out", out_s, "--stats", stats_s];
+    let (code, err) = run(&[&args[..], &["--shadow-refresh", "every-frame", "--sun-shadow", "on"]].concat());
     assert_eq!(code, 0, "{err}");
-    assert!(err.contains("shadows are not implemented yet"), "{err}");
+    assert!(!err.contains("not implemented"), "{err}");
     assert!(out.is_file());
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let pipeline = &report["pipeline"];
+    // Two lights of 1 or 6 faces, and the sun's 4 cascades of 16 MiB.
+    let faces = pipeline["setup"]["shadow_faces"].as_u64().unwrap() - 4;
+    assert!((2..=12).contains(&faces), "{pipeline}");
+    assert!(pipeline["memory"]["shadow_maps"].as_u64().unwrap() >= (faces + 16) * (4 << 20), "{pipeline}");
+    assert_eq!(pipeline["setup"]["shadow_refresh_every_frame"], 1);
+    assert_eq!(pipeline["setup"]["sun_shadow"], 1);
+    let (code, err) = run(&["render", "--shadow-refresh", "sometimes", "--size", "32x18", "--out", out_s]);
+    assert_ne!(code, 0);
+    assert!(err.contains("on-change or every-frame"), "{err}");
 }

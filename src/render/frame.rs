@@ -10,7 +10,7 @@
 //! passes in order. Timing labels are automatic: every pass opened through
 //! [`Frame::compute_pass`] or [`Frame::render_pass`] is timed under its name.
 
-use wgpu_profiler::{GpuProfiler, OwningScope};
+use wgpu_profiler::{GpuProfiler, OwningScope, Scope};
 
 use super::gpu_types::GpuView;
 use super::scene_gpu::SceneGpu;
@@ -48,6 +48,13 @@ impl Frame<'_> {
             timestamp_writes: query.compute_pass_timestamp_writes(),
         });
         OwningScope { profiler: self.profiler, recorder: pass, scope: Some(query) }
+    }
+
+    /// A timing scope `label` over several passes, each opened inside it
+    /// with `scoped_render_pass` / `scoped_compute_pass` and timed as
+    /// `label/name` (for example one pass per shadow-map face).
+    pub fn scope(&mut self, label: &str) -> Scope<'_, wgpu::CommandEncoder> {
+        self.profiler.scope(label, self.encoder)
     }
 
     /// A render pass timed as `label`, over `color` and `depth` attachments.

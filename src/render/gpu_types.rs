@@ -70,8 +70,11 @@ gpu_struct! {
         pub radiance: Vec3,
         pub cos_inner: f32,
         pub cos_outer: f32,
-        pub pad_a: u32,
-        pub pad_b: u32,
+        /// Its first shadow face (`render::passes::shadows`).
+        pub shadow_face: u32,
+        /// Its number of shadow faces: 0 (casts no shadow), 1 (spot), 6
+        /// (cube) or, for the sun, its cascades.
+        pub shadow_faces: u32,
         pub pad_c: u32,
     }
 }

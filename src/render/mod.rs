@@ -30,7 +30,7 @@ use serde::Serialize;
 use crate::gpu::timing::{FrameTimings, GpuTimer};
 use crate::gpu::{GpuContext, GpuError, readback};
 use crate::hash::fnv1a;
-use crate::scene::{Camera, Light, Scene};
+use crate::scene::{Aabb, Camera, Light, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
 pub use clustered::ClusteredConfig;
 use culling::Frustum;
@@ -41,6 +41,8 @@ pub use forward_multipass::ForwardMultipassConfig;
 pub use frame::Frame;
 pub use objectspace::ObjectSpaceConfig;
 use passes::bloom::{Bloom, bloom};
+pub use passes::shadows::ShadowRefresh;
+use passes::shadows::{ShadowMaps, SunView, shadow_maps};
 use passes::tonemap::{Tonemap, tonemap};
 pub use passes::visibility::VisibilityMethod;
 pub use report::{Counters, PipelineReport};
@@ -160,6 +162,13 @@ pub struct Renderer {
     /// Bloom strength, 0..=1: the fraction of the light spread into the glow
     /// (0, the default, skips the pass).
     pub bloom: f32,
+    /// When the shadow maps are re-rendered (default: when they change).
+    pub shadow_refresh: ShadowRefresh,
+    /// Whether the first directional light casts cascaded shadows (default
+    /// off: the generated sets' sun is a dim fill meant to cost nothing, and
+    /// the goldens are rendered without it).
+    pub sun_shadow: bool,
+    shadows: ShadowMaps,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
 }
@@ -194,6 +203,7 @@ impl Renderer {
         };
         let tonemap = Tonemap::new(device, &mut shaders, &targets)?;
         let bloom_pass = Bloom::supported(ctx).then(|| Bloom::new(device, &mut shaders, &targets)).transpose()?;
+        let shadows = ShadowMaps::new(device, &mut shaders, &scene_gpu)?;
         let timer = GpuTimer::new(device, queue);
         ctx.check_errors()?;
         Ok(Self {
@@ -206,6 +216,9 @@ impl Renderer {
             timer,
             exposure: 1.0,
             bloom: 0.0,
+            shadow_refresh: ShadowRefresh::default(),
+            sun_shadow: false,
+            shadows,
             lights_hash: None,
         })
     }
@@ -250,11 +263,31 @@ impl Renderer {
             culling::LightLists::empty(self.scene.object_bounds.len())
         };
         let visible: Vec<bool> = self.scene.object_bounds.iter().map(|b| frustum.intersects_aabb(b)).collect();
-        let gpu_lights: Vec<gpu_types::GpuLight> = lights.iter().map(gpu_types::GpuLight::from).collect();
+        let sun = self.sun_shadow.then(|| SunView {
+            camera,
+            aspect: w as f32 / h as f32,
+            scene: self.scene.object_bounds.iter().fold(Aabb::EMPTY, |b, o| b.union(o)),
+        });
+        let shadow_plan = passes::shadows::plan(&lights, sun.as_ref(), ctx.limits.max_texture_array_layers);
+
+        let gpu_lights: Vec<gpu_types::GpuLight> = lights
+            .iter()
+            .zip(&shadow_plan.lights)
+            .map(|(l, &(shadow_face, shadow_faces))| gpu_types::GpuLight {
+                shadow_face,
+                shadow_faces,
+                ..gpu_types::GpuLight::from(l)
+            })
+            .collect();
         let hash = fnv1a(bytemuck::cast_slice(&gpu_lights));
         let lights_changed = self.lights_hash != Some(hash);
         self.lights_hash = Some(hash);
         let changed = lights_changed.then_some(gpu_lights.as_slice());
+        if lights_changed && shadow_plan.unshadowed > 0 {
+            let max = ctx.limits.max_texture_array_layers;
+            tracing::warn!("{} shadowed lights cast no shadow: the atlas holds {max} faces", shadow_plan.unshadowed);
+        }
+        self.shadows.set_plan(&ctx.device, &ctx.queue, &mut self.scene, &lights, &shadow_plan);
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         {
@@ -272,6 +305,7 @@ impl Renderer {
                 encoder: &mut encoder,
                 profiler: self.timer.profiler(),
             };
+            shadow_maps(&mut f, &mut self.shadows, self.shadow_refresh == ShadowRefresh::EveryFrame);
             self.pipeline.encode(&mut f);
             if let Some(pass) = bloom_pass {
                 bloom(&mut f, pass, self.bloom);
@@ -301,9 +335,19 @@ impl Renderer {
         self.pipeline.collect_counters(&ctx.device, wait)
     }
 
-    /// The pipeline's settings, memory and setup.
+    /// The pipeline's settings, memory and setup, with what the renderer
+    /// holds for every pipeline: the shadow maps (`shadow_maps` bytes,
+    /// `shadow_faces`, the faces of the last frame's lights (the sun's
+    /// cascades included), `shadow_refresh_every_frame` and `sun_shadow`,
+    /// 1 when set).
     pub fn report(&self) -> PipelineReport {
-        self.pipeline.report()
+        let every_frame = self.shadow_refresh == ShadowRefresh::EveryFrame;
+        self.pipeline
+            .report()
+            .memory("shadow_maps", self.scene.shadow_atlas.bytes())
+            .setup("shadow_faces", self.shadows.faces() as u64)
+            .setup("shadow_refresh_every_frame", every_frame as u64)
+            .setup("sun_shadow", self.sun_shadow as u64)
     }
 
     /// Whether the adapter can time passes.

@@ -1,5 +1,5 @@
-//! The scene on the GPU: vertices, indices, objects, albedo textures, view and
-//! lights, bound as group 0 by every pipeline.
+//! The scene on the GPU: vertices, indices, objects, albedo textures, view,
+//! lights and the shadow atlas, bound as group 0 by every pipeline.
 
 use glam::{Mat4, Vec4};
 use image::imageops::FilterType;
@@ -7,6 +7,7 @@ use wgpu::util::DeviceExt;
 
 use super::culling::LightLists;
 use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
+use super::passes::shadows::{ShadowAtlas, ShadowPlan};
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
@@ -65,6 +66,8 @@ pub struct SceneGpu {
     /// CPU copy of the object table; light ranges are rewritten per frame.
     pub object_data: Vec<GpuObject>,
     pub triangle_count: u64,
+    /// Shadow maps of the shadowed lights (bindings 8-11).
+    pub shadow_atlas: ShadowAtlas,
     lights: GrowableBuffer,
     light_indices: GrowableBuffer,
     albedo_view: wgpu::TextureView,
@@ -151,12 +154,14 @@ impl SceneGpu {
             ..Default::default()
         });
         let layout = bind_group_layout(device);
+        let shadow_atlas = ShadowAtlas::new(device);
         let bind_group = make_bind_group(
             device,
             &layout,
             [&view, &objects, &vertices_buf, &lights.buffer, &light_indices.buffer, &indices_buf],
             &albedo_view,
             &sampler,
+            &shadow_atlas,
         );
         let object_bounds = (0..scene.objects.len()).map(|i| scene.object_bounds(i)).collect();
         Self {
@@ -169,6 +174,7 @@ impl SceneGpu {
             object_bounds,
             object_data,
             triangle_count: scene.triangle_count() as u64,
+            shadow_atlas,
             lights,
             light_indices,
             albedo_view,
@@ -201,21 +207,26 @@ impl SceneGpu {
         let mut grew = changed_lights.is_some_and(|l| self.lights.write(device, queue, bytemuck::cast_slice(l)));
         grew |= self.light_indices.write(device, queue, bytemuck::cast_slice(&lists.indices));
         if grew {
-            self.bind_group = make_bind_group(
-                device,
-                &self.layout,
-                [
-                    &self.view,
-                    &self.objects,
-                    &self.vertices,
-                    &self.lights.buffer,
-                    &self.light_indices.buffer,
-                    &self.indices,
-                ],
-                &self.albedo_view,
-                &self.sampler,
-            );
+            self.rebuild_bind_group(device);
         }
+    }
+
+    /// Uploads the shadow faces' view-projections, growing the atlas to hold them.
+    pub fn update_shadows(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, plan: &ShadowPlan) {
+        if self.shadow_atlas.update(device, queue, plan) {
+            self.rebuild_bind_group(device);
+        }
+    }
+
+    fn rebuild_bind_group(&mut self, device: &wgpu::Device) {
+        self.bind_group = make_bind_group(
+            device,
+            &self.layout,
+            [&self.view, &self.objects, &self.vertices, &self.lights.buffer, &self.light_indices.buffer, &self.indices],
+            &self.albedo_view,
+            &self.sampler,
+            &self.shadow_atlas,
+        );
     }
 }
 
@@ -289,17 +300,45 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
                 count: None,
             },
             storage(7),
+            wgpu::BindGroupLayoutEntry {
+                binding: 8,
+                visibility: vis,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 9,
+                visibility: vis,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                count: None,
+            },
+            storage(10),
+            wgpu::BindGroupLayoutEntry {
+                binding: 11,
+                visibility: vis,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                count: None,
+            },
         ],
     })
 }
 
-/// Buffers in binding order 0, 1, 2, 3, 4, 7.
+/// Buffers in binding order 0, 1, 2, 3, 4, 7; the shadow maps are 8-11.
 fn make_bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     buffers: [&wgpu::Buffer; 6],
     albedo: &wgpu::TextureView,
     sampler: &wgpu::Sampler,
+    shadows: &ShadowAtlas,
 ) -> wgpu::BindGroup {
     let [view, objects, vertices, lights, light_indices, indices] = buffers;
     device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -314,6 +353,10 @@ fn make_bind_group(
             wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(albedo) },
             wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(sampler) },
             wgpu::BindGroupEntry { binding: 7, resource: indices.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::TextureView(shadows.atlas_view()) },
+            wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::Sampler(&shadows.sampler) },
+            wgpu::BindGroupEntry { binding: 10, resource: shadows.faces_buffer().as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 11, resource: wgpu::BindingResource::TextureView(shadows.cascades_view()) },
         ],
     })
 }

@@ -45,7 +45,7 @@ pub struct Light {
     /// Cosine of the spot's outer cone half-angle (zero outside).
     #[serde(default = "default_outer")]
     pub cos_outer: f32,
-    /// Whether the light casts shadows (shadow maps come with a later pipeline stage).
+    /// Whether the light casts shadows (point and spot lights: shadow maps).
     #[serde(default)]
     pub casts_shadows: bool,
 }

@@ -44,6 +44,7 @@ impl ShaderSource {
 /// Modules that other shaders `#import`, in dependency order (after the
 /// generated `shadespace::contract`).
 const SHARED: &[ShaderSource] = &[
+    ShaderSource::new("shared/shadows.wgsl", include_str!("shared/shadows.wgsl")),
     ShaderSource::new("shared/lighting.wgsl", include_str!("shared/lighting.wgsl")),
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
@@ -65,6 +66,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     use crate::render::{clustered, deferred, deferred_compute, forward, forward_multipass, objectspace, passes};
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
+    all.push(passes::shadows::SHADER);
     all.extend([forward_multipass::SHADER, passes::bloom::SHADER]);
     all.extend([passes::visibility::compute::RASTER, passes::visibility::compute::RESOLVE]);
     all.extend_from_slice(objectspace::PASS_SHADERS);

@@ -7,6 +7,7 @@ pub mod bloom;
 pub mod depth_prepass;
 pub mod gbuffer;
 pub mod light_grid;
+pub mod shadows;
 pub mod tonemap;
 pub mod visibility;
 

@@ -3,10 +3,12 @@
 //
 // Phong: diffuse max(N.L, 0), specular max(R.V, 0)^p, point/spot attenuation
 // 1 / (1 + d^2) cut off at the light's radius, spot factor
-// (cos(theta) - cos_outer) / (cos_inner - cos_outer) clamped, times albedo.
+// (cos(theta) - cos_outer) / (cos_inner - cos_outer) clamped, times albedo,
+// times the shadow factor of lights that cast shadows (`shadows.wgsl`).
 #define_import_path shadespace::lighting
 
 #import shadespace::contract::{LIGHT_AMBIENT, LIGHT_DIRECTIONAL, LIGHT_SPOT}
+#import shadespace::shadows::shadow_factor
 
 // 64 bytes; mirrors `render::gpu_types::GpuLight`.
 struct Light {
@@ -19,8 +21,10 @@ struct Light {
     radiance: vec3f,
     cos_inner: f32,
     cos_outer: f32,
-    pad_a: u32,
-    pad_b: u32,
+    // Its first shadow face, and how many it has (0: casts no shadow, 1:
+    // spot, 6: cube, else the sun's cascades).
+    shadow_face: u32,
+    shadow_faces: u32,
     pad_c: u32,
 }
 
@@ -67,6 +71,9 @@ fn light_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
     let n_dot_l = dot(s.normal, to_light);
     if n_dot_l <= 0.0 || falloff <= 0.0 {
         return vec3f(0.0);
+    }
+    if light.shadow_faces != 0u {
+        falloff *= shadow_factor(light.kind, light.shadow_face, light.shadow_faces, light.position, s.position, s.normal, to_light, n_dot_l);
     }
     let r = reflect(-to_light, s.normal);
     let spec = s.specular * pow(max(dot(r, to_eye), 0.0), s.shininess);

@@ -13,6 +13,8 @@
 @group(0) @binding(6) var albedo_sampler: sampler;
 // Mesh-local indices; add the object's base_vertex.
 @group(0) @binding(7) var<storage, read> indices: array<u32>;
+// Bindings 8-11 (the shadow maps) are declared in `shadows.wgsl`, which the
+// lighting model imports.
 
 // The three (global) vertex indices of an object's triangle.
 fn triangle_vertices(o: Object, triangle: u32) -> vec3u {
