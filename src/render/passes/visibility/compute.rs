@@ -128,9 +128,12 @@ impl ComputeVisibility {
             buffer("vis resolve params", size_of::<GpuResolveParams>() as u64, U::UNIFORM | U::COPY_DST);
         let ranges = buffer("vis ranges", (scene.draws.len().max(1) * 8) as u64, U::STORAGE | U::COPY_DST);
         let depth_ids = buffer("vis depth and ids", width as u64 * height as u64 * 8, U::STORAGE);
-        // Room for every pixel covered 16 times over by big triangles' tiles
-        // (a tile holds up to 1024 pixels); past it, threads rasterize alone.
-        let big_capacity = ((width as u64 * height as u64 / 64).max(1 << 14) as u32).min(1 << 22);
+        // Room for big triangles' tiles covering every pixel 128 times over (a
+        // tile holds up to 1024 pixels; boxes of thin triangles and hidden
+        // layers count too: on the H100, Sponza at 1080p overflowed a
+        // 16-times queue and the overflow, rasterized by single threads, took
+        // 250 ms); past it, threads still rasterize alone.
+        let big_capacity = ((width as u64 * height as u64 / 8).max(1 << 16) as u32).min(1 << 22);
         let big_tiles = buffer("vis big tiles", big_capacity as u64 * 8, U::STORAGE);
         let big_count = buffer("vis big count", 4, U::STORAGE | U::COPY_DST);
 
