@@ -73,3 +73,20 @@ fn reuse_skips_young_tiles_and_light_changes_invalidate() {
     let c = every.collect_counters(&ctx, true);
     assert_eq!(counter(&c, "shaded_tiles")[1], counter(&c, "visible_tiles")[1]);
 }
+
+/// With every object shaded forward (`--forward-only` on all of them) the
+/// atlas has no page; the pipeline still renders, per pixel, like forward.
+#[test]
+fn objectspace_with_every_object_forward_only_matches_forward() {
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let mut fwd = Renderer::new(&ctx, &scene, &forward()).unwrap();
+    fwd.render(&ctx, &camera, &lights, 0).unwrap();
+    let config = ObjectSpaceConfig { texture_sizes: vec![None], ..Default::default() };
+    let options = RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config) };
+    let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
+    os.render(&ctx, &camera, &lights, 0).unwrap();
+    let (err, _) = metrics::compare(&fwd.read_image(&ctx).unwrap(), &os.read_image(&ctx).unwrap());
+    ctx.check_errors().unwrap();
+    assert!(err.flip_mean < 0.02, "{err:?}");
+}

@@ -145,7 +145,9 @@ impl AtlasLayout {
     }
 
     /// A 2D array texture with one layer per page: the shading atlas and the
-    /// triangle-index maps share this layout, texel for texel.
+    /// triangle-index maps share this layout, texel for texel. A layout with
+    /// no page (every object shaded forward) still gets one layer, since a
+    /// texture cannot be empty.
     pub fn page_array_texture(
         &self,
         device: &wgpu::Device,
@@ -155,7 +157,11 @@ impl AtlasLayout {
     ) -> wgpu::Texture {
         device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
-            size: wgpu::Extent3d { width: self.page_size, height: self.page_size, depth_or_array_layers: self.pages },
+            size: wgpu::Extent3d {
+                width: self.page_size,
+                height: self.page_size,
+                depth_or_array_layers: self.pages.max(1),
+            },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
