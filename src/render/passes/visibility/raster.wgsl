@@ -371,19 +371,6 @@ fn raster_rect(s: Setup, payload: u32, lo: vec2i, hi: vec2i) {
 }
 
 // Pixel bounds of tile `t` of a big triangle's bounding box.
-// Whether the pixels of [lo, hi] may hold a covered one: each edge function
-// at the rectangle's corner where it is largest must be inside (a linear
-// function's maximum over a box is at a corner). Homogeneous triangles keep
-// every rectangle.
-fn rect_may_cover(s: Setup, lo: vec2i, hi: vec2i) -> bool {
-    if s.fixed == 0u {
-        return true;
-    }
-    let x = select(vec4<i64>(i64(lo.x)), vec4<i64>(i64(hi.x)), s.fixed_dx > vec4<i64>(0li));
-    let y = select(vec4<i64>(i64(lo.y)), vec4<i64>(i64(hi.y)), s.fixed_dy > vec4<i64>(0li));
-    return all(s.fixed_origin + s.fixed_dx * x + s.fixed_dy * y >= vec4<i64>(0li));
-}
-
 fn big_tile_rect(bounds: vec4i, t: u32) -> vec4i {
     let tiles_x = u32((bounds.z - bounds.x) / BIG_TILE + 1);
     let lo = bounds.xy + vec2i(vec2u(t % tiles_x, t / tiles_x)) * BIG_TILE;
@@ -410,28 +397,18 @@ fn raster(
         raster_rect(s, payload, s.bounds.xy, s.bounds.zw);
         return;
     }
-    // Big: queue the tiles its edges may cover (a thin triangle's box is
-    // mostly empty) for whole workgroups; tiles past the queue's capacity are
-    // rasterized here (slow, but no pixel is lost).
+    // Big: queue its tiles for whole workgroups; tiles past the queue's
+    // capacity are rasterized here (slow, but no pixel is lost).
     let tiles = vec2u((extent + BIG_TILE - 1) / BIG_TILE);
     let count = tiles.x * tiles.y;
-    var kept = 0u;
+    let first = atomicAdd(&big_count, count);
     for (var t = 0u; t < count; t++) {
-        let r = big_tile_rect(s.bounds, t);
-        kept += u32(rect_may_cover(s, r.xy, r.zw));
-    }
-    var slot = atomicAdd(&big_count, kept);
-    for (var t = 0u; t < count; t++) {
-        let r = big_tile_rect(s.bounds, t);
-        if !rect_may_cover(s, r.xy, r.zw) {
-            continue;
-        }
-        if slot < params.big_capacity {
-            big_tiles[slot] = vec2u(payload, t);
+        if first + t < params.big_capacity {
+            big_tiles[first + t] = vec2u(payload, t);
         } else {
+            let r = big_tile_rect(s.bounds, t);
             raster_rect(s, payload, r.xy, r.zw);
         }
-        slot++;
     }
 }
 
