@@ -11,7 +11,6 @@ use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, PipelineConfig,
     RenderOptions, Renderer, VisibilityMethod,
 };
-use shadespace::scene::{self, LightSpec, lights, path};
 
 const WIDTH: u32 = 320;
 const HEIGHT: u32 = 180;
@@ -40,23 +39,16 @@ const LIGHTS: &str = "small:24+big:2";
 /// Three big shadowed lights (point and spot faces) among small ones.
 const SHADOWED_LIGHTS: &str = "shadowed:3+small:8";
 
-/// Renders `name` lit by `spec` with `pipeline`; `sun`: the sun casts shadows.
+/// Renders the frame with `pipeline`; `sun`: the sun casts shadows.
 fn render(
     ctx: &shadespace::gpu::GpuContext,
-    name: &str,
-    spec: &str,
+    frame: &common::PathFrame,
     sun: bool,
     pipeline: PipelineConfig,
 ) -> image::RgbaImage {
-    let scene = scene::load(name).unwrap();
-    let bounds = scene.bounds();
-    let cameras = path::cameras_for_scene(name, &bounds).unwrap();
-    let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
-    let spec: LightSpec = spec.parse().unwrap();
-    let lights = lights::build_lights(&spec, &bounds, &camera, WIDTH as f32 / HEIGHT as f32, 7).unwrap();
-    let mut r = Renderer::new(ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    let mut r = Renderer::new(ctx, &frame.scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
     r.sun_shadow = sun;
-    r.render(ctx, &camera, &lights, 0).unwrap();
+    r.render(ctx, &frame.camera, &frame.lights, 0).unwrap();
     let image = r.read_image(ctx).unwrap();
     ctx.check_errors().unwrap();
     image
@@ -64,13 +56,14 @@ fn render(
 
 fn check(name: &str, spec: &str, sun: bool) {
     let ctx = common::gpu();
-    let reference = render(&ctx, name, spec, sun, PipelineConfig::Forward(ForwardConfig::default()));
+    let frame = common::path_frame(name, spec, WIDTH, HEIGHT);
+    let reference = render(&ctx, &frame, sun, PipelineConfig::Forward(ForwardConfig::default()));
     let out = common::out_dir();
     for (i, pipeline) in pipelines().into_iter().enumerate() {
         let sun = if sun { "-sun" } else { "" };
         let label = format!("{name}-{spec}{sun}-{i}-{}", pipeline.name());
         let settings = format!("{pipeline:?}");
-        let test = render(&ctx, name, spec, !sun.is_empty(), pipeline);
+        let test = render(&ctx, &frame, !sun.is_empty(), pipeline);
         let (err, map) = metrics::compare(&reference, &test);
         eprintln!("{label} ({settings}): against forward: {err:?}");
         if err.flip_mean > AGREEMENT_FLIP {

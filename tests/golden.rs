@@ -10,7 +10,6 @@ use std::path::PathBuf;
 
 use shadespace::metrics;
 use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
-use shadespace::scene::{self, LightSpec, lights, path};
 
 const WIDTH: u32 = 192;
 const HEIGHT: u32 = 108;
@@ -46,12 +45,7 @@ fn render_at(
     width: u32,
     height: u32,
 ) -> image::RgbaImage {
-    let scene = scene::load(name).unwrap();
-    let bounds = scene.bounds();
-    let cameras = path::cameras_for_scene(name, &bounds).unwrap();
-    let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
-    let spec: LightSpec = spec.parse().unwrap();
-    let lights = lights::build_lights(&spec, &bounds, &camera, width as f32 / height as f32, 7).unwrap();
+    let common::PathFrame { scene, camera, lights } = common::path_frame(name, spec, width, height);
     let (scene, texture_sizes) = common::charted(&scene);
     let pipeline = match pipeline {
         Pipeline::Forward => PipelineConfig::Forward(ForwardConfig::default()),

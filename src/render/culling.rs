@@ -292,17 +292,7 @@ mod tests {
     }
 
     fn point(position: Vec3, radius: f32) -> Light {
-        Light {
-            kind: LightKind::Point,
-            color: Vec3::ONE,
-            intensity: 1.0,
-            position,
-            direction: Vec3::NEG_Y,
-            radius,
-            cos_inner: 0.95,
-            cos_outer: 0.85,
-            casts_shadows: false,
-        }
+        Light::point(position, radius)
     }
 
     #[test]

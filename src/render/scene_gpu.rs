@@ -8,6 +8,7 @@ use wgpu::util::DeviceExt;
 use super::culling::LightLists;
 use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
 use super::passes::shadows::{ShadowAtlas, ShadowPlan};
+use super::passes::{Binding, bind_group_layout_for};
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
@@ -254,81 +255,20 @@ pub fn order_lights(lights: &[Light]) -> (Vec<Light>, u32) {
     (ordered, globals)
 }
 
+/// Group 0 of every pipeline (`scene_bindings.wgsl`, `shadows.wgsl`), seen
+/// by every stage.
 fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let vis = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
-    let storage = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: vis,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("scene"),
-        entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: vis,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            storage(1),
-            storage(2),
-            storage(3),
-            storage(4),
-            wgpu::BindGroupLayoutEntry {
-                binding: 5,
-                visibility: vis,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                    view_dimension: wgpu::TextureViewDimension::D2Array,
-                    multisampled: false,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 6,
-                visibility: vis,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                count: None,
-            },
-            storage(7),
-            wgpu::BindGroupLayoutEntry {
-                binding: 8,
-                visibility: vis,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Depth,
-                    view_dimension: wgpu::TextureViewDimension::D2Array,
-                    multisampled: false,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 9,
-                visibility: vis,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
-                count: None,
-            },
-            storage(10),
-            wgpu::BindGroupLayoutEntry {
-                binding: 11,
-                visibility: vis,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Depth,
-                    view_dimension: wgpu::TextureViewDimension::D2Array,
-                    multisampled: false,
-                },
-                count: None,
-            },
-        ],
-    })
+    let stages = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
+    let read = Binding::Storage { read_only: true };
+    let array = wgpu::TextureViewDimension::D2Array;
+    let albedo = Binding::Texture { sample: wgpu::TextureSampleType::Float { filterable: true }, dimension: array };
+    let depth = Binding::Texture { sample: wgpu::TextureSampleType::Depth, dimension: array };
+    // Bindings 0-7: view, objects, vertices, lights, light indices, albedo,
+    // its sampler, indices; 8-11: shadow atlas, comparison sampler, shadow
+    // faces, sun cascades.
+    let bindings = [Binding::Uniform, read, read, read, read, albedo, Binding::Sampler, read];
+    let shadows = [depth, Binding::ComparisonSampler, read, depth];
+    bind_group_layout_for(device, "scene", stages, &[bindings.as_slice(), &shadows].concat())
 }
 
 /// Buffers in binding order 0, 1, 2, 3, 4, 7; the shadow maps are 8-11.

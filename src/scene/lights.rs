@@ -50,6 +50,24 @@ pub struct Light {
     pub casts_shadows: bool,
 }
 
+impl Light {
+    /// A white point light of intensity 1 at `position` reaching `radius`
+    /// (the other fields at their file defaults), for tests and examples.
+    pub fn point(position: Vec3, radius: f32) -> Self {
+        Light {
+            kind: LightKind::Point,
+            color: Vec3::ONE,
+            intensity: 1.0,
+            position,
+            direction: default_direction(),
+            radius,
+            cos_inner: default_inner(),
+            cos_outer: default_outer(),
+            casts_shadows: false,
+        }
+    }
+}
+
 fn default_direction() -> Vec3 {
     Vec3::NEG_Y
 }

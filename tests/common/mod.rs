@@ -93,3 +93,24 @@ pub fn charted(scene: &Scene) -> (Scene, Vec<Option<u32>>) {
     let c = charts::chart_scene(scene, &sizing, &cache).unwrap();
     (c.apply(scene), c.texture_sizes())
 }
+
+/// A scene seen from its camera path's frame 0, lit by a light spec placed
+/// for that camera at `width`x`height` (seed 7): what the agreement and
+/// golden tests render.
+pub struct PathFrame {
+    pub scene: Scene,
+    pub camera: Camera,
+    pub lights: Vec<Light>,
+}
+
+/// Loads `name` (a procedural scene or a path) as a [`PathFrame`] lit by `spec`.
+pub fn path_frame(name: &str, spec: &str, width: u32, height: u32) -> PathFrame {
+    use shadespace::scene::{self, LightSpec, lights, path};
+    let scene = scene::load(name).unwrap();
+    let bounds = scene.bounds();
+    let cameras = path::cameras_for_scene(name, &bounds).unwrap();
+    let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
+    let spec: LightSpec = spec.parse().unwrap();
+    let lights = lights::build_lights(&spec, &bounds, &camera, width as f32 / height as f32, 7).unwrap();
+    PathFrame { scene, camera, lights }
+}

@@ -212,6 +212,8 @@ pub enum Binding {
     },
     /// A filtering sampler.
     Sampler,
+    /// A comparison sampler (shadow maps).
+    ComparisonSampler,
 }
 
 /// A bind-group layout for compute passes; binding `i` is `bindings[i]`.
@@ -255,6 +257,7 @@ pub fn bind_group_layout_for(
                     view_dimension: dimension,
                 },
                 Binding::Sampler => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                Binding::ComparisonSampler => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
             },
             count: None,
         })

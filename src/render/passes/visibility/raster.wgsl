@@ -167,16 +167,16 @@ fn near_clipped_bounds(h: array<vec4f, 3>) -> vec4i {
     return vec4i(min_px, max_px);
 }
 
+fn cross_i64(a: vec2<i64>, b: vec2<i64>) -> i64 {
+    return a.x * b.y - a.y * b.x;
+}
+
 // Sets up `s`'s fixed-point edges: the triangle is clipped against the near
 // plane (z <= w) into a convex polygon of up to four vertices, as the
 // hardware clips it, then snapped. Coverage is the intersection of the
 // polygon's edges, each with the top-left rule: the same pixels as the
 // hardware's fan of triangles, whose inner edges cover each pixel once.
 // Returns false (and leaves `s`) when a vertex lies beyond the guard band.
-fn cross_i64(a: vec2<i64>, b: vec2<i64>) -> i64 {
-    return a.x * b.y - a.y * b.x;
-}
-
 fn setup_fixed(h: array<vec4f, 3>, s: ptr<function, Setup>) -> bool {
     let half = 0.5 * view.viewport.xy;
     var v: array<vec2<i64>, 4>;
