@@ -131,6 +131,16 @@ impl ShaderLibrary {
     }
 }
 
+/// Bytes of the WGSL struct `name` (declared in `module`'s own file, not an
+/// imported one) as an array element: for buffers of structs that only the
+/// GPU reads and writes, so that no Rust copy of their layout can drift.
+pub fn struct_size(module: &wgpu::naga::Module, name: &str) -> Option<u64> {
+    module.types.iter().find_map(|(_, ty)| match (&ty.name, &ty.inner) {
+        (Some(n), wgpu::naga::TypeInner::Struct { span, .. }) if n == name => Some(*span as u64),
+        _ => None,
+    })
+}
+
 fn error(composer: &Composer, file: &str, e: ComposerError) -> ShaderError {
     ShaderError { file: file.to_string(), message: e.emit_to_string(composer) }
 }

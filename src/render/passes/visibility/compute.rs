@@ -6,9 +6,10 @@
 //! background), `vis: raster` (one thread per visible triangle: near-plane
 //! clipped bounds, homogeneous edge functions with the top-left rule, and one
 //! 64-bit `atomicMax(depth << 32 | payload)` per covered pixel; triangles
-//! whose bounds exceed 256 pixels are queued as 32x32 tiles), `vis: raster
-//! big` (one workgroup per queued tile) and `vis: resolve` (payload to
-//! (object + 1, triangle)).
+//! whose bounds exceed 256 pixels are set up once into a buffer and queued as
+//! 32x32 tiles), `vis: raster big` (one workgroup per queued tile: its 8x8
+//! squares are tested against the triangle's edges, then every pixel of the
+//! squares that pass) and `vis: resolve` (payload to (object + 1, triangle)).
 //!
 //! Payload: the complement of the triangle's index in this frame's list of
 //! visible triangles, object by object (at equal depth the first drawn wins,
@@ -57,7 +58,8 @@ gpu_struct! {
         pub triangle_count: u32,
         /// Entries of the big-tile queue.
         pub big_capacity: u32,
-        pub pad: u32,
+        /// Entries of the big-triangle setups.
+        pub setup_capacity: u32,
     }
 }
 
@@ -93,9 +95,12 @@ pub struct ComputeVisibility {
     resolve_params: wgpu::Buffer,
     /// Per visible object: (object, first triangle in the frame's list).
     ranges: wgpu::Buffer,
-    /// Entries of the big-tile queue (cleared every frame).
+    /// Entries of the big-tile queue and of the setups (cleared every frame).
     big_count: wgpu::Buffer,
     big_capacity: u32,
+    setup_capacity: u32,
+    /// Bytes of the big-triangle setups.
+    setup_bytes: u64,
     raster_group: wgpu::BindGroup,
     resolve_group: wgpu::BindGroup,
     /// Group 1 of passes that import `shadespace::visibility_read`: the ids
@@ -135,11 +140,20 @@ impl ComputeVisibility {
         // 250 ms); past it, threads still rasterize alone.
         let big_capacity = ((width as u64 * height as u64 / 8).max(1 << 16) as u32).min(1 << 22);
         let big_tiles = buffer("vis big tiles", big_capacity as u64 * 8, U::STORAGE);
-        let big_count = buffer("vis big count", 4, U::STORAGE | U::COPY_DST);
+        let big_count = buffer("vis big count", 8, U::STORAGE | U::COPY_DST);
+        // One setup per triangle whose box exceeds 256 pixels: a few thousand
+        // on Sponza's path at 1080p; past the capacity threads rasterize
+        // their big triangles alone.
+        let triangles: u64 = scene.draws.iter().map(|d| d.index_count as u64 / 3).sum();
+        let setup_capacity = triangles.clamp(1, 1 << 16) as u32;
+        let setup_size = crate::shaders::struct_size(&shaders.compose(RASTER)?, "Setup")
+            .expect("raster.wgsl declares struct Setup");
+        let setup_bytes = setup_capacity as u64 * setup_size;
+        let big_setups = buffer("vis big setups", setup_bytes, U::STORAGE);
 
         let read = Binding::Storage { read_only: true };
         let rw = Binding::Storage { read_only: false };
-        let raster_layout = bind_group_layout(device, "vis raster", &[Binding::Uniform, read, rw, rw, rw]);
+        let raster_layout = bind_group_layout(device, "vis raster", &[Binding::Uniform, read, rw, rw, rw, rw]);
         let dimension = wgpu::TextureViewDimension::D2;
         let out_binding = Binding::StorageTexture { format: super::FORMAT, dimension };
         let resolve_layout = bind_group_layout(device, "vis resolve", &[Binding::Uniform, read, rw, out_binding]);
@@ -153,6 +167,7 @@ impl ComputeVisibility {
                 depth_ids.as_entire_binding(),
                 big_tiles.as_entire_binding(),
                 big_count.as_entire_binding(),
+                big_setups.as_entire_binding(),
             ],
         );
         let resolve_group = bind_group(
@@ -189,6 +204,8 @@ impl ComputeVisibility {
             ranges,
             big_count,
             big_capacity,
+            setup_capacity,
+            setup_bytes,
             raster_group,
             resolve_group,
             read_layout,
@@ -200,9 +217,10 @@ impl ComputeVisibility {
 }
 
 impl ComputeVisibility {
-    /// Bytes of its buffers (the 64-bit one, the big-tile queue, the ranges).
+    /// Bytes of its buffers (the 64-bit one, the big-tile queue and setups,
+    /// the ranges).
     pub fn bytes(&self) -> u64 {
-        self.width as u64 * self.height as u64 * 8 + self.big_capacity as u64 * 8 + self.ranges.size()
+        self.width as u64 * self.height as u64 * 8 + self.big_capacity as u64 * 8 + self.setup_bytes + self.ranges.size()
     }
 }
 
@@ -226,7 +244,12 @@ pub fn compute_visibility(frame: &mut Frame, pass: &ComputeVisibility) {
     if !ranges.is_empty() {
         frame.queue.write_buffer(&pass.ranges, 0, bytemuck::cast_slice(&ranges));
     }
-    let raster = GpuRasterParams { range_count, triangle_count: triangles, big_capacity: pass.big_capacity, pad: 0 };
+    let raster = GpuRasterParams {
+        range_count,
+        triangle_count: triangles,
+        big_capacity: pass.big_capacity,
+        setup_capacity: pass.setup_capacity,
+    };
     frame.queue.write_buffer(&pass.raster_params, 0, bytemuck::bytes_of(&raster));
     let resolve = GpuResolveParams { width: pass.width, height: pass.height, range_count, pad: 0 };
     frame.queue.write_buffer(&pass.resolve_params, 0, bytemuck::bytes_of(&resolve));

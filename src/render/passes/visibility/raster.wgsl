@@ -27,7 +27,8 @@ struct RasterParams {
     triangle_count: u32,
     // Entries of `big_tiles`.
     big_capacity: u32,
-    pad: u32,
+    // Entries of `big_setups`.
+    setup_capacity: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: RasterParams;
@@ -36,17 +37,28 @@ struct RasterParams {
 @group(1) @binding(1) var<storage, read> ranges: array<vec2u>;
 // Per pixel: depth bits << 32 | payload; 0 = background.
 @group(1) @binding(2) var<storage, read_write> depth_ids: array<atomic<u64>>;
-// Big triangles' work: (payload, tile of the triangle's bounding box).
+// Big triangles' work: (entry of `big_setups`, tile of the triangle's
+// bounding box).
 @group(1) @binding(3) var<storage, read_write> big_tiles: array<vec2u>;
-// Entries appended to `big_tiles` (may exceed the capacity: see `raster`).
-@group(1) @binding(4) var<storage, read_write> big_count: atomic<u32>;
+// Entries appended to `big_tiles` and `big_setups` (either may exceed its
+// capacity: see `raster`).
+struct BigCounts {
+    tiles: atomic<u32>,
+    setups: atomic<u32>,
+}
+@group(1) @binding(4) var<storage, read_write> big_count: BigCounts;
+// Big triangles, set up once by the thread that queues their tiles.
+@group(1) @binding(5) var<storage, read_write> big_setups: array<Setup>;
 
 // Threads per workgroup of `raster` (`compute::RASTER_WORKGROUP`).
 const RASTER_WORKGROUP: u32 = 64u;
 // A thread rasterizes its triangle itself when the bounding box has at most
-// this many pixels; bigger ones go to `raster_big` in BIG_TILE squares.
+// this many pixels; bigger ones go to `raster_big` in BIG_TILE squares,
+// which it tests in SUB_TILE squares (SUB_TILES^2 of them) before their pixels.
 const SMALL_AREA: i32 = 256;
 const BIG_TILE: i32 = 32;
+const SUB_TILE: i32 = 8;
+const SUB_TILES: i32 = 4;
 // Threads per workgroup of `raster_big` (`compute::BIG_WORKGROUP`), and its
 // fixed number of workgroups, which loop over the big tiles.
 const BIG_WORKGROUP: u32 = 64u;
@@ -58,10 +70,18 @@ const BIG_WORKGROUPS: u32 = 1024u;
 const SUBPIXELS: f32 = 256.0;
 const GUARD_BAND: f32 = 8192.0;
 
-// A triangle ready to rasterize.
+// A triangle ready to rasterize (members ordered to fill the 32-byte
+// alignment of the 64-bit vectors: `big_setups` holds many).
 struct Setup {
     // 1: fixed-point edges (`fixed_*`), 0: homogeneous ones (`edge_*`).
     fixed: u32,
+    // Bit i: edge i owns the pixels it passes through exactly (top-left rule).
+    owns: u32,
+    // What `keep_nearest` stores with the depth (see the file's top).
+    payload: u32,
+    // Sub-pixel position of the depth plane's origin (`depth`); sub-pixel
+    // coordinates inside the guard band fit 32 bits.
+    depth_origin: vec2i,
     // Per edge of the near-clipped polygon, in sub-pixels: the value at pixel (0, 0)'s centre (less one
     // where the edge does not own its pixels, so inside is >= 0), and the
     // steps one pixel right and one pixel down.
@@ -76,11 +96,8 @@ struct Setup {
     // offsets from `depth_origin`, from the snapped vertices (as the hardware
     // interpolates it); homogeneous: over (ndc.x, ndc.y, 1).
     depth: vec3f,
-    depth_origin: vec2<i64>,
     // Inclusive pixel bounds (min x, min y, max x, max y); empty when min > max.
     bounds: vec4i,
-    // Bit i: edge i owns the pixels it passes through exactly (top-left rule).
-    owns: u32,
 }
 
 // Index of the entry of `ranges` holding list triangle `index`.
@@ -259,7 +276,7 @@ fn setup_fixed(h: array<vec4f, 3>, s: ptr<function, Setup>) -> bool {
     let dz = vec2f(z[k] - z[0], z[k + 1u] - z[0]);
     let det = f32(select(a1, a2, k == 2u));
     (*s).depth = vec3f((dz.x * e2.y - dz.y * e1.y) / det, (e1.x * dz.y - e2.x * dz.x) / det, z[0]);
-    (*s).depth_origin = v[0];
+    (*s).depth_origin = vec2i(v[0]);
     (*s).fixed_origin = origin;
     (*s).fixed_dx = step_x;
     (*s).fixed_dy = step_y;
@@ -279,6 +296,7 @@ fn setup_triangle(index: u32) -> Setup {
         object_clip_position(object, tri.z),
     );
     var s: Setup;
+    s.payload = ~index;
     s.bounds = vec4i(0, 0, -1, -1);
     // Wholly behind the far plane (z < 0).
     if all(vec3f(h[0].z, h[1].z, h[2].z) < vec3f(0.0)) {
@@ -313,11 +331,11 @@ fn inside(e: f32, owns: bool) -> bool {
 }
 
 fn fixed_depth(s: Setup, p: vec2i) -> f32 {
-    let offset = vec2f(vec2<i64>(p) * i64(SUBPIXELS) + i64(SUBPIXELS / 2.0) - s.depth_origin);
+    let offset = vec2f(p * i32(SUBPIXELS) + i32(SUBPIXELS / 2.0) - s.depth_origin);
     return dot(s.depth, vec3f(offset, 1.0));
 }
 
-// Keeps the nearer of pixel p's surface and this triangle at `depth`.
+// Keeps the nearer of pixel p's surface and a triangle at `depth`.
 fn keep_nearest(payload: u32, p: vec2i, depth: f32) {
     // Clip to the depth range, as the hardware does (the background is 0).
     if !(depth > 0.0 && depth <= 1.0) {
@@ -327,32 +345,26 @@ fn keep_nearest(payload: u32, p: vec2i, depth: f32) {
     atomicMax(&depth_ids[pixel], (u64(bitcast<u32>(depth)) << 32u) | u64(payload));
 }
 
-// Tests pixel p against the triangle and keeps the nearest surface.
-fn raster_pixel(s: Setup, payload: u32, p: vec2i) {
-    if s.fixed != 0u {
-        let e = s.fixed_origin + s.fixed_dx * i64(p.x) + s.fixed_dy * i64(p.y);
-        if all(e >= vec4<i64>(0li)) {
-            keep_nearest(payload, p, fixed_depth(s, p));
-        }
-        return;
-    }
+// Tests pixel p against a triangle with homogeneous edges and keeps the
+// nearest surface.
+fn raster_pixel_homogeneous(s: Setup, p: vec2i) {
     let uv = (vec2f(p) + 0.5) * view.viewport.zw;
     let q = vec3f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0);
     let a = dot(s.edge_a, q);
     let b = dot(s.edge_b, q);
     let c = dot(s.edge_c, q);
     if inside(a, (s.owns & 1u) != 0u) && inside(b, (s.owns & 2u) != 0u) && inside(c, (s.owns & 4u) != 0u) {
-        keep_nearest(payload, p, dot(s.depth, q));
+        keep_nearest(s.payload, p, dot(s.depth, q));
     }
 }
 
 // Rasterizes the pixels of [lo, hi]; fixed-point edges step by additions
 // (64-bit multiplies are several instructions on GPUs).
-fn raster_rect(s: Setup, payload: u32, lo: vec2i, hi: vec2i) {
+fn raster_rect(s: Setup, lo: vec2i, hi: vec2i) {
     if s.fixed == 0u {
         for (var y = lo.y; y <= hi.y; y++) {
             for (var x = lo.x; x <= hi.x; x++) {
-                raster_pixel(s, payload, vec2i(x, y));
+                raster_pixel_homogeneous(s, vec2i(x, y));
             }
         }
         return;
@@ -362,7 +374,7 @@ fn raster_rect(s: Setup, payload: u32, lo: vec2i, hi: vec2i) {
         var e = row;
         for (var x = lo.x; x <= hi.x; x++) {
             if all(e >= vec4<i64>(0li)) {
-                keep_nearest(payload, vec2i(x, y), fixed_depth(s, vec2i(x, y)));
+                keep_nearest(s.payload, vec2i(x, y), fixed_depth(s, vec2i(x, y)));
             }
             e += s.fixed_dx;
         }
@@ -392,51 +404,100 @@ fn raster(
     if any(extent <= vec2i(0)) {
         return;
     }
-    let payload = ~index;
     if extent.x * extent.y <= SMALL_AREA {
-        raster_rect(s, payload, s.bounds.xy, s.bounds.zw);
+        raster_rect(s, s.bounds.xy, s.bounds.zw);
         return;
     }
-    // Big: queue its tiles for whole workgroups; tiles past the queue's
-    // capacity are rasterized here (slow, but no pixel is lost).
+    // Big: set up once, its tiles queued for whole workgroups; past either
+    // queue's capacity this thread rasterizes them itself (slow, but no pixel
+    // is lost).
     let tiles = vec2u((extent + BIG_TILE - 1) / BIG_TILE);
     let count = tiles.x * tiles.y;
-    let first = atomicAdd(&big_count, count);
+    let slot = atomicAdd(&big_count.setups, 1u);
+    if slot >= params.setup_capacity {
+        raster_rect(s, s.bounds.xy, s.bounds.zw);
+        return;
+    }
+    big_setups[slot] = s;
+    let first = atomicAdd(&big_count.tiles, count);
     for (var t = 0u; t < count; t++) {
         if first + t < params.big_capacity {
-            big_tiles[first + t] = vec2u(payload, t);
+            big_tiles[first + t] = vec2u(slot, t);
         } else {
             let r = big_tile_rect(s.bounds, t);
-            raster_rect(s, payload, r.xy, r.zw);
+            raster_rect(s, r.xy, r.zw);
         }
     }
 }
 
-var<workgroup> shared_setup: Setup;
+// The largest value fixed-point edge function `i` of `s` takes over the
+// pixels of [lo, hi] (at the corner its inside points to).
+fn edge_max(s: Setup, i: u32, lo: vec2i, hi: vec2i) -> i64 {
+    let x = select(lo.x, hi.x, s.fixed_dx[i] > 0li);
+    let y = select(lo.y, hi.y, s.fixed_dy[i] > 0li);
+    return s.fixed_origin[i] + s.fixed_dx[i] * i64(x) + s.fixed_dy[i] * i64(y);
+}
+
+// Whether a triangle may cover a pixel of [lo, hi]: every edge has a pixel of
+// the rectangle inside its half-plane (conservative: near a triangle's
+// corners a rectangle can pass and hold no covered pixel).
+fn may_cover(s: Setup, lo: vec2i, hi: vec2i) -> bool {
+    if any(lo > hi) {
+        return false;
+    }
+    if s.fixed == 0u {
+        return true;
+    }
+    return edge_max(s, 0u, lo, hi) >= 0li && edge_max(s, 1u, lo, hi) >= 0li && edge_max(s, 2u, lo, hi) >= 0li
+        && edge_max(s, 3u, lo, hi) >= 0li;
+}
+
 var<workgroup> shared_count: u32;
+// Per square of the current tile: 1 when the triangle may cover it.
+var<workgroup> square_live: array<u32, 16>;
 
 // One workgroup per big-triangle tile (BIG_WORKGROUPS workgroups looping over
-// the queue): the first thread sets the triangle up, every thread then tests
-// BIG_TILE^2 / BIG_WORKGROUP pixels.
+// the queue). The first SUB_TILES^2 threads test the tile's SUB_TILE squares
+// against the triangle's edges (a thin triangle's box is mostly empty); then
+// each thread tests its pixel of every square that passed.
 @compute @workgroup_size(BIG_WORKGROUP)
 fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_index) local: u32) {
     if local == 0u {
-        shared_count = min(atomicLoad(&big_count), params.big_capacity);
+        shared_count = min(atomicLoad(&big_count.tiles), params.big_capacity);
     }
     let count = workgroupUniformLoad(&shared_count);
+    let in_square = vec2i(i32(local) % SUB_TILE, i32(local) / SUB_TILE);
     for (var i = group.x; i < count; i += BIG_WORKGROUPS) {
         let item = big_tiles[i];
-        if local == 0u {
-            shared_setup = setup_triangle(~item.x);
-        }
-        let s = workgroupUniformLoad(&shared_setup);
+        let s = big_setups[item.x];
         let r = big_tile_rect(s.bounds, item.y);
-        let width = r.z - r.x + 1;
-        let pixels = width * (r.w - r.y + 1);
-        for (var k = i32(local); k < pixels; k += i32(BIG_WORKGROUP)) {
-            raster_pixel(s, item.x, r.xy + vec2i(k % width, k / width));
+        if local < u32(SUB_TILES * SUB_TILES) {
+            let lo = r.xy + vec2i(i32(local) % SUB_TILES, i32(local) / SUB_TILES) * SUB_TILE;
+            square_live[local] = select(0u, 1u, may_cover(s, lo, min(lo + SUB_TILE - 1, r.zw)));
         }
-        // `shared_setup` is rewritten next iteration.
+        workgroupBarrier();
+        // This thread's pixel in the tile's first square, and its edge
+        // functions there: the other squares are whole steps away.
+        let p0 = r.xy + in_square;
+        let e0 = s.fixed_origin + s.fixed_dx * i64(p0.x) + s.fixed_dy * i64(p0.y);
+        let step_x = s.fixed_dx * i64(SUB_TILE);
+        let step_y = s.fixed_dy * i64(SUB_TILE);
+        for (var k = 0; k < SUB_TILES * SUB_TILES; k++) {
+            let square = vec2i(k % SUB_TILES, k / SUB_TILES);
+            let p = p0 + square * SUB_TILE;
+            if square_live[k] == 0u || any(p > r.zw) {
+                continue;
+            }
+            if s.fixed == 0u {
+                raster_pixel_homogeneous(s, p);
+                continue;
+            }
+            let e = e0 + step_x * i64(square.x) + step_y * i64(square.y);
+            if all(e >= vec4<i64>(0li)) {
+                keep_nearest(s.payload, p, fixed_depth(s, p));
+            }
+        }
+        // `square_live` is rewritten next iteration.
         workgroupBarrier();
     }
 }
