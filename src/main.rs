@@ -119,10 +119,13 @@ struct SceneArgs {
     #[arg(long)]
     no_depth_prepass: bool,
     /// Objectspace, deferred-compute: how pixels find their surface:
-    /// `raster` (hardware visibility or G-buffer pass) or `compute` (software
-    /// rasterizer with 64-bit atomics; surfaces rebuilt from triangle ids).
-    #[arg(long, default_value = "raster", value_parser = VisibilityMethod::from_str)]
-    visibility: VisibilityMethod,
+    /// `raster` (hardware visibility or G-buffer pass), `compute` (software
+    /// rasterizer with 64-bit atomics; surfaces rebuilt from triangle ids) or
+    /// `auto` (default: compute where the adapter has 64-bit atomics, which
+    /// on the H100 is 1.7x (object space) to 2.2x (deferred-compute) faster
+    /// at 1920x1080, else raster).
+    #[arg(long, default_value = "auto", value_parser = visibility_choice)]
+    visibility: VisibilityChoice,
     #[command(flatten)]
     objectspace: ObjectSpaceArgs,
     #[command(flatten)]
@@ -261,6 +264,19 @@ fn on_off(s: &str) -> Result<bool, String> {
     }
 }
 
+/// `--visibility`: a method, or `auto` (`None`: chosen once the adapter is known).
+#[derive(Clone, Copy, Debug)]
+struct VisibilityChoice(Option<VisibilityMethod>);
+
+fn visibility_choice(s: &str) -> Result<VisibilityChoice, String> {
+    match s {
+        "auto" => Ok(VisibilityChoice(None)),
+        _ => VisibilityMethod::from_str(s)
+            .map(|m| VisibilityChoice(Some(m)))
+            .map_err(|_| format!("'{s}' is not auto, raster or compute")),
+    }
+}
+
 fn bloom_strength(s: &str) -> Result<f32, String> {
     finite_in(s, 0.0..=1.0, "a strength from 0 to 1")
 }
@@ -389,9 +405,15 @@ impl Setup {
     }
 }
 
-/// Renderer options from the command line and, for object space, the
-/// texture sizes the charts gave.
-fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view: DebugView) -> RenderOptions {
+/// Renderer options from the command line, for object space the texture
+/// sizes the charts gave, and for `--visibility auto` the adapter's features.
+fn render_options(
+    a: &SceneArgs,
+    texture_sizes: &Option<Vec<Option<u32>>>,
+    view: DebugView,
+    features: wgpu::Features,
+) -> RenderOptions {
+    let visibility = a.visibility.0.unwrap_or_else(|| VisibilityMethod::preferred(features));
     let pipeline = match a.pipeline {
         PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::ForwardMultipass => PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
@@ -405,13 +427,12 @@ fn render_options(a: &SceneArgs, texture_sizes: &Option<Vec<Option<u32>>>, view:
             texture_sizes: texture_sizes.clone().unwrap_or_default(),
             atlas_budget_texels: a.objectspace.atlas_budget << 20,
             visibility_prepass: !a.objectspace.no_visibility_prepass,
-            visibility: a.visibility,
+            visibility,
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
-        PipelineName::DeferredCompute => PipelineConfig::DeferredCompute(DeferredComputeConfig {
-            depth_prepass: !a.no_depth_prepass,
-            visibility: a.visibility,
-        }),
+        PipelineName::DeferredCompute => {
+            PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: !a.no_depth_prepass, visibility })
+        }
     };
     RenderOptions { width: a.size.0, height: a.size.1, pipeline }
 }
@@ -441,7 +462,8 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
-    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, a.view))?;
+    let mut renderer =
+        Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, a.view, ctx.device.features()))?;
     renderer.exposure = a.scene.exposure;
     renderer.bloom = a.scene.bloom;
     renderer.shadow_refresh = a.scene.shadow_refresh;
@@ -514,7 +536,11 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
-    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, DebugView::Shade))?;
+    let mut renderer = Renderer::new(
+        &ctx,
+        &s.scene,
+        &render_options(&a.scene, &s.texture_sizes, DebugView::Shade, ctx.device.features()),
+    )?;
     renderer.exposure = a.scene.exposure;
     renderer.bloom = a.scene.bloom;
     renderer.shadow_refresh = a.scene.shadow_refresh;

@@ -59,7 +59,7 @@ fn bad_options_say_what_is_wrong() {
     assert!(err.contains("8, 16, 32, 64"), "{err}");
     let (code, err) = run(&["render", "--pipeline", "objectspace", "--visibility", "software"]);
     assert_eq!(code, 2);
-    assert!(err.contains("'software' is not raster or compute"), "{err}");
+    assert!(err.contains("'software' is not auto, raster or compute"), "{err}");
     let (code, err) = run(&["bench", "--forward-only", "nothing-called-this"]);
     assert_eq!(code, 2);
     assert!(err.contains("nothing-called-this"), "{err}");

@@ -146,8 +146,8 @@ impl ComputeVisibility {
         // their big triangles alone.
         let triangles: u64 = scene.draws.iter().map(|d| d.index_count as u64 / 3).sum();
         let setup_capacity = triangles.clamp(1, 1 << 16) as u32;
-        let setup_size = crate::shaders::struct_size(&shaders.compose(RASTER)?, "Setup")
-            .expect("raster.wgsl declares struct Setup");
+        let setup_size =
+            crate::shaders::struct_size(&shaders.compose(RASTER)?, "Setup").expect("raster.wgsl declares struct Setup");
         let setup_bytes = setup_capacity as u64 * setup_size;
         let big_setups = buffer("vis big setups", setup_bytes, U::STORAGE);
 
@@ -220,7 +220,10 @@ impl ComputeVisibility {
     /// Bytes of its buffers (the 64-bit one, the big-tile queue and setups,
     /// the ranges).
     pub fn bytes(&self) -> u64 {
-        self.width as u64 * self.height as u64 * 8 + self.big_capacity as u64 * 8 + self.setup_bytes + self.ranges.size()
+        self.width as u64 * self.height as u64 * 8
+            + self.big_capacity as u64 * 8
+            + self.setup_bytes
+            + self.ranges.size()
     }
 }
 
