@@ -154,6 +154,14 @@ pub struct BenchSetup<'a> {
     pub camera: &'a str,
 }
 
+/// Adds a read-back's counters to their frames' (a pipeline's counters of
+/// one frame may arrive in parts, from several read-backs).
+fn merge_counters(into: &mut BTreeMap<u64, Counters>, arrived: Vec<(u64, Counters)>) {
+    for (frame, c) in arrived {
+        into.entry(frame).or_default().extend(c);
+    }
+}
+
 /// Renders `warmup + frames` frames along the plan's path, then waits for
 /// the GPU timings and counters and reports the measured frames. `progress`
 /// is called after each frame.
@@ -175,11 +183,11 @@ pub fn run(
     for i in 0..total as u64 {
         stats.push(renderer.render(ctx, &path.camera_at(path_frame(i)), lights, i)?);
         timings.extend(renderer.collect_timings(ctx, false).into_iter().map(|t| (t.frame, t)));
-        counters.extend(renderer.collect_counters(ctx, false));
+        merge_counters(&mut counters, renderer.collect_counters(ctx, false));
         progress(i as u32 + 1);
     }
     timings.extend(renderer.collect_timings(ctx, true).into_iter().map(|t| (t.frame, t)));
-    counters.extend(renderer.collect_counters(ctx, true));
+    merge_counters(&mut counters, renderer.collect_counters(ctx, true));
     ctx.check_errors()?;
 
     let per_frame: Vec<FrameReport> = stats

@@ -126,6 +126,12 @@ struct SceneArgs {
     /// at 1920x1080, else raster).
     #[arg(long, default_value = "auto", value_parser = visibility_choice)]
     visibility: VisibilityChoice,
+    /// Compute visibility: count the rasterizer's work every frame
+    /// (triangles per path, 32x32 tiles, 8x8 squares that pass the edge test,
+    /// pixels tested, atomics per pixel) into the `--stats`/`bench`
+    /// counters. Adds atomics: for profiling, not for timing.
+    #[arg(long)]
+    count_visibility: bool,
     #[command(flatten)]
     objectspace: ObjectSpaceArgs,
     #[command(flatten)]
@@ -428,11 +434,14 @@ fn render_options(
             atlas_budget_texels: a.objectspace.atlas_budget << 20,
             visibility_prepass: !a.objectspace.no_visibility_prepass,
             visibility,
+            count_visibility: a.count_visibility,
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
-        PipelineName::DeferredCompute => {
-            PipelineConfig::DeferredCompute(DeferredComputeConfig { depth_prepass: !a.no_depth_prepass, visibility })
-        }
+        PipelineName::DeferredCompute => PipelineConfig::DeferredCompute(DeferredComputeConfig {
+            depth_prepass: !a.no_depth_prepass,
+            visibility,
+            count_visibility: a.count_visibility,
+        }),
     };
     RenderOptions { width: a.size.0, height: a.size.1, pipeline }
 }

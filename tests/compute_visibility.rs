@@ -141,3 +141,54 @@ fn ids_agree_inside_objects_and_across_the_near_plane() {
     let (covered, _) = compare(&ctx, "eye on a 2 km floor", &huge, &camera, (160, 120));
     assert!(covered > 160 * 120 / 8, "the floor covers only {covered} pixels");
 }
+
+/// The counting variant's counts for one frame of the floor seen from
+/// straight above (the floor fills the view): every pixel written exactly
+/// once by one of its two triangles, both queued as big triangles over the
+/// whole 160x120 screen (5 x 4 tiles each), and the back-facing count follows
+/// the winding.
+#[test]
+fn counts_add_up_on_a_floor_filling_the_view() {
+    let ctx = common::gpu();
+    let (floor, camera, _) = common::floor_scene();
+    let camera = Camera { position: Vec3::new(0.2, 2.0, 0.1), forward: Vec3::NEG_Y, up: Vec3::Z, ..camera };
+    let (width, height) = (160u32, 120u32);
+    let counts = |scene: &Scene| {
+        let mut texture_sizes = vec![None; scene.objects.len()];
+        texture_sizes[0] = Some(128);
+        let objectspace = ObjectSpaceConfig {
+            texture_sizes,
+            visibility: VisibilityMethod::Compute,
+            count_visibility: true,
+            ..Default::default()
+        };
+        let options = RenderOptions { width, height, pipeline: PipelineConfig::ObjectSpace(objectspace) };
+        let mut renderer = Renderer::new(&ctx, scene, &options).unwrap();
+        renderer.render(&ctx, &camera, &[], 0).unwrap();
+        let mut counts = std::collections::BTreeMap::new();
+        for (_, c) in renderer.collect_counters(&ctx, true) {
+            counts.extend(c);
+        }
+        counts
+    };
+    let pixels = (width * height) as f64;
+    let front = counts(&floor);
+    let mut flipped = floor.clone();
+    for tri in flipped.meshes[0].indices.chunks_mut(3) {
+        tri.swap(1, 2);
+    }
+    let back = counts(&flipped);
+    for c in [&front, &back] {
+        assert_eq!(c["vis_pixels_written"], pixels, "{c:?}");
+        assert_eq!(c["vis_atomics_per_pixel"], 1.0);
+        assert_eq!(c["vis_small_triangles"], 0.0);
+        assert_eq!(c["vis_big_triangles"], 2.0);
+        assert_eq!(c["vis_big_tiles"], 40.0);
+        assert_eq!(c["vis_overflow_triangles"], 0.0);
+        // Each triangle's box is the screen; its squares that pass hold at
+        // least every pixel it covers, at most the whole screen.
+        assert!(c["vis_big_pixels_tested"] >= pixels && c["vis_big_pixels_tested"] <= 2.0 * pixels, "{c:?}");
+    }
+    let facing = [front["vis_back_facing_writes"], back["vis_back_facing_writes"]];
+    assert!(facing == [0.0, pixels] || facing == [pixels, 0.0], "back-facing writes {facing:?}");
+}

@@ -24,6 +24,7 @@ use super::passes::gbuffer::{self, GbufferStage, geometry};
 use super::passes::visibility::compute::{ComputeVisibility, compute_visibility};
 use super::passes::visibility::{VisibilityBuffer, VisibilityMethod};
 use super::passes::{compute_pipeline, hdr_output};
+use super::report::Counters;
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
 use super::targets::Targets;
@@ -56,14 +57,17 @@ pub struct DeferredComputeConfig {
     /// (lighter) visibility pass. Raster visibility only.
     pub depth_prepass: bool,
     /// Raster: the G-buffer pass. Compute: the compute visibility pass, the
-    /// surfaces rebuilt from ids (no G-buffer). Raster stays the default until
-    /// measured on the H100.
+    /// surfaces rebuilt from ids (no G-buffer). Raster here (it runs on every
+    /// adapter); the CLI's `--visibility auto` takes [`VisibilityMethod::preferred`].
     pub visibility: VisibilityMethod,
+    /// Compute visibility: count the rasterizer's work every frame into the
+    /// counters (adds atomics: for profiling, not timing).
+    pub count_visibility: bool,
 }
 
 impl Default for DeferredComputeConfig {
     fn default() -> Self {
-        Self { depth_prepass: true, visibility: VisibilityMethod::Raster }
+        Self { depth_prepass: true, visibility: VisibilityMethod::Raster, count_visibility: false }
     }
 }
 
@@ -97,7 +101,7 @@ impl DeferredCompute {
             }
             VisibilityMethod::Compute => {
                 let ids = VisibilityBuffer::new(device, targets);
-                let pass = ComputeVisibility::new(device, shaders, scene, targets, &ids)?;
+                let pass = ComputeVisibility::new(device, shaders, scene, targets, &ids, config.count_visibility)?;
                 Surfaces::Visibility { ids, pass }
             }
         };
@@ -114,7 +118,7 @@ impl DeferredCompute {
 
 impl Pipeline for DeferredCompute {
     fn encode(&mut self, frame: &mut Frame) {
-        let read = match &self.surfaces {
+        let read = match &mut self.surfaces {
             Surfaces::Gbuffer(stage) => {
                 geometry(frame, stage);
                 &stage.gbuffer.read_group
@@ -130,6 +134,20 @@ impl Pipeline for DeferredCompute {
     /// Lights come from the tiles' own lists, not the CPU's per-object ones.
     fn uses_object_light_lists(&self) -> bool {
         false
+    }
+
+    fn after_submit(&mut self) {
+        if let Surfaces::Visibility { pass, .. } = &mut self.surfaces {
+            pass.after_submit();
+        }
+    }
+
+    /// With `count_visibility`, the compute rasterizer's counts.
+    fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        match &mut self.surfaces {
+            Surfaces::Visibility { pass, .. } => pass.collect_counts(device, wait),
+            Surfaces::Gbuffer(_) => Vec::new(),
+        }
     }
 
     /// Memory: the G-buffer (or the visibility buffers); setup: its bytes

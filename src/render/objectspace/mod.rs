@@ -172,8 +172,12 @@ pub struct ObjectSpaceConfig {
     /// Raster visibility only.
     pub visibility_prepass: bool,
     /// Hardware or compute rasterization of the visibility buffer. Raster
-    /// stays the default until the compute rasterizer is measured on the H100.
+    /// here (it runs on every adapter); the CLI's `--visibility auto` takes
+    /// [`VisibilityMethod::preferred`].
     pub visibility: VisibilityMethod,
+    /// Compute visibility: count the rasterizer's work every frame into the
+    /// counters (adds atomics: for profiling, not timing).
+    pub count_visibility: bool,
 }
 
 impl Default for ObjectSpaceConfig {
@@ -188,6 +192,7 @@ impl Default for ObjectSpaceConfig {
             atlas_budget_texels: DEFAULT_ATLAS_BUDGET,
             visibility_prepass: true,
             visibility: VisibilityMethod::Raster,
+            count_visibility: false,
         }
     }
 }
@@ -213,7 +218,7 @@ pub enum ObjectSpaceError {
 /// The passes that fill the visibility buffer.
 enum Visibility {
     Raster { prepass: Option<DepthPrepass>, ids: VisibilityPass },
-    Compute(ComputeVisibility),
+    Compute(Box<ComputeVisibility>),
 }
 
 pub struct ObjectSpace {
@@ -266,7 +271,15 @@ impl ObjectSpace {
                 ids: VisibilityPass::new(device, shaders, scene, config.visibility_prepass)?,
             },
             VisibilityMethod::Compute => {
-                Visibility::Compute(ComputeVisibility::new(device, shaders, scene, targets, &res.visibility)?)
+                let counting = config.count_visibility;
+                Visibility::Compute(Box::new(ComputeVisibility::new(
+                    device,
+                    shaders,
+                    scene,
+                    targets,
+                    &res.visibility,
+                    counting,
+                )?))
             }
         };
         let grid = WorldGrid::new(device, shaders, scene)?;
@@ -301,7 +314,7 @@ impl Pipeline for ObjectSpace {
         let stale = frame.lights_changed || self.frames == 1;
         let max_queue = self.layout.tile_count;
         self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, &self.config, max_queue);
-        match &self.visibility {
+        match &mut self.visibility {
             Visibility::Raster { prepass, ids } => {
                 if let Some(prepass) = prepass {
                     depth_prepass(frame, prepass);
@@ -325,14 +338,22 @@ impl Pipeline for ObjectSpace {
     fn after_submit(&mut self) {
         self.readback.after_submit();
         self.grid.grid.after_submit();
+        if let Visibility::Compute(pass) = &mut self.visibility {
+            pass.after_submit();
+        }
     }
 
     /// Per frame: `visible_tiles`, `shaded_tiles`, `reused_tiles`,
     /// `new_tiles`, `new_fraction` (of visible), `shaded_texels`,
     /// `visible_texels`, and per screen pixel `overshading` (visible texels:
     /// what shading every visible tile costs, the study's measure) and
-    /// `shaded_texels_per_pixel` (after reuse).
+    /// `shaded_texels_per_pixel` (after reuse); with `count_visibility`, the
+    /// compute rasterizer's counts too (in entries of their own).
     fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        let mut counts = match &mut self.visibility {
+            Visibility::Compute(pass) => pass.collect_counts(device, wait),
+            Visibility::Raster { .. } => Vec::new(),
+        };
         let tile_texels = (self.layout.tile_size * self.layout.tile_size) as f64;
         let pixels = self.res.visibility.texture.width() as f64 * self.res.visibility.texture.height() as f64;
         self.readback
@@ -356,6 +377,7 @@ impl Pipeline for ObjectSpace {
                 ];
                 (frame, counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect())
             })
+            .chain(counts.drain(..))
             .collect()
     }
 

@@ -25,13 +25,17 @@
 //! full-screen depth write would be a fragment pass, the slow kind on the H100.
 
 use super::VisibilityBuffer;
+use crate::gpu::readback::ReadbackRing;
 use crate::render::frame::Frame;
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use crate::render::report::Counters;
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::targets::Targets;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
 
 pub const RASTER: ShaderSource = ShaderSource::new("raster.wgsl", include_str!("raster.wgsl"));
+/// `raster.wgsl` counting its work ([`RasterCount`]).
+pub const RASTER_COUNTING: ShaderSource = RASTER.with_defs(&["COUNT"]);
 pub const RESOLVE: ShaderSource = ShaderSource::new("resolve.wgsl", include_str!("resolve.wgsl"));
 /// The module lighting passes import to read the output as a G-buffer
 /// (`shadespace::visibility_read`, group 1: [`ComputeVisibility::read_layout`]).
@@ -74,6 +78,68 @@ gpu_struct! {
     }
 }
 
+/// What the counting variant of `raster.wgsl` counts per frame (its
+/// `counts` array, in this order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RasterCount {
+    /// Triangles rasterized by their own thread (box of at most 256 pixels).
+    SmallTriangles,
+    /// Pixels those threads tested (their boxes).
+    SmallPixelsTested,
+    /// Triangles set up once and queued as 32x32 tiles.
+    BigTriangles,
+    /// Their queued tiles.
+    BigTiles,
+    /// 8x8 squares of those tiles that passed the edge test.
+    BigSquaresPassed,
+    /// Pixels the tile workgroups tested (in squares that passed).
+    BigPixelsTested,
+    /// 64-bit atomics issued: covered pixels inside the depth range.
+    PixelsWritten,
+    /// Big triangles (partly) rasterized by one thread because a queue was full.
+    OverflowTriangles,
+    /// Writes by triangles that face away (clockwise on screen): what
+    /// back-face culling would save on closed meshes.
+    BackFacingWrites,
+}
+
+impl RasterCount {
+    pub const ALL: [Self; 9] = [
+        Self::SmallTriangles,
+        Self::SmallPixelsTested,
+        Self::BigTriangles,
+        Self::BigTiles,
+        Self::BigSquaresPassed,
+        Self::BigPixelsTested,
+        Self::PixelsWritten,
+        Self::OverflowTriangles,
+        Self::BackFacingWrites,
+    ];
+
+    /// Its name among the frame counters.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::SmallTriangles => "vis_small_triangles",
+            Self::SmallPixelsTested => "vis_small_pixels_tested",
+            Self::BigTriangles => "vis_big_triangles",
+            Self::BigTiles => "vis_big_tiles",
+            Self::BigSquaresPassed => "vis_big_squares_passed",
+            Self::BigPixelsTested => "vis_big_pixels_tested",
+            Self::PixelsWritten => "vis_pixels_written",
+            Self::OverflowTriangles => "vis_overflow_triangles",
+            Self::BackFacingWrites => "vis_back_facing_writes",
+        }
+    }
+}
+
+/// The counting variant's buffer and its read-back.
+struct RasterCounting {
+    counts: wgpu::Buffer,
+    readback: ReadbackRing<u64>,
+}
+
+const COUNTS_BYTES: u64 = RasterCount::ALL.len() as u64 * 4;
+
 #[derive(Debug, thiserror::Error)]
 pub enum ComputeVisibilityError {
     #[error(transparent)]
@@ -109,16 +175,19 @@ pub struct ComputeVisibility {
     pub read_group: wgpu::BindGroup,
     width: u32,
     height: u32,
+    counting: Option<RasterCounting>,
 }
 
 impl ComputeVisibility {
-    /// Fails where the device lacks [`FEATURES`].
+    /// Fails where the device lacks [`FEATURES`]. `counting`: the variant
+    /// that counts its work ([`RasterCount`], see [`Self::collect_counts`]).
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         targets: &Targets,
         out: &VisibilityBuffer,
+        counting: bool,
     ) -> Result<Self, ComputeVisibilityError> {
         if !device.features().contains(FEATURES) {
             return Err(ComputeVisibilityError::NoInt64Atomics);
@@ -153,23 +222,30 @@ impl ComputeVisibility {
 
         let read = Binding::Storage { read_only: true };
         let rw = Binding::Storage { read_only: false };
-        let raster_layout = bind_group_layout(device, "vis raster", &[Binding::Uniform, read, rw, rw, rw, rw]);
+        let counting = counting.then(|| RasterCounting {
+            counts: buffer("vis raster counts", COUNTS_BYTES, U::STORAGE | U::COPY_DST | U::COPY_SRC),
+            readback: ReadbackRing::new("vis raster counts", COUNTS_BYTES),
+        });
+        let mut raster_bindings = vec![Binding::Uniform, read, rw, rw, rw, rw];
+        if counting.is_some() {
+            raster_bindings.push(rw);
+        }
+        let raster_layout = bind_group_layout(device, "vis raster", &raster_bindings);
         let dimension = wgpu::TextureViewDimension::D2;
         let out_binding = Binding::StorageTexture { format: super::FORMAT, dimension };
         let resolve_layout = bind_group_layout(device, "vis resolve", &[Binding::Uniform, read, rw, out_binding]);
-        let raster_group = bind_group(
-            device,
-            "vis raster",
-            &raster_layout,
-            &[
-                raster_params.as_entire_binding(),
-                ranges.as_entire_binding(),
-                depth_ids.as_entire_binding(),
-                big_tiles.as_entire_binding(),
-                big_count.as_entire_binding(),
-                big_setups.as_entire_binding(),
-            ],
-        );
+        let mut raster_resources = vec![
+            raster_params.as_entire_binding(),
+            ranges.as_entire_binding(),
+            depth_ids.as_entire_binding(),
+            big_tiles.as_entire_binding(),
+            big_count.as_entire_binding(),
+            big_setups.as_entire_binding(),
+        ];
+        if let Some(c) = &counting {
+            raster_resources.push(c.counts.as_entire_binding());
+        }
+        let raster_group = bind_group(device, "vis raster", &raster_layout, &raster_resources);
         let resolve_group = bind_group(
             device,
             "vis resolve",
@@ -194,11 +270,12 @@ impl ComputeVisibility {
             &[wgpu::BindingResource::TextureView(&out.view), depth_ids.as_entire_binding()],
         );
         let raster_groups = [&scene.layout, &raster_layout];
+        let raster_shader = if counting.is_some() { RASTER_COUNTING } else { RASTER };
         Ok(Self {
             clear: compute_pipeline(device, shaders, RESOLVE, "clear", &[&resolve_layout])?,
             resolve: compute_pipeline(device, shaders, RESOLVE, "resolve", &[&resolve_layout])?,
-            raster: compute_pipeline(device, shaders, RASTER, "raster", &raster_groups)?,
-            raster_big: compute_pipeline(device, shaders, RASTER, "raster_big", &raster_groups)?,
+            raster: compute_pipeline(device, shaders, raster_shader, "raster", &raster_groups)?,
+            raster_big: compute_pipeline(device, shaders, raster_shader, "raster_big", &raster_groups)?,
             raster_params,
             resolve_params,
             ranges,
@@ -212,6 +289,7 @@ impl ComputeVisibility {
             read_group,
             width,
             height,
+            counting,
         })
     }
 }
@@ -219,6 +297,41 @@ impl ComputeVisibility {
 impl ComputeVisibility {
     /// Bytes of its buffers (the 64-bit one, the big-tile queue and setups,
     /// the ranges).
+    /// Starts the read-back of the frame's counts (counting variant). Call
+    /// right after the frame's submit.
+    pub fn after_submit(&mut self) {
+        if let Some(c) = &mut self.counting {
+            c.readback.after_submit();
+        }
+    }
+
+    /// The counting variant's counts of finished frames, by frame number,
+    /// with three ratios: `vis_atomics_per_pixel` (writes per screen pixel),
+    /// `vis_tests_per_write` (pixels tested per write) and
+    /// `vis_small_pixels_per_triangle`. None without counting.
+    pub fn collect_counts(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        let Some(c) = &mut self.counting else { return Vec::new() };
+        let pixels = self.width as f64 * self.height as f64;
+        c.readback
+            .collect(device, wait)
+            .into_iter()
+            .map(|(frame, bytes)| {
+                let raw: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+                let get = |k: RasterCount| raw[k as usize] as f64;
+                let mut counters: Counters = RasterCount::ALL.iter().map(|&k| (k.name().to_string(), get(k))).collect();
+                let written = get(RasterCount::PixelsWritten);
+                let tested = get(RasterCount::SmallPixelsTested) + get(RasterCount::BigPixelsTested);
+                counters.insert("vis_atomics_per_pixel".into(), written / pixels);
+                counters.insert("vis_tests_per_write".into(), tested / written.max(1.0));
+                counters.insert(
+                    "vis_small_pixels_per_triangle".into(),
+                    get(RasterCount::SmallPixelsTested) / get(RasterCount::SmallTriangles).max(1.0),
+                );
+                (frame, counters)
+            })
+            .collect()
+    }
+
     pub fn bytes(&self) -> u64 {
         self.width as u64 * self.height as u64 * 8
             + self.big_capacity as u64 * 8
@@ -241,7 +354,7 @@ pub fn visible_ranges(scene: &SceneGpu, visible: &[bool]) -> (Vec<[u32; 2]>, u32
 
 /// Reads: the scene and the frame's visible objects. Writes: `pass`'s output
 /// visibility buffer (every pixel). The depth target is left untouched.
-pub fn compute_visibility(frame: &mut Frame, pass: &ComputeVisibility) {
+pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
     let (ranges, triangles) = visible_ranges(frame.scene, frame.visible);
     let range_count = ranges.len() as u32;
     if !ranges.is_empty() {
@@ -257,6 +370,9 @@ pub fn compute_visibility(frame: &mut Frame, pass: &ComputeVisibility) {
     let resolve = GpuResolveParams { width: pass.width, height: pass.height, range_count, pad: 0 };
     frame.queue.write_buffer(&pass.resolve_params, 0, bytemuck::bytes_of(&resolve));
     frame.encoder.clear_buffer(&pass.big_count, 0, None);
+    if let Some(c) = &pass.counting {
+        frame.encoder.clear_buffer(&c.counts, 0, None);
+    }
 
     let pixel_groups = (pass.width.div_ceil(8), pass.height.div_ceil(8));
     {
@@ -282,8 +398,13 @@ pub fn compute_visibility(frame: &mut Frame, pass: &ComputeVisibility) {
         cp.set_bind_group(1, &pass.raster_group, &[]);
         cp.dispatch_workgroups(BIG_WORKGROUPS, 1, 1);
     }
-    let mut cp = frame.compute_pass("vis: resolve");
-    cp.set_pipeline(&pass.resolve);
-    cp.set_bind_group(0, &pass.resolve_group, &[]);
-    cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1);
+    {
+        let mut cp = frame.compute_pass("vis: resolve");
+        cp.set_pipeline(&pass.resolve);
+        cp.set_bind_group(0, &pass.resolve_group, &[]);
+        cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1);
+    }
+    if let Some(c) = &mut pass.counting {
+        c.readback.copy(frame.device, frame.encoder, &c.counts, COUNTS_BYTES, frame.number);
+    }
 }

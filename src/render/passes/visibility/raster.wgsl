@@ -50,6 +50,32 @@ struct BigCounts {
 // Big triangles, set up once by the thread that queues their tiles.
 @group(1) @binding(5) var<storage, read_write> big_setups: array<Setup>;
 
+#ifdef COUNT
+// The profiling variant's work counts (`compute::RasterCount`), each added
+// once per thread.
+@group(1) @binding(6) var<storage, read_write> counts: array<atomic<u32>, 9>;
+#endif
+
+// Adds n to work count `k` (nothing unless built with COUNT).
+fn count(k: u32, n: u32) {
+#ifdef COUNT
+    if n > 0u {
+        atomicAdd(&counts[k], n);
+    }
+#endif
+}
+
+// Indices of `counts`, as `compute::RasterCount` numbers them.
+const SMALL_TRIANGLES: u32 = 0u;
+const SMALL_PIXELS_TESTED: u32 = 1u;
+const BIG_TRIANGLES: u32 = 2u;
+const BIG_TILES: u32 = 3u;
+const BIG_SQUARES_PASSED: u32 = 4u;
+const BIG_PIXELS_TESTED: u32 = 5u;
+const PIXELS_WRITTEN: u32 = 6u;
+const OVERFLOW_TRIANGLES: u32 = 7u;
+const BACK_FACING_WRITES: u32 = 8u;
+
 // Threads per workgroup of `raster` (`compute::RASTER_WORKGROUP`).
 const RASTER_WORKGROUP: u32 = 64u;
 // A thread rasterizes its triangle itself when the bounding box has at most
@@ -82,6 +108,9 @@ struct Setup {
     // Sub-pixel position of the depth plane's origin (`depth`); sub-pixel
     // coordinates inside the guard band fit 32 bits.
     depth_origin: vec2i,
+    // 1 when the triangle faces away (clockwise on screen): counted only,
+    // as both facings are drawn.
+    back_facing: u32,
     // Per edge of the near-clipped polygon, in sub-pixels: the value at pixel (0, 0)'s centre (less one
     // where the edge does not own its pixels, so inside is >= 0), and the
     // steps one pixel right and one pixel down.
@@ -312,6 +341,7 @@ fn setup_triangle(index: u32) -> Setup {
     }
     // sum_i e_i(q) c_i = det (q, 1), so the depth is sum_i e_i(q) z_i / det.
     s.depth = (n[0] * h[0].z + n[1] * h[1].z + n[2] * h[2].z) / det;
+    s.back_facing = select(0u, 1u, det < 0.0);
     if setup_fixed(h, &s) {
         return s;
     }
@@ -336,50 +366,56 @@ fn fixed_depth(s: Setup, p: vec2i) -> f32 {
 }
 
 // Keeps the nearer of pixel p's surface and a triangle at `depth`.
-fn keep_nearest(payload: u32, p: vec2i, depth: f32) {
+// Returns 1 when it wrote (one atomic), else 0.
+fn keep_nearest(payload: u32, p: vec2i, depth: f32) -> u32 {
     // Clip to the depth range, as the hardware does (the background is 0).
     if !(depth > 0.0 && depth <= 1.0) {
-        return;
+        return 0u;
     }
     let pixel = u32(p.y) * u32(view.viewport.x) + u32(p.x);
     atomicMax(&depth_ids[pixel], (u64(bitcast<u32>(depth)) << 32u) | u64(payload));
+    return 1u;
 }
 
 // Tests pixel p against a triangle with homogeneous edges and keeps the
-// nearest surface.
-fn raster_pixel_homogeneous(s: Setup, p: vec2i) {
+// nearest surface; returns the atomics it issued.
+fn raster_pixel_homogeneous(s: Setup, p: vec2i) -> u32 {
     let uv = (vec2f(p) + 0.5) * view.viewport.zw;
     let q = vec3f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0);
     let a = dot(s.edge_a, q);
     let b = dot(s.edge_b, q);
     let c = dot(s.edge_c, q);
     if inside(a, (s.owns & 1u) != 0u) && inside(b, (s.owns & 2u) != 0u) && inside(c, (s.owns & 4u) != 0u) {
-        keep_nearest(s.payload, p, dot(s.depth, q));
+        return keep_nearest(s.payload, p, dot(s.depth, q));
     }
+    return 0u;
 }
 
 // Rasterizes the pixels of [lo, hi]; fixed-point edges step by additions
-// (64-bit multiplies are several instructions on GPUs).
-fn raster_rect(s: Setup, lo: vec2i, hi: vec2i) {
+// (64-bit multiplies are several instructions on GPUs). Returns the atomics
+// it issued.
+fn raster_rect(s: Setup, lo: vec2i, hi: vec2i) -> u32 {
+    var written = 0u;
     if s.fixed == 0u {
         for (var y = lo.y; y <= hi.y; y++) {
             for (var x = lo.x; x <= hi.x; x++) {
-                raster_pixel_homogeneous(s, vec2i(x, y));
+                written += raster_pixel_homogeneous(s, vec2i(x, y));
             }
         }
-        return;
+        return written;
     }
     var row = s.fixed_origin + s.fixed_dx * i64(lo.x) + s.fixed_dy * i64(lo.y);
     for (var y = lo.y; y <= hi.y; y++) {
         var e = row;
         for (var x = lo.x; x <= hi.x; x++) {
             if all(e >= vec4<i64>(0li)) {
-                keep_nearest(s.payload, vec2i(x, y), fixed_depth(s, vec2i(x, y)));
+                written += keep_nearest(s.payload, vec2i(x, y), fixed_depth(s, vec2i(x, y)));
             }
             e += s.fixed_dx;
         }
         row += s.fixed_dy;
     }
+    return written;
 }
 
 // Pixel bounds of tile `t` of a big triangle's bounding box.
@@ -404,30 +440,44 @@ fn raster(
     if any(extent <= vec2i(0)) {
         return;
     }
-    if extent.x * extent.y <= SMALL_AREA {
-        raster_rect(s, s.bounds.xy, s.bounds.zw);
+    let area = u32(extent.x * extent.y);
+    if area <= u32(SMALL_AREA) {
+        let written = raster_rect(s, s.bounds.xy, s.bounds.zw);
+        count(PIXELS_WRITTEN, written);
+        count(BACK_FACING_WRITES, written * s.back_facing);
+        count(SMALL_TRIANGLES, 1u);
+        count(SMALL_PIXELS_TESTED, area);
         return;
     }
     // Big: set up once, its tiles queued for whole workgroups; past either
     // queue's capacity this thread rasterizes them itself (slow, but no pixel
     // is lost).
     let tiles = vec2u((extent + BIG_TILE - 1) / BIG_TILE);
-    let count = tiles.x * tiles.y;
+    let tile_count = tiles.x * tiles.y;
     let slot = atomicAdd(&big_count.setups, 1u);
     if slot >= params.setup_capacity {
-        raster_rect(s, s.bounds.xy, s.bounds.zw);
+        let written = raster_rect(s, s.bounds.xy, s.bounds.zw);
+        count(PIXELS_WRITTEN, written);
+        count(BACK_FACING_WRITES, written * s.back_facing);
+        count(OVERFLOW_TRIANGLES, 1u);
         return;
     }
     big_setups[slot] = s;
-    let first = atomicAdd(&big_count.tiles, count);
-    for (var t = 0u; t < count; t++) {
+    let first = atomicAdd(&big_count.tiles, tile_count);
+    var written = 0u;
+    for (var t = 0u; t < tile_count; t++) {
         if first + t < params.big_capacity {
             big_tiles[first + t] = vec2u(slot, t);
         } else {
             let r = big_tile_rect(s.bounds, t);
-            raster_rect(s, r.xy, r.zw);
+            written += raster_rect(s, r.xy, r.zw);
         }
     }
+    count(PIXELS_WRITTEN, written);
+    count(BACK_FACING_WRITES, written * s.back_facing);
+    count(BIG_TRIANGLES, 1u);
+    count(BIG_TILES, min(tile_count, params.big_capacity - min(first, params.big_capacity)));
+    count(OVERFLOW_TRIANGLES, select(0u, 1u, first + tile_count > params.big_capacity));
 }
 
 // The largest value fixed-point edge function `i` of `s` takes over the
@@ -465,15 +515,20 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_ind
     if local == 0u {
         shared_count = min(atomicLoad(&big_count.tiles), params.big_capacity);
     }
-    let count = workgroupUniformLoad(&shared_count);
+    let queued = workgroupUniformLoad(&shared_count);
+    var passed = 0u;
+    var tested = 0u;
+    var written = 0u;
+    var back_facing = 0u;
     let in_square = vec2i(i32(local) % SUB_TILE, i32(local) / SUB_TILE);
-    for (var i = group.x; i < count; i += BIG_WORKGROUPS) {
+    for (var i = group.x; i < queued; i += BIG_WORKGROUPS) {
         let item = big_tiles[i];
         let s = big_setups[item.x];
         let r = big_tile_rect(s.bounds, item.y);
         if local < u32(SUB_TILES * SUB_TILES) {
             let lo = r.xy + vec2i(i32(local) % SUB_TILES, i32(local) / SUB_TILES) * SUB_TILE;
             square_live[local] = select(0u, 1u, may_cover(s, lo, min(lo + SUB_TILE - 1, r.zw)));
+            passed += square_live[local];
         }
         workgroupBarrier();
         // This thread's pixel in the tile's first square, and its edge
@@ -488,16 +543,25 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_ind
             if square_live[k] == 0u || any(p > r.zw) {
                 continue;
             }
+            tested++;
             if s.fixed == 0u {
-                raster_pixel_homogeneous(s, p);
+                let w = raster_pixel_homogeneous(s, p);
+                written += w;
+                back_facing += w * s.back_facing;
                 continue;
             }
             let e = e0 + step_x * i64(square.x) + step_y * i64(square.y);
             if all(e >= vec4<i64>(0li)) {
-                keep_nearest(s.payload, p, fixed_depth(s, p));
+                let w = keep_nearest(s.payload, p, fixed_depth(s, p));
+                written += w;
+                back_facing += w * s.back_facing;
             }
         }
         // `square_live` is rewritten next iteration.
         workgroupBarrier();
     }
+    count(BIG_SQUARES_PASSED, passed);
+    count(BIG_PIXELS_TESTED, tested);
+    count(PIXELS_WRITTEN, written);
+    count(BACK_FACING_WRITES, back_facing);
 }
