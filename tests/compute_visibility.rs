@@ -192,3 +192,30 @@ fn counts_add_up_on_a_floor_filling_the_view() {
     let facing = [front["vis_back_facing_writes"], back["vis_back_facing_writes"]];
     assert!(facing == [0.0, pixels] || facing == [pixels, 0.0], "back-facing writes {facing:?}");
 }
+
+/// With back faces culled, both rasterizers cull the same triangles: the
+/// ids agree on the voxels (closed blocks) and on Sponza, and the floor seen
+/// from below (its back) is culled by both while from above it covers the
+/// view.
+#[test]
+fn ids_agree_with_raster_with_back_faces_culled() {
+    let ctx = common::gpu();
+    let mut voxels = scene::load("voxels").unwrap();
+    voxels.cull_back_faces = true;
+    compare(&ctx, "voxels culled, frame 40", &voxels, &path_camera("voxels", &voxels, 40), (256, 144));
+    if Path::new(SPONZA).is_dir() {
+        let mut sponza = scene::load(SPONZA).unwrap();
+        sponza.cull_back_faces = true;
+        compare(&ctx, "sponza culled, frame 100", &sponza, &path_camera(SPONZA, &sponza, 100), (320, 180));
+    }
+    let (mut floor, camera, _) = common::floor_scene();
+    floor.cull_back_faces = true;
+    let above = Camera { position: Vec3::new(0.2, 2.0, 0.1), forward: Vec3::NEG_Y, up: Vec3::Z, ..camera };
+    let below = Camera { position: Vec3::new(0.2, -2.0, 0.1), forward: Vec3::Y, up: Vec3::Z, ..camera };
+    let (covered, _) = compare(&ctx, "floor culled, from above", &floor, &above, (160, 120));
+    assert_eq!(covered, 160 * 120, "the floor's front covers the view");
+    for method in VisibilityMethod::ALL {
+        let ids = ids(&ctx, &floor, &below, (160, 120), method);
+        assert!(ids.iter().all(|id| id[0] == 0), "{method:?}: the floor's back is drawn");
+    }
+}

@@ -67,6 +67,8 @@ pub struct SceneGpu {
     /// CPU copy of the object table; light ranges are rewritten per frame.
     pub object_data: Vec<GpuObject>,
     pub triangle_count: u64,
+    /// The scene's [`Scene::cull_back_faces`].
+    pub cull_back_faces: bool,
     /// Shadow maps of the shadowed lights (bindings 8-11).
     pub shadow_atlas: ShadowAtlas,
     lights: GrowableBuffer,
@@ -175,6 +177,7 @@ impl SceneGpu {
             object_bounds,
             object_data,
             triangle_count: scene.triangle_count() as u64,
+            cull_back_faces: scene.cull_back_faces,
             shadow_atlas,
             lights,
             light_indices,

@@ -286,6 +286,11 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Cameras that came with the scene file (glTF cameras).
     pub cameras: Vec<Camera>,
+    /// Surfaces are seen from their front only (closed or one-sided meshes,
+    /// counter-clockwise in front): every pipeline culls back faces, the
+    /// compute rasterizer included (shadow maps keep both). Default false:
+    /// both faces are drawn.
+    pub cull_back_faces: bool,
 }
 
 impl Scene {

@@ -68,7 +68,10 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
     all.push(passes::shadows::SHADER);
     all.extend([forward_multipass::SHADER, passes::bloom::SHADER]);
-    all.extend([passes::visibility::compute::RASTER, passes::visibility::compute::RESOLVE]);
+    {
+        use passes::visibility::compute::*;
+        all.extend([RASTER, RASTER_CULLING, RASTER_COUNTING, RASTER_CULLING_COUNTING, RESOLVE]);
+    }
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
     all.push(clustered::SHADER);

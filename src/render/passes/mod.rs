@@ -104,7 +104,10 @@ pub fn scene_raster_pipeline_from(
             compilation_options: Default::default(),
             targets: targets.as_slice(),
         }),
-        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: scene.cull_back_faces.then_some(wgpu::Face::Back),
+            ..Default::default()
+        },
         depth_stencil: Some(wgpu::DepthStencilState {
             format: targets::DEPTH_FORMAT,
             depth_write_enabled: Some(depth_write),

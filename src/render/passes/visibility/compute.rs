@@ -34,8 +34,11 @@ use crate::render::targets::Targets;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
 
 pub const RASTER: ShaderSource = ShaderSource::new("raster.wgsl", include_str!("raster.wgsl"));
-/// `raster.wgsl` counting its work ([`RasterCount`]).
+/// `raster.wgsl` culling back faces ([`crate::scene::Scene::cull_back_faces`]),
+/// counting its work ([`RasterCount`]), or both.
+pub const RASTER_CULLING: ShaderSource = RASTER.with_defs(&["CULL_BACK"]);
 pub const RASTER_COUNTING: ShaderSource = RASTER.with_defs(&["COUNT"]);
+pub const RASTER_CULLING_COUNTING: ShaderSource = RASTER.with_defs(&["CULL_BACK", "COUNT"]);
 pub const RESOLVE: ShaderSource = ShaderSource::new("resolve.wgsl", include_str!("resolve.wgsl"));
 /// The module lighting passes import to read the output as a G-buffer
 /// (`shadespace::visibility_read`, group 1: [`ComputeVisibility::read_layout`]).
@@ -270,7 +273,12 @@ impl ComputeVisibility {
             &[wgpu::BindingResource::TextureView(&out.view), depth_ids.as_entire_binding()],
         );
         let raster_groups = [&scene.layout, &raster_layout];
-        let raster_shader = if counting.is_some() { RASTER_COUNTING } else { RASTER };
+        let raster_shader = match (scene.cull_back_faces, counting.is_some()) {
+            (false, false) => RASTER,
+            (false, true) => RASTER_COUNTING,
+            (true, false) => RASTER_CULLING,
+            (true, true) => RASTER_CULLING_COUNTING,
+        };
         Ok(Self {
             clear: compute_pipeline(device, shaders, RESOLVE, "clear", &[&resolve_layout])?,
             resolve: compute_pipeline(device, shaders, RESOLVE, "resolve", &[&resolve_layout])?,

@@ -339,6 +339,13 @@ fn setup_triangle(index: u32) -> Setup {
     if det == 0.0 {
         return s;
     }
+#ifdef CULL_BACK
+    // Clockwise: a back face, culled as the raster pipelines cull it (the
+    // sign of the homogeneous determinant, as the hardware decides it).
+    if det < 0.0 {
+        return s;
+    }
+#endif
     // sum_i e_i(q) c_i = det (q, 1), so the depth is sum_i e_i(q) z_i / det.
     s.depth = (n[0] * h[0].z + n[1] * h[1].z + n[2] * h[2].z) / det;
     s.back_facing = select(0u, 1u, det < 0.0);
