@@ -9,6 +9,7 @@
 pub mod bench;
 pub mod charts;
 pub mod color;
+pub mod experiments;
 pub mod gpu;
 pub mod hash;
 pub mod metrics;
