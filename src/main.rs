@@ -9,6 +9,8 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use shadespace::bench::{self, BenchPlan, BenchSetup, RunReport};
 use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
+use shadespace::experiments::marking::Marking;
+use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
 use shadespace::render::{
@@ -38,6 +40,87 @@ enum Command {
     Charts(ChartsArgs),
     /// Compare two images: mean FLIP error, PSNR, largest channel difference.
     Compare(CompareArgs),
+    /// Run one of the studies behind the project (overshading, overlap,
+    /// reuse) and write its data, summary, plots and report into a folder.
+    #[command(long_about = EXPERIMENT_ABOUT)]
+    Experiment(ExperimentArgs),
+}
+
+const EXPERIMENT_ABOUT: &str = "\
+Run one of the studies behind the project as a reproducible experiment. Each writes, into --out:
+  data.csv       one row per measurement
+  summary.json   the grid, the setup, and per cell median, std, mean, p10, p90
+  *.png, *.svg   the plots (ratio over frames, overlap heat maps, reuse over frames)
+  report.md      the tables and plots, with the adapter, driver, date, commit and command
+
+The tile studies render each view's visibility buffer with the renderer's own visibility pass and
+mark tiles on the CPU in three variants: the reference study's rule at 4096x4096 per object
+(--marking study: one tile per pixel at level floor(log2(4096 x the largest |dUV/dx|, |dUV/dy|
+component))), ours at the same textures (--marking bilinear: the bilinear footprint at the rounded
+level, as the object-space pipeline marks), and ours at our texel density (with bilinear).
+Cameras: the scene's path (600 frames, the study's stepping) and its five fixed cameras, all
+with the study's projection (60 degrees, near 0.3, far 1000).
+
+  overshading  tiles needed x tile area / screen pixels, per path frame
+  overlap      per pair of fixed cameras: tiles both need / tiles camera a needs, and IoU;
+               the saving of one atlas shared by the five views
+  reuse        per pair of consecutive path frames: previous tiles still needed, new tiles;
+               over all frames and the windows 100-120, 300-320, 500-520
+
+The study's Sponza run: shadespace experiment overshading --scene ../shared/scenes/sponza-thesis \\
+  --exclude sponza_plantsA,sponza_plantsB --out results/overshading";
+
+/// The experiments, for `experiment NAME`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ExperimentChoice {
+    /// Shaded texels per screen pixel along the camera path (tiles x tile area / pixels).
+    Overshading,
+    /// Tiles two of the five fixed cameras both need; one shared atlas against one per view.
+    Overlap,
+    /// Share of the previous path frame's tiles still needed, and of new tiles.
+    Reuse,
+}
+
+#[derive(Args)]
+struct ExperimentArgs {
+    /// The experiment to run.
+    #[arg(value_enum)]
+    name: ExperimentChoice,
+    /// `atrium` (default), `voxels`, or a path (see `render --help`), e.g.
+    /// ../shared/scenes/sponza-thesis.
+    #[arg(long, default_value = "atrium")]
+    scene: String,
+    /// Output folder (created; files in it are replaced). Default: experiment-NAME.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// A reduced grid (two small resolutions, tiles of 8 and 32, a few
+    /// frames): under a minute on a CPU driver, for CI.
+    #[arg(long)]
+    quick: bool,
+    /// Marking rules to count with, comma-separated: `study` (the reference
+    /// study's, at 4096x4096 textures) and/or `bilinear` (ours, at 4096 and
+    /// at our texel density).
+    #[arg(long, value_delimiter = ',', default_value = "study,bilinear", value_parser = Marking::from_str)]
+    marking: Vec<Marking>,
+    /// Leave these objects out (comma-separated names; `shadespace charts`
+    /// lists them). The study ran Sponza without sponza_plantsA,sponza_plantsB.
+    #[arg(long, value_delimiter = ',')]
+    exclude: Vec<String>,
+    /// Tile sizes, comma-separated, instead of the grid's (8,16,32,64; quick: 8,32).
+    #[arg(long, value_delimiter = ',', value_parser = parse_tile_size)]
+    tile_sizes: Vec<u32>,
+    /// Resolutions, comma-separated WIDTHxHEIGHT, instead of the grid's
+    /// (800x600,1024x768,1920x1080,3840x2160; quick: 320x240,480x270).
+    #[arg(long, value_delimiter = ',', value_parser = parse_size)]
+    resolutions: Vec<(u32, u32)>,
+    /// Our texel density (texels per metre) for the density variant.
+    #[arg(long, default_value_t = 256.0, value_parser = texel_density)]
+    texel_density: f32,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args)]
@@ -338,6 +421,7 @@ fn main() -> ExitCode {
         Command::Info(a) => info(a),
         Command::Charts(a) => print_charts(a),
         Command::Compare(a) => compare(a),
+        Command::Experiment(a) => experiment(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -631,6 +715,63 @@ fn compare(a: CompareArgs) -> Result<(), Failure> {
         write_file(path, &bytes)?;
     }
     Ok(())
+}
+
+fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
+    let name = match a.name {
+        ExperimentChoice::Overshading => ExperimentName::Overshading,
+        ExperimentChoice::Overlap => ExperimentName::Overlap,
+        ExperimentChoice::Reuse => ExperimentName::Reuse,
+    };
+    let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("experiment-{}", name.name())));
+    if out.exists() && !out.is_dir() {
+        return input(Err(anyhow::anyhow!("--out {}: exists and is not a folder", out.display())));
+    }
+    let mut grid = if a.quick { Grid::quick() } else { Grid::full() };
+    if !a.tile_sizes.is_empty() {
+        grid.tile_sizes = a.tile_sizes.clone();
+    }
+    if !a.resolutions.is_empty() {
+        grid.resolutions = a.resolutions.clone();
+    }
+    let options = ExperimentOptions {
+        name,
+        scene: a.scene.clone(),
+        exclude: a.exclude.clone(),
+        markings: a.marking.clone(),
+        grid,
+        quick: a.quick,
+        texel_density: a.texel_density,
+        out,
+        command: command_line(),
+    };
+    let ctx = open_gpu(&a.gpu)?;
+    let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} views, {elapsed} elapsed, eta {eta}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    let written = match experiments::run(&ctx, &options, &bar) {
+        Ok(w) => w,
+        Err(e) if e.is_input() => return input(Err(e)),
+        Err(e) => return Err(e.into()),
+    };
+    bar.finish_and_clear();
+    println!("{}: {} -> {}", name.name(), written.headline, written.report.display());
+    Ok(())
+}
+
+/// The command line as typed, arguments with spaces or quotes single-quoted.
+fn command_line() -> String {
+    let quote = |s: String| {
+        if s.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:,+@".contains(c)) {
+            s
+        } else {
+            format!("'{}'", s.replace('\'', "'\\''"))
+        }
+    };
+    std::env::args().map(quote).collect::<Vec<_>>().join(" ")
 }
 
 fn info(a: GpuArgs) -> Result<(), Failure> {

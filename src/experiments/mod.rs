@@ -1,9 +1,350 @@
 //! Each study of the sources as one named, reproducible experiment, writing
-//! CSV, JSON, plots and a Markdown report.
+//! `data.csv`, `summary.json`, figures (PNG and SVG) and `report.md` into one
+//! folder (`shadespace experiment NAME`).
+//!
+//! The tile studies (`overshading`, `overlap`, `reuse`) render the scene's
+//! visibility buffer once per view and resolution with the renderer's own
+//! visibility pass, read it back, and mark tiles on the CPU in every variant
+//! ([`marking::Variant`]) and tile size at once ([`census::Census`]).
 
+pub mod census;
 pub mod marking;
+pub mod overlap;
+pub mod overshading;
 pub mod plot;
+pub mod report;
+pub mod reuse;
 pub mod stats;
 pub mod study_path;
 pub mod tile_set;
 pub mod visibility;
+
+use std::path::{Path, PathBuf};
+
+use indicatif::ProgressBar;
+use serde::Serialize;
+
+use crate::charts::ChartCache;
+use crate::gpu::GpuContext;
+use crate::render::RenderError;
+use crate::render::objectspace::atlas::AtlasError;
+use crate::scene::Camera;
+use census::{Census, StudyScene, StudySceneError};
+use marking::{Marking, Variant};
+use report::{Provenance, Section, Table};
+use study_path::{PATH_FRAMES, StudyCameras};
+use tile_set::TileSet;
+use visibility::VisibilityRenderer;
+
+/// The experiments (`shadespace experiment NAME`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ExperimentName {
+    /// Shaded texels per screen pixel along the camera path.
+    Overshading,
+    /// Tiles two of the five fixed cameras both need.
+    Overlap,
+    /// Tiles of the previous path frame still needed, and new ones.
+    Reuse,
+}
+
+impl ExperimentName {
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Overshading => "overshading",
+            Self::Overlap => "overlap",
+            Self::Reuse => "reuse",
+        }
+    }
+}
+
+/// What to measure: resolutions, tile sizes, frames.
+#[derive(Clone, Debug, Serialize)]
+pub struct Grid {
+    pub resolutions: Vec<(u32, u32)>,
+    pub tile_sizes: Vec<u32>,
+    /// Path frames of `overshading`.
+    pub path_frames: Vec<u32>,
+    /// Windows of `reuse` (first and last frame, inclusive); `reuse` measures
+    /// every frame of `path_frames` whose predecessor was measured too.
+    pub reuse_windows: Vec<(u32, u32)>,
+    /// Path frames of `reuse`.
+    pub reuse_frames: Vec<u32>,
+}
+
+impl Grid {
+    /// The study's grid: four resolutions from 800x600 to 3840x2160, tiles of
+    /// 8 to 64, all 600 path frames, windows 100-120, 300-320, 500-520.
+    pub fn full() -> Self {
+        Self {
+            resolutions: vec![(800, 600), (1024, 768), (1920, 1080), (3840, 2160)],
+            tile_sizes: vec![8, 16, 32, 64],
+            path_frames: (0..PATH_FRAMES).collect(),
+            reuse_windows: vec![(100, 120), (300, 320), (500, 520)],
+            reuse_frames: (0..PATH_FRAMES).collect(),
+        }
+    }
+
+    /// A reduced grid for CI (well under a minute per experiment on a CPU
+    /// driver): two small resolutions, tiles of 8 and 32, every 100th path
+    /// frame, and the first 3 frame pairs of each reuse window.
+    pub fn quick() -> Self {
+        let reuse_windows = vec![(100, 103), (300, 303), (500, 503)];
+        Self {
+            resolutions: vec![(320, 240), (480, 270)],
+            tile_sizes: vec![8, 32],
+            path_frames: (0..PATH_FRAMES).step_by(100).collect(),
+            reuse_frames: reuse_windows.iter().flat_map(|&(a, b)| a..=b).collect(),
+            reuse_windows,
+        }
+    }
+}
+
+/// Everything an experiment run needs besides the GPU.
+#[derive(Clone, Debug)]
+pub struct ExperimentOptions {
+    pub name: ExperimentName,
+    /// `atrium`, `voxels`, or a path (as `render --scene`).
+    pub scene: String,
+    /// Objects left out (the study ran Sponza without its plants).
+    pub exclude: Vec<String>,
+    pub markings: Vec<Marking>,
+    pub grid: Grid,
+    pub quick: bool,
+    /// Our texel density (texels per metre) for the density variant.
+    pub texel_density: f32,
+    pub out: PathBuf,
+    /// The command line, for the report.
+    pub command: String,
+}
+
+/// Why an experiment failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ExperimentError {
+    #[error(transparent)]
+    Scene(#[from] StudySceneError),
+    #[error("scene cameras: {0}")]
+    Cameras(#[from] crate::scene::path::CameraFileError),
+    #[error(transparent)]
+    Atlas(#[from] AtlasError),
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error("{path}: {message}")]
+    Output { path: PathBuf, message: String },
+    #[error(transparent)]
+    Plot(#[from] plot::PlotError),
+}
+
+impl ExperimentError {
+    /// Errors the user's input caused (a scene, an object name, an output
+    /// folder), as opposed to failures of the GPU or the program.
+    pub fn is_input(&self) -> bool {
+        match self {
+            Self::Scene(StudySceneError::Charts(_)) => false,
+            Self::Scene(_) | Self::Cameras(_) | Self::Output { .. } => true,
+            Self::Atlas(_) | Self::Render(_) | Self::Plot(_) => false,
+        }
+    }
+
+    fn output(path: &Path, e: impl std::fmt::Display) -> Self {
+        Self::Output { path: path.to_path_buf(), message: e.to_string() }
+    }
+}
+
+/// A run in progress: the prepared scene, its cameras, the marking spaces
+/// and the visibility renderer.
+pub struct Study<'a> {
+    ctx: &'a GpuContext,
+    pub scene: &'a StudyScene,
+    pub cameras: StudyCameras,
+    pub census: Census<'a>,
+    renderer: VisibilityRenderer,
+    pub grid: &'a Grid,
+    /// The output folder (figures are written as they are made).
+    pub out: &'a Path,
+    pub progress: &'a ProgressBar,
+}
+
+impl Study<'_> {
+    /// The tiles `camera` needs at resolution `resolution` (an index into the
+    /// grid's), one set per census space.
+    pub fn tiles(&mut self, camera: &Camera, resolution: usize) -> Result<Vec<TileSet>, ExperimentError> {
+        let image = self.renderer.render(self.ctx, camera, resolution)?;
+        Ok(self.census.tiles(&image))
+    }
+
+    pub fn variants(&self) -> Vec<Variant> {
+        let mut v: Vec<Variant> = self.census.spaces.iter().map(|s| s.variant).collect();
+        v.dedup();
+        v
+    }
+
+    /// Writes a figure into the output folder as `stem.png` and `stem.svg`;
+    /// returns the PNG's name for the report.
+    pub fn figure(&self, stem: &str, figure: &impl plot::Figure) -> Result<PathBuf, ExperimentError> {
+        figure.write(&self.out.join(stem))?;
+        Ok(PathBuf::from(format!("{stem}.png")))
+    }
+
+    /// Writes `data.csv`.
+    pub fn write_rows<R: Serialize>(&self, rows: &[R]) -> Result<(), ExperimentError> {
+        let path = self.out.join("data.csv");
+        report::write_csv(&path, rows).map_err(|e| ExperimentError::output(&path, e))
+    }
+}
+
+/// What an experiment hands back: its results for `summary.json` and its
+/// report sections.
+pub struct Findings {
+    pub results: serde_json::Value,
+    pub sections: Vec<Section>,
+}
+
+/// The files a run wrote.
+#[derive(Clone, Debug)]
+pub struct Written {
+    pub folder: PathBuf,
+    pub report: PathBuf,
+    /// One line of headline figures.
+    pub headline: String,
+}
+
+/// Runs an experiment and writes its outputs into `options.out`.
+pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar) -> Result<Written, ExperimentError> {
+    let out = options.out.as_path();
+    std::fs::create_dir_all(out).map_err(|e| ExperimentError::output(out, format!("cannot create the folder: {e}")))?;
+    let provenance = Provenance::new(ctx, &options.command);
+    progress.set_message(format!("{}: preparing {}", options.name.name(), options.scene));
+    let scene = StudyScene::load(&options.scene, &options.exclude, options.texel_density, &ChartCache::from_env())?;
+    let cameras = StudyCameras::for_scene(&options.scene, &scene.render.bounds())?;
+    let variants = Variant::for_markings(&options.markings);
+    let census = Census::new(&scene, &variants, &options.grid.tile_sizes)?;
+    let renderer = VisibilityRenderer::new(ctx, &scene.render, &options.grid.resolutions)?;
+    let method = renderer.method;
+    let mut study = Study { ctx, scene: &scene, cameras, census, renderer, grid: &options.grid, out, progress };
+    progress.set_message(format!("{} {}", options.name.name(), scene.name));
+    let findings = match options.name {
+        ExperimentName::Overshading => overshading::run(&mut study)?,
+        ExperimentName::Overlap => overlap::run(&mut study)?,
+        ExperimentName::Reuse => reuse::run(&mut study)?,
+    };
+    let headline = findings.results.get("headline").and_then(|h| h.as_str()).unwrap_or_default().to_string();
+
+    let summary = serde_json::json!({
+        "experiment": options.name,
+        "scene": scene.name,
+        "scene_spec": options.scene,
+        "quick": options.quick,
+        "provenance": provenance,
+        "grid": options.grid,
+        "markings": options.markings,
+        "variants": variants,
+        "visibility": method.name(),
+        "camera_source": study.cameras.source,
+        "setup": {
+            "excluded": scene.excluded,
+            "texel_density": scene.texel_density,
+            "budget_halvings": scene.budget_halvings,
+            "objects": scene.objects,
+        },
+        "results": findings.results,
+    });
+    let summary_path = out.join("summary.json");
+    let text = serde_json::to_string_pretty(&summary).expect("the summary serializes");
+    std::fs::write(&summary_path, text).map_err(|e| ExperimentError::output(&summary_path, e))?;
+
+    let mut sections = vec![setup_section(options, &study, method.name()), differences_section(&scene, &variants)];
+    sections.extend(findings.sections);
+    let title = format!("Experiment `{}`: {}", options.name.name(), scene.name);
+    let report_path = out.join("report.md");
+    std::fs::write(&report_path, report::markdown(&title, &provenance, &sections))
+        .map_err(|e| ExperimentError::output(&report_path, e))?;
+    Ok(Written { folder: out.to_path_buf(), report: report_path, headline })
+}
+
+fn setup_section(options: &ExperimentOptions, study: &Study, visibility: &str) -> Section {
+    let scene = study.scene;
+    let g = &options.grid;
+    let res: Vec<String> = g.resolutions.iter().map(|(w, h)| format!("{w}x{h}")).collect();
+    let mut text = format!(
+        "Scene `{}` ({} objects counted{}), cameras from {}, the study's projection (60° vertical field of view, \
+         near 0.3, far 1000). Resolutions {}; tile sizes {:?}; {}. Visibility pass: {visibility}. {}\n\n\
+         Variants: the study's marking at 4096 for every object (`study`, `4096`), ours at the same textures \
+         (`bilinear`, `4096`: the renderer's `mark.wgsl` rule, levels down to 128), and ours as the renderer \
+         shades by default (`bilinear`, `density`: {} texels per metre, default atlas budget, {} halving(s)).\n",
+        options.scene,
+        scene.render.objects.len(),
+        if scene.excluded.is_empty() { String::new() } else { format!("; left out: {}", scene.excluded.join(", ")) },
+        study.cameras.source,
+        res.join(", "),
+        g.tile_sizes,
+        if options.quick { "quick mode (a reduced grid)" } else { "the study's full grid" },
+        if options.markings.len() < 2 {
+            format!("Markings: {}.", options.markings.iter().map(|m| m.name()).collect::<Vec<_>>().join(", "))
+        } else {
+            String::new()
+        },
+        scene.texel_density,
+        scene.budget_halvings,
+    );
+    text += "\nPer object: the UV layout the 4096 variants mark through, our chart, our texture side.\n";
+    let mut t = Table::new(&["object", "4096 variants' UVs", "our chart", "our texture"]);
+    for o in &scene.objects {
+        let overlap = o.file_uv_overlap.map_or(String::new(), |f| format!(" ({:.2}% overlap)", 100.0 * f));
+        let size = o.density_size.map_or("forward".to_string(), |s| s.to_string());
+        t.rows.push(vec![o.name.clone(), format!("{}{overlap}", o.study_uvs), o.our_chart.clone(), size]);
+    }
+    Section { heading: "Setup".into(), text, tables: vec![(String::new(), t)], figures: Vec::new() }
+}
+
+/// Where these figures differ from what the study's method would give, and why.
+fn differences_section(scene: &StudyScene, variants: &[Variant]) -> Section {
+    let mut items = vec![
+        "Derivatives: each pixel's chart-UV derivatives come from its triangle's plane one pixel to the right and \
+         one down (the CPU twin of our marking pass), not from the 2x2 quad differences of a fragment shader; \
+         they agree inside a triangle and differ at triangle edges, where quad differences mix neighbours."
+            .to_string(),
+        "Visibility: our visibility pass decides which triangle a pixel sees; the study's Unity pass may resolve \
+         depth ties and thin geometry differently."
+            .to_string(),
+    ];
+    if variants.iter().any(|v| v.marking == Marking::Bilinear) {
+        items.push(
+            "Marking: `bilinear` is our rule (level = round(log2(texture size x the longer derivative vector)), \
+             the 2x2 bilinear footprint, which may cross into neighbouring tiles, and levels down to 128 texels), \
+             so it marks more tiles than the study's one tile per pixel at the floored level of the largest \
+             derivative component."
+                .to_string(),
+        );
+    }
+    let overlapping: Vec<&str> =
+        scene.objects.iter().filter(|o| o.file_uv_overlap.is_some()).map(|o| o.name.as_str()).collect();
+    if !overlapping.is_empty() {
+        items.push(format!(
+            "UV layouts: the 4096 variants mark through the file's own layouts, as the study did, although our \
+             check finds overlaps in {} (where two surfaces share a texel they share a tile and count once); the \
+             density variant uses our generated charts for them.",
+            overlapping.join(", ")
+        ));
+    }
+    if !scene.excluded.is_empty() {
+        items.push(format!("Objects left out (--exclude): {}.", scene.excluded.join(", ")));
+    }
+    let names: Vec<&str> = scene.render.objects.iter().map(|o| o.name.as_str()).collect();
+    if names.iter().any(|n| n.starts_with("sponza_")) && !names.contains(&"sponza_detailsA") {
+        items.push(
+            "Missing object: the study's Sponza had `sponza_detailsA`, which the shared copy lacks: its surfaces \
+             are not counted and what they hid is visible here."
+                .to_string(),
+        );
+    }
+    if scene.name.contains("lost-empire") {
+        items.push(
+            "Lost Empire: the shared copy lacks `grass.obj` and `stone1.obj`; the ground's top faces are missing, so \
+             fewer tiles are needed and the views see through the holes."
+                .to_string(),
+        );
+    }
+    let text = items.iter().map(|i| format!("- {i}\n")).collect();
+    Section { heading: "Differences from the study's method".into(), text, ..Default::default() }
+}

@@ -157,40 +157,45 @@ impl Figure for HeatMap {
     {
         root.fill(&WHITE)?;
         let n = self.labels.len();
-        let labels = self.labels.clone();
         let mut chart = ChartBuilder::on(root)
             .caption(&self.title, (FONT, 22))
             .margin(12)
             .x_label_area_size(44)
             .y_label_area_size(80)
             .build_cartesian_2d(0..n, 0..n)?;
-        let name = move |i: &usize| labels.get(*i).cloned().unwrap_or_default();
+        // Axis labels are drawn at the cells' centres below, not at the ticks.
         chart
             .configure_mesh()
             .disable_mesh()
-            .x_desc("camera b (needed by both / needed by a)")
+            .x_label_formatter(&|_| String::new())
+            .y_label_formatter(&|_| String::new())
+            .x_desc("camera b (tiles both need / tiles a needs)")
             .y_desc("camera a")
-            .x_label_formatter(&name)
-            .y_label_formatter(&name)
-            .x_labels(n + 1)
-            .y_labels(n + 1)
-            .label_style((FONT, 15))
             .axis_desc_style((FONT, 17))
             .draw()?;
+        let centred = |size| TextStyle::from((FONT, size).into_font()).pos(Pos::new(HPos::Center, VPos::Center));
+        // The backend point at the centre of cell (column b, row a); row a counts down from the top.
+        let centre = |b: usize, a: usize| {
+            let (x0, y0) = chart.backend_coord(&(b, n - a));
+            let (x1, y1) = chart.backend_coord(&(b + 1, n - 1 - a));
+            ((x0 + x1) / 2, (y0 + y1) / 2, (x1 - x0).abs(), (y1 - y0).abs())
+        };
         for (a, row) in self.values.iter().enumerate() {
             for (b, &v) in row.iter().enumerate() {
-                // Row a at the top: y counts down from n.
-                let (y0, y1) = (n - 1 - a, n - a);
-                chart.draw_series([Rectangle::new([(b, y0), (b + 1, y1)], heat_color(v).filled())])?;
+                chart
+                    .plotting_area()
+                    .draw(&Rectangle::new([(b, n - 1 - a), (b + 1, n - a)], heat_color(v).filled()))?;
                 let text_color = if v > 0.5 { WHITE } else { BLACK };
-                let style = TextStyle::from((FONT, 16).into_font())
-                    .color(&text_color)
-                    .pos(Pos::new(HPos::Center, VPos::Center));
-                let centre = chart.backend_coord(&(b, y1));
-                let next = chart.backend_coord(&(b + 1, y0));
-                let at = ((centre.0 + next.0) / 2, (centre.1 + next.1) / 2);
-                root.draw_text(&format!("{v:.2}"), &style, at)?;
+                let (x, y, _, _) = centre(b, a);
+                root.draw_text(&format!("{v:.2}"), &centred(16).color(&text_color), (x, y))?;
             }
+        }
+        for (i, label) in self.labels.iter().enumerate() {
+            // Column labels under the bottom row, row labels left of the first column.
+            let (x, y, _, h) = centre(i, n - 1);
+            root.draw_text(label, &centred(15), (x, y + h / 2 + 12))?;
+            let (x, y, w, _) = centre(0, i);
+            root.draw_text(label, &centred(15), (x - w / 2 - 14, y))?;
         }
         Ok(())
     }
