@@ -744,6 +744,7 @@ fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
         texel_density: a.texel_density,
         out,
         command: command_line(),
+        chart_cache: None,
     };
     let ctx = open_gpu(&a.gpu)?;
     let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };

@@ -116,6 +116,8 @@ pub struct ExperimentOptions {
     pub out: PathBuf,
     /// The command line, for the report.
     pub command: String,
+    /// Where generated charts are cached (`None`: `$SHADESPACE_CACHE_DIR` or the default).
+    pub chart_cache: Option<PathBuf>,
 }
 
 /// Why an experiment failed.
@@ -215,7 +217,8 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
     std::fs::create_dir_all(out).map_err(|e| ExperimentError::output(out, format!("cannot create the folder: {e}")))?;
     let provenance = Provenance::new(ctx, &options.command);
     progress.set_message(format!("{}: preparing {}", options.name.name(), options.scene));
-    let scene = StudyScene::load(&options.scene, &options.exclude, options.texel_density, &ChartCache::from_env())?;
+    let cache = options.chart_cache.as_ref().map_or_else(ChartCache::from_env, ChartCache::in_dir);
+    let scene = StudyScene::load(&options.scene, &options.exclude, options.texel_density, &cache)?;
     let cameras = StudyCameras::for_scene(&options.scene, &scene.render.bounds())?;
     let variants = Variant::for_markings(&options.markings);
     let census = Census::new(&scene, &variants, &options.grid.tile_sizes)?;

@@ -1,0 +1,289 @@
+//! The tile studies in quick mode: each runs on the procedural atrium (and on
+//! the shared Sponza where `../shared/scenes` is present), and its outputs are
+//! read back and checked: CSV columns and invariants of the measures, JSON
+//! keys, valid PNG and SVG plots, a report naming the command and commit.
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use indicatif::ProgressBar;
+use serde_json::Value;
+use shadespace::experiments::census::{Census, StudyScene};
+use shadespace::experiments::marking::{Marking, Variant};
+use shadespace::experiments::report::GIT_COMMIT;
+use shadespace::experiments::study_path::StudyCameras;
+use shadespace::experiments::visibility::VisibilityRenderer;
+use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid, overlap, reuse};
+
+const SPONZA: &str = "../shared/scenes/sponza-thesis";
+
+fn chart_cache() -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR")).join("charts")
+}
+
+/// Runs `name` in quick mode on `scene` into a fresh folder; returns the folder.
+fn run_quick(name: ExperimentName, scene: &str, exclude: &[&str]) -> (tempfile::TempDir, Value) {
+    let ctx = common::gpu();
+    let dir = tempfile::tempdir().unwrap();
+    let options = ExperimentOptions {
+        name,
+        scene: scene.into(),
+        exclude: exclude.iter().map(|s| s.to_string()).collect(),
+        markings: Marking::ALL.to_vec(),
+        grid: Grid::quick(),
+        quick: true,
+        texel_density: 256.0,
+        out: dir.path().to_path_buf(),
+        command: format!("shadespace experiment {} --quick --scene {scene}", name.name()),
+        chart_cache: Some(chart_cache()),
+    };
+    experiments::run(&ctx, &options, &ProgressBar::hidden()).unwrap();
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap()).unwrap();
+    check_common(dir.path(), &options, &summary);
+    (dir, summary)
+}
+
+/// The checks every experiment's outputs pass.
+fn check_common(dir: &Path, options: &ExperimentOptions, summary: &Value) {
+    for key in ["experiment", "scene", "quick", "provenance", "grid", "variants", "setup", "results"] {
+        assert!(summary.get(key).is_some(), "summary.json lacks '{key}': {summary:#}");
+    }
+    assert_eq!(summary["experiment"], options.name.name());
+    for key in ["adapter", "driver", "date", "commit", "command"] {
+        assert!(summary["provenance"][key].as_str().is_some_and(|s| !s.is_empty()), "provenance.{key}");
+    }
+    assert_eq!(summary["variants"].as_array().unwrap().len(), 3);
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains(&options.command), "the report does not state the command");
+    assert!(report.contains(GIT_COMMIT) && GIT_COMMIT.len() >= 40, "the report does not state the commit");
+    assert!(report.contains("Differences from the study"));
+    // Every figure the report embeds exists as a valid PNG, with its SVG beside it.
+    let figures: Vec<&str> = report.split("](").skip(1).filter_map(|s| s.split(')').next()).collect();
+    let pngs: Vec<&&str> = figures.iter().filter(|f| f.ends_with(".png")).collect();
+    assert!(!pngs.is_empty(), "no figure in the report");
+    for png in pngs {
+        let image = image::open(dir.join(png)).unwrap_or_else(|e| panic!("{png}: {e}"));
+        assert!(image.width() > 100 && image.height() > 100);
+        let svg = std::fs::read_to_string(dir.join(Path::new(png).with_extension("svg"))).unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "{png}: SVG is not a whole document");
+    }
+}
+
+/// `data.csv` as column name -> values, checking the header.
+fn read_csv(dir: &Path, columns: &[&str]) -> Vec<BTreeMap<String, String>> {
+    let mut r = csv::Reader::from_path(dir.join("data.csv")).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    assert_eq!(header, columns, "data.csv columns");
+    r.records().map(|rec| header.iter().cloned().zip(rec.unwrap().iter().map(String::from)).collect()).collect()
+}
+
+fn num(row: &BTreeMap<String, String>, key: &str) -> f64 {
+    row[key].parse().unwrap_or_else(|_| panic!("{key} = '{}' is not a number", row[key]))
+}
+
+#[test]
+fn overshading_quick() {
+    let (dir, summary) = run_quick(ExperimentName::Overshading, "atrium", &[]);
+    let rows = read_csv(
+        dir.path(),
+        &["frame", "width", "height", "tile_size", "marking", "texture", "tiles", "pixels", "ratio"],
+    );
+    let grid = Grid::quick();
+    let spaces = 3 * grid.tile_sizes.len();
+    assert_eq!(rows.len(), grid.path_frames.len() * grid.resolutions.len() * spaces);
+    let mut by_key = BTreeMap::new();
+    for r in &rows {
+        let (tiles, t, pixels) = (num(r, "tiles"), num(r, "tile_size"), num(r, "pixels"));
+        assert_eq!(pixels, num(r, "width") * num(r, "height"));
+        assert!((num(r, "ratio") - tiles * t * t / pixels).abs() < 1e-9, "{r:?}");
+        assert!(tiles > 0.0, "the atrium's path sees surfaces in every frame: {r:?}");
+        by_key.insert(
+            (r["frame"].clone(), r["width"].clone(), r["marking"].clone(), r["texture"].clone(), t as u32),
+            num(r, "ratio"),
+        );
+    }
+    // Our marking at 4096 (levels down to 128 at every tile size): every
+    // 8-texel tile needed lies in a needed 32-texel tile, so the larger tiles
+    // cover at least as many texels.
+    for ((frame, width, marking, texture, t), ratio) in &by_key {
+        if *t == 8 && marking == "bilinear" && texture == "4096" {
+            let coarse = by_key[&(frame.clone(), width.clone(), marking.clone(), texture.clone(), 32)];
+            assert!(coarse >= *ratio, "frame {frame} at width {width}: tiles of 32 {coarse} < tiles of 8 {ratio}");
+        }
+    }
+    let cells = summary["results"]["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), spaces * grid.resolutions.len());
+    for c in cells {
+        let s = &c["ratio"];
+        for key in ["median", "std", "mean", "p10", "p90"] {
+            assert!(s[key].as_f64().is_some(), "cell lacks {key}: {c}");
+        }
+        assert!(s["p10"].as_f64() <= s["median"].as_f64() && s["median"].as_f64() <= s["p90"].as_f64(), "{c}");
+        assert_eq!(s["samples"], grid.path_frames.len());
+    }
+}
+
+#[test]
+fn overlap_quick() {
+    let (dir, summary) = run_quick(ExperimentName::Overlap, "atrium", &[]);
+    let rows = read_csv(
+        dir.path(),
+        &[
+            "width",
+            "height",
+            "tile_size",
+            "marking",
+            "texture",
+            "camera_a",
+            "camera_b",
+            "tiles_a",
+            "tiles_b",
+            "tiles_both",
+            "tiles_either",
+            "overlap",
+            "iou",
+        ],
+    );
+    let grid = Grid::quick();
+    assert_eq!(rows.len(), 25 * 3 * grid.tile_sizes.len() * grid.resolutions.len());
+    for r in &rows {
+        let (a, b, both) = (num(r, "tiles_a"), num(r, "tiles_b"), num(r, "tiles_both"));
+        assert!(a > 0.0, "every fixed atrium camera sees surfaces: {r:?}");
+        assert!((num(r, "overlap") - both / a).abs() < 1e-9);
+        if r["camera_a"] == r["camera_b"] {
+            // A camera with itself: everything overlaps.
+            assert_eq!((num(r, "overlap"), num(r, "iou"), b), (1.0, 1.0, a), "{r:?}");
+        } else {
+            assert!(both <= a.min(b) && num(r, "iou") < 1.0, "{r:?}");
+        }
+    }
+    for c in summary["results"]["cells"].as_array().unwrap() {
+        let shared = &c["shared_atlas"];
+        let (union, sum) = (shared["union"].as_u64().unwrap(), shared["sum"].as_u64().unwrap());
+        let largest = c["tiles"].as_array().unwrap().iter().map(|t| t.as_u64().unwrap()).max().unwrap();
+        assert!(largest <= union && union <= sum, "{c}");
+        let saving = shared["saving"].as_f64().unwrap();
+        assert!((0.0..1.0).contains(&saving), "{c}");
+        // The IoU matrix is symmetric.
+        let iou = c["iou"].as_array().unwrap();
+        for (a, row) in iou.iter().enumerate() {
+            for (b, v) in row.as_array().unwrap().iter().enumerate() {
+                assert_eq!(v, &iou[b][a], "iou[{a}][{b}]");
+            }
+        }
+    }
+}
+
+#[test]
+fn reuse_quick() {
+    let (dir, summary) = run_quick(ExperimentName::Reuse, "atrium", &[]);
+    let rows = read_csv(
+        dir.path(),
+        &[
+            "frame",
+            "width",
+            "height",
+            "tile_size",
+            "marking",
+            "texture",
+            "previous_tiles",
+            "tiles",
+            "kept",
+            "reusable",
+            "new",
+            "windows",
+        ],
+    );
+    let grid = Grid::quick();
+    // Each quick window of 4 frames gives 3 pairs.
+    assert_eq!(rows.len(), 3 * 3 * 3 * grid.tile_sizes.len() * grid.resolutions.len());
+    for r in &rows {
+        let (reusable, new) = (num(r, "reusable"), num(r, "new"));
+        assert!((0.0..=1.0).contains(&reusable) && (0.0..=1.0).contains(&new), "{r:?}");
+        assert!((reusable - num(r, "kept") / num(r, "previous_tiles")).abs() < 1e-9);
+        assert!((new - (num(r, "tiles") - num(r, "kept")) / num(r, "tiles")).abs() < 1e-9);
+        assert_eq!(r["windows"].split(' ').count(), 1, "quick windows do not overlap: {r:?}");
+    }
+    // The orbit moves a little each frame: most tiles stay.
+    let cells = summary["results"]["cells"].as_array().unwrap();
+    let windows: Vec<&str> = cells.iter().map(|c| c["window"].as_str().unwrap()).collect();
+    for w in ["all", "100-103", "300-303", "500-503"] {
+        assert!(windows.contains(&w), "no cell for window {w}");
+    }
+    for c in cells.iter().filter(|c| c["window"] == "all") {
+        assert!(c["reusable"]["median"].as_f64().unwrap() > 0.5, "{c}");
+    }
+}
+
+#[test]
+fn a_static_camera_reuses_every_tile_and_overlaps_itself() {
+    let ctx = common::gpu();
+    let scene = StudyScene::load("atrium", &[], 256.0, &shadespace::charts::ChartCache::in_dir(chart_cache())).unwrap();
+    let cameras = StudyCameras::for_scene("atrium", &scene.render.bounds()).unwrap();
+    let census = Census::new(&scene, &Variant::for_markings(&Marking::ALL), &[8, 64]).unwrap();
+    let mut renderer = VisibilityRenderer::new(&ctx, &scene.render, &[(200, 150)]).unwrap();
+    let camera = cameras.path_camera(42);
+    let first = census.tiles(&renderer.render(&ctx, &camera, 0).unwrap());
+    let second = census.tiles(&renderer.render(&ctx, &camera, 0).unwrap());
+    for (a, b) in first.iter().zip(&second) {
+        assert!(a.count() > 0);
+        assert_eq!(reuse::shares(a, b), (Some(1.0), Some(0.0)));
+        assert_eq!(overlap::pair_overlap(a, b), (Some(1.0), Some(1.0)));
+    }
+    // A different frame shares some tiles, not all.
+    let moved = census.tiles(&renderer.render(&ctx, &cameras.path_camera(142), 0).unwrap());
+    let (reusable, new) = reuse::shares(&first[0], &moved[0]);
+    assert!(reusable.unwrap() < 1.0 && new.unwrap() > 0.0, "{reusable:?} {new:?}");
+}
+
+#[test]
+fn sponza_quick_without_its_plants() {
+    if !Path::new(SPONZA).is_dir() {
+        eprintln!("SKIPPED: {SPONZA} is absent");
+        return;
+    }
+    let (_dir, summary) = run_quick(ExperimentName::Overshading, SPONZA, &["sponza_plantsA", "sponza_plantsB"]);
+    let objects: Vec<&str> =
+        summary["setup"]["objects"].as_array().unwrap().iter().map(|o| o["name"].as_str().unwrap()).collect();
+    assert!(!objects.contains(&"sponza_plantsA") && !objects.contains(&"sponza_plantsB"), "{objects:?}");
+    assert!(objects.contains(&"sponza_floor") || objects.len() >= 10, "{objects:?}");
+    for c in summary["results"]["cells"].as_array().unwrap() {
+        assert!(c["ratio"]["median"].as_f64().unwrap() > 0.0, "{c}");
+    }
+}
+
+fn run_cli(args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_shadespace")).args(args).output().expect("run shadespace");
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!stderr.contains("panicked"), "panic on {args:?}:\n{stderr}");
+    (out.status.code().unwrap_or(-1), stderr)
+}
+
+#[test]
+fn bad_experiment_input_names_the_flag_or_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    let (code, err) = run_cli(&["experiment", "overlap", "--scene", "no/such/scene", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("no/such/scene"), "{err}");
+    let (code, err) = run_cli(&["experiment", "overlap", "--quick", "--exclude", "no_such_object", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--exclude") && err.contains("no_such_object") && err.contains("floor"), "{err}");
+    let (code, err) = run_cli(&["experiment", "overlap", "--tile-sizes", "8,12"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--tile-sizes") && err.contains("12"), "{err}");
+    let (code, err) = run_cli(&["experiment", "overlap", "--marking", "nearest"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--marking") && err.contains("nearest"), "{err}");
+    let file = dir.path().join("file");
+    std::fs::write(&file, "x").unwrap();
+    let (code, err) = run_cli(&["experiment", "reuse", "--out", file.to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--out") && err.contains("not a folder"), "{err}");
+    let (code, _) = run_cli(&["experiment", "lights"]);
+    assert_eq!(code, 2);
+}
