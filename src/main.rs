@@ -116,6 +116,11 @@ struct ExperimentArgs {
     /// Our texel density (texels per metre) for the density variant.
     #[arg(long, default_value_t = 256.0, value_parser = texel_density)]
     texel_density: f32,
+    /// Measure every K-th path frame (overshading) or frame pair (reuse's
+    /// all-frames statistics; its windows stay whole) instead of all 600:
+    /// K times less work, the same distribution sampled more thinly.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=600))]
+    frame_step: Option<u32>,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -733,6 +738,9 @@ fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
     }
     if !a.resolutions.is_empty() {
         grid.resolutions = a.resolutions.clone();
+    }
+    if let Some(step) = a.frame_step {
+        grid.sample_frames(step);
     }
     let options = ExperimentOptions {
         name,

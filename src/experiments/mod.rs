@@ -85,6 +85,19 @@ impl Grid {
         }
     }
 
+    /// Keeps every `step`-th path frame of `overshading` and, for `reuse`,
+    /// every `step`-th frame with its predecessor (a pair) plus the whole
+    /// windows.
+    pub fn sample_frames(&mut self, step: u32) {
+        let step = step.max(1) as usize;
+        self.path_frames = (0..PATH_FRAMES).step_by(step).collect();
+        let mut reuse: Vec<u32> = (1..PATH_FRAMES).step_by(step).flat_map(|f| [f - 1, f]).collect();
+        reuse.extend(self.reuse_windows.iter().flat_map(|&(a, b)| a..=b));
+        reuse.sort_unstable();
+        reuse.dedup();
+        self.reuse_frames = reuse;
+    }
+
     /// A reduced grid for CI (well under a minute per experiment on a CPU
     /// driver): two small resolutions, tiles of 8 and 32, every 100th path
     /// frame, and the first 3 frame pairs of each reuse window.
@@ -350,4 +363,27 @@ fn differences_section(scene: &StudyScene, variants: &[Variant]) -> Section {
     }
     let text = items.iter().map(|i| format!("- {i}\n")).collect();
     Section { heading: "Differences from the study's method".into(), text, ..Default::default() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Sampling keeps every 10th frame for overshading and, for reuse, pairs
+    /// of consecutive frames every 10 frames plus the whole windows.
+    #[test]
+    fn sampled_frames_keep_pairs_and_windows() {
+        let mut grid = Grid::full();
+        grid.sample_frames(10);
+        assert_eq!(grid.path_frames.len(), 60);
+        assert_eq!(grid.path_frames[..3], [0, 10, 20]);
+        let has = |f: u32| grid.reuse_frames.binary_search(&f).is_ok();
+        for f in (1..PATH_FRAMES).step_by(10) {
+            assert!(has(f - 1) && has(f), "pair ({}, {f}) missing", f - 1);
+        }
+        for &(a, b) in &grid.reuse_windows {
+            assert!((a..=b).all(has), "window {a}-{b} incomplete");
+        }
+        assert!(!has(5), "frame 5 is neither sampled nor in a window");
+    }
 }
