@@ -56,7 +56,7 @@ mod tests {
     use crate::render::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
     use crate::render::objectspace::atlas::{GpuAtlasEntry, GpuAtlasLevel};
     use crate::render::objectspace::resources::GpuParams;
-    use crate::render::objectspace::trimap::Square;
+    use crate::render::objectspace::trimap::{GpuTrimapDraw, Square};
     use crate::render::passes::gbuffer::GpuUnproject;
     use crate::render::passes::light_grid::GpuLightGridParams;
     use crate::render::passes::visibility::compute::{GpuRasterParams, GpuResolveParams};
@@ -105,6 +105,7 @@ mod tests {
         check::<GpuAtlasEntry>(&modules);
         check::<GpuParams>(&modules);
         check::<Square>(&modules);
+        check::<GpuTrimapDraw>(&modules);
         check::<LightPair>(&modules);
         check::<GpuLightGridParams>(&modules);
         check::<GpuUnproject>(&modules);
