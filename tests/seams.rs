@@ -1,0 +1,151 @@
+//! Seams along chart borders: object space against forward, counted only on
+//! the pixels next to a chart border (where a pixel's neighbours see another
+//! chart or object), at the default level choice and at levels forced 2 and
+//! 3 coarser (`mip_bias`), where a texel spans several pixels and bilinear
+//! taps near a border reach texels of the neighbouring chart or texels no
+//! triangle owns. A seam shows as border pixels much worse than the others.
+mod common;
+
+use std::collections::HashMap;
+
+use shadespace::render::objectspace::ObjectSpace;
+use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::scene::{Mesh, Scene};
+
+const WIDTH: u32 = 320;
+const HEIGHT: u32 = 180;
+const LIGHTS: &str = "small:24+big:2";
+
+/// Chart of each triangle: triangles joined by an edge whose two chart-UV
+/// endpoints match (continuous in the chart) share a chart.
+fn chart_ids(mesh: &Mesh) -> Vec<u32> {
+    let uv = mesh.uv1.as_ref().expect("charted mesh");
+    let triangles = mesh.triangle_count();
+    let mut parent: Vec<usize> = (0..triangles).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let mut edges: HashMap<[u64; 2], usize> = HashMap::new();
+    for t in 0..triangles {
+        for k in 0..3 {
+            let a = mesh.indices[3 * t + k] as usize;
+            let b = mesh.indices[3 * t + (k + 1) % 3] as usize;
+            let key = |i: usize| ((uv[i].x.to_bits() as u64) << 32) | uv[i].y.to_bits() as u64;
+            let (ka, kb) = (key(a), key(b));
+            let edge = if ka < kb { [ka, kb] } else { [kb, ka] };
+            if let Some(&other) = edges.get(&edge) {
+                let (ra, rb) = (root(&mut parent, t), root(&mut parent, other));
+                parent[ra] = rb;
+            } else {
+                edges.insert(edge, t);
+            }
+        }
+    }
+    (0..triangles).map(|t| root(&mut parent, t) as u32).collect()
+}
+
+/// Per pixel: the (object + 1, chart) it sees, 0 for background.
+fn pixel_charts(scene: &Scene, ids: &[[u32; 2]]) -> Vec<(u32, u32)> {
+    let charts: Vec<Vec<u32>> = scene.objects.iter().map(|o| chart_ids(&scene.meshes[o.mesh])).collect();
+    ids.iter()
+        .map(
+            |&[object, triangle]| {
+                if object == 0 { (0, 0) } else { (object, charts[object as usize - 1][triangle as usize]) }
+            },
+        )
+        .collect()
+}
+
+/// PSNR (8-bit RGB) of `test` against `reference` over the pixels `keep`.
+fn psnr(reference: &image::RgbaImage, test: &image::RgbaImage, keep: &[bool]) -> (f64, usize) {
+    let mut sum = 0.0;
+    let mut n = 0;
+    for (i, (a, b)) in reference.pixels().zip(test.pixels()).enumerate() {
+        if keep[i] {
+            sum += (0..3).map(|c| (a[c] as f64 - b[c] as f64).powi(2)).sum::<f64>();
+            n += 3;
+        }
+    }
+    let mse = sum / n.max(1) as f64;
+    (10.0 * (255.0f64.powi(2) / mse.max(1e-12)).log10(), n / 3)
+}
+
+/// (border PSNR, other pixels' PSNR, border pixels) of object space at
+/// `mip_bias` against forward on `name`'s path frame 0.
+fn seams(name: &str, mip_bias: f32) -> (f64, f64, usize) {
+    let ctx = common::gpu();
+    let frame = common::path_frame(name, LIGHTS, WIDTH, HEIGHT);
+    let (scene, texture_sizes) = common::charted(&frame.scene);
+    let render = |pipeline| {
+        let mut r = Renderer::new(&ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+        r.render(&ctx, &frame.camera, &frame.lights, 0).unwrap();
+        let image = r.read_image(&ctx).unwrap();
+        let ids = r.pipeline::<ObjectSpace>().map(|os| os.read_mark_state(&ctx).unwrap().visibility);
+        ctx.check_errors().unwrap();
+        (image, ids)
+    };
+    let (forward, _) = render(PipelineConfig::Forward(ForwardConfig::default()));
+    let objectspace = ObjectSpaceConfig { texture_sizes, mip_bias, ..Default::default() };
+    let (test, ids) = render(PipelineConfig::ObjectSpace(objectspace));
+    let charts = pixel_charts(&scene, &ids.unwrap());
+    let (w, h) = (WIDTH as i32, HEIGHT as i32);
+    let at = |x: i32, y: i32| charts[(y * w + x) as usize];
+    // A border pixel sees a surface and has a neighbour (8-connected) that
+    // sees another chart or object; the others are every other surface pixel.
+    let mut border = vec![false; charts.len()];
+    let mut inside = vec![false; charts.len()];
+    for y in 0..h {
+        for x in 0..w {
+            let c = at(x, y);
+            if c.0 == 0 {
+                continue;
+            }
+            let mut near = false;
+            for (dx, dy) in [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)] {
+                let (nx, ny) = (x + dx, y + dy);
+                if nx >= 0 && ny >= 0 && nx < w && ny < h && at(nx, ny).0 != 0 && at(nx, ny) != c {
+                    near = true;
+                }
+            }
+            let i = (y * w + x) as usize;
+            border[i] = near;
+            inside[i] = !near;
+        }
+    }
+    let (border_psnr, border_pixels) = psnr(&forward, &test, &border);
+    let (inside_psnr, _) = psnr(&forward, &test, &inside);
+    eprintln!(
+        "{name}, mip bias {mip_bias}: border pixels {border_pixels}: PSNR {border_psnr:.1} dB; other pixels {inside_psnr:.1} dB"
+    );
+    (border_psnr, inside_psnr, border_pixels)
+}
+
+/// Least border PSNR per scene (lavapipe, no hardware conservative
+/// rasterization). Measured with the emulated conservative triangle maps:
+/// atrium 37.1 / 34.5 / 33.4 dB at bias 0 / 2 / 3 (other pixels 44.1 / 38.0
+/// / 37.3), voxels 38.7 dB at every bias (its textures are already at their
+/// coarsest level; other pixels 53.5). With centre-sampled maps (texels
+/// owned only where a triangle holds their centre) the voxels' borders fell
+/// to 31.2 dB: dark seams. The borders are still 4-15 dB worse than the
+/// other pixels: bilinear taps reach the neighbouring chart's texels
+/// (wrong-coloured seams), which per-level gutters or chart-aware filtering
+/// would remove (issue 10); these bounds keep what is won.
+const MIN_BORDER_PSNR: [(&str, f64); 2] = [("atrium", 32.5), ("voxels", 37.5)];
+
+#[test]
+fn chart_borders_keep_their_measured_quality() {
+    for (name, least) in MIN_BORDER_PSNR {
+        for bias in [0.0, 2.0, 3.0] {
+            let (border, inside, pixels) = seams(name, bias);
+            assert!(pixels > 5000, "{name}: only {pixels} border pixels");
+            assert!(
+                border >= least,
+                "{name}, mip bias {bias}: border pixels {border:.1} dB < {least} dB (other pixels {inside:.1} dB)"
+            );
+        }
+    }
+}
