@@ -15,13 +15,13 @@ const WIDTH: u32 = 192;
 const HEIGHT: u32 = 108;
 /// Mean FLIP allowed between a render and its golden image.
 const GOLDEN_FLIP: f32 = 0.02;
-/// Object space against forward at 320x180 on lavapipe. The issue's bound is
-/// FLIP <= 0.05 and PSNR >= 35 dB; at this small size the voxel world seen
-/// from above is strongly minified (each pixel spans several blocks), where
-/// bilinear filtering of texel shades and per-pixel shading part the most, so
-/// PSNR is held to 30 dB here (the figures measured are printed).
+/// Object space against forward at 320x180 on lavapipe: FLIP <= 0.05 and
+/// PSNR >= 35 dB (issue 3's bound). Measured with conservative triangle maps
+/// and filtering within chart islands: atrium 0.0165 / 42.3 dB (shadowed
+/// 0.0174 / 41.7), voxels 0.0087 / 52.8 dB; before them the voxels' chart
+/// borders (each block face is a chart) brought it to 0.0285 / 33.7 dB.
 const AGREEMENT_FLIP: f32 = 0.05;
-const AGREEMENT_PSNR: f64 = 30.0;
+const AGREEMENT_PSNR: f64 = 35.0;
 
 #[derive(Clone, Copy)]
 enum Pipeline {

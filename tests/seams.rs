@@ -6,51 +6,25 @@
 //! triangle owns. A seam shows as border pixels much worse than the others.
 mod common;
 
-use std::collections::HashMap;
-
+use shadespace::charts::islands::triangle_islands;
 use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
-use shadespace::scene::{Mesh, Scene};
+use shadespace::scene::Scene;
 
 const WIDTH: u32 = 320;
 const HEIGHT: u32 = 180;
 const LIGHTS: &str = "small:24+big:2";
 
-/// Chart of each triangle: triangles joined by an edge whose two chart-UV
-/// endpoints match (continuous in the chart) share a chart.
-fn chart_ids(mesh: &Mesh) -> Vec<u32> {
-    let uv = mesh.uv1.as_ref().expect("charted mesh");
-    let triangles = mesh.triangle_count();
-    let mut parent: Vec<usize> = (0..triangles).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    let mut edges: HashMap<[u64; 2], usize> = HashMap::new();
-    for t in 0..triangles {
-        for k in 0..3 {
-            let a = mesh.indices[3 * t + k] as usize;
-            let b = mesh.indices[3 * t + (k + 1) % 3] as usize;
-            let key = |i: usize| ((uv[i].x.to_bits() as u64) << 32) | uv[i].y.to_bits() as u64;
-            let (ka, kb) = (key(a), key(b));
-            let edge = if ka < kb { [ka, kb] } else { [kb, ka] };
-            if let Some(&other) = edges.get(&edge) {
-                let (ra, rb) = (root(&mut parent, t), root(&mut parent, other));
-                parent[ra] = rb;
-            } else {
-                edges.insert(edge, t);
-            }
-        }
-    }
-    (0..triangles).map(|t| root(&mut parent, t) as u32).collect()
-}
-
 /// Per pixel: the (object + 1, chart) it sees, 0 for background.
 fn pixel_charts(scene: &Scene, ids: &[[u32; 2]]) -> Vec<(u32, u32)> {
-    let charts: Vec<Vec<u32>> = scene.objects.iter().map(|o| chart_ids(&scene.meshes[o.mesh])).collect();
+    let charts: Vec<Vec<u32>> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            let mesh = &scene.meshes[o.mesh];
+            triangle_islands(&mesh.indices, mesh.uv1.as_ref().expect("charted mesh"))
+        })
+        .collect();
     ids.iter()
         .map(
             |&[object, triangle]| {
@@ -125,26 +99,26 @@ fn seams(name: &str, mip_bias: f32) -> (f64, f64, usize) {
 }
 
 /// Least border PSNR per scene (lavapipe, no hardware conservative
-/// rasterization). Measured with the emulated conservative triangle maps:
-/// atrium 37.1 / 34.5 / 33.4 dB at bias 0 / 2 / 3 (other pixels 44.1 / 38.0
-/// / 37.3), voxels 38.7 dB at every bias (its textures are already at their
-/// coarsest level; other pixels 53.5). With centre-sampled maps (texels
-/// owned only where a triangle holds their centre) the voxels' borders fell
-/// to 31.2 dB: dark seams. The borders are still 4-15 dB worse than the
-/// other pixels: bilinear taps reach the neighbouring chart's texels
-/// (wrong-coloured seams), which per-level gutters or chart-aware filtering
-/// would remove (issue 10); these bounds keep what is won.
-const MIN_BORDER_PSNR: [(&str, f64); 2] = [("atrium", 32.5), ("voxels", 37.5)];
+/// rasterization), and the most the borders may fall below the other pixels.
+/// Measured: atrium 39.0 / 37.3 / 37.3 dB at bias 0 / 2 / 3 (other pixels
+/// 44.1 / 38.3 / 38.2), voxels 50.6 dB at every bias (its textures are at
+/// their coarsest level already; other pixels 53.5). Before, with
+/// centre-sampled triangle maps and plain bilinear filtering: voxels 31.2 dB
+/// (dark seams: taps on texels no triangle owned); with conservative maps
+/// but taps crossing into neighbouring charts: atrium 33.4 dB at bias 3,
+/// voxels 38.7 dB (colour bleeding across chart borders).
+const MIN_BORDER_PSNR: [(&str, f64); 2] = [("atrium", 36.5), ("voxels", 49.5)];
+const MAX_BORDER_GAP_DB: f64 = 6.0;
 
 #[test]
-fn chart_borders_keep_their_measured_quality() {
+fn chart_borders_show_no_seams() {
     for (name, least) in MIN_BORDER_PSNR {
         for bias in [0.0, 2.0, 3.0] {
             let (border, inside, pixels) = seams(name, bias);
             assert!(pixels > 5000, "{name}: only {pixels} border pixels");
             assert!(
-                border >= least,
-                "{name}, mip bias {bias}: border pixels {border:.1} dB < {least} dB (other pixels {inside:.1} dB)"
+                border >= least && border >= inside - MAX_BORDER_GAP_DB,
+                "{name}, mip bias {bias}: border pixels {border:.1} dB (least {least}), other pixels {inside:.1} dB"
             );
         }
     }

@@ -17,6 +17,7 @@
 pub mod cache;
 pub mod density;
 pub mod generate;
+pub mod islands;
 pub mod overlap;
 
 use std::fmt;

@@ -9,6 +9,7 @@ use super::culling::LightLists;
 use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
 use super::passes::shadows::{ShadowAtlas, ShadowPlan};
 use super::passes::{Binding, bind_group_layout_for};
+use crate::charts::islands::triangle_islands;
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
@@ -67,6 +68,9 @@ pub struct SceneGpu {
     /// CPU copy of the object table; light ranges are rewritten per frame.
     pub object_data: Vec<GpuObject>,
     pub triangle_count: u64,
+    /// Per triangle of the index buffer: its chart island in its mesh's
+    /// chart UVs ([`triangle_islands`]; object space filters within it).
+    pub triangle_charts: wgpu::Buffer,
     /// The scene's [`Scene::cull_back_faces`].
     pub cull_back_faces: bool,
     /// Shadow maps of the shadowed lights (bindings 8-11).
@@ -134,6 +138,14 @@ impl SceneGpu {
         };
         let vertices_buf = storage("vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::empty());
         let indices_buf = storage("indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
+        // Chart island of every triangle, in index-buffer order (at least one
+        // entry: empty buffers cannot be bound).
+        let mut islands: Vec<u32> =
+            scene.meshes.iter().flat_map(|m| triangle_islands(&m.indices, m.uv1.as_ref().unwrap_or(&m.uv0))).collect();
+        if islands.is_empty() {
+            islands.push(0);
+        }
+        let triangle_charts = storage("triangle charts", bytemuck::cast_slice(&islands), wgpu::BufferUsages::empty());
         let objects = storage("objects", bytemuck::cast_slice(&object_data), wgpu::BufferUsages::empty());
         let view = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("view"),
@@ -178,6 +190,7 @@ impl SceneGpu {
             object_data,
             triangle_count: scene.triangle_count() as u64,
             cull_back_faces: scene.cull_back_faces,
+            triangle_charts,
             shadow_atlas,
             lights,
             light_indices,

@@ -264,7 +264,7 @@ impl ObjectSpace {
         }
         let layout = AtlasLayout::new(&sizes, config.tile_size, max_page, COARSEST_LEVEL)?;
         let triangle_map = trimap::build(device, &ctx.queue, shaders, scene, &layout)?;
-        let res = Resources::new(device, &layout, &triangle_map, targets);
+        let res = Resources::new(device, &layout, &triangle_map, &scene.triangle_charts, targets);
         let visibility = match config.visibility {
             VisibilityMethod::Raster => Visibility::Raster {
                 prepass: config.visibility_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?,

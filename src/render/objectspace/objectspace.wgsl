@@ -54,6 +54,9 @@ struct Params {
 @group(1) @binding(6) var visibility: texture_2d<u32>;
 // Per atlas texel: triangle + 1 covering it; 0 = empty.
 @group(1) @binding(7) var triangle_map: texture_2d_array<u32>;
+// Per triangle of the scene's index buffer: its chart island (a number
+// shared by the triangles of one island of its mesh's chart UVs).
+@group(1) @binding(8) var<storage, read> triangle_charts: array<u32>;
 
 // Chart UV of the pixel and its screen derivatives.
 struct ChartFootprint {

@@ -59,6 +59,7 @@ impl Resources {
         device: &wgpu::Device,
         atlas_layout: &AtlasLayout,
         triangle_map: &wgpu::Texture,
+        triangle_charts: &wgpu::Buffer,
         targets: &Targets,
     ) -> Self {
         let atlas = atlas_layout.page_array_texture(
@@ -112,6 +113,7 @@ impl Resources {
                 rw,
                 Binding::Texture { sample: uint, dimension: wgpu::TextureViewDimension::D2 },
                 Binding::Texture { sample: uint, dimension: wgpu::TextureViewDimension::D2Array },
+                Binding::Storage { read_only: true },
             ],
         );
         let bind_group = bind_group(
@@ -127,6 +129,7 @@ impl Resources {
                 counters.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&visibility.view),
                 wgpu::BindingResource::TextureView(&view_as(triangle_map, wgpu::TextureViewDimension::D2Array)),
+                triangle_charts.as_entire_binding(),
             ],
         );
         Self {

@@ -1,7 +1,7 @@
 // Shade gathering, in compute over the visibility buffer: each pixel selects
 // the same mip level as tile marking did and filters the object's shades
 // bilinearly (by hand, with taps clamped inside the level's square, so no tap
-// reads a neighbour in the atlas). Objects outside the atlas (forward-only)
+// reads a neighbour in the atlas, and only taps in the pixel's chart island). Objects outside the atlas (forward-only)
 // are shaded here per pixel, with the world grid's lights. Debug views replace
 // the shade.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
@@ -9,7 +9,7 @@
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface}
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, tile_shaded, visibility, chart_footprint, select_level,
-    bilinear, level_origin, AtlasLevel}
+    bilinear, level_origin, AtlasLevel, triangle_map, triangle_charts}
 
 @group(2) @binding(0) var atlas: texture_2d_array<f32>;
 @group(2) @binding(1) var hdr: texture_storage_2d<rgba16float, write>;
@@ -30,6 +30,18 @@ fn level_color(level: u32) -> vec3f {
 
 fn fetch(l: AtlasLevel, texel: vec2i) -> vec3f {
     return textureLoad(atlas, level_origin(l) + vec2u(texel), l.page, 0).rgb;
+}
+
+// Chart island of triangle `triangle` of `object`.
+fn island(object: u32, triangle: u32) -> u32 {
+    return triangle_charts[objects[object].first_index / 3u + triangle];
+}
+
+// 1 when texel `texel` of level `l` belongs to chart island `own` of
+// `object` (its triangle map names a triangle of that island), else 0.
+fn in_island(object: u32, own: u32, l: AtlasLevel, texel: vec2i) -> f32 {
+    let id = textureLoad(triangle_map, level_origin(l) + vec2u(texel), l.page, 0).x;
+    return select(0.0, 1.0, id != 0u && island(object, id - 1u) == own);
 }
 
 @compute @workgroup_size(8, 8)
@@ -77,13 +89,32 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
             }
         }
         default: {
-            let c00 = fetch(l, b.texel);
-            let c10 = fetch(l, vec2i(b.texel_hi.x, b.texel.y));
-            let c01 = fetch(l, vec2i(b.texel.x, b.texel_hi.y));
-            let c11 = fetch(l, b.texel_hi);
-            let top = mix(c00, c10, b.weight.x);
-            let bottom = mix(c01, c11, b.weight.x);
-            out = vec4f(mix(top, bottom, b.weight.y), 1.0);
+            // Bilinear over the taps in the pixel's own chart island: a tap
+            // on a neighbouring chart's texel (closer than a texel at coarse
+            // levels) would bleed its colour across the border. With no tap
+            // in the island (a sliver thinner than the level's texels), all
+            // four are kept.
+            let t10 = vec2i(b.texel_hi.x, b.texel.y);
+            let t01 = vec2i(b.texel.x, b.texel_hi.y);
+            let own = island(p.object, ids.y);
+            var w = vec4f(
+                (1.0 - b.weight.x) * (1.0 - b.weight.y),
+                b.weight.x * (1.0 - b.weight.y),
+                (1.0 - b.weight.x) * b.weight.y,
+                b.weight.x * b.weight.y,
+            );
+            let keep = vec4f(
+                in_island(p.object, own, l, b.texel),
+                in_island(p.object, own, l, t10),
+                in_island(p.object, own, l, t01),
+                in_island(p.object, own, l, b.texel_hi),
+            );
+            let kept = dot(w, keep);
+            if kept > 0.0 {
+                w = w * keep / kept;
+            }
+            let c = fetch(l, b.texel) * w.x + fetch(l, t10) * w.y + fetch(l, t01) * w.z + fetch(l, b.texel_hi) * w.w;
+            out = vec4f(c, 1.0);
         }
     }
     textureStore(hdr, id.xy, out);
