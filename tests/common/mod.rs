@@ -105,12 +105,17 @@ pub struct PathFrame {
 
 /// Loads `name` (a procedural scene or a path) as a [`PathFrame`] lit by `spec`.
 pub fn path_frame(name: &str, spec: &str, width: u32, height: u32) -> PathFrame {
+    path_frame_seeded(name, spec, width, height, 7)
+}
+
+/// As [`path_frame`], with the lights placed from `seed`.
+pub fn path_frame_seeded(name: &str, spec: &str, width: u32, height: u32, seed: u64) -> PathFrame {
     use shadespace::scene::{self, LightSpec, lights, path};
     let scene = scene::load(name).unwrap();
     let bounds = scene.bounds();
     let cameras = path::cameras_for_scene(name, &bounds).unwrap();
     let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
     let spec: LightSpec = spec.parse().unwrap();
-    let lights = lights::build_lights(&spec, &bounds, &camera, width as f32 / height as f32, 7).unwrap();
+    let lights = lights::build_lights(&spec, &bounds, &camera, width as f32 / height as f32, seed).unwrap();
     PathFrame { scene, camera, lights }
 }
