@@ -169,8 +169,11 @@ struct SceneArgs {
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     size: (u32, u32),
-    /// `path` (the scene's camera path; from cameras.json beside a shared scene,
-    /// an orbit for other scenes) or `fixed:K` (fixed camera K, from 0).
+    /// `path`: the scene's camera path (from cameras.json beside a shared
+    /// scene; an orbit for atrium and voxels; for other scenes the file's
+    /// first camera, or else a turntable framing the whole scene), `fixed:K`
+    /// (fixed camera K, from 0; framed views for other scenes) or `gltf:K`
+    /// (camera K of the glTF file).
     #[arg(long, default_value = "path")]
     camera: String,
     /// Lights besides the ambient and directional light that every set has:
@@ -478,11 +481,11 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
         o.forward_only = true;
     }
     let bounds = scene.bounds();
+    let aspect = a.size.0 as f32 / a.size.1 as f32;
     let choice: path::CameraChoice = input(a.camera.parse())?;
-    let cameras = input(path::cameras_for_scene(&a.scene, &bounds))?;
+    let cameras = input(path::cameras_for_scene(&a.scene, &scene, aspect))?;
     let path = input(cameras.select(choice))?;
     let spec: LightSpec = input(a.lights.parse())?;
-    let aspect = a.size.0 as f32 / a.size.1 as f32;
     let reference: Camera = path.camera_at(0);
     let lights = input(lights::build_lights(&spec, &bounds, &reference, aspect, a.seed))?;
     let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {

@@ -81,7 +81,7 @@ fn compare(ctx: &GpuContext, name: &str, scene: &Scene, camera: &Camera, size: (
 }
 
 fn path_camera(spec: &str, scene: &Scene, t: u32) -> Camera {
-    let cameras = path::cameras_for_scene(spec, &scene.bounds()).unwrap();
+    let cameras = path::cameras_for_scene(spec, scene, 16.0 / 9.0).unwrap();
     cameras.select(path::CameraChoice::Path).unwrap().camera_at(t)
 }
 

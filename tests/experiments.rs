@@ -222,7 +222,7 @@ fn reuse_quick() {
 fn a_static_camera_reuses_every_tile_and_overlaps_itself() {
     let ctx = common::gpu();
     let scene = StudyScene::load("atrium", &[], 256.0, &shadespace::charts::ChartCache::in_dir(chart_cache())).unwrap();
-    let cameras = StudyCameras::for_scene("atrium", &scene.render.bounds()).unwrap();
+    let cameras = StudyCameras::for_scene("atrium", &scene.render, 200.0 / 150.0).unwrap();
     let census = Census::new(&scene, &Variant::for_markings(&Marking::ALL), &[8, 64]).unwrap();
     let mut renderer = VisibilityRenderer::new(&ctx, &scene.render, &[(200, 150)]).unwrap();
     let camera = cameras.path_camera(42);

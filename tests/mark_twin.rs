@@ -244,7 +244,8 @@ fn atrium_along_its_camera_path() {
     let ctx = common::gpu();
     let scene = scene::load("atrium").unwrap();
     let bounds = scene.bounds();
-    let path = path::cameras_for_scene("atrium", &bounds).unwrap().select(path::CameraChoice::Path).unwrap();
+    let path =
+        path::cameras_for_scene("atrium", &scene, 128.0 / 72.0).unwrap().select(path::CameraChoice::Path).unwrap();
     let cameras: Vec<Camera> = (0..5).map(|f| path.camera_at(f * 12)).collect();
     let (width, height) = (128, 72);
     let spec: LightSpec = "small:8".parse().unwrap();

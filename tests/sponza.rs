@@ -19,8 +19,11 @@ fn sponza_forward_and_objectspace_agree() {
     let ctx = common::gpu();
     let scene = scene::load(SPONZA).unwrap();
     let bounds = scene.bounds();
-    let camera =
-        path::cameras_for_scene(SPONZA, &bounds).unwrap().select(path::CameraChoice::Path).unwrap().camera_at(0);
+    let camera = path::cameras_for_scene(SPONZA, &scene, 480.0 / 270.0)
+        .unwrap()
+        .select(path::CameraChoice::Path)
+        .unwrap()
+        .camera_at(0);
     let (w, h) = (480, 270);
     let spec: LightSpec = "small:32".parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &camera, w as f32 / h as f32, 1).unwrap();

@@ -232,7 +232,9 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
     progress.set_message(format!("{}: preparing {}", options.name.name(), options.scene));
     let cache = options.chart_cache.as_ref().map_or_else(ChartCache::from_env, ChartCache::in_dir);
     let scene = StudyScene::load(&options.scene, &options.exclude, options.texel_density, &cache)?;
-    let cameras = StudyCameras::for_scene(&options.scene, &scene.render.bounds())?;
+    // Framing (for scenes without a camera path) fits the first resolution's aspect.
+    let aspect = options.grid.resolutions.first().map_or(4.0 / 3.0, |&(w, h)| w as f32 / h as f32);
+    let cameras = StudyCameras::for_scene(&options.scene, &scene.render, aspect)?;
     let variants = Variant::for_markings(&options.markings);
     let census = Census::new(&scene, &variants, &options.grid.tile_sizes)?;
     let renderer = VisibilityRenderer::new(ctx, &scene.render, &options.grid.resolutions)?;

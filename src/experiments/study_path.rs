@@ -3,7 +3,7 @@
 //! [`KeyedPath::pose_at`]) and its projection for every camera.
 
 use crate::scene::path::{CameraPath, KeyedPath, Projection, SceneCameras, UnityPose};
-use crate::scene::{Aabb, Camera};
+use crate::scene::{Camera, Scene};
 
 /// Frames of the study's path (two segments; the last one is cut short).
 pub const PATH_FRAMES: u32 = 600;
@@ -70,10 +70,11 @@ enum PathKind {
 }
 
 impl StudyCameras {
-    /// The cameras of scene `spec` (`cameras_for_scene`'s lookup) with the
-    /// study's path stepping and projection.
-    pub fn for_scene(spec: &str, bounds: &Aabb) -> Result<Self, crate::scene::path::CameraFileError> {
-        Ok(Self::from_cameras(crate::scene::path::cameras_for_scene(spec, bounds)?))
+    /// The cameras of `scene`, named `spec` (`cameras_for_scene`'s lookup;
+    /// scenes without a camera path framed for images of aspect `aspect`),
+    /// with the study's path stepping and projection.
+    pub fn for_scene(spec: &str, scene: &Scene, aspect: f32) -> Result<Self, crate::scene::path::CameraFileError> {
+        Ok(Self::from_cameras(crate::scene::path::cameras_for_scene(spec, scene, aspect)?))
     }
 
     pub fn from_cameras(cameras: SceneCameras) -> Self {

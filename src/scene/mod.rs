@@ -7,6 +7,7 @@
 pub mod camera;
 pub mod checker;
 pub mod error;
+pub mod framing;
 pub mod generate;
 pub mod gltf;
 pub mod lights;
@@ -307,6 +308,14 @@ impl Scene {
     /// World-space bounds of the whole scene.
     pub fn bounds(&self) -> Aabb {
         (0..self.objects.len()).fold(Aabb::EMPTY, |b, i| b.union(&self.object_bounds(i)))
+    }
+
+    /// Every object's vertices in world space (for framing the scene).
+    pub fn world_positions(&self) -> Vec<Vec3> {
+        self.objects
+            .iter()
+            .flat_map(|o| self.meshes[o.mesh].positions.iter().map(|p| o.transform.transform_point3(*p)))
+            .collect()
     }
 
     /// Checks every invariant the renderer relies on (see [`Mesh::validate`]),

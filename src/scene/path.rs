@@ -1,7 +1,8 @@
 //! Camera paths, sampled by frame index (never by wall clock, so that every
 //! run renders the same frames): the keyed paths of `cameras.json` (Unity's
-//! conventions, converted), fixed cameras, and a default orbit for scenes that
-//! come without cameras. Also the `--camera` choice and its resolver.
+//! conventions, converted), fixed cameras, the procedural scenes' orbits and
+//! turntables (the framed default of other scenes, and `--orbit`). Also the
+//! `--camera` choice and its resolver.
 
 use std::collections::BTreeMap;
 use std::f32::consts::TAU;
@@ -12,7 +13,7 @@ use std::str::FromStr;
 use glam::{EulerRot, Quat, Vec3};
 use serde::Deserialize;
 
-use super::{Aabb, Camera};
+use super::{Aabb, Camera, Scene, framing};
 
 /// Vertical field of view and clip planes of a path's cameras.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -72,27 +73,17 @@ impl UnityPose {
     }
 }
 
-/// How the default orbit looks at a scene.
+/// How a procedural scene's orbit looks at it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OrbitStyle {
-    /// Inside an enclosed scene (a courtyard), looking across it.
+    /// Inside an enclosed scene (the atrium's courtyard), looking across it.
     Inside,
-    /// Above an open scene (a terrain), looking down at 30 degrees.
+    /// Above an open scene (the voxel terrain), looking down at 30 degrees.
     Above,
 }
 
-impl OrbitStyle {
-    /// `Inside` when the scene is at least 0.35 times as tall as its shorter
-    /// horizontal side (Sponza: about 0.7), `Above` for flatter scenes (terrains,
-    /// block maps).
-    pub fn for_bounds(bounds: &Aabb) -> OrbitStyle {
-        let e = bounds.extent();
-        if e.y >= 0.35 * e.x.min(e.z) { OrbitStyle::Inside } else { OrbitStyle::Above }
-    }
-}
-
-/// The default camera path of a scene without cameras: one full turn around
-/// the vertical axis through the centre of `bounds`, over `frames` frames.
+/// The camera path of a procedural scene: one full turn around the vertical
+/// axis through the centre of `bounds`, over `frames` frames.
 ///
 /// - `Inside`: the eye moves on an ellipse at 35% of the box's half-extents
 ///   around the centre, at 35% of the height above the floor, and looks at the
@@ -117,13 +108,8 @@ impl Orbit {
     /// Default frames per turn.
     pub const FRAMES: u32 = 600;
 
-    /// The orbit of `bounds` with the style [`OrbitStyle::for_bounds`] picks,
-    /// 600 frames, 60 degrees fov, near 0.1 and far `max(1000, 4 × diagonal)`.
-    pub fn around(bounds: &Aabb) -> Orbit {
-        Orbit::with_style(bounds, OrbitStyle::for_bounds(bounds))
-    }
-
-    /// As [`Orbit::around`] with a given style.
+    /// The orbit of `bounds` in `style`: 600 frames, 60 degrees fov, near 0.1
+    /// and far `max(1000, 4 × diagonal)`.
     pub fn with_style(bounds: &Aabb, style: OrbitStyle) -> Orbit {
         let diagonal = bounds.extent().length();
         let far = if diagonal.is_finite() { (4.0 * diagonal).max(1000.0) } else { 1000.0 };
@@ -174,11 +160,44 @@ impl Orbit {
     }
 }
 
-fn look_at(eye: Vec3, target: Vec3, p: Projection) -> Camera {
+/// A camera at `eye` looking at `target`, upright (its up in the vertical
+/// plane through its view direction; looking straight down, up is -z).
+pub fn look_at(eye: Vec3, target: Vec3, p: Projection) -> Camera {
     let forward = (target - eye).try_normalize().unwrap_or(Vec3::NEG_Z);
     // Up orthogonal to forward, in the vertical plane through it.
     let right = forward.cross(Vec3::Y).try_normalize().unwrap_or(Vec3::X);
     Camera { position: eye, forward, up: right.cross(forward), fov_y: p.fov_y, near: p.near, far: p.far }
+}
+
+/// A camera circling `target` on a horizontal circle of `radius` at `height`
+/// above it, always looking at it: the framed default of scenes without a
+/// camera path ([`framing`]) and `--orbit`. Frame k is at angle `2π k /
+/// frames` from the +x side, turning towards +z.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Turntable {
+    /// The point circled and looked at.
+    pub target: Vec3,
+    /// Horizontal distance of the eye from `target`.
+    pub radius: f32,
+    /// Height of the eye above `target` (negative: below).
+    pub height: f32,
+    /// Frames per full turn; later frames wrap around.
+    pub frames: u32,
+    /// Projection of every camera of the turn.
+    pub projection: Projection,
+}
+
+impl Turntable {
+    /// The camera at turn angle `angle` (radians; 0 is on the +x side).
+    pub fn camera_at_angle(&self, angle: f32) -> Camera {
+        let eye = self.target + Vec3::new(self.radius * angle.cos(), self.height, self.radius * angle.sin());
+        look_at(eye, self.target, self.projection)
+    }
+
+    fn camera_at(&self, frame: u32) -> Camera {
+        let frames = self.frames.max(1);
+        self.camera_at_angle(TAU * (frame % frames) as f32 / frames as f32)
+    }
 }
 
 /// A camera path of `cameras.json`: keys interpolated linearly.
@@ -215,8 +234,10 @@ pub enum CameraPath {
     Keyed(KeyedPath),
     /// One camera for every frame.
     Fixed(Camera),
-    /// The default orbit of a scene without cameras.
+    /// A procedural scene's orbit of its bounds.
     Orbit(Orbit),
+    /// A camera circling a point.
+    Turntable(Turntable),
 }
 
 impl CameraPath {
@@ -226,17 +247,19 @@ impl CameraPath {
             CameraPath::Keyed(p) => p.pose_at(frame).to_camera(p.projection),
             CameraPath::Fixed(c) => *c,
             CameraPath::Orbit(o) => o.camera_at(frame),
+            CameraPath::Turntable(t) => t.camera_at(frame),
         }
     }
 
     /// Frames in one run of the path: `(keys - 1) × frames_per_segment` for a
     /// keyed path (600 for 3 keys; 1 for a single key), 1 for a fixed camera,
-    /// the frames of one turn for an orbit.
+    /// the frames of one turn for an orbit or a turntable.
     pub fn frame_count(&self) -> u32 {
         match self {
             CameraPath::Keyed(p) => ((p.keys.len() as u32).saturating_sub(1) * p.frames_per_segment).max(1),
             CameraPath::Fixed(_) => 1,
             CameraPath::Orbit(o) => o.frames.max(1),
+            CameraPath::Turntable(t) => t.frames.max(1),
         }
     }
 }
@@ -246,8 +269,12 @@ impl CameraPath {
 pub enum CameraSource {
     /// The scene's entry in a `cameras.json` file.
     File { path: PathBuf, scene: String },
-    /// Derived from the scene bounds.
+    /// A procedural scene's orbit of its bounds.
     Orbit(OrbitStyle),
+    /// The turntable framing the scene's bounds ([`framing`]).
+    Framed,
+    /// Camera `index` of the scene file (glTF).
+    Own { scene: String, index: usize },
 }
 
 impl fmt::Display for CameraSource {
@@ -256,6 +283,8 @@ impl fmt::Display for CameraSource {
             CameraSource::File { path, scene } => write!(f, "{} [{}]", path.display(), scene),
             CameraSource::Orbit(OrbitStyle::Inside) => f.write_str("orbit inside the scene bounds"),
             CameraSource::Orbit(OrbitStyle::Above) => f.write_str("orbit above the scene bounds"),
+            CameraSource::Framed => f.write_str("turntable framing the scene bounds"),
+            CameraSource::Own { scene, index } => write!(f, "{scene} [camera {index}]"),
         }
     }
 }
@@ -263,17 +292,21 @@ impl fmt::Display for CameraSource {
 /// A scene's camera path and fixed cameras.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneCameras {
+    /// The scene as `--scene` names it (for messages).
+    pub scene: String,
     /// The camera path of `--camera path`.
     pub path: CameraPath,
-    /// The fixed cameras (five for the reference scenes and for orbits).
+    /// The fixed cameras (five for the reference scenes, orbits and framed scenes).
     pub fixed: Vec<Camera>,
-    /// Where these cameras came from.
+    /// The scene file's own cameras (glTF), for `--camera gltf:K`.
+    pub own: Vec<Camera>,
+    /// Where the path came from.
     pub source: CameraSource,
 }
 
 impl SceneCameras {
-    /// The path `choice` selects: the scene path, or one fixed camera as a
-    /// [`CameraPath::Fixed`]. Fails when the fixed index is out of range.
+    /// The path `choice` selects: the scene path, or one fixed or file camera
+    /// as a [`CameraPath::Fixed`]. Fails when the index is out of range.
     pub fn select(&self, choice: CameraChoice) -> Result<CameraPath, CameraChoiceError> {
         match choice {
             CameraChoice::Path => Ok(self.path.clone()),
@@ -282,11 +315,14 @@ impl SceneCameras {
                 .get(k)
                 .map(|c| CameraPath::Fixed(*c))
                 .ok_or(CameraChoiceError::OutOfRange { index: k, count: self.fixed.len() }),
+            CameraChoice::Gltf(k) => self.own.get(k).map(|c| CameraPath::Fixed(*c)).ok_or_else(|| {
+                CameraChoiceError::NoSuchFileCamera { scene: self.scene.clone(), index: k, count: self.own.len() }
+            }),
         }
     }
 }
 
-/// The CLI's `--camera`: `path` or `fixed:K` (K from 0).
+/// The CLI's `--camera`: `path`, `fixed:K` or `gltf:K` (K from 0).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum CameraChoice {
     /// The scene's camera path.
@@ -294,6 +330,8 @@ pub enum CameraChoice {
     Path,
     /// Fixed camera K (from 0).
     Fixed(usize),
+    /// Camera K (from 0) of the scene's glTF file.
+    Gltf(usize),
 }
 
 impl fmt::Display for CameraChoice {
@@ -301,6 +339,7 @@ impl fmt::Display for CameraChoice {
         match self {
             CameraChoice::Path => f.write_str("path"),
             CameraChoice::Fixed(k) => write!(f, "fixed:{k}"),
+            CameraChoice::Gltf(k) => write!(f, "gltf:{k}"),
         }
     }
 }
@@ -308,12 +347,23 @@ impl fmt::Display for CameraChoice {
 /// Why a `--camera` value is not usable.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum CameraChoiceError {
-    /// Neither `path` nor `fixed:K`.
-    #[error("\"{0}\": expected 'path' or 'fixed:K' (K = 0, 1, ...)")]
+    /// Not `path`, `fixed:K` or `gltf:K`.
+    #[error("\"{0}\": expected 'path', 'fixed:K' or 'gltf:K' (K = 0, 1, ...)")]
     Syntax(String),
     /// The scene has fewer fixed cameras.
     #[error("camera fixed:{index} does not exist: the scene has {count} fixed cameras (fixed:0 to fixed:{})", count.saturating_sub(1))]
     OutOfRange { index: usize, count: usize },
+    /// The scene file has fewer cameras of its own.
+    #[error("camera gltf:{index} does not exist: {scene} {}", file_camera_count(*count))]
+    NoSuchFileCamera { scene: String, index: usize, count: usize },
+}
+
+fn file_camera_count(count: usize) -> String {
+    match count {
+        0 => "has no cameras of its own".into(),
+        1 => "has 1 camera (gltf:0)".into(),
+        n => format!("has {n} cameras (gltf:0 to gltf:{})", n - 1),
+    }
 }
 
 impl FromStr for CameraChoice {
@@ -324,9 +374,10 @@ impl FromStr for CameraChoice {
         if s.eq_ignore_ascii_case("path") {
             return Ok(CameraChoice::Path);
         }
-        s.strip_prefix("fixed:")
-            .and_then(|k| k.parse::<usize>().ok())
+        let index = |prefix: &str| s.strip_prefix(prefix).and_then(|k| k.parse::<usize>().ok());
+        index("fixed:")
             .map(CameraChoice::Fixed)
+            .or_else(|| index("gltf:").map(CameraChoice::Gltf))
             .ok_or_else(|| CameraChoiceError::Syntax(s.into()))
     }
 }
@@ -350,8 +401,8 @@ pub enum CameraFileError {
     /// The file has no entry for the scene.
     #[error("{path}: no cameras for scene '{scene}' (the file has: {})", known.join(", "))]
     UnknownScene { path: PathBuf, scene: String, known: Vec<String> },
-    /// An orbit needs a non-empty, finite box.
-    #[error("cannot place cameras: the scene bounds are empty or not finite")]
+    /// An orbit or framing needs a finite box that is more than a point.
+    #[error("cannot place cameras: the scene bounds are empty, a single point, or not finite")]
     EmptyBounds,
 }
 
@@ -402,6 +453,8 @@ impl CamerasFile {
         Ok(Projection { fov_y: p.vertical_fov_deg.to_radians(), near: p.near, far: p.far })
     }
 
+    /// The entry `scene` as [`SceneCameras`] (with no cameras of the scene
+    /// file's own, which [`cameras_for_scene`] adds).
     fn scene_cameras(&self, path: &Path, scene: &str) -> Result<SceneCameras, CameraFileError> {
         let projection = self.projection(path)?;
         let entry = self.scenes.get(scene).ok_or_else(|| CameraFileError::UnknownScene {
@@ -438,8 +491,10 @@ impl CamerasFile {
         }
         let fixed = poses(&entry.fixed_cameras, "fixed_cameras")?.iter().map(|p| p.to_camera(projection)).collect();
         Ok(SceneCameras {
+            scene: scene.into(),
             path: CameraPath::Keyed(KeyedPath { keys, frames_per_segment: self.frames_per_segment, projection }),
             fixed,
+            own: Vec::new(),
             source: CameraSource::File { path: path.into(), scene: scene.into() },
         })
     }
@@ -451,45 +506,76 @@ pub fn load_cameras_json(path: &Path, scene_name: &str) -> Result<SceneCameras, 
     read_cameras_file(path)?.scene_cameras(path, scene_name)
 }
 
-/// The cameras of the scene `scene_spec` (as given to `--scene`).
+/// The cameras of `scene`, named `scene_spec` by `--scene`, for images of
+/// aspect `aspect` (width / height).
 ///
 /// A folder or file whose parent folder holds a `cameras.json` with an entry
 /// named after it (the folder name, or the file stem) uses that entry:
 /// `../shared/scenes/sponza-thesis` -> `../shared/scenes/cameras.json`,
 /// scene `sponza-thesis`. A `cameras.json` that exists but cannot be read or
-/// parsed is an error. Everything else (the procedural `atrium` and `voxels`,
-/// other files, scenes the file does not list) gets the deterministic
-/// [`Orbit`] of `scene_bounds` and its five fixed cameras; `atrium` orbits
-/// inside, `voxels` above, others by [`OrbitStyle::for_bounds`].
-pub fn cameras_for_scene(scene_spec: &str, scene_bounds: &Aabb) -> Result<SceneCameras, CameraFileError> {
-    let spec = Path::new(scene_spec);
-    if spec.exists() {
-        let key = if spec.is_dir() { spec.file_name() } else { spec.file_stem() };
-        if let Some(key) = key.and_then(|k| k.to_str()) {
-            let parent = spec.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-            let file = parent.join("cameras.json");
-            if file.is_file() {
-                let cameras = read_cameras_file(&file)?;
-                if cameras.scenes.contains_key(key) {
-                    return cameras.scene_cameras(&file, key);
-                }
-            }
-        }
+/// parsed is an error. The procedural `atrium` and `voxels` get the
+/// deterministic [`Orbit`] of their bounds (inside and above) and its five
+/// fixed cameras. Every other scene is framed from outside ([`framing`]):
+/// its path is the framing turntable, or, when the file brings cameras
+/// (glTF), its first camera held still; its fixed cameras are the framed
+/// views. The file's own cameras are `gltf:K` in every case.
+pub fn cameras_for_scene(scene_spec: &str, scene: &Scene, aspect: f32) -> Result<SceneCameras, CameraFileError> {
+    cameras_for(scene_spec, &scene.bounds(), &scene.cameras, || framing::frame(&scene.world_positions(), aspect))
+}
+
+/// [`cameras_for_scene`] for a scene of `bounds` with cameras `own`, framed
+/// by `frame` when it comes to that.
+fn cameras_for(
+    spec: &str,
+    bounds: &Aabb,
+    own: &[Camera],
+    frame: impl FnOnce() -> Option<framing::Framed>,
+) -> Result<SceneCameras, CameraFileError> {
+    if let Some(mut cameras) = cameras_json_entry(spec)? {
+        cameras.scene = spec.into();
+        cameras.own = own.to_vec();
+        return Ok(cameras);
     }
-    if scene_bounds.is_empty() || !scene_bounds.min.is_finite() || !scene_bounds.max.is_finite() {
+    if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
         return Err(CameraFileError::EmptyBounds);
     }
-    let style = match scene_spec {
-        "atrium" => OrbitStyle::Inside,
-        "voxels" => OrbitStyle::Above,
-        _ => OrbitStyle::for_bounds(scene_bounds),
+    let (path, fixed, source) = match spec {
+        "atrium" | "voxels" => {
+            let style = if spec == "atrium" { OrbitStyle::Inside } else { OrbitStyle::Above };
+            let orbit = Orbit::with_style(bounds, style);
+            (CameraPath::Orbit(orbit), orbit.fixed_cameras(), CameraSource::Orbit(style))
+        }
+        _ => {
+            let framed = frame().ok_or(CameraFileError::EmptyBounds)?;
+            match own.first() {
+                Some(first) => {
+                    (CameraPath::Fixed(*first), framed.fixed, CameraSource::Own { scene: spec.into(), index: 0 })
+                }
+                None => (CameraPath::Turntable(framed.turntable), framed.fixed, CameraSource::Framed),
+            }
+        }
     };
-    let orbit = Orbit::with_style(scene_bounds, style);
-    Ok(SceneCameras {
-        path: CameraPath::Orbit(orbit),
-        fixed: orbit.fixed_cameras(),
-        source: CameraSource::Orbit(style),
-    })
+    Ok(SceneCameras { scene: spec.into(), path, fixed, own: own.to_vec(), source })
+}
+
+/// The entry of `cameras.json` beside the scene `spec` names, if there is one.
+fn cameras_json_entry(spec: &str) -> Result<Option<SceneCameras>, CameraFileError> {
+    let spec = Path::new(spec);
+    if !spec.exists() {
+        return Ok(None);
+    }
+    let key = if spec.is_dir() { spec.file_name() } else { spec.file_stem() };
+    let Some(key) = key.and_then(|k| k.to_str()) else { return Ok(None) };
+    let parent = spec.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let file = parent.join("cameras.json");
+    if !file.is_file() {
+        return Ok(None);
+    }
+    let cameras = read_cameras_file(&file)?;
+    if !cameras.scenes.contains_key(key) {
+        return Ok(None);
+    }
+    cameras.scene_cameras(&file, key).map(Some)
 }
 
 #[cfg(test)]
@@ -661,10 +747,18 @@ mod tests {
         assert_eq!("path".parse::<CameraChoice>(), Ok(CameraChoice::Path));
         assert_eq!("fixed:0".parse::<CameraChoice>(), Ok(CameraChoice::Fixed(0)));
         assert_eq!("fixed:3".parse::<CameraChoice>().unwrap().to_string(), "fixed:3");
-        for bad in ["", "fixed", "fixed:", "fixed:-1", "fixed:x", "orbit"] {
+        assert_eq!("gltf:2".parse::<CameraChoice>(), Ok(CameraChoice::Gltf(2)));
+        assert_eq!(CameraChoice::Gltf(1).to_string(), "gltf:1");
+        for bad in ["", "fixed", "fixed:", "fixed:-1", "fixed:x", "orbit", "gltf:", "gltf:a"] {
             let err = bad.parse::<CameraChoice>().unwrap_err().to_string();
-            assert!(err.contains("expected 'path' or 'fixed:K'"), "{bad}: {err}");
+            assert!(err.contains("expected 'path', 'fixed:K' or 'gltf:K'"), "{bad}: {err}");
         }
+    }
+
+    /// Frames the corners of `bounds`.
+    fn framer(bounds: &Aabb, aspect: f32) -> impl FnOnce() -> Option<framing::Framed> {
+        let corners = bounds.corners();
+        move || framing::frame(&corners, aspect)
     }
 
     fn courtyard() -> Aabb {
@@ -677,10 +771,7 @@ mod tests {
 
     #[test]
     fn orbit_styles_and_views() {
-        assert_eq!(OrbitStyle::for_bounds(&courtyard()), OrbitStyle::Inside);
-        assert_eq!(OrbitStyle::for_bounds(&terrain()), OrbitStyle::Above);
-
-        let inside = CameraPath::Orbit(Orbit::around(&courtyard()));
+        let inside = CameraPath::Orbit(Orbit::with_style(&courtyard(), OrbitStyle::Inside));
         assert_eq!(inside.frame_count(), 600);
         for f in (0..600).step_by(37) {
             let c = inside.camera_at(f);
@@ -694,7 +785,7 @@ mod tests {
         let c300 = inside.camera_at(300);
         assert!(c0.position.x > 0.0 && c300.position.x < 0.0, "half a turn later on the other side");
 
-        let above = CameraPath::Orbit(Orbit::around(&terrain()));
+        let above = CameraPath::Orbit(Orbit::with_style(&terrain(), OrbitStyle::Above));
         for f in (0..600).step_by(41) {
             let c = above.camera_at(f);
             assert!(c.position.y > terrain().max.y);
@@ -706,16 +797,55 @@ mod tests {
 
     #[test]
     fn procedural_scenes_get_a_deterministic_orbit() {
-        let a = cameras_for_scene("atrium", &terrain()).unwrap();
+        let a = cameras_for("atrium", &terrain(), &[], framer(&terrain(), 1.5)).unwrap();
         assert_eq!(a.source, CameraSource::Orbit(OrbitStyle::Inside), "atrium orbits inside whatever its shape");
-        let v = cameras_for_scene("voxels", &terrain()).unwrap();
+        let v = cameras_for("voxels", &terrain(), &[], framer(&terrain(), 1.5)).unwrap();
         assert_eq!(v.source, CameraSource::Orbit(OrbitStyle::Above));
-        assert_eq!(v, cameras_for_scene("voxels", &terrain()).unwrap());
+        assert_eq!(v, cameras_for("voxels", &terrain(), &[], framer(&terrain(), 1.5)).unwrap());
+        assert_eq!(
+            v,
+            cameras_for("voxels", &terrain(), &[], framer(&terrain(), 0.5)).unwrap(),
+            "the orbit ignores the aspect"
+        );
         assert_eq!(v.fixed.len(), 5);
         for c in &v.fixed {
             assert!(c.forward.is_normalized() && c.up.dot(c.forward).abs() < 1e-5);
         }
-        assert!(matches!(cameras_for_scene("atrium", &Aabb::EMPTY), Err(CameraFileError::EmptyBounds)));
+        assert!(matches!(
+            cameras_for("atrium", &Aabb::EMPTY, &[], framer(&Aabb::EMPTY, 1.0)),
+            Err(CameraFileError::EmptyBounds)
+        ));
+    }
+
+    #[test]
+    fn other_scenes_are_framed_or_use_their_own_cameras() {
+        let framed = cameras_for("model.glb", &courtyard(), &[], framer(&courtyard(), 1.5)).unwrap();
+        assert_eq!(framed.source, CameraSource::Framed);
+        let CameraPath::Turntable(t) = framed.path else { panic!("turntable expected: {:?}", framed.path) };
+        let c = courtyard().center();
+        assert_eq!((t.target.x, t.target.z), (c.x, c.z), "on the vertical through the centre");
+        assert_eq!(framed.fixed.len(), 5);
+        assert_eq!(framed.path.frame_count(), 600);
+        let err = framed.select(CameraChoice::Gltf(0)).unwrap_err().to_string();
+        assert_eq!(err, "camera gltf:0 does not exist: model.glb has no cameras of its own");
+
+        let own = [Camera { position: Vec3::new(1.0, 2.0, 3.0), ..framed.fixed[0] }, framed.fixed[1]];
+        let with_own = cameras_for("model.glb", &courtyard(), &own, framer(&courtyard(), 1.5)).unwrap();
+        assert_eq!(with_own.source, CameraSource::Own { scene: "model.glb".into(), index: 0 });
+        assert_eq!(with_own.path, CameraPath::Fixed(own[0]), "the file's first camera is the default");
+        assert_eq!(with_own.fixed, framed.fixed, "fixed cameras stay the framed views");
+        assert_eq!(with_own.select(CameraChoice::Gltf(1)).unwrap(), CameraPath::Fixed(own[1]));
+        let err = with_own.select(CameraChoice::Gltf(2)).unwrap_err().to_string();
+        assert_eq!(err, "camera gltf:2 does not exist: model.glb has 2 cameras (gltf:0 to gltf:1)");
+        let one = cameras_for("a.gltf", &courtyard(), &own[..1], framer(&courtyard(), 1.5)).unwrap();
+        let err = one.select(CameraChoice::Gltf(1)).unwrap_err().to_string();
+        assert_eq!(err, "camera gltf:1 does not exist: a.gltf has 1 camera (gltf:0)");
+
+        let point = Aabb { min: Vec3::ONE, max: Vec3::ONE };
+        assert!(matches!(
+            cameras_for("model.glb", &point, &[], framer(&point, 1.0)),
+            Err(CameraFileError::EmptyBounds)
+        ));
     }
 
     #[test]
@@ -729,7 +859,7 @@ mod tests {
                 eprintln!("skipped: {spec} is absent");
                 return;
             }
-            let cams = cameras_for_scene(spec, &courtyard()).unwrap();
+            let cams = cameras_for(spec, &courtyard(), &[], framer(&courtyard(), 1.0)).unwrap();
             assert_eq!(cams.source.to_string(), "../shared/scenes/cameras.json [sponza-thesis]");
             assert_eq!(cams.path.camera_at(0).position, Vec3::new(-6.0, 4.0, -0.5));
         }
@@ -749,16 +879,17 @@ mod tests {
         let other = dir.path().join("other.obj");
         std::fs::write(&boxed, "").unwrap();
         std::fs::write(&other, "").unwrap();
-        let cams = cameras_for_scene(boxed.to_str().unwrap(), &courtyard()).unwrap();
+        let cams = cameras_for(boxed.to_str().unwrap(), &courtyard(), &[], framer(&courtyard(), 1.0)).unwrap();
         assert!(matches!(cams.source, CameraSource::File { ref scene, .. } if scene == "box"));
         assert_eq!(cams.path.frame_count(), 1);
         assert_eq!(cams.path.camera_at(7).position, Vec3::new(-1.0, 2.0, 3.0));
-        // A scene the file does not list falls back to the orbit.
-        let cams = cameras_for_scene(other.to_str().unwrap(), &courtyard()).unwrap();
-        assert_eq!(cams.source, CameraSource::Orbit(OrbitStyle::Inside));
+        // A scene the file does not list is framed.
+        let cams = cameras_for(other.to_str().unwrap(), &courtyard(), &[], framer(&courtyard(), 1.0)).unwrap();
+        assert_eq!(cams.source, CameraSource::Framed);
         // A broken cameras.json beside the scene is an error naming it.
         std::fs::write(dir.path().join("cameras.json"), "[").unwrap();
-        let err = cameras_for_scene(other.to_str().unwrap(), &courtyard()).unwrap_err().to_string();
+        let err =
+            cameras_for(other.to_str().unwrap(), &courtyard(), &[], framer(&courtyard(), 1.0)).unwrap_err().to_string();
         assert!(err.contains("cameras.json: not a camera file"), "{err}");
     }
 }

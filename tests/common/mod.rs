@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod gltf;
+
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -113,7 +115,7 @@ pub fn path_frame_seeded(name: &str, spec: &str, width: u32, height: u32, seed: 
     use shadespace::scene::{self, LightSpec, lights, path};
     let scene = scene::load(name).unwrap();
     let bounds = scene.bounds();
-    let cameras = path::cameras_for_scene(name, &bounds).unwrap();
+    let cameras = path::cameras_for_scene(name, &scene, width as f32 / height as f32).unwrap();
     let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
     let spec: LightSpec = spec.parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &camera, width as f32 / height as f32, seed).unwrap();
