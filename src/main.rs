@@ -6,6 +6,7 @@ use std::str::FromStr;
 
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use shadespace::bench::{self, BenchPlan, BenchSetup, RunReport};
 use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
@@ -17,6 +18,7 @@ use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,
     PipelineConfig, RenderOptions, Renderer, ShadowRefresh, VisibilityMethod,
 };
+use shadespace::scene::free_camera::{self, LookAt, OrbitSpec};
 use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
 #[derive(Parser)]
@@ -176,6 +178,8 @@ struct SceneArgs {
     /// (camera K of the glTF file).
     #[arg(long, default_value = "path")]
     camera: String,
+    #[command(flatten)]
+    free_camera: FreeCameraArgs,
     /// Lights besides the ambient and directional light that every set has:
     /// `small:N` (each covers 0.25-5% of the screen), `big:N` (20-100%),
     /// `shadowed:N` (big lights that cast shadows: a quarter are spots),
@@ -232,6 +236,38 @@ struct SceneArgs {
     objectspace: ObjectSpaceArgs,
     #[command(flatten)]
     gpu: GpuArgs,
+}
+
+#[derive(Args)]
+#[command(next_help_heading = "Free cameras (instead of --camera)")]
+struct FreeCameraArgs {
+    /// Place the camera at X,Y,Z (world metres, +y up) looking at --target;
+    /// the near and far planes hold the whole scene.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_point,
+          group = "free", requires = "target", conflicts_with = "camera")]
+    eye: Option<Vec3>,
+    /// The point --eye looks at, or --orbit circles (default for --orbit: the
+    /// centre of the scene's bounds).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_point, requires = "free")]
+    target: Option<Vec3>,
+    /// Camera path circling --target: the eye RADIUS metres from it
+    /// horizontally and HEIGHT metres above it, one turn in PERIOD frames
+    /// (from the +x side towards +z).
+    #[arg(long, value_name = "RADIUS,HEIGHT,PERIOD", allow_hyphen_values = true, value_parser = parse_orbit,
+          group = "free", conflicts_with = "camera")]
+    orbit: Option<OrbitArg>,
+    /// Vertical field of view of --eye or --orbit, degrees (above 0, below 180).
+    #[arg(long, value_name = "DEG", default_value_t = free_camera::DEFAULT_FOV_DEG, value_parser = fov_degrees,
+          requires = "free")]
+    fov: f32,
+}
+
+/// `--orbit RADIUS,HEIGHT,PERIOD`.
+#[derive(Clone, Copy, Debug)]
+struct OrbitArg {
+    radius: f32,
+    height: f32,
+    frames: u32,
 }
 
 #[derive(Args)]
@@ -358,6 +394,43 @@ fn positive_f32(s: &str) -> Result<f32, String> {
     finite_in(s, f32::MIN_POSITIVE..=f32::MAX, "a positive finite number")
 }
 
+/// Comma-separated finite numbers, exactly `N` of them.
+fn numbers<const N: usize>(s: &str, form: &str) -> Result<[f32; N], String> {
+    let values: Vec<&str> = s.split(',').map(str::trim).collect();
+    let bad = || format!("'{s}' is not {form} ({N} finite numbers separated by commas)");
+    if values.len() != N {
+        return Err(bad());
+    }
+    let mut out = [0.0; N];
+    for (o, v) in out.iter_mut().zip(values) {
+        *o = v.parse::<f32>().ok().filter(|x| x.is_finite()).ok_or_else(bad)?;
+    }
+    Ok(out)
+}
+
+fn parse_point(s: &str) -> Result<Vec3, String> {
+    numbers::<3>(s, "X,Y,Z").map(Vec3::from)
+}
+
+fn parse_orbit(s: &str) -> Result<OrbitArg, String> {
+    let [radius, height, period] = numbers::<3>(s, "RADIUS,HEIGHT,PERIOD")?;
+    if radius <= 0.0 {
+        return Err(format!("'{s}': the radius {radius} is not positive"));
+    }
+    if period < 1.0 || period.fract() != 0.0 || period > u32::MAX as f32 {
+        return Err(format!("'{s}': the period {period} is not a whole number of frames of at least 1"));
+    }
+    Ok(OrbitArg { radius, height, frames: period as u32 })
+}
+
+fn fov_degrees(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v < 180.0 => Ok(v),
+        Ok(_) => Err(format!("'{s}' is not a field of view above 0 and below 180 degrees")),
+        Err(_) => Err(format!("'{s}' is not a number")),
+    }
+}
+
 fn on_off(s: &str) -> Result<bool, String> {
     match s {
         "on" => Ok(true),
@@ -482,9 +555,7 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     }
     let bounds = scene.bounds();
     let aspect = a.size.0 as f32 / a.size.1 as f32;
-    let choice: path::CameraChoice = input(a.camera.parse())?;
-    let cameras = input(path::cameras_for_scene(&a.scene, &scene, aspect))?;
-    let path = input(cameras.select(choice))?;
+    let (path, camera_label) = camera_path(a, &scene, aspect)?;
     let spec: LightSpec = input(a.lights.parse())?;
     let reference: Camera = path.camera_at(0);
     let lights = input(lights::build_lights(&spec, &bounds, &reference, aspect, a.seed))?;
@@ -494,7 +565,34 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     } else {
         (scene, None)
     };
-    Ok(Setup { scene, texture_sizes, path, camera_label: a.camera.clone(), lights, lights_spec: spec.to_string() })
+    Ok(Setup { scene, texture_sizes, path, camera_label, lights, lights_spec: spec.to_string() })
+}
+
+/// The camera path the options ask for, and its label for reports: a free
+/// camera (`--eye`, `--orbit`) or one of the scene's (`--camera`).
+fn camera_path(a: &SceneArgs, scene: &Scene, aspect: f32) -> Result<(CameraPath, String), Failure> {
+    let f = &a.free_camera;
+    let bounds = scene.bounds();
+    let fov = f.fov;
+    if let (Some(eye), Some(target)) = (f.eye, f.target) {
+        let camera = LookAt { eye, target, fov_deg: fov }.camera(&bounds);
+        let camera = input(camera.context("--eye, --target"))?;
+        let label = format!("eye {} target {} fov {fov}", xyz(eye), xyz(target));
+        return Ok((CameraPath::Fixed(camera), label));
+    }
+    if let Some(o) = f.orbit {
+        let spec = OrbitSpec { radius: o.radius, height: o.height, frames: o.frames, target: f.target, fov_deg: fov };
+        let turntable = input(spec.turntable(&bounds).context("--orbit"))?;
+        let label = format!("orbit {},{},{} target {} fov {fov}", o.radius, o.height, o.frames, xyz(turntable.target));
+        return Ok((CameraPath::Turntable(turntable), label));
+    }
+    let choice: path::CameraChoice = input(a.camera.parse().context("--camera"))?;
+    let cameras = input(path::cameras_for_scene(&a.scene, scene, aspect))?;
+    Ok((input(cameras.select(choice).context("--camera"))?, a.camera.clone()))
+}
+
+fn xyz(v: Vec3) -> String {
+    format!("{},{},{}", v.x, v.y, v.z)
 }
 
 impl Setup {

@@ -125,3 +125,106 @@ fn gltf_cameras_are_used_when_present() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("atrium has no cameras of its own"), "{err}");
 }
+
+/// The centroid (x, y, in pixels) and the radius (from its area) of the
+/// model's pixels, for a sphere seen as a disc.
+fn disc(image: &image::RgbImage) -> (f32, f32, f32) {
+    let pixels: Vec<(u32, u32)> =
+        image.enumerate_pixels().filter(|(_, _, p)| p.0.iter().any(|&c| c > 0)).map(|(x, y, _)| (x, y)).collect();
+    let n = pixels.len() as f32;
+    let x = pixels.iter().map(|p| p.0 as f32).sum::<f32>() / n;
+    let y = pixels.iter().map(|p| p.1 as f32).sum::<f32>() / n;
+    (x, y, (n / std::f32::consts::PI).sqrt())
+}
+
+/// Pixel radius of the disc a sphere of `radius` at `distance` covers in a
+/// `size`-pixel-high image of vertical field of view `fov_deg`: its silhouette
+/// cone has half-angle asin(radius / distance).
+fn disc_radius(radius: f32, distance: f32, fov_deg: f32, size: u32) -> f32 {
+    (radius / distance).asin().tan() / (0.5 * fov_deg.to_radians()).tan() * 0.5 * size as f32
+}
+
+/// `--eye`/`--target` and `--orbit` put a known point in the middle of the
+/// image at the distance and field of view asked for: a unit sphere at
+/// (3, 1, -2) shows as a centred disc of the predicted size.
+#[test]
+fn free_cameras_show_the_expected_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let ball = [common::gltf::ellipsoid(Vec3::new(3.0, 1.0, -2.0), Vec3::ONE, 32, 48)];
+    let scene = write_gltf(dir.path(), "ball", &ball, &Placement::default());
+    let size = 128;
+    let cases: [(&[&str], f32, f32); 4] = [
+        // (flags, distance from the eye to the centre, field of view)
+        (&["--eye", "3,1,2", "--target", "3,1,-2"], 4.0, 60.0),
+        (&["--eye", "3,1,2", "--target", "3,1,-2", "--fov", "40"], 4.0, 40.0),
+        // Frame 0 of the turn is on the +x side, frame 2 of 8 a quarter turn on.
+        (&["--orbit", "3,4,8", "--target", "3,1,-2"], 5.0, 60.0),
+        (&["--orbit", "3,4,8", "--target", "3,1,-2", "--frame", "2", "--fov", "45"], 5.0, 45.0),
+    ];
+    for (k, (flags, distance, fov)) in cases.into_iter().enumerate() {
+        let out = dir.path().join(format!("free-{k}.png"));
+        let mut args = vec!["--scene", scene.to_str().unwrap(), "--size", "128x128"];
+        args.extend_from_slice(flags);
+        let (code, err, image) = render(&out, &args);
+        assert_eq!(code, 0, "{flags:?}: {err}");
+        let image = image.unwrap();
+        image.save(common::out_dir().join(format!("free-camera-{k}.png"))).unwrap();
+        let (x, y, r) = disc(&image);
+        let want = disc_radius(1.0, distance, fov, size);
+        eprintln!("{flags:?}: disc at ({x:.2}, {y:.2}), radius {r:.2} px (expected {want:.2})");
+        let middle = (size - 1) as f32 / 2.0;
+        assert!((x - middle).abs() < 0.5 && (y - middle).abs() < 0.5, "{flags:?}: off centre at ({x}, {y})");
+        assert!((r / want - 1.0).abs() < 0.03, "{flags:?}: radius {r} px, expected {want}");
+    }
+    // Looking at (2, 1, -2), 1 m left of the ball: the ball's centre is
+    // atan(1/4) to the right of the view axis, its silhouette asin(1/4) wide
+    // either side, so its left and right edges are at those angles' tangents
+    // over tan(30 deg), in half-widths of 64 pixels from the middle.
+    let out = dir.path().join("free-aside.png");
+    let args = ["--scene", scene.to_str().unwrap(), "--size", "128x128", "--eye", "3,1,2", "--target", "2,1,-2"];
+    let (code, err, image) = render(&out, &args);
+    assert_eq!(code, 0, "{err}");
+    let image = image.unwrap();
+    let columns: Vec<u32> = image.enumerate_pixels().filter(|(_, _, p)| p.0[0] > 0).map(|(x, _, _)| x).collect();
+    let (left, right) = (*columns.iter().min().unwrap() as f32, *columns.iter().max().unwrap() as f32);
+    let (centre, half) = ((1.0f32 / 4.0).atan(), (1.0f32 / 4.0).asin());
+    let edge = |angle: f32| 63.5 + angle.tan() / 30f32.to_radians().tan() * 64.0;
+    let (want_left, want_right) = (edge(centre - half), edge(centre + half));
+    eprintln!("aside: columns {left} to {right}, expected {want_left:.2} to {want_right:.2}");
+    assert!((left - want_left).abs() < 1.0 && (right - want_right).abs() < 1.0, "columns {left} to {right}");
+    assert!((disc(&image).1 - 63.5).abs() < 0.5, "still level");
+}
+
+/// Bad camera flags exit with status 2 and name the flag.
+#[test]
+fn bad_camera_flags_name_the_flag() {
+    let cases: [(&[&str], &[&str]); 12] = [
+        (&["--eye", "1,2"], &["--eye", "X,Y,Z"]),
+        (&["--eye", "1,2,nan", "--target", "0,0,0"], &["--eye", "finite"]),
+        (&["--eye", "1,2,3"], &["--target"]),
+        (&["--target", "1,2,3"], &["--eye", "--orbit"]),
+        (&["--fov", "40"], &["--eye", "--orbit"]),
+        (&["--eye", "1,2,3", "--target", "1,2,3"], &["--eye", "--target", "same point"]),
+        (&["--eye", "1,2,3", "--target", "0,0,0", "--fov", "180"], &["--fov", "below 180"]),
+        (&["--eye", "1,2,3", "--target", "0,0,0", "--fov", "0"], &["--fov", "above 0"]),
+        (&["--eye", "1,2,3", "--target", "0,0,0", "--orbit", "1,1,10"], &["--eye", "--orbit"]),
+        (&["--eye", "1,2,3", "--target", "0,0,0", "--camera", "fixed:1"], &["--camera", "--eye"]),
+        (&["--orbit", "0,1,10"], &["--orbit", "radius"]),
+        (&["--orbit", "1,1,2.5"], &["--orbit", "period"]),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (flags, expected) in cases {
+        let mut args = vec!["--size", "32x18"];
+        args.extend_from_slice(flags);
+        let (code, err, _) = render(&dir.path().join("x.png"), &args);
+        assert_eq!(code, 2, "{flags:?} was accepted:\n{err}");
+        for e in expected {
+            assert!(err.contains(e), "{flags:?}: no '{e}' in {err}");
+        }
+    }
+    let help = Command::new(env!("CARGO_BIN_EXE_shadespace")).args(["render", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    for flag in ["--eye <X,Y,Z>", "--target <X,Y,Z>", "--orbit <RADIUS,HEIGHT,PERIOD>", "--fov <DEG>", "gltf:K"] {
+        assert!(help.contains(flag), "render --help lacks {flag}");
+    }
+}

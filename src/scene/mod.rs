@@ -8,6 +8,7 @@ pub mod camera;
 pub mod checker;
 pub mod error;
 pub mod framing;
+pub mod free_camera;
 pub mod generate;
 pub mod gltf;
 pub mod lights;
