@@ -178,8 +178,6 @@ struct SceneArgs {
     /// (camera K of the glTF file).
     #[arg(long, default_value = "path")]
     camera: String,
-    #[command(flatten)]
-    free_camera: FreeCameraArgs,
     /// Lights besides the ambient and directional light that every set has:
     /// `small:N` (each covers 0.25-5% of the screen), `big:N` (20-100%),
     /// `shadowed:N` (big lights that cast shadows: a quarter are spots),
@@ -232,6 +230,8 @@ struct SceneArgs {
     /// counters. Adds atomics: for profiling, not for timing.
     #[arg(long)]
     count_visibility: bool,
+    #[command(flatten)]
+    free_camera: FreeCameraArgs,
     #[command(flatten)]
     objectspace: ObjectSpaceArgs,
     #[command(flatten)]
