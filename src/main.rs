@@ -19,7 +19,8 @@ use shadespace::render::{
     PipelineConfig, RenderOptions, Renderer, ShadowRefresh, VisibilityMethod,
 };
 use shadespace::scene::free_camera::{self, LookAt, OrbitSpec};
-use shadespace::scene::{self, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
+use shadespace::scene::path::SceneCameras;
+use shadespace::scene::{self, Aabb, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
 
 #[derive(Parser)]
 #[command(name = "shadespace", version, about = "Object-space shading renderer and testbed", long_about = None)]
@@ -555,10 +556,12 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     }
     let bounds = scene.bounds();
     let aspect = a.size.0 as f32 / a.size.1 as f32;
-    let (path, camera_label) = camera_path(a, &scene, aspect)?;
+    let cameras = input(path::cameras_for_scene(&a.scene, &scene, aspect))?;
+    let (path, camera_label) = camera_path(a, &cameras, &bounds)?;
     let spec: LightSpec = input(a.lights.parse())?;
     let reference: Camera = path.camera_at(0);
-    let lights = input(lights::build_lights(&spec, &bounds, &reference, aspect, a.seed))?;
+    let placement = if cameras.source.seen_from_outside() { lights::region_around(&bounds) } else { bounds };
+    let lights = input(lights::build_lights(&spec, &placement, &reference, aspect, a.seed))?;
     let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {
         let (charted, charts) = chart(&scene, &a.objectspace)?;
         (charted, Some(charts.texture_sizes()))
@@ -570,24 +573,22 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
 
 /// The camera path the options ask for, and its label for reports: a free
 /// camera (`--eye`, `--orbit`) or one of the scene's (`--camera`).
-fn camera_path(a: &SceneArgs, scene: &Scene, aspect: f32) -> Result<(CameraPath, String), Failure> {
+fn camera_path(a: &SceneArgs, cameras: &SceneCameras, bounds: &Aabb) -> Result<(CameraPath, String), Failure> {
     let f = &a.free_camera;
-    let bounds = scene.bounds();
     let fov = f.fov;
     if let (Some(eye), Some(target)) = (f.eye, f.target) {
-        let camera = LookAt { eye, target, fov_deg: fov }.camera(&bounds);
+        let camera = LookAt { eye, target, fov_deg: fov }.camera(bounds);
         let camera = input(camera.context("--eye, --target"))?;
         let label = format!("eye {} target {} fov {fov}", xyz(eye), xyz(target));
         return Ok((CameraPath::Fixed(camera), label));
     }
     if let Some(o) = f.orbit {
         let spec = OrbitSpec { radius: o.radius, height: o.height, frames: o.frames, target: f.target, fov_deg: fov };
-        let turntable = input(spec.turntable(&bounds).context("--orbit"))?;
+        let turntable = input(spec.turntable(bounds).context("--orbit"))?;
         let label = format!("orbit {},{},{} target {} fov {fov}", o.radius, o.height, o.frames, xyz(turntable.target));
         return Ok((CameraPath::Turntable(turntable), label));
     }
     let choice: path::CameraChoice = input(a.camera.parse().context("--camera"))?;
-    let cameras = input(path::cameras_for_scene(&a.scene, scene, aspect))?;
     Ok((input(cameras.select(choice).context("--camera"))?, a.camera.clone()))
 }
 

@@ -63,9 +63,13 @@ fn exposure(image: &image::RgbImage) -> Exposure {
 /// their extent filling 30-90 % of the frame, lit (not black, not white),
 /// with no camera or light flags; so are other frames of the turntable.
 ///
-/// The model's own pixels cover less (about 14 % here): a compact model seen
+/// The model's own pixels cover less (23-28 % here): a compact model seen
 /// whole from every side of the turn, with a margin, in a 16:9 frame leaves
 /// the sides empty. Its extent is what framing controls.
+///
+/// The generated lights reach either model: four big lights brighten over a
+/// fifth of its pixels (with lights placed in metres, none on the 5 cm model
+/// and a ninth of the 200 m one).
 #[test]
 fn tiny_and_huge_models_are_framed_and_lit_with_no_flags() {
     let dir = tempfile::tempdir().unwrap();
@@ -90,6 +94,20 @@ fn tiny_and_huge_models_are_framed_and_lit_with_no_flags() {
             assert!((50.0..=220.0).contains(&e.mean), "{name} frame {frame}: too dark or bright: {e:?}");
             assert!(e.white < 0.05, "{name} frame {frame}: blown out: {e:?}");
         }
+        let lit = |lights: &str| {
+            let out = dir.path().join(format!("{name}-{}.png", lights.replace(':', "-")));
+            let (code, err, image) =
+                render(&out, &["--scene", scene.to_str().unwrap(), "--size", SIZE, "--lights", lights]);
+            assert_eq!(code, 0, "{name}: {err}");
+            image.unwrap()
+        };
+        let (unlit, big) = (lit("none"), lit("big:4"));
+        let model = unlit.pixels().zip(big.pixels()).filter(|(u, _)| u.0.iter().any(|&c| c > 0));
+        let value = |p: &image::Rgb<u8>| *p.0.iter().max().unwrap() as i32;
+        let (n, brighter) = model.fold((0, 0), |(n, b), (u, l)| (n + 1, b + (value(l) > value(u) + 10) as u32));
+        let share = brighter as f32 / n as f32;
+        eprintln!("{name}: big:4 brightens {:.1} % of the model", 100.0 * share);
+        assert!(share > 0.2, "{name}: the generated lights hardly reach the model ({:.1} %)", 100.0 * share);
     }
 }
 

@@ -93,8 +93,24 @@ pub const MAX_GENERATED_LIGHTS: u64 = 1_000_000;
 pub const SMALL_COVERAGE: (f32, f32) = (0.0025, 0.05);
 /// Screen coverage range of one big light (fraction of the screen).
 pub const BIG_COVERAGE: (f32, f32) = (0.20, 1.0);
-/// Smallest generated light radius, metres.
+/// Smallest generated light radius, metres, in scenes of at least
+/// [`FULL_SIZE_DIAGONAL`] (see [`length_scale`]).
 pub const MIN_LIGHT_RADIUS: f32 = 0.01;
+/// Scenes whose bounds' diagonal is at least this long (metres) are placed
+/// in with the generators' lengths as they are (lights floating at least
+/// 0.5 m above the floor, radii from 0.01 m to at least 1 m); smaller scenes
+/// scale those lengths down with their size ([`length_scale`]). The atrium,
+/// the voxel world and Sponza are 30-360 m across, so their light sets stay
+/// what the goldens and the published benchmarks were made with.
+pub const FULL_SIZE_DIAGONAL: f32 = 10.0;
+
+/// The factor the generators' fixed lengths (the floor gap, the smallest
+/// and the largest radius) take in a scene of bounds `bounds`: its diagonal
+/// over [`FULL_SIZE_DIAGONAL`], at most 1. Without it a 5 cm model had every
+/// light 0.5 m above it, out of reach.
+pub fn length_scale(bounds: &Aabb) -> f32 {
+    (bounds.extent().length() / FULL_SIZE_DIAGONAL).min(1.0)
+}
 
 /// One `+`-separated part of a generated light spec.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -326,6 +342,17 @@ pub fn default_sun() -> Light {
     }
 }
 
+/// The box to place the generated lights of an object seen from outside in
+/// (a model framed automatically, not an enclosing scene like the atrium):
+/// its bounds grown by a quarter of their extent sideways and upwards, not below
+/// its bottom. Inside its own bounds many lights sit inside a solid model and
+/// light nothing; around it they light it from every side (farther out, as
+/// with half the extent, fewer reach it).
+pub fn region_around(bounds: &Aabb) -> Aabb {
+    let grow = 0.25 * bounds.extent();
+    Aabb { min: bounds.min - grow.with_y(0.0), max: bounds.max + grow }
+}
+
 /// Radius that makes a sphere at distance `distance` from a camera with
 /// vertical field of view `fov_y` cover the fraction `coverage` of a screen
 /// of aspect `aspect` (width / height).
@@ -379,7 +406,7 @@ fn log_uniform_mean((lo, hi): (f32, f32)) -> f32 {
 ///
 /// Placement: each light's position is uniform in `bounds` shrunk by 5% of its
 /// extent on every side, with the bottom raised by 10% of the height (at least
-/// 0.5 m) so that lights float above the floor. Part k draws from
+/// 0.5 m times [`length_scale`]) so that lights float above the floor. Part k draws from
 /// `ChaCha8Rng::seed_from_u64(seed)` on its own stream (2k for a part's main
 /// lights, 2k+1 for the small lights of `mixed`), and every light draws a fixed
 /// sequence, so the same seed gives the same lights, adding `+` parts changes
@@ -389,7 +416,8 @@ fn log_uniform_mean((lo, hi): (f32, f32)) -> f32 {
 /// (0.25-5% of the screen) or [`BIG_COVERAGE`] (20-100%), and its radius is the
 /// one that covers c of the `reference` camera's screen at the light's distance
 /// D from it ([`radius_for_coverage`] with the camera's `fov_y` and `aspect`;
-/// D at least the near plane), clamped to at least [`MIN_LIGHT_RADIUS`] and at most the scene's diagonal.
+/// D at least the near plane), clamped to at least [`MIN_LIGHT_RADIUS`] and at
+/// most the scene's diagonal (at least 1 m), both lengths times [`length_scale`].
 ///
 /// Kinds: small lights are point lights. In `big`, `shadowed` and the big
 /// lights of `mixed`, light i is a spot when `i % 4 == 1` (a quarter of them,
@@ -444,6 +472,7 @@ enum Size {
 struct Placer {
     lo: Vec3,
     hi: Vec3,
+    min_radius: f32,
     max_radius: f32,
     eye: Vec3,
     near: f32,
@@ -454,17 +483,19 @@ struct Placer {
 impl Placer {
     fn new(bounds: &Aabb, reference: &Camera, aspect: f32) -> Self {
         let ext = bounds.extent();
+        let scale = length_scale(bounds);
         let mut lo = bounds.min + 0.05 * ext;
         let mut hi = bounds.max - 0.05 * ext;
-        lo.y = bounds.min.y + (0.1 * ext.y).max(0.5);
+        lo.y = bounds.min.y + (0.1 * ext.y).max(0.5 * scale);
         hi.y = hi.y.max(lo.y);
         let aspect = if aspect.is_finite() && aspect > 0.0 { aspect } else { 1.0 };
         Self {
             lo,
             hi,
-            max_radius: ext.length().max(1.0),
+            min_radius: MIN_LIGHT_RADIUS * scale,
+            max_radius: ext.length().max(scale),
             eye: reference.position,
-            near: reference.near.max(1e-3),
+            near: reference.near.max(1e-3 * scale),
             fov_y: reference.fov_y,
             aspect,
         }
@@ -483,7 +514,7 @@ impl Placer {
             let coverage = range.0 * (range.1 / range.0).powf(u);
             let distance = position.distance(self.eye).max(self.near);
             let radius = radius_for_coverage(coverage, distance, self.fov_y, self.aspect)
-                .clamp(MIN_LIGHT_RADIUS, self.max_radius);
+                .clamp(self.min_radius, self.max_radius);
             let color = hsv_to_rgb(rng.random(), 0.6 + 0.4 * rng.random::<f32>(), 1.0);
             let mut light = Light {
                 kind: LightKind::Point,
@@ -781,6 +812,38 @@ mod tests {
         let spec: LightSpec = missing.to_str().unwrap().parse().unwrap();
         let err = build_lights(&spec, &bounds(), &reference(), 1.0, 0).unwrap_err().to_string();
         assert!(err.starts_with(&format!("{}: cannot read light file", missing.display())), "{err}");
+    }
+
+    #[test]
+    fn small_scenes_scale_the_fixed_lengths() {
+        assert_eq!(length_scale(&bounds()), 1.0, "a 36 m scene keeps them");
+        let model = |size: f32| Aabb { min: Vec3::new(0.1, 0.0, -0.2) * size, max: Vec3::new(0.3, 0.1, 0.0) * size };
+        let camera =
+            |size: f32| Camera { position: reference().position * 0.02 * size, near: 0.01 * size, ..reference() };
+        let set =
+            |size: f32| build_lights(&"small:40+big:8".parse().unwrap(), &model(size), &camera(size), 1.5, 3).unwrap();
+        // A 30 cm model and a 9 m one (both under FULL_SIZE_DIAGONAL): the
+        // lights of the one are those of the other, 30 times larger.
+        let (small, large) = (set(1.0), set(30.0));
+        assert!((length_scale(&model(1.0)) - 0.03).abs() < 1e-3 && length_scale(&model(100.0)) == 1.0);
+        for (s, l) in small[2..].iter().zip(&large[2..]) {
+            assert!((l.position - 30.0 * s.position).length() < 1e-4 * l.position.length().max(1.0), "{s:?} {l:?}");
+            assert!((l.radius / s.radius - 30.0).abs() < 1e-3, "{} vs {}", s.radius, l.radius);
+        }
+        // Lights float above the small model's floor inside its box, not 0.5 m over it.
+        let b = model(1.0);
+        for l in &small[2..] {
+            assert!(l.position.cmpge(b.min).all() && l.position.cmple(b.max).all(), "{l:?}");
+        }
+    }
+
+    #[test]
+    fn lights_around_an_object_surround_it_from_above() {
+        let b = bounds();
+        let around = region_around(&b);
+        assert_eq!(around.min.y, b.min.y, "not below its bottom");
+        assert_eq!(around.max - b.max, 0.25 * b.extent());
+        assert_eq!((b.min - around.min).with_y(0.0), 0.25 * b.extent().with_y(0.0));
     }
 
     #[test]

@@ -277,6 +277,15 @@ pub enum CameraSource {
     Own { scene: String, index: usize },
 }
 
+impl CameraSource {
+    /// Whether the scene is an object framed from outside (a model without
+    /// a camera path), not a scene the cameras move through: its generated
+    /// lights go around it ([`super::lights::region_around`]).
+    pub fn seen_from_outside(&self) -> bool {
+        matches!(self, CameraSource::Framed | CameraSource::Own { .. })
+    }
+}
+
 impl fmt::Display for CameraSource {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
