@@ -15,8 +15,8 @@ use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
 use shadespace::render::{
-    ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,
-    PipelineConfig, RenderOptions, Renderer, ShadowRefresh, VisibilityMethod,
+    ClusteredConfig, DeferredComputeConfig, DeferredConfig, Exposure, ForwardConfig, ForwardMultipassConfig,
+    ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, ShadowRefresh, VisibilityMethod,
 };
 use shadespace::scene::free_camera::{self, LookAt, OrbitSpec};
 use shadespace::scene::path::SceneCameras;
@@ -189,9 +189,12 @@ struct SceneArgs {
     /// Seed of the light placement (same seed, same lights).
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Exposure multiplier applied before tone mapping (positive, finite).
-    #[arg(long, default_value_t = 1.0, value_parser = positive_f32)]
-    exposure: f32,
+    /// Exposure before tone mapping: a multiplier (positive, finite; the
+    /// default is 1), or `auto`: computed on the GPU every frame, the HDR
+    /// frame's log-average luminance over the pixels any light reached,
+    /// mapped to mid-grey 0.18.
+    #[arg(long, default_value = "1", value_parser = parse_exposure)]
+    exposure: Exposure,
     /// Bloom strength, 0 to 1: the fraction of the HDR image replaced by its
     /// glow (an average of blurs from half to 1/64 of the image size) before
     /// tone mapping; 0 (default) turns bloom off.
@@ -391,8 +394,12 @@ fn finite_in(s: &str, range: std::ops::RangeInclusive<f32>, what: &str) -> Resul
     }
 }
 
-fn positive_f32(s: &str) -> Result<f32, String> {
-    finite_in(s, f32::MIN_POSITIVE..=f32::MAX, "a positive finite number")
+fn parse_exposure(s: &str) -> Result<Exposure, String> {
+    if s.trim() == "auto" {
+        return Ok(Exposure::Auto);
+    }
+    let what = "auto or a positive finite number";
+    finite_in(s, f32::MIN_POSITIVE..=f32::MAX, what).map(Exposure::Fixed).map_err(|_| format!("'{s}' is not {what}"))
 }
 
 /// Comma-separated finite numbers, exactly `N` of them.
@@ -702,6 +709,9 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
         ctx.info.name,
         a.out.display()
     );
+    if renderer.exposure == Exposure::Auto {
+        println!("  exposure auto: {:.4}", renderer.read_exposure(&ctx)?);
+    }
     for f in &report.per_frame {
         for p in &f.gpu_passes {
             println!("  {:<16} {:8.3} ms GPU", p.pass, p.ms);

@@ -41,6 +41,8 @@ pub use forward_multipass::ForwardMultipassConfig;
 pub use frame::Frame;
 pub use objectspace::ObjectSpaceConfig;
 use passes::bloom::{Bloom, bloom};
+pub use passes::exposure::Exposure;
+use passes::exposure::{AutoExposure, auto_exposure};
 pub use passes::shadows::ShadowRefresh;
 use passes::shadows::{ShadowMaps, SunView, shadow_maps};
 use passes::tonemap::{Tonemap, tonemap};
@@ -155,10 +157,12 @@ pub struct Renderer {
     pipeline: Box<dyn Pipeline>,
     name: &'static str,
     tonemap: Tonemap,
+    auto_exposure: AutoExposure,
     /// None where the adapter cannot run it ([`Bloom::supported`]).
     bloom_pass: Option<Bloom>,
     timer: GpuTimer,
-    pub exposure: f32,
+    /// How the HDR frame is scaled before tone mapping (default: fixed 1).
+    pub exposure: Exposure,
     /// Bloom strength, 0..=1: the fraction of the light spread into the glow
     /// (0, the default, skips the pass).
     pub bloom: f32,
@@ -202,6 +206,7 @@ impl Renderer {
             }
         };
         let tonemap = Tonemap::new(device, &mut shaders, &targets)?;
+        let auto_exposure = AutoExposure::new(device, &mut shaders, &targets, tonemap.exposure_buffer())?;
         let bloom_pass = Bloom::supported(ctx).then(|| Bloom::new(device, &mut shaders, &targets)).transpose()?;
         let shadows = ShadowMaps::new(device, &mut shaders, &scene_gpu)?;
         let timer = GpuTimer::new(device, queue);
@@ -212,9 +217,10 @@ impl Renderer {
             pipeline,
             name: options.pipeline.name(),
             tonemap,
+            auto_exposure,
             bloom_pass,
             timer,
-            exposure: 1.0,
+            exposure: Exposure::default(),
             bloom: 0.0,
             shadow_refresh: ShadowRefresh::default(),
             sun_shadow: false,
@@ -310,7 +316,13 @@ impl Renderer {
             if let Some(pass) = bloom_pass {
                 bloom(&mut f, pass, self.bloom);
             }
-            tonemap(&mut f, &self.tonemap, self.exposure);
+            match self.exposure {
+                Exposure::Fixed(e) => tonemap(&mut f, &self.tonemap, Some(e)),
+                Exposure::Auto => {
+                    auto_exposure(&mut f, &self.auto_exposure);
+                    tonemap(&mut f, &self.tonemap, None);
+                }
+            }
         }
         self.timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
@@ -359,6 +371,13 @@ impl Renderer {
     /// false when none was collected.
     pub fn write_trace(&self, path: &std::path::Path) -> std::io::Result<bool> {
         self.timer.write_trace(path)
+    }
+
+    /// The exposure multiplier the last frame was tone-mapped with (blocks):
+    /// the fixed one, or what automatic exposure found.
+    pub fn read_exposure(&self, ctx: &GpuContext) -> Result<f32, RenderError> {
+        let bytes = readback::read_whole_buffer(ctx, self.tonemap.exposure_buffer())?;
+        Ok(f32::from_le_bytes(bytes[..4].try_into().expect("the exposure buffer holds a vec4")))
     }
 
     /// Reads the last tone-mapped frame back (blocks).

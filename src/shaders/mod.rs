@@ -67,7 +67,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
     all.push(passes::shadows::SHADER);
-    all.extend([forward_multipass::SHADER, passes::bloom::SHADER]);
+    all.extend([forward_multipass::SHADER, passes::bloom::SHADER, passes::exposure::SHADER]);
     {
         use passes::visibility::compute::*;
         all.extend([RASTER, RASTER_CULLING, RASTER_COUNTING, RASTER_CULLING_COUNTING, RESOLVE]);

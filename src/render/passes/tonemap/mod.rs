@@ -9,6 +9,8 @@ pub const SHADER: ShaderSource = ShaderSource::new("tonemap.wgsl", include_str!(
 
 pub struct Tonemap {
     pipeline: wgpu::ComputePipeline,
+    /// The exposure multiplier (x of a vec4): written by the CPU for a fixed
+    /// exposure, by the auto-exposure pass otherwise.
     exposure: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
@@ -31,7 +33,10 @@ impl Tonemap {
         let exposure = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("exposure"),
             size: 16,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::UNIFORM
+                | wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
         let bind_group = bind_group(
@@ -46,11 +51,20 @@ impl Tonemap {
         );
         Ok(Self { pipeline, exposure, bind_group })
     }
+
+    /// The buffer holding the exposure (a vec4 whose x is the multiplier),
+    /// for the auto-exposure pass to write and for read-back.
+    pub fn exposure_buffer(&self) -> &wgpu::Buffer {
+        &self.exposure
+    }
 }
 
-/// Reads: `targets.hdr`. Writes: `targets.ldr`.
-pub fn tonemap(frame: &mut Frame, pass: &Tonemap, exposure: f32) {
-    frame.queue.write_buffer(&pass.exposure, 0, bytemuck::cast_slice(&[exposure, 0.0, 0.0, 0.0]));
+/// Reads: `targets.hdr` and the exposure buffer, after writing `fixed` into
+/// it (`None`: the auto-exposure pass wrote this frame's). Writes: `targets.ldr`.
+pub fn tonemap(frame: &mut Frame, pass: &Tonemap, fixed: Option<f32>) {
+    if let Some(exposure) = fixed {
+        frame.queue.write_buffer(&pass.exposure, 0, bytemuck::cast_slice(&[exposure, 0.0, 0.0, 0.0]));
+    }
     let (w, h) = (frame.targets.width, frame.targets.height);
     let mut cp = frame.compute_pass("tonemap");
     cp.set_pipeline(&pass.pipeline);
