@@ -143,7 +143,7 @@ fn view_direction(angle: f32, elevation: f32) -> Vec3 {
 /// `d + z` from a camera `d` behind the centre, and in the frame when
 /// `|y| <= FILL (d + z) tan(fov/2)` and `|x| <= FILL (d + z) tan(fov/2) aspect`:
 /// `d >= |y| / (FILL tan(fov/2)) - z`, and likewise for x.
-pub fn fit_distance(points: &[Vec3], target: Vec3, forward: Vec3, aspect: f32) -> f32 {
+fn fit_distance(points: &[Vec3], target: Vec3, forward: Vec3, aspect: f32) -> f32 {
     // The basis `look_at` gives the camera.
     let camera = look_at(Vec3::ZERO, forward, Projection { fov_y: FOV_Y, near: 1.0, far: 2.0 });
     let right = camera.forward.cross(camera.up);
