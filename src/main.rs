@@ -294,6 +294,12 @@ struct ObjectSpaceArgs {
     /// Added to every pixel's mip level (positive: coarser shading; -16 to 16).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = mip_bias)]
     mip_bias: f32,
+    /// Most texels shaded per frame, in millions: above it every pixel's mip
+    /// level is biased coarser (up to 8 levels, on top of --mip-bias) until
+    /// the shading fits, and the bias falls back when there is room; the
+    /// counters report it as `shade_budget_bias`. Default: no limit.
+    #[arg(long, value_parser = shade_budget)]
+    shade_budget: Option<f64>,
     /// Variable rate: shade up to this many mip levels coarser where a
     /// triangle's normals do not vary (0 = off; at most 16).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = variable_rate)]
@@ -468,6 +474,15 @@ fn texel_density(s: &str) -> Result<f32, String> {
     finite_in(s, f32::MIN_POSITIVE..=65536.0, "a density above 0 and at most 65536 texels per metre")
 }
 
+fn shade_budget(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if v.is_finite() && v > 0.0 && v <= 1.0e6 {
+        Ok(v)
+    } else {
+        Err(format!("'{s}' is not a number of millions of texels above 0 and at most 1e6"))
+    }
+}
+
 fn mip_bias(s: &str) -> Result<f32, String> {
     finite_in(s, -16.0..=16.0, "a bias from -16 to 16 levels")
 }
@@ -632,6 +647,7 @@ fn render_options(
             tile_size: a.objectspace.tile_size,
             reuse: a.objectspace.reuse,
             mip_bias: a.objectspace.mip_bias,
+            shade_budget_texels: a.objectspace.shade_budget.map(|m| (m * 1.0e6) as u64),
             variable_rate: a.objectspace.variable_rate,
             view,
             texture_sizes: texture_sizes.clone().unwrap_or_default(),

@@ -90,3 +90,45 @@ fn objectspace_with_every_object_forward_only_matches_forward() {
     ctx.check_errors().unwrap();
     assert!(err.flip_mean < 0.02, "{err:?}");
 }
+
+/// A shading budget a quarter of what the view needs: the controller biases the
+/// levels coarser until each frame's shaded texels fit (a static camera with
+/// reuse 1 shades every visible tile every frame), and the image stays close
+/// to forward (coarser, not broken). A budget above the need adds no bias.
+#[test]
+fn shade_budget_biases_levels_until_the_shading_fits() {
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let shaded_with = |budget: Option<u64>| {
+        let config =
+            ObjectSpaceConfig { texture_sizes: vec![Some(4096)], shade_budget_texels: budget, ..Default::default() };
+        // Large enough that a budget 4x under the need lies above what the
+        // coarsest level (128 texels, about 16k visible) shades.
+        let options = RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config) };
+        let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
+        let mut counters = Vec::new();
+        for frame in 0..24 {
+            os.render(&ctx, &camera, &lights, frame).unwrap();
+            // Waiting makes each frame's count reach the controller before
+            // the next frame (in the frame loop they arrive a few frames late).
+            counters.extend(os.collect_counters(&ctx, true));
+        }
+        (counters, os.read_image(&ctx).unwrap())
+    };
+    let (free, reference) = shaded_with(None);
+    let need = counter(&free, "shaded_texels")[23];
+    assert!(need > 0.0);
+    let budget = (need / 4.0) as u64;
+    let (limited, image) = shaded_with(Some(budget));
+    let shaded = counter(&limited, "shaded_texels");
+    let bias = counter(&limited, "shade_budget_bias");
+    eprintln!("need {need}, budget {budget}: shaded {shaded:?}, bias {bias:?}");
+    assert_eq!(shaded[0], need, "the first frame, before any count arrived, shades everything");
+    assert!(shaded[23] <= budget as f64, "the last frame shades {} texels over a budget of {budget}", shaded[23]);
+    assert!(bias[23] > 0.5 && bias[23] <= 2.5, "bias {} levels for a budget 4x under the need", bias[23]);
+    let (err, _) = metrics::compare(&reference, &image);
+    assert!(err.flip_mean < 0.05, "coarser shading under the budget: {err:?}");
+    let (roomy, _) = shaded_with(Some((need * 2.0) as u64));
+    assert!(counter(&roomy, "shade_budget_bias").iter().all(|&b| b == 0.0));
+    assert_eq!(counter(&roomy, "shaded_texels")[23], need);
+}

@@ -21,8 +21,10 @@ pub mod gather;
 pub mod mark;
 pub mod resources;
 pub mod shade;
+pub mod shade_budget;
 pub mod trimap;
 
+use shade_budget::ShadeBudget;
 use std::str::FromStr;
 
 use serde::Serialize;
@@ -178,6 +180,9 @@ pub struct ObjectSpaceConfig {
     /// Compute visibility: count the rasterizer's work every frame into the
     /// counters (adds atomics: for profiling, not timing).
     pub count_visibility: bool,
+    /// Most texels shaded per frame: above it the mip levels are biased
+    /// coarser until the shading fits ([`shade_budget`]). `None`: no limit.
+    pub shade_budget_texels: Option<u64>,
 }
 
 impl Default for ObjectSpaceConfig {
@@ -193,6 +198,7 @@ impl Default for ObjectSpaceConfig {
             visibility_prepass: true,
             visibility: VisibilityMethod::Raster,
             count_visibility: false,
+            shade_budget_texels: None,
         }
     }
 }
@@ -234,6 +240,9 @@ pub struct ObjectSpace {
     /// Frames rendered so far; stamps are `frames + 1` so that 0 means never.
     frames: u32,
     budget_halvings: u32,
+    shade_budget: Option<ShadeBudget>,
+    /// The bias the budget added to each frame still in flight.
+    budget_bias: std::collections::BTreeMap<u64, f32>,
 }
 
 impl ObjectSpace {
@@ -283,6 +292,7 @@ impl ObjectSpace {
             }
         };
         let grid = WorldGrid::new(device, shaders, scene)?;
+        let shade_budget = config.shade_budget_texels.map(|t| ShadeBudget::new(t as f64));
         Ok(Self {
             visibility,
             mark: MarkPass::new(device, shaders, scene, &res)?,
@@ -295,6 +305,8 @@ impl ObjectSpace {
             readback: ReadbackRing::new("tile counters", TileCounter::SLOTS as u64 * 4),
             frames: 0,
             budget_halvings,
+            shade_budget,
+            budget_bias: Default::default(),
         })
     }
 
@@ -313,7 +325,12 @@ impl Pipeline for ObjectSpace {
         self.frames += 1;
         let stale = frame.lights_changed || self.frames == 1;
         let max_queue = self.layout.tile_count;
-        self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, &self.config, max_queue);
+        let added = self.shade_budget.as_ref().map_or(0.0, |b| b.bias);
+        if self.shade_budget.is_some() {
+            self.budget_bias.insert(frame.number, added);
+        }
+        let mip_bias = self.config.mip_bias + added;
+        self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, &self.config, mip_bias, max_queue);
         match &mut self.visibility {
             Visibility::Raster { prepass, ids } => {
                 if let Some(prepass) = prepass {
@@ -375,7 +392,13 @@ impl Pipeline for ObjectSpace {
                     ("overshading", visible * tile_texels / pixels),
                     ("shaded_texels_per_pixel", shaded * tile_texels / pixels),
                 ];
-                (frame, counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect())
+                let mut counters: Counters = counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+                if let Some(budget) = &mut self.shade_budget {
+                    budget.observe(frame, shaded * tile_texels);
+                    let added = self.budget_bias.remove(&frame).unwrap_or_default();
+                    counters.insert("shade_budget_bias".into(), added as f64);
+                }
+                (frame, counters)
             })
             .chain(counts.drain(..))
             .collect()

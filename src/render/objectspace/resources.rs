@@ -151,6 +151,8 @@ impl Resources {
 
     /// Uploads this frame's settings (and, when the shades went stale, the
     /// atlas table with its new `valid_since`) and clears the counters.
+    /// `mip_bias`: the configured bias plus what the shading budget adds.
+    #[allow(clippy::too_many_arguments)]
     pub fn begin_frame(
         &mut self,
         queue: &wgpu::Queue,
@@ -158,6 +160,7 @@ impl Resources {
         stamp: u32,
         stale: bool,
         config: &ObjectSpaceConfig,
+        mip_bias: f32,
         max_queue: u32,
     ) {
         if stale {
@@ -171,7 +174,7 @@ impl Resources {
             reuse: config.reuse,
             tile_size: config.tile_size,
             view_mode: config.view as u32,
-            mip_bias: config.mip_bias,
+            mip_bias,
             variable_rate: config.variable_rate,
             max_queue,
             pad: 0,

@@ -1,0 +1,80 @@
+//! A stable shading budget (Oxide's object space lighting): when the tiles a
+//! frame shades exceed a budget of texels, every pixel's mip level is biased
+//! coarser until they fit, and the bias falls back when there is room, so
+//! the shading cost per frame stays flat while quality gives.
+//!
+//! The controller sees each frame's shaded texels a few frames late (the
+//! counters' read-back never stalls the frame). Shaded texels scale as
+//! 4^-bias (a level coarser has a quarter of the texels), so the bias that
+//! fits a count `s` into budget `b` is half of log2(s / b) more; half of that
+//! step is taken per observation, to settle without overshooting on counts
+//! that arrive late.
+
+/// Largest bias the controller adds (levels).
+pub const MAX_BIAS: f32 = 8.0;
+/// Below this share of the budget, the bias falls back.
+const ROOM: f64 = 0.7;
+/// Share of the computed step taken per observation.
+const GAIN: f32 = 0.5;
+/// Smallest step (levels): near the budget the computed steps shrink, and
+/// per-pixel levels round, so without it the count would creep in slowly.
+const MIN_STEP: f32 = 1.0 / 16.0;
+
+/// The budget and the bias it currently adds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShadeBudget {
+    /// Most texels shaded per frame.
+    pub texels: f64,
+    /// Levels added to every pixel's mip level, in [0, MAX_BIAS].
+    pub bias: f32,
+    /// The newest frame observed (older counts arriving late are ignored).
+    newest: Option<u64>,
+}
+
+impl ShadeBudget {
+    pub fn new(texels: f64) -> Self {
+        Self { texels, bias: 0.0, newest: None }
+    }
+
+    /// Takes frame `frame`'s count of shaded texels into account.
+    pub fn observe(&mut self, frame: u64, shaded: f64) {
+        if self.newest.is_some_and(|n| frame <= n) {
+            return;
+        }
+        self.newest = Some(frame);
+        let over = shaded > self.texels;
+        let room = shaded < ROOM * self.texels && self.bias > 0.0;
+        if over || room {
+            let step = GAIN * 0.5 * (shaded.max(1.0) / self.texels).log2() as f32;
+            let step = if over { step.max(MIN_STEP) } else { step.min(-MIN_STEP) };
+            self.bias = (self.bias + step).clamp(0.0, MAX_BIAS);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Against a model where shaded texels fall 4x per level of bias, the
+    /// controller settles inside [ROOM, 1] of the budget, comes back down
+    /// when demand drops, and ignores counts older than one it has seen.
+    #[test]
+    fn settles_within_budget_and_falls_back() {
+        let demand = |bias: f32, base: f64| base * 4f64.powf(-bias as f64);
+        let mut b = ShadeBudget::new(1.0e6);
+        for frame in 0..40 {
+            b.observe(frame, demand(b.bias, 16.0e6));
+        }
+        let shaded = demand(b.bias, 16.0e6);
+        assert!((ROOM * 1.0e6..=1.0e6 * 1.01).contains(&shaded), "shaded {shaded} at bias {}", b.bias);
+        assert!((b.bias - 2.0).abs() < 0.1, "bias {}", b.bias);
+        for frame in 40..80 {
+            b.observe(frame, demand(b.bias, 0.5e6));
+        }
+        assert_eq!(b.bias, 0.0, "demand under the budget needs no bias");
+        let before = b.clone();
+        b.observe(10, 1.0e9);
+        assert_eq!(b, before, "a late count of an old frame changes nothing");
+    }
+}
