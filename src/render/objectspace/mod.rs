@@ -394,9 +394,9 @@ impl Pipeline for ObjectSpace {
                 ];
                 let mut counters: Counters = counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
                 if let Some(budget) = &mut self.shade_budget {
-                    budget.observe(frame, shaded * tile_texels);
-                    let added = self.budget_bias.remove(&frame).unwrap_or_default();
-                    counters.insert("shade_budget_bias".into(), added as f64);
+                    let used = self.budget_bias.remove(&frame).unwrap_or_default();
+                    budget.observe(frame, used, shaded * tile_texels);
+                    counters.insert("shade_budget_bias".into(), used as f64);
                 }
                 (frame, counters)
             })

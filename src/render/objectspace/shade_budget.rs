@@ -4,11 +4,12 @@
 //! the shading cost per frame stays flat while quality gives.
 //!
 //! The controller sees each frame's shaded texels a few frames late (the
-//! counters' read-back never stalls the frame). Shaded texels scale as
-//! 4^-bias (a level coarser has a quarter of the texels), so the bias that
-//! fits a count `s` into budget `b` is half of log2(s / b) more; half of that
-//! step is taken per observation, to settle without overshooting on counts
-//! that arrive late.
+//! counters' read-back never stalls the frame), so it corrects the bias that
+//! frame was shaded with, not the current one: frames still in flight would
+//! otherwise push the same error in again and again, and the bias would
+//! overshoot and swing. Shaded texels scale as 4^-bias (a level coarser has a
+//! quarter of the texels), so the bias that fits a count `s` into budget `b`
+//! is half of log2(s / b) more than the frame's; half of that step is taken.
 
 /// Largest bias the controller adds (levels).
 pub const MAX_BIAS: f32 = 8.0;
@@ -36,18 +37,19 @@ impl ShadeBudget {
         Self { texels, bias: 0.0, newest: None }
     }
 
-    /// Takes frame `frame`'s count of shaded texels into account.
-    pub fn observe(&mut self, frame: u64, shaded: f64) {
+    /// Takes frame `frame`'s count of shaded texels, shaded with `used` (the
+    /// bias this controller gave that frame), into account.
+    pub fn observe(&mut self, frame: u64, used: f32, shaded: f64) {
         if self.newest.is_some_and(|n| frame <= n) {
             return;
         }
         self.newest = Some(frame);
         let over = shaded > self.texels;
-        let room = shaded < ROOM * self.texels && self.bias > 0.0;
+        let room = shaded < ROOM * self.texels && used > 0.0;
         if over || room {
             let step = GAIN * 0.5 * (shaded.max(1.0) / self.texels).log2() as f32;
             let step = if over { step.max(MIN_STEP) } else { step.min(-MIN_STEP) };
-            self.bias = (self.bias + step).clamp(0.0, MAX_BIAS);
+            self.bias = (used + step).clamp(0.0, MAX_BIAS);
         }
     }
 }
@@ -62,19 +64,32 @@ mod tests {
     #[test]
     fn settles_within_budget_and_falls_back() {
         let demand = |bias: f32, base: f64| base * 4f64.powf(-bias as f64);
+        // Counts arrive LAG frames late, as the read-back delivers them.
+        const LAG: usize = 3;
         let mut b = ShadeBudget::new(1.0e6);
-        for frame in 0..40 {
-            b.observe(frame, demand(b.bias, 16.0e6));
-        }
-        let shaded = demand(b.bias, 16.0e6);
-        assert!((ROOM * 1.0e6..=1.0e6 * 1.01).contains(&shaded), "shaded {shaded} at bias {}", b.bias);
-        assert!((b.bias - 2.0).abs() < 0.1, "bias {}", b.bias);
-        for frame in 40..80 {
-            b.observe(frame, demand(b.bias, 0.5e6));
+        let mut used = Vec::new();
+        let mut base = 16.0e6;
+        for frame in 0..80usize {
+            if frame == 40 {
+                base = 0.5e6;
+            }
+            used.push(b.bias);
+            if frame >= LAG {
+                let seen = frame - LAG;
+                b.observe(seen as u64, used[seen], demand(used[seen], base));
+            }
+            if frame == 39 {
+                let shaded = demand(b.bias, 16.0e6);
+                assert!((ROOM * 1.0e6..=1.0e6 * 1.01).contains(&shaded), "shaded {shaded} at bias {}", b.bias);
+                assert!((b.bias - 2.0).abs() < 0.1, "bias {}", b.bias);
+                // Settled: no swing over the last frames.
+                let last = &used[30..40];
+                assert!(last.iter().all(|u| (u - b.bias).abs() < 0.1), "swinging: {last:?}");
+            }
         }
         assert_eq!(b.bias, 0.0, "demand under the budget needs no bias");
         let before = b.clone();
-        b.observe(10, 1.0e9);
+        b.observe(10, 0.0, 1.0e9);
         assert_eq!(b, before, "a late count of an old frame changes nothing");
     }
 }
