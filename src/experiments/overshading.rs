@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::marking::{Marking, Texture, Variant};
-use super::plot::{LinePlot, Series};
+use super::plot::{LinePlot, series_per_resolution};
 use super::report::{Section, Table, f3};
 use super::stats::Summary;
 use super::{ExperimentError, Findings, Study};
@@ -106,19 +106,10 @@ pub fn run(study: &mut Study) -> Result<Findings, ExperimentError> {
         }
         let mut figures = Vec::new();
         for &tile_size in &grid.tile_sizes {
-            let series = grid
-                .resolutions
-                .iter()
-                .map(|&(w, h)| Series {
-                    label: format!("{w}x{h}"),
-                    points: rows
-                        .iter()
-                        .filter(|r| r.tile_size == tile_size && (r.width, r.height) == (w, h))
-                        .filter(|r| r.marking == v.marking && r.texture == v.texture)
-                        .map(|r| (r.frame as f64, r.ratio))
-                        .collect(),
-                })
-                .collect();
+            let series = series_per_resolution(&grid.resolutions, &rows, |r, size| {
+                let cell = r.tile_size == tile_size && (r.width, r.height) == size;
+                (cell && r.marking == v.marking && r.texture == v.texture).then_some((r.frame as f64, r.ratio))
+            });
             let plot = LinePlot {
                 title: format!("Overshading, tiles of {tile_size}, {v}"),
                 x_label: "path frame".into(),

@@ -21,6 +21,22 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
 }
 
+/// One series per resolution, labelled `WxH`, holding the points `point`
+/// gives for the rows at that resolution (`None` leaves a row out).
+pub fn series_per_resolution<R>(
+    resolutions: &[(u32, u32)],
+    rows: &[R],
+    point: impl Fn(&R, (u32, u32)) -> Option<(f64, f64)>,
+) -> Vec<Series> {
+    resolutions
+        .iter()
+        .map(|&(w, h)| Series {
+            label: format!("{w}x{h}"),
+            points: rows.iter().filter_map(|r| point(r, (w, h))).collect(),
+        })
+        .collect()
+}
+
 /// A line plot: one line per series over a shared x axis.
 #[derive(Clone, Debug)]
 pub struct LinePlot {

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::marking::{Marking, Texture, Variant};
-use super::plot::{LinePlot, Series};
+use super::plot::{LinePlot, series_per_resolution};
 use super::report::{Section, Table, f3};
 use super::stats::Summary;
 use super::tile_set::TileSet;
@@ -159,19 +159,13 @@ pub fn run(study: &mut Study) -> Result<Findings, ExperimentError> {
             for (measure, label) in
                 [("reusable", "previous frame's tiles still needed"), ("new", "this frame's tiles not needed before")]
             {
-                let series = grid
-                    .resolutions
-                    .iter()
-                    .map(|&(w, h)| Series {
-                        label: format!("{w}x{h}"),
-                        points: rows
-                            .iter()
-                            .filter(|r| r.tile_size == tile_size && (r.width, r.height) == (w, h))
-                            .filter(|r| r.marking == v.marking && r.texture == v.texture)
-                            .filter_map(|r| Some((r.frame as f64, if measure == "new" { r.new? } else { r.reusable? })))
-                            .collect(),
-                    })
-                    .collect();
+                let series = series_per_resolution(&grid.resolutions, &rows, |r, size| {
+                    let cell = r.tile_size == tile_size && (r.width, r.height) == size;
+                    let value = if measure == "new" { r.new } else { r.reusable };
+                    value
+                        .filter(|_| cell && r.marking == v.marking && r.texture == v.texture)
+                        .map(|y| (r.frame as f64, y))
+                });
                 let plot = LinePlot {
                     title: format!("Reuse ({measure}), tiles of {tile_size}, {v}"),
                     x_label: "path frame".into(),

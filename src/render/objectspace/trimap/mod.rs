@@ -49,7 +49,6 @@ pub fn build(
     layout: &AtlasLayout,
 ) -> Result<wgpu::Texture, ShaderError> {
     let conservative = device.features().contains(wgpu::Features::CONSERVATIVE_RASTERIZATION);
-    let rings = 1;
     let make = |label| {
         layout.page_array_texture(
             device,
@@ -62,7 +61,7 @@ pub fn build(
                 | wgpu::TextureUsages::COPY_SRC,
         )
     };
-    let maps = [make("triangle map"), make("triangle map (dilation)")];
+    let (coverage, dilated) = (make("triangle map (coverage)"), make("triangle map"));
 
     // 1. Rasterize every object's levels into their squares.
     let module = shaders.module(device, SHADER)?;
@@ -124,7 +123,7 @@ pub fn build(
     });
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("triangle maps") });
     for page in 0..layout.pages {
-        let view = maps[0].create_view(&wgpu::TextureViewDescriptor {
+        let view = coverage.create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2),
             base_array_layer: page,
             array_layer_count: Some(1),
@@ -170,7 +169,7 @@ pub fn build(
         }
     }
 
-    // 2. Dilate inside each square, ping-ponging between the two textures.
+    // 2. Dilate inside each square by one ring, from the coverage into the map.
     let squares: Vec<Square> = layout
         .objects
         .iter()
@@ -198,19 +197,18 @@ pub fn build(
     );
     let dilate = compute_pipeline(device, shaders, DILATE, "dilate", &[&bgl])?;
     let array_view = |t: &wgpu::Texture| view_as(t, wgpu::TextureViewDimension::D2Array);
-    for ring in 0..rings {
-        let (source, target) = (&maps[(ring % 2) as usize], &maps[((ring + 1) % 2) as usize]);
-        let square = wgpu::BufferBinding { buffer: &uniforms, offset: 0, size: wgpu::BufferSize::new(16) };
-        let bind_group = bind_group(
-            device,
-            "dilate",
-            &bgl,
-            &[
-                wgpu::BindingResource::Buffer(square),
-                wgpu::BindingResource::TextureView(&array_view(source)),
-                wgpu::BindingResource::TextureView(&array_view(target)),
-            ],
-        );
+    let square = wgpu::BufferBinding { buffer: &uniforms, offset: 0, size: wgpu::BufferSize::new(16) };
+    let bind_group = bind_group(
+        device,
+        "dilate",
+        &bgl,
+        &[
+            wgpu::BindingResource::Buffer(square),
+            wgpu::BindingResource::TextureView(&array_view(&coverage)),
+            wgpu::BindingResource::TextureView(&array_view(&dilated)),
+        ],
+    );
+    {
         let mut pass =
             encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("dilate"), timestamp_writes: None });
         pass.set_pipeline(&dilate);
@@ -220,6 +218,5 @@ pub fn build(
         }
     }
     queue.submit([encoder.finish()]);
-    let [a, b] = maps;
-    Ok(if rings % 2 == 0 { a } else { b })
+    Ok(dilated)
 }
