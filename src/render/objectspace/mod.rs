@@ -367,7 +367,7 @@ impl Pipeline for ObjectSpace {
     /// `shaded_texels_per_pixel` (after reuse); with `count_visibility`, the
     /// compute rasterizer's counts too (in entries of their own).
     fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
-        let mut counts = match &mut self.visibility {
+        let counts = match &mut self.visibility {
             Visibility::Compute(pass) => pass.collect_counts(device, wait),
             Visibility::Raster { .. } => Vec::new(),
         };
@@ -400,7 +400,7 @@ impl Pipeline for ObjectSpace {
                 }
                 (frame, counters)
             })
-            .chain(counts.drain(..))
+            .chain(counts)
             .collect()
     }
 
