@@ -13,7 +13,8 @@ use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::experiments::marking::Marking;
 use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid};
 use shadespace::gpu::{GpuContext, GpuOptions};
-use shadespace::render::objectspace::{DebugView, MAX_PAGE_SIZE, ObjectSpace};
+use shadespace::render::objectspace::atlas::MAX_TEXTURE_SIZE;
+use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, DebugView, MAX_DENSITY_SIZE, ObjectSpace};
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, Exposure, ForwardConfig, ForwardMultipassConfig,
     ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, ShadowRefresh, VisibilityMethod,
@@ -283,6 +284,15 @@ struct ObjectSpaceArgs {
     /// Re-shade a visible tile when its shade is N frames old (1 = every frame).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     reuse: u32,
+    /// Decoupled shading rate: shade each visible tile S times a second at
+    /// --frame-hz frames a second (every R/S frames, rounded), spread evenly
+    /// over the frames so that each frame shades about the same number of
+    /// tiles. Replaces --reuse.
+    #[arg(long, value_parser = hertz, conflicts_with = "reuse")]
+    shade_hz: Option<f64>,
+    /// The frame rate --shade-hz divides (frames a second).
+    #[arg(long, default_value_t = 60.0, value_parser = hertz, requires = "shade_hz")]
+    frame_hz: f64,
     /// Shading texels per metre of surface (above 0, at most 65536); an
     /// object's texture side is its charted area times this, rounded up to a
     /// power of two.
@@ -297,17 +307,24 @@ struct ObjectSpaceArgs {
     /// Most texels shaded per frame, in millions: above it every pixel's mip
     /// level is biased coarser (up to 8 levels, on top of --mip-bias) until
     /// the shading fits, and the bias falls back when there is room; the
-    /// counters report it as `shade_budget_bias`. Default: no limit.
+    /// counters report it as `budget_bias`. Default: no limit.
     #[arg(long, value_parser = shade_budget)]
     shade_budget: Option<f64>,
     /// Variable rate: shade up to this many mip levels coarser where a
     /// triangle's normals do not vary (0 = off; at most 16).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = variable_rate)]
     variable_rate: f32,
-    /// Atlas budget in Mi texels (all objects, mip chains included; 12 bytes
-    /// each with the triangle maps); texture sizes are halved until they fit.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=1 << 20))]
-    atlas_budget: u64,
+    /// Physical atlas in Mi texels (12 bytes each with the triangle maps):
+    /// the pages that back the objects' virtual textures where visible tiles
+    /// need them. When a frame needs more, the mip bias rises until it fits
+    /// (the counters report `budget_bias`). Default: 1.25 texels per screen
+    /// pixel, at least 1 Mi.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1 << 14))]
+    atlas_budget: Option<u64>,
+    /// Page side of the virtual textures in texels (a power of two, at most
+    /// four times the tile size; raised to the tile size).
+    #[arg(long, default_value_t = DEFAULT_PAGE_SIZE)]
+    page_size: u32,
     /// Skip the depth pre-pass before the visibility (id) pass (with it, each
     /// pixel's ids are written once; measured faster on the H100).
     #[arg(long)]
@@ -468,6 +485,15 @@ fn visibility_choice(s: &str) -> Result<VisibilityChoice, String> {
 
 fn bloom_strength(s: &str) -> Result<f32, String> {
     finite_in(s, 0.0..=1.0, "a strength from 0 to 1")
+}
+
+fn hertz(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if v.is_finite() && v > 0.0 && v <= 1000.0 {
+        Ok(v)
+    } else {
+        Err(format!("{s} is not a rate above 0 and at most 1000"))
+    }
 }
 
 fn texel_density(s: &str) -> Result<f32, String> {
@@ -645,13 +671,18 @@ fn render_options(
         PipelineName::Clustered => PipelineConfig::Clustered(ClusteredConfig::default()),
         PipelineName::Objectspace => PipelineConfig::ObjectSpace(ObjectSpaceConfig {
             tile_size: a.objectspace.tile_size,
-            reuse: a.objectspace.reuse,
+            reuse: match a.objectspace.shade_hz {
+                Some(hz) => (a.objectspace.frame_hz / hz).round().max(1.0) as u32,
+                None => a.objectspace.reuse,
+            },
+            spread_reshading: a.objectspace.shade_hz.is_some(),
+            page_size: a.objectspace.page_size,
             mip_bias: a.objectspace.mip_bias,
             shade_budget_texels: a.objectspace.shade_budget.map(|m| (m * 1.0e6) as u64),
             variable_rate: a.objectspace.variable_rate,
             view,
             texture_sizes: texture_sizes.clone().unwrap_or_default(),
-            atlas_budget_texels: a.objectspace.atlas_budget << 20,
+            atlas_budget_texels: a.objectspace.atlas_budget.map(|m| m << 20),
             visibility_prepass: !a.objectspace.no_visibility_prepass,
             visibility,
             count_visibility: a.count_visibility,
@@ -669,10 +700,14 @@ fn render_options(
 /// The texture sizing the options ask for.
 fn sizing(a: &ObjectSpaceArgs) -> Result<TextureSizing, Failure> {
     match a.texture_size {
-        Some(size) if size.is_power_of_two() && size >= 8 => Ok(TextureSizing::Fixed(size)),
-        Some(size) => input(Err(anyhow::anyhow!("--texture-size {size} is not a power of two of at least 8"))),
+        Some(size) if size.is_power_of_two() && (8..=MAX_TEXTURE_SIZE).contains(&size) => {
+            Ok(TextureSizing::Fixed(size))
+        }
+        Some(size) => {
+            input(Err(anyhow::anyhow!("--texture-size {size} is not a power of two from 8 to {MAX_TEXTURE_SIZE}")))
+        }
         // The value parser has checked the density.
-        None => Ok(TextureSizing::Density { texels_per_metre: a.texel_density, min: 64, max: MAX_PAGE_SIZE }),
+        None => Ok(TextureSizing::Density { texels_per_metre: a.texel_density, min: 64, max: MAX_DENSITY_SIZE }),
     }
 }
 

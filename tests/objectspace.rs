@@ -121,7 +121,7 @@ fn shade_budget_biases_levels_until_the_shading_fits() {
     let budget = (need / 4.0) as u64;
     let (limited, image) = shaded_with(Some(budget));
     let shaded = counter(&limited, "shaded_texels");
-    let bias = counter(&limited, "shade_budget_bias");
+    let bias = counter(&limited, "budget_bias");
     eprintln!("need {need}, budget {budget}: shaded {shaded:?}, bias {bias:?}");
     assert_eq!(shaded[0], need, "the first frame, before any count arrived, shades everything");
     assert!(shaded[23] <= budget as f64, "the last frame shades {} texels over a budget of {budget}", shaded[23]);
@@ -129,6 +129,77 @@ fn shade_budget_biases_levels_until_the_shading_fits() {
     let (err, _) = metrics::compare(&reference, &image);
     assert!(err.flip_mean < 0.05, "coarser shading under the budget: {err:?}");
     let (roomy, _) = shaded_with(Some((need * 2.0) as u64));
-    assert!(counter(&roomy, "shade_budget_bias").iter().all(|&b| b == 0.0));
+    assert!(counter(&roomy, "budget_bias").iter().all(|&b| b == 0.0));
     assert_eq!(counter(&roomy, "shaded_texels")[23], need);
+}
+
+/// A frame that asks for ten times the pages the physical atlas holds (a mip
+/// bias of -log4(10): ten times the texels): the first frame backs what fits
+/// and shades the rest forward (no error, the image still right), then the
+/// budget raises the bias until every page fits, and the image stays close
+/// to the one shaded at the unbiased level.
+#[test]
+fn an_atlas_ten_times_over_budget_biases_until_the_pages_fit() {
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let run = |mip_bias: f32, atlas: Option<u64>| {
+        let config = ObjectSpaceConfig {
+            texture_sizes: vec![Some(4096)],
+            mip_bias,
+            atlas_budget_texels: atlas,
+            ..Default::default()
+        };
+        let options = RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config) };
+        let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
+        let mut counters = Vec::new();
+        for frame in 0..24 {
+            os.render(&ctx, &camera, &lights, frame).unwrap();
+            counters.extend(os.collect_counters(&ctx, true));
+        }
+        ctx.check_errors().unwrap();
+        (counters, os.read_image(&ctx).unwrap())
+    };
+    let (free, reference) = run(0.0, None);
+    assert_eq!(counter(&free, "pages_failed")[23], 0.0);
+    let need = counter(&free, "page_texels")[23];
+    // Room for what the unbiased frame needs (the budget fills 85 % of it), no more.
+    let atlas = (need / 0.85 * 1.1) as u64;
+    let (small, image) = run(-(10f32.ln() / 4f32.ln()), Some(atlas));
+    let (failed, bias) = (counter(&small, "pages_failed"), counter(&small, "budget_bias"));
+    let asked = counter(&small, "page_texels");
+    eprintln!("need {need} texels of pages, atlas {atlas}: failed {failed:?}, bias {bias:?}, pages {asked:?}");
+    assert!(failed[0] > 0.0, "the first frame needs more pages than the atlas holds");
+    assert_eq!(failed[23], 0.0, "the last frame still finds no page for some tiles");
+    assert!((1.0..=2.5).contains(&bias[23]), "bias {} levels for pages 10x over the atlas", bias[23]);
+    let (err, _) = metrics::compare(&reference, &image);
+    assert!(err.flip_mean < 0.05, "coarser shading in a small atlas: {err:?}");
+}
+
+/// Decoupled shading rate: with re-shading spread over N = 4 frames, a static
+/// view shades every visible tile in the first frame, then about a quarter of
+/// them each frame (no frame shading all of them again), and the image stays
+/// the same.
+#[test]
+fn spread_reshading_shades_a_share_of_the_tiles_each_frame() {
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let config =
+        ObjectSpaceConfig { texture_sizes: vec![Some(512)], reuse: 4, spread_reshading: true, ..Default::default() };
+    let options = RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config) };
+    let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
+    let mut counters = Vec::new();
+    for frame in 0..12 {
+        os.render(&ctx, &camera, &lights, frame).unwrap();
+        counters.extend(os.collect_counters(&ctx, true));
+    }
+    let (visible, shaded) = (counter(&counters, "visible_tiles"), counter(&counters, "shaded_tiles"));
+    eprintln!("visible {visible:?}, shaded {shaded:?}");
+    assert_eq!(shaded[0], visible[0]);
+    for f in 4..12 {
+        let share = shaded[f] / visible[f];
+        assert!((0.1..=0.45).contains(&share), "frame {f} shades {share:.2} of the visible tiles");
+    }
+    // Over any four consecutive frames every tile is shaded once.
+    let window: f64 = shaded[4..8].iter().sum();
+    assert!((window - visible[7]).abs() <= visible[7] * 0.02, "{window} shaded over 4 frames, {} visible", visible[7]);
 }

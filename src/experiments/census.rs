@@ -10,9 +10,9 @@ use super::marking::{Texture, TileSpace, Variant};
 use super::tile_set::{ConcurrentTileSet, TileSet};
 use super::visibility::IdImage;
 use crate::charts::{self, ChartCache, ChartError, ChartSource, TextureSizing};
-use crate::render::objectspace::atlas::{AtlasError, fit_budget};
+use crate::render::objectspace::MAX_DENSITY_SIZE;
+use crate::render::objectspace::atlas::AtlasError;
 use crate::render::objectspace::cpu::{chart_footprint, sample_pixel};
-use crate::render::objectspace::{DEFAULT_ATLAS_BUDGET, MAX_PAGE_SIZE};
 use crate::scene::{self, Scene, SceneError};
 
 /// Why a scene could not be prepared for the studies.
@@ -53,9 +53,8 @@ pub struct StudyScene {
     study: Scene,
     /// Meshes carrying our charts, as `--pipeline objectspace` shades.
     charted: Scene,
-    /// Our texture sides (texel density, default atlas budget).
+    /// Our virtual texture sides (texel density).
     pub density_sizes: Vec<Option<u32>>,
-    pub budget_halvings: u32,
     pub objects: Vec<ObjectSetup>,
     pub excluded: Vec<String>,
     pub texel_density: f32,
@@ -81,9 +80,9 @@ impl StudyScene {
         if render.objects.is_empty() {
             return Err(StudySceneError::NothingLeft);
         }
-        let sizing = TextureSizing::Density { texels_per_metre: texel_density, min: 64, max: MAX_PAGE_SIZE };
+        let sizing = TextureSizing::Density { texels_per_metre: texel_density, min: 64, max: MAX_DENSITY_SIZE };
         let charts = charts::chart_scene(&render, &sizing, cache)?;
-        let (density_sizes, budget_halvings) = fit_budget(&charts.texture_sizes(), DEFAULT_ATLAS_BUDGET, 64);
+        let density_sizes = charts.texture_sizes();
         let charted = charts.apply(&render);
         let mut study = charted.clone();
         let mut objects = Vec::new();
@@ -116,7 +115,6 @@ impl StudyScene {
             study,
             charted,
             density_sizes,
-            budget_halvings,
             objects,
             excluded: exclude.to_vec(),
             texel_density,

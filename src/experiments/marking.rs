@@ -10,9 +10,10 @@ use std::str::FromStr;
 use glam::UVec2;
 use serde::Serialize;
 
+use crate::render::objectspace::atlas::MAX_TEXTURE_SIZE;
 use crate::render::objectspace::atlas::{AtlasError, AtlasLayout, GpuAtlasEntry};
 use crate::render::objectspace::cpu::{self, ChartFootprint, MarkParams};
-use crate::render::objectspace::{COARSEST_LEVEL, MAX_PAGE_SIZE};
+use crate::render::objectspace::{COARSEST_LEVEL, DEFAULT_PAGE_SIZE};
 
 /// The study's shading-texture side for every object (12 levels).
 pub const STUDY_TEXTURE_SIZE: u32 = 4096;
@@ -215,7 +216,8 @@ impl TileSpace {
             Texture::Study => vec![Some(STUDY_TEXTURE_SIZE); n],
             Texture::Density => density_sizes.to_vec(),
         };
-        let layout = AtlasLayout::new(&sizes, tile_size, MAX_PAGE_SIZE, COARSEST_LEVEL)?;
+        let layout =
+            AtlasLayout::new(&sizes, tile_size, DEFAULT_PAGE_SIZE.max(tile_size), MAX_TEXTURE_SIZE, COARSEST_LEVEL)?;
         Ok(Self::Atlas { entries: layout.gpu_entries(), tile_size, tile_count: layout.tile_count })
     }
 
@@ -366,7 +368,7 @@ mod tests {
 
     #[test]
     fn our_marking_matches_the_twins_footprint() {
-        let layout = AtlasLayout::new(&[Some(256)], 8, 4096, 32).unwrap();
+        let layout = AtlasLayout::new(&[Some(256)], 8, 16, 4096, 32).unwrap();
         let entries = layout.gpu_entries();
         // One texel a pixel at level 2 (64 texels): uv * 64 - 0.5 = (7.0, 3.3):
         // taps 7-8 cross the tile edge in x only.

@@ -262,7 +262,6 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
         "setup": {
             "excluded": scene.excluded,
             "texel_density": scene.texel_density,
-            "budget_halvings": scene.budget_halvings,
             "objects": scene.objects,
         },
         "results": findings.results,
@@ -289,7 +288,7 @@ fn setup_section(options: &ExperimentOptions, study: &Study, visibility: &str) -
          near 0.3, far 1000). Resolutions {}; tile sizes {:?}; {}. Visibility pass: {visibility}. {}\n\n\
          Variants: the study's marking at 4096 for every object (`study`, `4096`), ours at the same textures \
          (`bilinear`, `4096`: the renderer's `mark.wgsl` rule, levels down to 128), and ours as the renderer \
-         shades by default (`bilinear`, `density`: {} texels per metre, default atlas budget, {} halving(s)).\n",
+         shades by default (`bilinear`, `density`: {} texels per metre, virtual textures, no halving).\n",
         options.scene,
         scene.render.objects.len(),
         if scene.excluded.is_empty() { String::new() } else { format!("; left out: {}", scene.excluded.join(", ")) },
@@ -303,7 +302,6 @@ fn setup_section(options: &ExperimentOptions, study: &Study, visibility: &str) -
             String::new()
         },
         scene.texel_density,
-        scene.budget_halvings,
     );
     text += "\nPer object: the UV layout the 4096 variants mark through, our chart, our texture side.\n";
     let mut t = Table::new(&["object", "4096 variants' UVs", "our chart", "our texture"]);

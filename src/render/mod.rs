@@ -194,7 +194,7 @@ impl Renderer {
                 Box::new(forward_multipass::ForwardMultipass::new(device, &mut shaders, &scene_gpu, *c)?)
             }
             PipelineConfig::ObjectSpace(c) => {
-                let os = objectspace::ObjectSpace::new(ctx, &mut shaders, &scene_gpu, &targets, c.clone())?;
+                let os = objectspace::ObjectSpace::new(ctx, &mut shaders, scene, &scene_gpu, &targets, c.clone())?;
                 Box::new(os)
             }
             PipelineConfig::Clustered(c) => Box::new(clustered::Clustered::new(device, &mut shaders, &scene_gpu, *c)?),

@@ -56,10 +56,11 @@ impl PipelineReport {
 #[derive(Clone, Debug, Serialize)]
 pub struct ObjectMemory {
     pub object: usize,
-    /// Mip-0 side of its shading texture, in texels.
+    /// Mip-0 side of its virtual shading texture, in texels.
     pub texture_size: u32,
     pub levels: u32,
+    /// Virtual texels, tiles and pages (mip chain included).
     pub texels: u64,
     pub tiles: u64,
-    pub bytes: u64,
+    pub pages: u64,
 }

@@ -18,6 +18,8 @@ pub fn constants() -> Vec<(&'static str, u32)> {
     c.extend(GpuLightKind::ALL.iter().map(|k| (k.wgsl_name(), *k as u32)));
     c.extend(DebugView::ALL.iter().map(|v| (v.wgsl_name(), *v as u32)));
     c.extend(TileCounter::ALL.iter().map(|t| (t.wgsl_name(), *t as u32)));
+    c.push(("AGE_BUCKET_BASE", TileCounter::AGE_BUCKET_BASE as u32));
+    c.push(("AGE_BUCKETS", TileCounter::AGE_BUCKETS as u32));
     c.extend(VolumeList::ALL.iter().map(|l| (l.wgsl_name(), *l as u32)));
     c.push(("VOLUME_LISTS", VolumeList::ALL.len() as u32));
     c.extend(deferred_compute::wgsl_constants());

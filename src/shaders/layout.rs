@@ -56,7 +56,7 @@ mod tests {
     use crate::render::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
     use crate::render::objectspace::atlas::{GpuAtlasEntry, GpuAtlasLevel};
     use crate::render::objectspace::resources::GpuParams;
-    use crate::render::objectspace::trimap::{GpuTrimapDraw, Square};
+    use crate::render::objectspace::trimap::GpuChartGrid;
     use crate::render::passes::gbuffer::GpuUnproject;
     use crate::render::passes::light_grid::GpuLightGridParams;
     use crate::render::passes::visibility::compute::{GpuRasterParams, GpuResolveParams};
@@ -104,8 +104,7 @@ mod tests {
         check::<GpuAtlasLevel>(&modules);
         check::<GpuAtlasEntry>(&modules);
         check::<GpuParams>(&modules);
-        check::<Square>(&modules);
-        check::<GpuTrimapDraw>(&modules);
+        check::<GpuChartGrid>(&modules);
         check::<LightPair>(&modules);
         check::<GpuLightGridParams>(&modules);
         check::<GpuUnproject>(&modules);
@@ -115,10 +114,11 @@ mod tests {
     }
 
     gpu_struct! {
-        struct Swapped as "Square" {
+        struct Swapped as "AtlasLevel" {
+            page_base: u32,
             size: u32,
-            origin: [u32; 2],
-            page: u32,
+            tile_base: u32,
+            pad: u32,
         }
     }
 

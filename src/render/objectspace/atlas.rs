@@ -1,10 +1,11 @@
-//! Where every object's shading texture lives: each mip level of each object
-//! is a square in one page of a shared physical atlas (a 2D array texture),
-//! and its tiles are numbered in one flat index space for the tile buffers.
-//!
-//! Sizes are powers of two, so a buddy allocator packs the squares without
-//! waste. The per-object table ([`GpuAtlasEntry`]) is what the GPU passes read;
-//! a page table can replace its rectangles later without changing the passes.
+//! Where every object's shading texture lives. Each object's texture (its
+//! whole mip pyramid, up to 16384 texels a side) is *virtual*: its levels
+//! are cut into square pages, numbered in one flat virtual page space, and
+//! only the pages that visible tiles need are backed by a page of the shared
+//! physical atlas ([`PagePool`]), through a page table the GPU keeps
+//! (`paging/`). Tiles keep a flat virtual numbering too (the shade queue and
+//! the CPU twin speak of virtual tiles); their state lives with the physical
+//! page that backs them.
 
 use bytemuck::Zeroable;
 
@@ -12,19 +13,27 @@ use crate::shaders::gpu_struct;
 
 /// Most mip levels an object can have (a 16384 texture down to 8x8 tiles is 12).
 pub const MAX_LEVELS: usize = 14;
+/// Largest virtual texture side.
+pub const MAX_TEXTURE_SIZE: u32 = 16384;
 
-/// One mip level of one object in the atlas.
+/// One mip level of one object's virtual texture.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AtlasLevel {
-    pub page: u32,
-    pub x: u32,
-    pub y: u32,
     pub size: u32,
-    /// Global index of the level's first tile.
+    /// Virtual index of the level's first page (pages row-major).
+    pub page_base: u32,
+    /// Global index of the level's first tile (tiles row-major).
     pub tile_base: u32,
 }
 
-/// An object's shading texture: its size (mip 0) and levels.
+impl AtlasLevel {
+    /// Pages per row (the last row and column may be partly outside the level).
+    pub fn pages_per_row(&self, page_size: u32) -> u32 {
+        self.size.div_ceil(page_size)
+    }
+}
+
+/// An object's virtual shading texture: its size (mip 0) and levels.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ObjectAtlas {
     pub size: u32,
@@ -45,80 +54,104 @@ impl ObjectAtlas {
 pub enum AtlasError {
     #[error("tile size {0} is not one of 8, 16, 32, 64")]
     BadTileSize(u32),
+    #[error("page size {page} is not a power of two from the tile size {tile} to four times it")]
+    BadPageSize { page: u32, tile: u32 },
     #[error("object {object}: texture size {size} is not a power of two")]
     NotPowerOfTwo { object: usize, size: u32 },
     #[error("the atlas needs {tiles} tiles, more than the 2^32 tile indices")]
     TooManyTiles { tiles: u64 },
 }
 
-/// The layout of all objects in the atlas pages.
+/// The virtual layout of all objects' shading textures.
 #[derive(Clone, Debug)]
 pub struct AtlasLayout {
     pub page_size: u32,
-    pub pages: u32,
     pub tile_size: u32,
     /// Per scene object; `None` for objects shaded forward (not in the atlas).
     pub objects: Vec<Option<ObjectAtlas>>,
+    /// Virtual tiles, all objects and levels.
     pub tile_count: u32,
+    /// Virtual pages, all objects and levels.
+    pub page_count: u32,
 }
 
 impl AtlasLayout {
     /// Lays out objects of the given shading-texture sizes (`None`: not in the
-    /// atlas). Sizes above `max_page` are clamped to it; sizes below the tile
+    /// atlas). Sizes above `max_size` are clamped to it; sizes below the tile
     /// size are raised to it. Levels go down to `coarsest` texels (or one
     /// tile, if larger): below the charts' gutter, neighbouring charts would
     /// share texels.
-    pub fn new(sizes: &[Option<u32>], tile_size: u32, max_page: u32, coarsest: u32) -> Result<Self, AtlasError> {
+    pub fn new(
+        sizes: &[Option<u32>],
+        tile_size: u32,
+        page_size: u32,
+        max_size: u32,
+        coarsest: u32,
+    ) -> Result<Self, AtlasError> {
         if ![8, 16, 32, 64].contains(&tile_size) {
             return Err(AtlasError::BadTileSize(tile_size));
         }
-        let mut clamped = Vec::with_capacity(sizes.len());
-        for (object, s) in sizes.iter().enumerate() {
-            clamped.push(match *s {
-                Some(size) if !size.is_power_of_two() => return Err(AtlasError::NotPowerOfTwo { object, size }),
-                Some(size) => Some(size.clamp(tile_size, max_page)),
-                None => None,
-            });
+        if !page_size.is_power_of_two() || page_size < tile_size || page_size > 4 * tile_size {
+            return Err(AtlasError::BadPageSize { page: page_size, tile: tile_size });
         }
-        let page_size = clamped.iter().flatten().copied().max().unwrap_or(tile_size);
         let coarsest = coarsest.max(tile_size);
-        let level_count = |size: u32| ((size / coarsest.min(size)).ilog2() as usize + 1).min(MAX_LEVELS);
-        // Requests (object, level, size), largest first: then buddy splitting never fragments.
-        let mut requests: Vec<(usize, usize, u32)> = Vec::new();
-        for (object, size) in clamped.iter().enumerate() {
-            if let Some(size) = size {
-                requests.extend((0..level_count(*size)).map(|l| (object, l, size >> l)));
-            }
-        }
-        requests.sort_by(|a, b| b.2.cmp(&a.2).then(a.0.cmp(&b.0)).then(a.1.cmp(&b.1)));
-        let mut buddy = Buddy::new(page_size);
-        let mut placed: Vec<Vec<Option<AtlasLevel>>> =
-            clamped.iter().map(|s| vec![None; s.map_or(0, level_count)]).collect();
-        for &(object, level, size) in &requests {
-            let (page, x, y) = buddy.alloc(size);
-            placed[object][level] = Some(AtlasLevel { page, x, y, size, tile_base: 0 });
-        }
-        // Tile numbering in object, level order (stable, independent of packing).
-        let mut next: u64 = 0;
+        let (mut tiles, mut pages) = (0u64, 0u64);
         let mut objects = Vec::with_capacity(sizes.len());
-        for (object, size) in clamped.iter().enumerate() {
-            objects.push(size.map(|size| {
-                let levels = placed[object]
-                    .iter()
-                    .map(|l| {
-                        let mut l = l.expect("every requested level was placed");
-                        l.tile_base = next as u32;
-                        next += (l.size / tile_size) as u64 * (l.size / tile_size) as u64;
-                        l
-                    })
-                    .collect();
-                ObjectAtlas { size, levels }
-            }));
+        for (object, s) in sizes.iter().enumerate() {
+            let size = match *s {
+                Some(size) if !size.is_power_of_two() => return Err(AtlasError::NotPowerOfTwo { object, size }),
+                Some(size) => size.clamp(tile_size, max_size),
+                None => {
+                    objects.push(None);
+                    continue;
+                }
+            };
+            let count = ((size / coarsest.min(size)).ilog2() as usize + 1).min(MAX_LEVELS);
+            let levels = (0..count)
+                .map(|l| {
+                    let level = AtlasLevel {
+                        size: size >> l,
+                        page_base: pages as u32,
+                        tile_base: tiles.min(u32::MAX as u64) as u32,
+                    };
+                    tiles += ((size >> l) / tile_size) as u64 * ((size >> l) / tile_size) as u64;
+                    pages += level.pages_per_row(page_size) as u64 * level.pages_per_row(page_size) as u64;
+                    level
+                })
+                .collect();
+            objects.push(Some(ObjectAtlas { size, levels }));
         }
-        if next > u32::MAX as u64 {
-            return Err(AtlasError::TooManyTiles { tiles: next });
+        if tiles > u32::MAX as u64 {
+            return Err(AtlasError::TooManyTiles { tiles });
         }
-        Ok(Self { page_size, pages: buddy.pages, tile_size, objects, tile_count: next as u32 })
+        Ok(Self { page_size, tile_size, objects, tile_count: tiles as u32, page_count: pages as u32 })
+    }
+
+    /// [`AtlasLayout::new`], with every object's side halved (down to 64)
+    /// until the layout has at most `max_pages` virtual pages: the page table
+    /// holds one entry per virtual page, and a scene of many large objects
+    /// (the voxel city at the default density: 24 G virtual texels) would
+    /// need more than a GPU buffer holds. Returns the layout and the halvings.
+    pub fn fitting(
+        sizes: &[Option<u32>],
+        tile_size: u32,
+        page_size: u32,
+        max_size: u32,
+        coarsest: u32,
+        max_pages: u64,
+    ) -> Result<(Self, u32), AtlasError> {
+        let mut sizes: Vec<Option<u32>> = sizes.iter().map(|s| s.map(|s| s.min(max_size))).collect();
+        let mut halvings = 0;
+        loop {
+            let layout = Self::new(&sizes, tile_size, page_size, max_size, coarsest)?;
+            if layout.page_count as u64 <= max_pages || !sizes.iter().flatten().any(|&s| s > 64) {
+                return Ok((layout, halvings));
+            }
+            for s in sizes.iter_mut().flatten() {
+                *s = (*s / 2).max(64);
+            }
+            halvings += 1;
+        }
     }
 
     /// The table the GPU passes read, one entry per scene object.
@@ -131,12 +164,7 @@ impl AtlasLayout {
                     e.size = o.size;
                     e.level_count = o.levels.len() as u32;
                     for (g, l) in e.levels.iter_mut().zip(&o.levels) {
-                        *g = GpuAtlasLevel {
-                            page: l.page,
-                            origin: l.x | (l.y << 16),
-                            size: l.size,
-                            tile_base: l.tile_base,
-                        };
+                        *g = GpuAtlasLevel { size: l.size, page_base: l.page_base, tile_base: l.tile_base, pad: 0 };
                     }
                 }
                 e
@@ -144,24 +172,74 @@ impl AtlasLayout {
             .collect()
     }
 
-    /// A 2D array texture with one layer per page: the shading atlas and the
-    /// triangle-index maps share this layout, texel for texel. A layout with
-    /// no page (every object shaded forward) still gets one layer, since a
-    /// texture cannot be empty.
-    pub fn page_array_texture(
+    /// Virtual texels of all objects (mip chains included).
+    pub fn virtual_texels(&self) -> u64 {
+        self.objects.iter().flatten().map(|o| o.texels()).sum()
+    }
+
+    /// Where virtual page `page` lies: (object, level, its first texel in
+    /// the level). `None` past the last page.
+    pub fn page_origin(&self, page: u32) -> Option<(usize, usize, [u32; 2])> {
+        for (object, o) in self.objects.iter().enumerate() {
+            let Some(o) = o else { continue };
+            for (level, l) in o.levels.iter().enumerate() {
+                let per_row = l.pages_per_row(self.page_size);
+                if (l.page_base..l.page_base + per_row * per_row).contains(&page) {
+                    let local = page - l.page_base;
+                    return Some((object, level, [local % per_row * self.page_size, local / per_row * self.page_size]));
+                }
+            }
+        }
+        None
+    }
+}
+
+/// The physical atlas: `pages` pages of `page_size` texels a side, laid out
+/// `layer_pages` x `layer_pages` per layer of a 2D array texture (one layer
+/// when they fit in the adapter's largest texture).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PagePool {
+    pub page_size: u32,
+    pub pages: u32,
+    pub layer_pages: u32,
+    pub layers: u32,
+}
+
+impl PagePool {
+    /// A pool of at least `texels` texels (at least one page), in layers no
+    /// wider than `max_side`; every page of the last layer is used.
+    pub fn new(page_size: u32, texels: u64, max_side: u32) -> Self {
+        let wanted = texels.div_ceil(page_size as u64 * page_size as u64).max(1);
+        let layer_pages = ((wanted as f64).sqrt().ceil() as u32).clamp(1, (max_side / page_size).max(1));
+        let per_layer = layer_pages as u64 * layer_pages as u64;
+        let layers = wanted.div_ceil(per_layer) as u32;
+        Self { page_size, pages: (per_layer * layers as u64).min(u32::MAX as u64) as u32, layer_pages, layers }
+    }
+
+    pub fn texels(&self) -> u64 {
+        self.pages as u64 * self.page_size as u64 * self.page_size as u64
+    }
+
+    /// Physical page `page`'s first texel: (x, y, layer).
+    pub fn origin(&self, page: u32) -> (u32, u32, u32) {
+        let per_layer = self.layer_pages * self.layer_pages;
+        let (layer, i) = (page / per_layer, page % per_layer);
+        (i % self.layer_pages * self.page_size, i / self.layer_pages * self.page_size, layer)
+    }
+
+    /// A 2D array texture holding the pool: the shading atlas and the
+    /// triangle-index maps share this layout, texel for texel.
+    pub fn texture(
         &self,
         device: &wgpu::Device,
         label: &str,
         format: wgpu::TextureFormat,
         usage: wgpu::TextureUsages,
     ) -> wgpu::Texture {
+        let side = self.layer_pages * self.page_size;
         device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
-            size: wgpu::Extent3d {
-                width: self.page_size,
-                height: self.page_size,
-                depth_or_array_layers: self.pages.max(1),
-            },
+            size: wgpu::Extent3d { width: side, height: side, depth_or_array_layers: self.layers },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -170,80 +248,14 @@ impl AtlasLayout {
             view_formats: &[],
         })
     }
-
-    pub fn atlas_texels(&self) -> u64 {
-        self.pages as u64 * self.page_size as u64 * self.page_size as u64
-    }
-}
-
-/// Oxide's stable shading budget: while the objects' texels (mip chains
-/// included) exceed `budget_texels`, every object's side is halved (down to
-/// `min_side`), so shading density drops uniformly and no scene overflows.
-/// Returns the sizes and how many times they were halved.
-pub fn fit_budget(sizes: &[Option<u32>], budget_texels: u64, min_side: u32) -> (Vec<Option<u32>>, u32) {
-    let texels = |sizes: &[Option<u32>]| sizes.iter().flatten().map(|&s| s as u64 * s as u64 * 4 / 3).sum::<u64>();
-    let mut sizes = sizes.to_vec();
-    let mut halvings = 0;
-    while texels(&sizes) > budget_texels && sizes.iter().flatten().any(|&s| s > min_side) {
-        for s in sizes.iter_mut().flatten() {
-            *s = (*s / 2).max(min_side);
-        }
-        halvings += 1;
-    }
-    (sizes, halvings)
-}
-
-/// A square's place: (page, x, y).
-type Spot = (u32, u32, u32);
-
-/// Buddy allocator over square pages of a power-of-two side.
-struct Buddy {
-    page_size: u32,
-    pages: u32,
-    /// Free squares by side: (side, [(page, x, y)]).
-    free: Vec<(u32, Vec<Spot>)>,
-}
-
-impl Buddy {
-    fn new(page_size: u32) -> Self {
-        Self { page_size, pages: 0, free: Vec::new() }
-    }
-
-    fn free_list(&mut self, size: u32) -> &mut Vec<Spot> {
-        let i = match self.free.iter().position(|(s, _)| *s == size) {
-            Some(i) => i,
-            None => {
-                self.free.push((size, Vec::new()));
-                self.free.len() - 1
-            }
-        };
-        &mut self.free[i].1
-    }
-
-    fn alloc(&mut self, size: u32) -> Spot {
-        if let Some(spot) = self.free_list(size).pop() {
-            return spot;
-        }
-        if size >= self.page_size {
-            self.pages += 1;
-            return (self.pages - 1, 0, 0);
-        }
-        let (page, x, y) = self.alloc(size * 2);
-        // Keep the first quadrant; the other three become free, pushed in
-        // reverse so the next allocation takes the lowest address.
-        let list = self.free_list(size);
-        list.extend([(page, x + size, y + size), (page, x, y + size), (page, x + size, y)]);
-        (page, x, y)
-    }
 }
 
 gpu_struct! {
     pub struct GpuAtlasLevel as "AtlasLevel" {
-        pub page: u32,
-        /// x | y << 16, in texels of the page.
-        pub origin: u32,
         pub size: u32,
+        pub page_base: u32,
         pub tile_base: u32,
+        pub pad: u32,
     }
 }
 
@@ -265,66 +277,81 @@ gpu_struct! {
 mod tests {
     use super::*;
 
-    fn overlaps(a: &AtlasLevel, b: &AtlasLevel) -> bool {
-        a.page == b.page && a.x < b.x + b.size && b.x < a.x + a.size && a.y < b.y + b.size && b.y < a.y + a.size
-    }
-
     #[test]
-    fn levels_are_disjoint_inside_pages_and_tiles_are_contiguous() {
-        let sizes = [Some(1024), Some(256), None, Some(512), Some(64), Some(1024)];
-        let a = AtlasLayout::new(&sizes, 8, 4096, 8).unwrap();
-        assert_eq!(a.page_size, 1024);
-        let all: Vec<AtlasLevel> = a.objects.iter().flatten().flat_map(|o| o.levels.clone()).collect();
-        for (i, x) in all.iter().enumerate() {
-            assert!(x.x + x.size <= a.page_size && x.y + x.size <= a.page_size && x.page < a.pages);
-            for y in &all[i + 1..] {
-                assert!(!overlaps(x, y), "{x:?} overlaps {y:?}");
-            }
-        }
-        // Levels: 1024 -> 8 is 8 levels.
-        assert_eq!(a.objects[0].as_ref().unwrap().levels.len(), 8);
+    fn levels_number_pages_and_tiles_contiguously() {
+        let sizes = [Some(1024), Some(256), None, Some(512), Some(64)];
+        let a = AtlasLayout::new(&sizes, 16, 64, 16384, 64).unwrap();
+        // Levels: 1024 -> 64 is 5 levels.
+        assert_eq!(a.objects[0].as_ref().unwrap().levels.len(), 5);
+        let t = 16;
         assert!(a.objects[2].is_none());
-        // Tile bases are contiguous in object, level order.
-        let mut expected = 0;
+        let (mut tiles, mut pages) = (0, 0);
         for o in a.objects.iter().flatten() {
             for l in &o.levels {
-                assert_eq!(l.tile_base, expected);
-                expected += (l.size / 8) * (l.size / 8);
+                assert_eq!((l.tile_base, l.page_base), (tiles, pages));
+                tiles += (l.size / t) * (l.size / t);
+                pages += (l.size / 64) * (l.size / 64);
             }
         }
-        assert_eq!(a.tile_count, expected);
-        // Texels used fit the pages with little waste (buddy packing of sorted squares).
-        let used: u64 = a.objects.iter().flatten().map(|o| o.texels()).sum();
-        assert!(used <= a.atlas_texels() && used * 2 > a.atlas_texels(), "used {used} of {}", a.atlas_texels());
+        assert_eq!((a.tile_count, a.page_count), (tiles, pages));
+        // Object 1's level 2 (64 texels) is one page; its origin is found back.
+        let l = a.objects[1].as_ref().unwrap().levels[2];
+        assert_eq!(a.page_origin(l.page_base), Some((1, 2, [0, 0])));
+        let l0 = a.objects[0].as_ref().unwrap().levels[0];
+        assert_eq!(a.page_origin(l0.page_base + 16 + 3), Some((0, 0, [3 * 64, 64])));
+        assert_eq!(a.page_origin(a.page_count), None);
     }
 
     #[test]
-    fn mip_chains_stop_at_the_coarsest_level() {
-        let a = AtlasLayout::new(&[Some(1024), Some(64)], 8, 4096, 128).unwrap();
+    fn a_level_smaller_than_a_page_takes_one_page() {
+        let a = AtlasLayout::new(&[Some(256)], 32, 128, 16384, 32).unwrap();
         let sizes: Vec<u32> = a.objects[0].as_ref().unwrap().levels.iter().map(|l| l.size).collect();
-        assert_eq!(sizes, vec![1024, 512, 256, 128]);
-        assert_eq!(a.objects[1].as_ref().unwrap().levels.len(), 1);
-    }
-
-    #[test]
-    fn budget_halves_every_object_until_it_fits() {
-        let (sizes, halvings) = fit_budget(&[Some(4096), Some(1024), None, Some(64)], 2 * 1024 * 1024, 64);
-        assert_eq!(halvings, 2);
-        assert_eq!(sizes, vec![Some(1024), Some(256), None, Some(64)]);
-        let (same, none) = fit_budget(&[Some(256)], 1 << 20, 64);
-        assert_eq!((same, none), (vec![Some(256)], 0));
+        assert_eq!(sizes, vec![256, 128, 64, 32]);
+        assert_eq!(a.page_count, 4 + 1 + 1 + 1);
     }
 
     #[test]
     fn sizes_are_clamped_and_checked() {
-        let a = AtlasLayout::new(&[Some(4), Some(1 << 15)], 16, 2048, 16).unwrap();
+        let a = AtlasLayout::new(&[Some(4), Some(1 << 15)], 16, 64, 2048, 16).unwrap();
         assert_eq!(a.objects[0].as_ref().unwrap().size, 16);
         assert_eq!(a.objects[0].as_ref().unwrap().levels.len(), 1);
         assert_eq!(a.objects[1].as_ref().unwrap().size, 2048);
         assert_eq!(
-            AtlasLayout::new(&[Some(300)], 8, 2048, 8).unwrap_err(),
+            AtlasLayout::new(&[Some(300)], 8, 16, 2048, 8).unwrap_err(),
             AtlasError::NotPowerOfTwo { object: 0, size: 300 }
         );
-        assert_eq!(AtlasLayout::new(&[Some(256)], 12, 2048, 8).unwrap_err(), AtlasError::BadTileSize(12));
+        assert_eq!(AtlasLayout::new(&[Some(256)], 12, 64, 2048, 8).unwrap_err(), AtlasError::BadTileSize(12));
+        assert_eq!(
+            AtlasLayout::new(&[Some(256)], 32, 16, 2048, 8).unwrap_err(),
+            AtlasError::BadPageSize { page: 16, tile: 32 }
+        );
+        // A page holds at most 16 tiles (one mask word of requests).
+        assert_eq!(
+            AtlasLayout::new(&[Some(256)], 8, 64, 2048, 8).unwrap_err(),
+            AtlasError::BadPageSize { page: 64, tile: 8 }
+        );
+    }
+
+    #[test]
+    fn large_virtual_spaces_are_halved_until_the_page_table_fits() {
+        let sizes = [Some(8192), Some(4096), None];
+        let (full, none) = AtlasLayout::fitting(&sizes, 8, 16, 16384, 128, 1 << 30).unwrap();
+        assert_eq!(none, 0);
+        let (fit, halvings) = AtlasLayout::fitting(&sizes, 8, 16, 16384, 128, full.page_count as u64 / 3).unwrap();
+        assert_eq!(halvings, 1);
+        assert!(fit.page_count as u64 <= full.page_count as u64 / 3);
+        assert_eq!(fit.objects[0].as_ref().unwrap().size, 4096);
+    }
+
+    #[test]
+    fn pools_fill_square_layers() {
+        let p = PagePool::new(64, 10 * 64 * 64, 8192);
+        assert_eq!((p.layer_pages, p.layers, p.pages), (4, 1, 16));
+        assert_eq!(p.origin(5), (64, 64, 0));
+        // A pool wider than the largest texture takes more layers.
+        let p = PagePool::new(64, 5 * 256 * 256, 256);
+        assert_eq!((p.layer_pages, p.layers, p.pages), (4, 5, 80));
+        assert_eq!(p.origin(17), (64, 0, 1));
+        assert_eq!(PagePool::new(64, 0, 8192).pages, 1);
     }
 }

@@ -419,7 +419,7 @@ mod tests {
 
     /// One object of texture side 256 in tiles of 8, levels 256 down to 32.
     fn entries() -> Vec<GpuAtlasEntry> {
-        AtlasLayout::new(&[Some(256)], 8, 4096, 32).unwrap().gpu_entries()
+        AtlasLayout::new(&[Some(256)], 8, 16, 4096, 32).unwrap().gpu_entries()
     }
 
     #[test]
@@ -495,7 +495,7 @@ mod tests {
 
     #[test]
     fn footprints_add_tiles_only_across_tile_edges() {
-        let l = GpuAtlasLevel { page: 0, origin: 0, size: 32, tile_base: 100 };
+        let l = GpuAtlasLevel { size: 32, page_base: 0, tile_base: 100, pad: 0 };
         assert_eq!(footprint_tiles(&l, 8, IVec2::new(3, 3), IVec2::new(4, 4)), vec![100]);
         assert_eq!(footprint_tiles(&l, 8, IVec2::new(7, 3), IVec2::new(8, 4)), vec![100, 101]);
         assert_eq!(footprint_tiles(&l, 8, IVec2::new(2, 15), IVec2::new(3, 16)), vec![104, 108]);
@@ -566,7 +566,7 @@ mod tests {
     #[test]
     fn mark_frame_updates_visible_tiles_only() {
         // Object 0: 16 texels, 4 tiles; object 1: 32 then 16 texels, 16 + 4 tiles.
-        let mut entries = AtlasLayout::new(&[Some(16), None, Some(32)], 8, 64, 16).unwrap().gpu_entries();
+        let mut entries = AtlasLayout::new(&[Some(16), None, Some(32)], 8, 16, 64, 16).unwrap().gpu_entries();
         entries[0].valid_since = 1;
         entries[2].valid_since = 3;
         assert_eq!(tile_owner(&entries, 8, 3), Some((0, 0)));

@@ -2,11 +2,12 @@
 //! the GPU, so they stay out of the frame loop).
 
 use super::ObjectSpace;
-use super::resources::ATLAS_FORMAT;
+use super::resources::{ATLAS_FORMAT, TRIANGLE_MAP_FORMAT};
 use crate::color::reinhard_srgb8;
 use crate::gpu::{GpuContext, GpuError, readback};
 
-/// The object-space marking state after a frame, read back from the GPU.
+/// The object-space marking state after a frame, read back from the GPU,
+/// with the tile state of the backed pages translated to virtual tiles.
 #[derive(Clone, Debug)]
 pub struct MarkState {
     /// The frame's stamp (frames rendered so far; 0 in the tile buffers means never).
@@ -15,32 +16,58 @@ pub struct MarkState {
     pub valid_since: Vec<u32>,
     /// Per pixel, row-major: (object + 1, triangle); object 0 = background.
     pub visibility: Vec<[u32; 2]>,
-    /// Per tile: stamp of the last frame it was visible.
+    /// Per virtual tile: stamp of the last frame it was visible (0 for
+    /// tiles on pages with no physical page).
     pub tile_visible: Vec<u32>,
-    /// Per tile: stamp of the last frame it was shaded.
+    /// Per virtual tile: stamp of the last frame it was shaded.
     pub tile_shaded: Vec<u32>,
-    /// This frame's shade queue: (global tile, object << 8 | level), in GPU order.
+    /// This frame's shade queue: (virtual tile, object << 8 | level), in GPU order.
     pub queue: Vec<[u32; 2]>,
     /// Indexed by [`super::TileCounter`].
     pub counters: [u32; super::TileCounter::SLOTS],
+    /// Per physical page: the virtual page it backs, if any.
+    pub page_owner: Vec<Option<u32>>,
 }
 
 impl ObjectSpace {
+    fn words(ctx: &GpuContext, b: &wgpu::Buffer) -> Result<Vec<u32>, GpuError> {
+        Ok(bytemuck::pod_collect_to_vec(&readback::read_whole_buffer(ctx, b)?))
+    }
+
+    /// Calls `f(virtual tile, physical tile)` for every tile of every backed page.
+    fn backed_tiles(&self, page_owner: &[Option<u32>], mut f: impl FnMut(usize, usize)) {
+        let (page, tile) = (self.layout.page_size, self.layout.tile_size);
+        let per_row = page / tile;
+        for (physical, owner) in page_owner.iter().enumerate() {
+            let Some((object, level, origin)) = owner.and_then(|v| self.layout.page_origin(v)) else { continue };
+            let l = self.layout.objects[object].as_ref().expect("pages belong to atlas objects").levels[level];
+            for t in 0..per_row * per_row {
+                let (x, y) = (origin[0] + t % per_row * tile, origin[1] + t / per_row * tile);
+                if x < l.size && y < l.size {
+                    let virtual_tile = l.tile_base + y / tile * (l.size / tile) + x / tile;
+                    f(virtual_tile as usize, (physical as u32 * per_row * per_row + t) as usize);
+                }
+            }
+        }
+    }
+
     /// The marking state after the last frame, for tests that check tile
     /// marking against its CPU twin.
     pub fn read_mark_state(&self, ctx: &GpuContext) -> Result<MarkState, GpuError> {
         let res = &self.res;
-        let words = |b: &wgpu::Buffer| -> Result<Vec<u32>, GpuError> {
-            Ok(bytemuck::pod_collect_to_vec(&readback::read_whole_buffer(ctx, b)?))
-        };
+        let page_owner: Vec<Option<u32>> =
+            Self::words(ctx, &res.page_owner)?.into_iter().map(|o| o.checked_sub(1)).collect();
+        let (visible, shaded) = (Self::words(ctx, &res.tile_visible)?, Self::words(ctx, &res.tile_shaded)?);
         let tiles = self.layout.tile_count as usize;
-        let mut tile_visible = words(&res.tile_visible)?;
-        let mut tile_shaded = words(&res.tile_shaded)?;
-        tile_visible.truncate(tiles);
-        tile_shaded.truncate(tiles);
-        let c = words(&res.counters)?;
-        let queued = (c[super::TileCounter::Queued as usize] as usize).min(tiles);
-        let queue = words(&res.work_queue)?.chunks_exact(2).take(queued).map(|c| [c[0], c[1]]).collect();
+        let (mut tile_visible, mut tile_shaded) = (vec![0; tiles], vec![0; tiles]);
+        self.backed_tiles(&page_owner, |v, p| {
+            tile_visible[v] = visible[p];
+            tile_shaded[v] = shaded[p];
+        });
+        let c = Self::words(ctx, &res.counters)?;
+        let queued =
+            (c[super::TileCounter::Queued as usize] as usize).min(res.max_queue(self.layout.tile_size) as usize);
+        let queue = Self::words(ctx, &res.work_queue)?.chunks_exact(2).take(queued).map(|c| [c[0], c[1]]).collect();
         let ids: Vec<u32> = bytemuck::pod_collect_to_vec(&readback::read_texture(ctx, &res.visibility.texture, 8)?);
         Ok(MarkState {
             stamp: self.frames,
@@ -50,22 +77,88 @@ impl ObjectSpace {
             tile_shaded,
             queue,
             counters: std::array::from_fn(|i| c[i]),
+            page_owner,
         })
     }
 
-    /// One mip level of one object's shades as an image (Reinhard tone
-    /// mapped, sRGB), for the atlas debug view.
-    pub fn read_atlas(&self, ctx: &GpuContext, object: usize, level: usize) -> Result<image::RgbaImage, GpuError> {
-        let Some(l) = self.layout.objects.get(object).and_then(|o| o.as_ref()).and_then(|o| o.levels.get(level)) else {
+    /// Copies texel rows of the backed pages of `object`'s `level` out of a
+    /// physical texture read back whole (`bytes`, `texel` bytes a texel)
+    /// into a level-sized image; texels of pages with no physical page keep
+    /// `fill`.
+    fn gather_level(
+        &self,
+        ctx: &GpuContext,
+        bytes: &[u8],
+        texel: usize,
+        object: usize,
+        level: usize,
+        fill: &[u8],
+    ) -> Result<(u32, Vec<u8>), GpuError> {
+        let Some(l) =
+            self.layout.objects.get(object).and_then(|o| o.as_ref()).and_then(|o| o.levels.get(level)).copied()
+        else {
             return Err(GpuError::Readback(format!("object {object} has no atlas level {level}")));
         };
-        let texel_bytes = ATLAS_FORMAT.block_copy_size(None).expect("uncompressed format");
-        let bytes =
-            readback::read_texture_region(ctx, &self.res.atlas, texel_bytes, (l.x, l.y, l.page), (l.size, l.size))?;
-        let halves: Vec<half::f16> = bytemuck::pod_collect_to_vec(&bytes);
+        let pool = self.res.pool;
+        let side = (pool.layer_pages * pool.page_size) as usize;
+        let mut out: Vec<u8> = fill.iter().copied().cycle().take(l.size as usize * l.size as usize * texel).collect();
+        let owners = Self::words(ctx, &self.res.page_owner)?;
+        for (physical, owner) in owners.iter().enumerate() {
+            let Some((o, lv, origin)) = owner.checked_sub(1).and_then(|v| self.layout.page_origin(v)) else { continue };
+            if (o, lv) != (object, level) {
+                continue;
+            }
+            let (px, py, layer) = pool.origin(physical as u32);
+            let rows = pool.page_size.min(l.size - origin[1]);
+            let width = pool.page_size.min(l.size - origin[0]) as usize;
+            for r in 0..rows {
+                let src = ((layer as usize * side + (py + r) as usize) * side + px as usize) * texel;
+                let dst = (((origin[1] + r) * l.size + origin[0]) as usize) * texel;
+                out[dst..dst + width * texel].copy_from_slice(&bytes[src..src + width * texel]);
+            }
+        }
+        Ok((l.size, out))
+    }
+
+    /// One mip level of one object's shades as an image (Reinhard tone
+    /// mapped, sRGB), for the atlas debug view; texels of pages with no
+    /// physical page are magenta.
+    pub fn read_atlas(&self, ctx: &GpuContext, object: usize, level: usize) -> Result<image::RgbaImage, GpuError> {
+        let texel = ATLAS_FORMAT.block_copy_size(None).expect("uncompressed format");
+        let bytes = self.read_layers(ctx, &self.res.atlas, texel)?;
+        let magenta = [half::f16::from_f32(4.0), half::f16::ZERO, half::f16::from_f32(4.0), half::f16::ONE];
+        let (size, level_bytes) =
+            self.gather_level(ctx, &bytes, texel as usize, object, level, bytemuck::cast_slice(&magenta))?;
+        let halves: Vec<half::f16> = bytemuck::pod_collect_to_vec(&level_bytes);
         let pixels = halves.chunks_exact(4).flat_map(|p| {
             [reinhard_srgb8(p[0].to_f32()), reinhard_srgb8(p[1].to_f32()), reinhard_srgb8(p[2].to_f32()), 255]
         });
-        Ok(image::RgbaImage::from_raw(l.size, l.size, pixels.collect()).expect("size matches"))
+        Ok(image::RgbaImage::from_raw(size, size, pixels.collect()).expect("size matches"))
+    }
+
+    /// One mip level of one object's triangle map, row-major: triangle + 1
+    /// per texel (0 for none), `None` for texels of pages with no physical page.
+    pub fn read_triangle_map(
+        &self,
+        ctx: &GpuContext,
+        object: usize,
+        level: usize,
+    ) -> Result<(u32, Vec<Option<u32>>), GpuError> {
+        let texel = TRIANGLE_MAP_FORMAT.block_copy_size(None).expect("uncompressed format");
+        let bytes = self.read_layers(ctx, &self.res.triangle_map, texel)?;
+        // No page: a value no triangle map holds (triangle indices stay below it).
+        let (size, level_bytes) = self.gather_level(ctx, &bytes, texel as usize, object, level, &[0xff; 4])?;
+        let ids: Vec<u32> = bytemuck::pod_collect_to_vec(&level_bytes);
+        Ok((size, ids.into_iter().map(|id| (id != u32::MAX).then_some(id)).collect()))
+    }
+
+    /// Every layer of a physical texture, one after the other.
+    fn read_layers(&self, ctx: &GpuContext, texture: &wgpu::Texture, texel: u32) -> Result<Vec<u8>, GpuError> {
+        let mut all = Vec::new();
+        for layer in 0..texture.depth_or_array_layers() {
+            let size = (texture.width(), texture.height());
+            all.extend(readback::read_texture_region(ctx, texture, texel, (0, 0, layer), size)?);
+        }
+        Ok(all)
     }
 }

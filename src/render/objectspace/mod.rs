@@ -2,29 +2,37 @@
 //! into per-object squares of a shared atlas, reused across frames, and the
 //! frame is gathered from those shades.
 //!
+//! Each object's shading texture is virtual ([`atlas`]): only the pages
+//! visible tiles need are backed by pages of one physical atlas, which the
+//! GPU allocates and evicts (least recently used) itself.
+//!
 //! Per frame ([`ObjectSpace::encode`]): *visibility* (object and triangle id
 //! per pixel: hardware raster after an optional depth pre-pass, or the
 //! compute rasterizer) -> *mark*
 //! (compute per pixel: mip level, bilinear footprint, tiles marked visible;
 //! the first marker of a tile queues it when its shade is `reuse` frames old
-//! or stale) -> *shade* (one workgroup per queued tile, indirect) ->
-//! *gather* (compute per pixel: bilinear from the atlas). Texels are lit by
+//! or stale; tiles on pages with no physical page request one) -> *paging*
+//! (requested pages get physical pages) -> *triangle maps* of the pages
+//! backed this frame -> *mark backed* (their requested tiles) -> *shade*
+//! (one workgroup per queued tile, indirect) -> *gather* (compute per
+//! pixel: bilinear from the atlas). Texels are lit by
 //! the global lights and the lights of their cell of the world grid (Oxide's
 //! light matrix), built on the GPU before shading; no CPU light culling. No
 //! CPU read-back inside the frame: the counters are copied out and read a few
 //! frames later.
 
 pub mod atlas;
+pub mod budget;
 pub mod cpu;
 pub mod debug;
 pub mod gather;
 pub mod mark;
+pub mod paging;
 pub mod resources;
 pub mod shade;
-pub mod shade_budget;
 pub mod trimap;
 
-use shade_budget::ShadeBudget;
+use budget::Budget;
 use std::str::FromStr;
 
 use serde::Serialize;
@@ -41,32 +49,53 @@ use super::targets::Targets;
 use super::{Pipeline, PipelineConfig};
 use crate::gpu::GpuContext;
 use crate::gpu::readback::ReadbackRing;
+use crate::scene::Scene;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
-use atlas::{AtlasError, AtlasLayout};
+use atlas::{AtlasError, AtlasLayout, PagePool};
 use gather::{GatherPass, gather};
-use mark::{MarkPass, mark_tiles};
+use mark::{MarkPass, mark_backed_pages, mark_tiles};
+use paging::{PagingPass, back_pages};
 use resources::Resources;
 use shade::{ShadePass, shade_tiles};
+use trimap::{TrimapPass, build_triangle_maps};
 
-/// The WGSL module every object-space pass imports (`shadespace::objectspace`).
-pub const SHARED_WGSL: ShaderSource = ShaderSource::new("objectspace.wgsl", include_str!("objectspace.wgsl"));
+/// The WGSL modules every object-space pass imports (`shadespace::objectspace`,
+/// `shadespace::objectspace_dispatch`).
+pub const SHARED_WGSL: [ShaderSource; 2] = [
+    ShaderSource::new("objectspace.wgsl", include_str!("objectspace.wgsl")),
+    ShaderSource::new("dispatch.wgsl", include_str!("dispatch.wgsl")),
+];
 
 /// The object-space pass shaders, for the test that validates every shader.
 pub const PASS_SHADERS: &[ShaderSource] =
-    &[mark::SHADER, shade::SHADER, gather::SHADER, trimap::SHADER, trimap::DILATE];
+    &[mark::SHADER, paging::SHADER, trimap::SHADER, shade::SHADER, gather::SHADER];
 
-/// Largest atlas page side (the adapter's limit may be lower).
-pub const MAX_PAGE_SIZE: u32 = 8192;
+/// Texture sides that texel densities clamp to (`--texture-size` may go to
+/// [`atlas::MAX_TEXTURE_SIZE`]).
+pub const MAX_DENSITY_SIZE: u32 = 8192;
 /// Mip chains stop at this side: the procedural scenes' chart gutters are
 /// 1/128 of the square and generated charts have 4 texels at 256 or more, so
 /// below 128 texels neighbouring charts would share texels.
 pub const COARSEST_LEVEL: u32 = 128;
-/// Default atlas budget: 64 Mi texels (768 MiB with the triangle maps).
-pub const DEFAULT_ATLAS_BUDGET: u64 = 64 << 20;
-/// Bytes per atlas texel: the shade (`Rgba16Float`) and the triangle map (`R32Uint`).
-const BYTES_PER_TEXEL: u64 = 8 + 4;
-/// Bytes per tile: two stamps and a queue slot.
-const BYTES_PER_TILE: u64 = 4 + 4 + 8;
+/// Default page side of the virtual textures (raised to the tile size).
+/// Pages of 2x2 tiles of 8: on Sponza at 1920x1080 the pages in use hold
+/// 1.6 times the visible texels (3.0 at 32, 6.3 at 64, with a page table 4
+/// and 16 times smaller).
+pub const DEFAULT_PAGE_SIZE: u32 = 16;
+/// Default physical atlas: this many texels per screen pixel. A frame at
+/// 1920x1080 on Sponza (path frame 120) sees 0.56 texels per pixel in
+/// visible tiles, on pages holding 0.89; the rest keeps recently seen pages
+/// for reuse and room for frames that see more.
+pub const DEFAULT_TEXELS_PER_PIXEL: f64 = 1.25;
+/// ... and at least this many texels (16 MiB of shades and triangle maps):
+/// small frames fill pages poorly (few visible tiles per chart).
+pub const MIN_DEFAULT_ATLAS_TEXELS: u64 = 1 << 20;
+/// Most virtual pages (a page table of 128 MiB, as much again for the request
+/// masks): 8 G virtual texels at the default page size.
+const MAX_VIRTUAL_PAGES: u64 = 32 << 20;
+/// The page budget: past this share of the physical pages in use, the mip
+/// bias rises (the rest is room for newly visible pages).
+const PAGE_FILL: f64 = 0.85;
 
 /// Debug views that replace the gathered shade (`render --view`); the values
 /// are exported to WGSL as `VIEW_*`.
@@ -123,7 +152,8 @@ impl FromStr for DebugView {
     }
 }
 
-/// The GPU's tile counters, one `u32` slot each (exported to WGSL as `COUNT_*`).
+/// The GPU's tile and page counters, one `u32` slot each (exported to WGSL
+/// as `COUNT_*`), followed by the paging pass's age buckets.
 #[repr(u32)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TileCounter {
@@ -133,18 +163,46 @@ pub enum TileCounter {
     Visible = 1,
     /// Visible tiles that were not visible in the previous frame.
     New = 2,
+    /// Physical pages already backing a page that visible tiles used.
+    PagesUsed = 3,
+    /// Virtual pages visible tiles needed that had no physical page.
+    PagesRequested = 4,
+    /// Requested pages that got a physical page this frame.
+    PagesBacked = 5,
+    /// Requested pages that found none (the atlas was full).
+    PagesFailed = 6,
+    /// Physical pages no visible tile used this frame (free or evictable).
+    Candidates = 7,
 }
 
 impl TileCounter {
-    pub const ALL: [Self; 3] = [Self::Queued, Self::Visible, Self::New];
-    /// Slots in the counter buffer (one spare keeps it 16 bytes).
-    pub const SLOTS: usize = 4;
+    pub const ALL: [Self; 8] = [
+        Self::Queued,
+        Self::Visible,
+        Self::New,
+        Self::PagesUsed,
+        Self::PagesRequested,
+        Self::PagesBacked,
+        Self::PagesFailed,
+        Self::Candidates,
+    ];
+    /// First slot of the age buckets (free pages, then unused for 128 or
+    /// more frames, 64-127, ..., 1 frame).
+    pub const AGE_BUCKET_BASE: usize = 8;
+    pub const AGE_BUCKETS: usize = 9;
+    /// Slots in the counter buffer (a multiple of four: 16-byte rows).
+    pub const SLOTS: usize = 20;
 
     pub fn wgsl_name(self) -> &'static str {
         match self {
             Self::Queued => "COUNT_QUEUED",
             Self::Visible => "COUNT_VISIBLE",
             Self::New => "COUNT_NEW",
+            Self::PagesUsed => "COUNT_PAGES_USED",
+            Self::PagesRequested => "COUNT_PAGES_REQUESTED",
+            Self::PagesBacked => "COUNT_PAGES_BACKED",
+            Self::PagesFailed => "COUNT_PAGES_FAILED",
+            Self::Candidates => "COUNT_CANDIDATES",
         }
     }
 }
@@ -156,19 +214,27 @@ pub struct ObjectSpaceConfig {
     pub tile_size: u32,
     /// Re-shade a visible tile when its shade is this many frames old (N >= 1).
     pub reuse: u32,
+    /// Spread re-shading over the N frames (decoupled shading rate): each
+    /// tile is shaded again on its own phase frame, so every frame shades
+    /// about 1/N of the visible tiles instead of all of them every N frames.
+    pub spread_reshading: bool,
     /// Added to every pixel's mip level (positive: coarser shading).
     pub mip_bias: f32,
     /// Strength of the per-pixel variable-rate bias (0 = off): up to this
     /// many levels coarser where a triangle's normals do not vary.
     pub variable_rate: f32,
     pub view: DebugView,
-    /// Shading-texture side per scene object; `None` shades the object
-    /// forward (per pixel, in the gather). Reported per object instead.
+    /// Virtual shading-texture side per scene object; `None` shades the
+    /// object forward (per pixel, in the gather). Reported per object instead.
     #[serde(skip)]
     pub texture_sizes: Vec<Option<u32>>,
-    /// Most atlas texels (all objects, mip chains included); sizes are halved
-    /// uniformly until they fit (see [`atlas::fit_budget`]).
-    pub atlas_budget_texels: u64,
+    /// Page side of the virtual textures (a power of two, at most four
+    /// times the tile size; raised to the tile size).
+    pub page_size: u32,
+    /// Texels of the physical atlas; `None`: [`DEFAULT_TEXELS_PER_PIXEL`]
+    /// per screen pixel, at least [`MIN_DEFAULT_ATLAS_TEXELS`]. When a frame needs more pages than it holds, the
+    /// mip bias rises ([`budget`]).
+    pub atlas_budget_texels: Option<u64>,
     /// Lay down depth before the id pass, which then writes each pixel once
     /// (on the H100: 1.65 instead of 1.82 ms at 1920x1080 on Sponza).
     /// Raster visibility only.
@@ -181,7 +247,7 @@ pub struct ObjectSpaceConfig {
     /// counters (adds atomics: for profiling, not timing).
     pub count_visibility: bool,
     /// Most texels shaded per frame: above it the mip levels are biased
-    /// coarser until the shading fits ([`shade_budget`]). `None`: no limit.
+    /// coarser until the shading fits ([`budget`]). `None`: no limit.
     pub shade_budget_texels: Option<u64>,
 }
 
@@ -190,11 +256,13 @@ impl Default for ObjectSpaceConfig {
         Self {
             tile_size: 8,
             reuse: 1,
+            spread_reshading: false,
             mip_bias: 0.0,
             variable_rate: 0.0,
             view: DebugView::Shade,
             texture_sizes: Vec::new(),
-            atlas_budget_texels: DEFAULT_ATLAS_BUDGET,
+            page_size: DEFAULT_PAGE_SIZE,
+            atlas_budget_texels: None,
             visibility_prepass: true,
             visibility: VisibilityMethod::Raster,
             count_visibility: false,
@@ -219,6 +287,8 @@ pub enum ObjectSpaceError {
     NoPrimitiveIndex(String),
     #[error("{0} texture sizes given for {1} objects")]
     SizeCount(usize, usize),
+    #[error("an atlas of {texels} texels needs {bytes} bytes of tile state, more than the adapter's largest buffer")]
+    AtlasTooLarge { texels: u64, bytes: u64 },
 }
 
 /// The passes that fill the visibility buffer.
@@ -233,14 +303,16 @@ pub struct ObjectSpace {
     res: Resources,
     visibility: Visibility,
     mark: MarkPass,
+    paging: PagingPass,
+    trimap: TrimapPass,
     shade: ShadePass,
     gather: GatherPass,
     grid: WorldGrid,
     readback: ReadbackRing<u64>,
     /// Frames rendered so far; stamps are `frames + 1` so that 0 means never.
     frames: u32,
-    budget_halvings: u32,
-    shade_budget: Option<ShadeBudget>,
+    budget: Budget,
+    virtual_halvings: u32,
     /// The bias the budget added to each frame still in flight.
     budget_bias: std::collections::BTreeMap<u64, f32>,
 }
@@ -249,6 +321,7 @@ impl ObjectSpace {
     pub fn new(
         ctx: &GpuContext,
         shaders: &mut ShaderLibrary,
+        scene_cpu: &Scene,
         scene: &SceneGpu,
         targets: &Targets,
         config: ObjectSpaceConfig,
@@ -266,14 +339,30 @@ impl ObjectSpace {
         if config.texture_sizes.len() != scene.draws.len() {
             return Err(ObjectSpaceError::SizeCount(config.texture_sizes.len(), scene.draws.len()));
         }
-        let max_page = MAX_PAGE_SIZE.min(device.limits().max_texture_dimension_2d);
-        let (sizes, budget_halvings) = atlas::fit_budget(&config.texture_sizes, config.atlas_budget_texels, 64);
-        if budget_halvings > 0 {
-            tracing::info!("atlas budget: every object's shading texture halved {budget_halvings} time(s)");
+        let page_size = config.page_size.max(config.tile_size);
+        // The page table and request masks are one word per virtual page each.
+        let max_pages = (device.limits().max_storage_buffer_binding_size / 4).min(MAX_VIRTUAL_PAGES);
+        let (layout, virtual_halvings) = AtlasLayout::fitting(
+            &config.texture_sizes,
+            config.tile_size,
+            page_size,
+            atlas::MAX_TEXTURE_SIZE,
+            COARSEST_LEVEL,
+            max_pages,
+        )?;
+        if virtual_halvings > 0 {
+            tracing::info!("virtual textures halved {virtual_halvings} time(s) to fit the page table");
         }
-        let layout = AtlasLayout::new(&sizes, config.tile_size, max_page, COARSEST_LEVEL)?;
-        let triangle_map = trimap::build(device, &ctx.queue, shaders, scene, &layout)?;
-        let res = Resources::new(device, &layout, &triangle_map, &scene.triangle_charts, targets);
+        let pixels = targets.width as u64 * targets.height as u64;
+        let default = ((pixels as f64 * DEFAULT_TEXELS_PER_PIXEL) as u64).max(MIN_DEFAULT_ATLAS_TEXELS);
+        let texels = config.atlas_budget_texels.unwrap_or(default);
+        let pool = PagePool::new(page_size, texels, device.limits().max_texture_dimension_2d);
+        // The largest per-tile buffer is the shade queue: 8 bytes a tile.
+        let queue_bytes = pool.texels() / (config.tile_size as u64).pow(2) * 8;
+        if queue_bytes > device.limits().max_storage_buffer_binding_size {
+            return Err(ObjectSpaceError::AtlasTooLarge { texels: pool.texels(), bytes: queue_bytes });
+        }
+        let res = Resources::new(device, &layout, pool, &scene.triangle_charts, targets);
         let visibility = match config.visibility {
             VisibilityMethod::Raster => Visibility::Raster {
                 prepass: config.visibility_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?,
@@ -292,10 +381,11 @@ impl ObjectSpace {
             }
         };
         let grid = WorldGrid::new(device, shaders, scene)?;
-        let shade_budget = config.shade_budget_texels.map(|t| ShadeBudget::new(t as f64));
         Ok(Self {
             visibility,
             mark: MarkPass::new(device, shaders, scene, &res)?,
+            paging: PagingPass::new(device, shaders, scene, &res)?,
+            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather: GatherPass::new(device, shaders, scene, &res, targets, &grid.grid)?,
             grid,
@@ -304,14 +394,19 @@ impl ObjectSpace {
             config,
             readback: ReadbackRing::new("tile counters", TileCounter::SLOTS as u64 * 4),
             frames: 0,
-            budget_halvings,
-            shade_budget,
+            budget: Budget::default(),
+            virtual_halvings,
             budget_bias: Default::default(),
         })
     }
 
     pub fn config(&self) -> &ObjectSpaceConfig {
         &self.config
+    }
+
+    /// The physical atlas.
+    pub fn pool(&self) -> &PagePool {
+        &self.res.pool
     }
 
     /// The world grid (its last build can be read back).
@@ -324,13 +419,10 @@ impl Pipeline for ObjectSpace {
     fn encode(&mut self, frame: &mut Frame) {
         self.frames += 1;
         let stale = frame.lights_changed || self.frames == 1;
-        let max_queue = self.layout.tile_count;
-        let added = self.shade_budget.as_ref().map_or(0.0, |b| b.bias);
-        if self.shade_budget.is_some() {
-            self.budget_bias.insert(frame.number, added);
-        }
+        let added = self.budget.bias;
+        self.budget_bias.insert(frame.number, added);
         let mip_bias = self.config.mip_bias + added;
-        self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, &self.config, mip_bias, max_queue);
+        self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, &self.config, mip_bias);
         match &mut self.visibility {
             Visibility::Raster { prepass, ids } => {
                 if let Some(prepass) = prepass {
@@ -341,6 +433,9 @@ impl Pipeline for ObjectSpace {
             Visibility::Compute(pass) => compute_visibility(frame, pass),
         }
         mark_tiles(frame, &self.mark, &self.res);
+        back_pages(frame, &self.paging, &self.res);
+        build_triangle_maps(frame, &self.trimap, &self.res);
+        mark_backed_pages(frame, &self.mark, &self.res);
         build_world_grid(frame, &mut self.grid);
         shade_tiles(frame, &self.shade, &self.res, &self.grid.grid);
         gather(frame, &self.gather, &self.res, &self.grid.grid);
@@ -364,14 +459,20 @@ impl Pipeline for ObjectSpace {
     /// `new_tiles`, `new_fraction` (of visible), `shaded_texels`,
     /// `visible_texels`, and per screen pixel `overshading` (visible texels:
     /// what shading every visible tile costs, the study's measure) and
-    /// `shaded_texels_per_pixel` (after reuse); with `count_visibility`, the
-    /// compute rasterizer's counts too (in entries of their own).
+    /// `shaded_texels_per_pixel` (after reuse); paging: `pages_in_use`
+    /// (backing visible tiles this frame), `pages_backed` (newly),
+    /// `pages_failed` (found no page: the atlas was full), `page_texels`
+    /// (texels of the pages in use) and `budget_bias` (levels the budget
+    /// added); with `count_visibility`, the compute rasterizer's counts too
+    /// (in entries of their own).
     fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
         let counts = match &mut self.visibility {
             Visibility::Compute(pass) => pass.collect_counts(device, wait),
             Visibility::Raster { .. } => Vec::new(),
         };
         let tile_texels = (self.layout.tile_size * self.layout.tile_size) as f64;
+        let page_texels = (self.res.pool.page_size as f64).powi(2);
+        let physical_pages = self.res.pool.pages as f64;
         let pixels = self.res.visibility.texture.width() as f64 * self.res.visibility.texture.height() as f64;
         self.readback
             .collect(device, wait)
@@ -381,6 +482,16 @@ impl Pipeline for ObjectSpace {
                 let count = |t: TileCounter| c[t as usize] as f64;
                 let (shaded, visible, new) =
                     (count(TileCounter::Queued), count(TileCounter::Visible), count(TileCounter::New));
+                let backed = count(TileCounter::PagesBacked);
+                let in_use = count(TileCounter::PagesUsed) + backed;
+                let failed = count(TileCounter::PagesFailed);
+                let used = self.budget_bias.remove(&frame).unwrap_or_default();
+                // Demand: the pages this frame needed, against the share of the atlas it may fill.
+                let mut load = (in_use + failed) / (PAGE_FILL * physical_pages);
+                if let Some(budget) = self.config.shade_budget_texels {
+                    load = load.max(shaded * tile_texels / budget as f64);
+                }
+                self.budget.observe(frame, used, load);
                 let counters = [
                     ("visible_tiles", visible),
                     ("shaded_tiles", shaded),
@@ -391,49 +502,54 @@ impl Pipeline for ObjectSpace {
                     ("visible_texels", visible * tile_texels),
                     ("overshading", visible * tile_texels / pixels),
                     ("shaded_texels_per_pixel", shaded * tile_texels / pixels),
+                    ("pages_in_use", in_use),
+                    ("pages_backed", backed),
+                    ("pages_failed", failed),
+                    ("page_texels", in_use * page_texels),
+                    ("budget_bias", used as f64),
                 ];
-                let mut counters: Counters = counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
-                if let Some(budget) = &mut self.shade_budget {
-                    let used = self.budget_bias.remove(&frame).unwrap_or_default();
-                    budget.observe(frame, used, shaded * tile_texels);
-                    counters.insert("shade_budget_bias".into(), used as f64);
-                }
-                (frame, counters)
+                (frame, counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect())
             })
             .chain(counts)
             .collect()
     }
 
-    /// Memory: atlas (8 B/texel), triangle maps (4 B/texel), tile state
-    /// (16 B/tile), visibility buffer; per object: texture size, levels,
-    /// texels, tiles and bytes.
+    /// Memory: the physical atlas (8 B/texel), its triangle maps (4 B/texel),
+    /// tile state (two stamps and a queue slot per physical tile), the page
+    /// table and page state, the chart grids, the visibility buffer; per
+    /// object: virtual texture size, levels, virtual texels, tiles and pages.
     fn report(&self) -> PipelineReport {
+        let pool = &self.res.pool;
         let t = self.layout.tile_size;
-        let texels = self.layout.atlas_texels();
-        let tiles = self.layout.tile_count as u64;
+        let physical_tiles = self.res.max_queue(t) as u64;
         let mut report = PipelineReport::new(PipelineConfig::ObjectSpace(self.config.clone()))
-            .memory("atlas", texels * 8)
-            .memory("triangle_maps", texels * 4)
-            .memory("tile_state", tiles * BYTES_PER_TILE)
+            .memory("atlas", pool.texels() * 8)
+            .memory("triangle_maps", pool.texels() * 4)
+            .memory("tile_state", physical_tiles * 16)
+            .memory("page_table", self.res.page_table_bytes())
+            .memory("chart_grids", self.trimap.grid_bytes)
             .memory("visibility", self.res.visibility.bytes())
             .memory("world_grid", self.grid.grid.bytes())
-            .setup("budget_halvings", self.budget_halvings as u64)
-            .setup("atlas_pages", self.layout.pages as u64)
-            .setup("page_size", self.layout.page_size as u64)
-            .setup("tile_count", tiles)
+            .setup("physical_pages", pool.pages as u64)
+            .setup("page_size", pool.page_size as u64)
+            .setup("virtual_pages", self.layout.page_count as u64)
+            .setup("virtual_texels", self.layout.virtual_texels())
+            .setup("virtual_tiles", self.layout.tile_count as u64)
+            .setup("virtual_halvings", self.virtual_halvings as u64)
             .setup("world_grid_list_capacity", self.grid.grid.capacity())
             .setup("world_grid_list_peak", self.grid.grid.peak_entries());
+        let page = self.layout.page_size;
         report.objects = (self.layout.objects.iter().enumerate())
             .filter_map(|(object, a)| {
                 let a = a.as_ref()?;
-                let (texels, tiles) = (a.texels(), a.tiles(t));
+                let pages = a.levels.iter().map(|l| (l.pages_per_row(page) as u64).pow(2)).sum();
                 Some(ObjectMemory {
                     object,
                     texture_size: a.size,
                     levels: a.levels.len() as u32,
-                    texels,
-                    tiles,
-                    bytes: texels * BYTES_PER_TEXEL + tiles * BYTES_PER_TILE,
+                    texels: a.texels(),
+                    tiles: a.tiles(t),
+                    pages,
                 })
             })
             .collect();

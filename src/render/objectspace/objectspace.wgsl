@@ -7,11 +7,11 @@
 #import shadespace::pixel_surface::{PixelSample, interpolate2}
 
 struct AtlasLevel {
-    page: u32,
-    // x | y << 16
-    origin: u32,
     size: u32,
+    // Virtual index of the level's first page, and global index of its first tile.
+    page_base: u32,
     tile_base: u32,
+    pad: u32,
 }
 
 // Mirrors `objectspace::atlas::GpuAtlasEntry` (and `AtlasLevel` its
@@ -37,26 +37,98 @@ struct Params {
     // Strength of the per-pixel variable-rate bias (0 = off).
     variable_rate: f32,
     max_queue: u32,
-    pad: u32,
+    // 1: a due tile waits for its phase frame (decoupled shading rate).
+    spread: u32,
+    page_size: u32,
+    // Physical pages, and pages per layer side of the physical atlas.
+    physical_pages: u32,
+    layer_pages: u32,
+    // Virtual pages (the page table's length).
+    virtual_pages: u32,
+    pad_d: u32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: Params;
 @group(1) @binding(1) var<storage, read> atlas_entries: array<AtlasEntry>;
-// Per tile: stamp of the last frame it was visible.
+// Per physical tile: stamp of the last frame it was visible.
 @group(1) @binding(2) var<storage, read_write> tile_visible: array<atomic<u32>>;
-// Per tile: stamp of the last frame it was shaded (the cache age).
+// Per physical tile: stamp of the last frame it was shaded (the cache age).
 @group(1) @binding(3) var<storage, read_write> tile_shaded: array<u32>;
-// Work list: (global tile, object << 8 | level).
+// Work list: (global virtual tile, object << 8 | level).
 @group(1) @binding(4) var<storage, read_write> queue: array<vec2u>;
 // Indexed by the `COUNT_*` constants.
 @group(1) @binding(5) var<storage, read_write> counters: array<atomic<u32>, TILE_COUNTER_SLOTS>;
 // Visibility buffer: (object + 1, triangle); 0 = background.
 @group(1) @binding(6) var visibility: texture_2d<u32>;
-// Per atlas texel: triangle + 1 covering it; 0 = empty.
-@group(1) @binding(7) var triangle_map: texture_2d_array<u32>;
 // Per triangle of the scene's index buffer: its chart island (a number
 // shared by the triangles of one island of its mesh's chart UVs).
-@group(1) @binding(8) var<storage, read> triangle_charts: array<u32>;
+@group(1) @binding(7) var<storage, read> triangle_charts: array<u32>;
+// Per virtual page: its physical page + 1; 0 = not backed.
+@group(1) @binding(8) var<storage, read_write> page_table: array<u32>;
+// Per physical page: stamp of the last frame a visible tile used it.
+@group(1) @binding(9) var<storage, read_write> page_used: array<atomic<u32>>;
+// Per physical page: the virtual page it backs + 1; 0 = free.
+@group(1) @binding(10) var<storage, read_write> page_owner: array<u32>;
+// Per virtual page: the mask of its tiles this frame's pixels need while it
+// has no physical page (a page holds at most 16 tiles).
+@group(1) @binding(11) var<storage, read_write> page_requests: array<atomic<u32>>;
+// This frame's requests (at most one per physical page): (virtual page, object << 8 | level).
+@group(1) @binding(12) var<storage, read_write> request_list: array<vec2u>;
+// Physical pages that may be taken this frame, oldest first.
+@group(1) @binding(13) var<storage, read_write> candidates: array<u32>;
+// Pages backed this frame: (virtual page, object << 8 | level, physical page, 0).
+@group(1) @binding(14) var<storage, read_write> backed: array<vec4u>;
+
+const NOT_BACKED: u32 = 0xffffffffu;
+
+// Virtual page of texel `texel` of level `l`.
+fn virtual_page(l: AtlasLevel, texel: vec2u) -> u32 {
+    let per_row = (l.size + params.page_size - 1u) / params.page_size;
+    let p = texel / params.page_size;
+    return l.page_base + p.y * per_row + p.x;
+}
+
+// The physical page backing virtual page `page`, or NOT_BACKED.
+fn physical_page(page: u32) -> u32 {
+    return page_table[page] - 1u;
+}
+
+// Global virtual tile of texel `texel` of level `l`.
+fn virtual_tile(l: AtlasLevel, texel: vec2u) -> u32 {
+    let t = texel / params.tile_size;
+    return l.tile_base + t.y * (l.size / params.tile_size) + t.x;
+}
+
+// Index of texel `texel`'s tile inside its page.
+fn tile_in_page(texel: vec2u) -> u32 {
+    let per_row = params.page_size / params.tile_size;
+    let t = (texel % params.page_size) / params.tile_size;
+    return t.y * per_row + t.x;
+}
+
+// Physical tile (index into the tile stamps) of texel `texel` on physical page `page`.
+fn physical_tile(page: u32, texel: vec2u) -> u32 {
+    let per_page = (params.page_size / params.tile_size) * (params.page_size / params.tile_size);
+    return page * per_page + tile_in_page(texel);
+}
+
+// Where texel `texel` (level-local) lies on physical page `page`: (x, y) and layer.
+struct AtlasTexel {
+    xy: vec2u,
+    layer: u32,
+}
+
+fn atlas_texel(page: u32, texel: vec2u) -> AtlasTexel {
+    let per_layer = params.layer_pages * params.layer_pages;
+    let i = page % per_layer;
+    var out: AtlasTexel;
+    out.layer = page / per_layer;
+    out.xy = vec2u(i % params.layer_pages, i / params.layer_pages) * params.page_size + texel % params.page_size;
+    return out;
+}
 
 // Chart UV of the pixel and its screen derivatives.
 struct ChartFootprint {
@@ -99,10 +171,6 @@ fn select_level(e: AtlasEntry, p: PixelSample, f: ChartFootprint) -> u32 {
     return u32(clamp(round(lod), 0.0, f32(e.level_count - 1u)));
 }
 
-fn level_origin(l: AtlasLevel) -> vec2u {
-    return vec2u(l.origin & 0xffffu, l.origin >> 16u);
-}
-
 // The bilinear footprint at a level: top-left texel (level-local, clamped so
 // that both taps lie in the level) and the weight of the right/lower taps.
 struct Bilinear {
@@ -120,4 +188,17 @@ fn bilinear(l: AtlasLevel, uv: vec2f) -> Bilinear {
     out.texel = clamp(vec2i(base), vec2i(0), vec2i(s - 1));
     out.texel_hi = clamp(vec2i(base) + 1, vec2i(0), vec2i(s - 1));
     return out;
+}
+
+// Where texel `texel` of level `l` lies in the physical atlas; its layer is
+// NOT_BACKED when its page has no physical page.
+fn locate(l: AtlasLevel, texel: vec2i) -> AtlasTexel {
+    let t = vec2u(texel);
+    let page = physical_page(virtual_page(l, t));
+    if page == NOT_BACKED {
+        var out: AtlasTexel;
+        out.layer = NOT_BACKED;
+        return out;
+    }
+    return atlas_texel(page, t);
 }

@@ -1,11 +1,12 @@
-//! Everything the object-space passes share, in one place: the shading atlas,
-//! the triangle-index maps, the visibility buffer, the atlas table, the tile
-//! stamps, the shade queue and its counters, and the bind group (group 1 of
-//! every object-space pass, `objectspace.wgsl`) that exposes them.
+//! Everything the object-space passes share, in one place: the physical
+//! shading atlas and triangle-index maps, the visibility buffer, the atlas
+//! table, the page table and page state, the tile stamps, the shade queue
+//! and its counters, and the bind group (group 1 of every object-space pass,
+//! `objectspace.wgsl`) that exposes them.
 
 use wgpu::util::DeviceExt;
 
-use super::atlas::{AtlasLayout, GpuAtlasEntry};
+use super::atlas::{AtlasLayout, GpuAtlasEntry, PagePool};
 use super::{ObjectSpaceConfig, TileCounter};
 use crate::render::passes::visibility::VisibilityBuffer;
 use crate::render::passes::{Binding, bind_group, bind_group_layout, view_as};
@@ -13,6 +14,7 @@ use crate::render::targets::Targets;
 use crate::shaders::gpu_struct;
 
 pub const ATLAS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+pub const TRIANGLE_MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 gpu_struct! {
     /// Per-frame settings of the object-space passes (`Params` in `objectspace.wgsl`).
@@ -25,59 +27,105 @@ gpu_struct! {
         pub view_mode: u32,
         pub mip_bias: f32,
         pub variable_rate: f32,
-        /// Capacity of the shade queue (the atlas's tile count).
+        /// Capacity of the shade queue (the physical atlas's tile count).
         pub max_queue: u32,
-        pub pad: u32,
+        /// 1: due tiles wait for their phase frame (decoupled shading rate).
+        pub spread: u32,
+        pub page_size: u32,
+        pub physical_pages: u32,
+        pub layer_pages: u32,
+        pub virtual_pages: u32,
+        pub pad_d: u32,
+        pub pad_a: u32,
+        pub pad_b: u32,
+        pub pad_c: u32,
     }
 }
 
 pub struct Resources {
+    pub pool: PagePool,
     pub atlas: wgpu::Texture,
     /// The atlas as a 2D array (one layer per page).
     pub atlas_array: wgpu::TextureView,
+    pub triangle_map: wgpu::Texture,
+    /// The triangle maps as a 2D array.
+    pub triangle_map_array: wgpu::TextureView,
     pub visibility: VisibilityBuffer,
     pub params: wgpu::Buffer,
     pub entries: wgpu::Buffer,
     /// CPU copy of the atlas table (its `valid_since` changes with the lights).
     pub entry_data: Vec<GpuAtlasEntry>,
-    /// Per tile: stamp of the last frame it was visible.
+    /// Per physical tile: stamp of the last frame it was visible.
     pub tile_visible: wgpu::Buffer,
-    /// Per tile: stamp of the last frame it was shaded.
+    /// Per physical tile: stamp of the last frame it was shaded.
     pub tile_shaded: wgpu::Buffer,
-    /// This frame's tiles to shade: (tile, object << 8 | level).
+    /// This frame's tiles to shade: (virtual tile, object << 8 | level).
     pub work_queue: wgpu::Buffer,
     /// Indexed by [`TileCounter`].
     pub counters: wgpu::Buffer,
-    /// Indirect dispatch arguments of the shade pass.
-    pub shade_dispatch: wgpu::Buffer,
+    /// Per virtual page: physical page + 1 (0: not backed).
+    pub page_table: wgpu::Buffer,
+    /// Per physical page: stamp of its last use.
+    pub page_used: wgpu::Buffer,
+    /// Per physical page: the virtual page it backs + 1 (0: free).
+    pub page_owner: wgpu::Buffer,
+    /// Per virtual page: the mask of tiles requested while it has no physical page.
+    pub page_requests: wgpu::Buffer,
+    pub request_list: wgpu::Buffer,
+    pub candidates: wgpu::Buffer,
+    /// Pages backed this frame.
+    pub backed: wgpu::Buffer,
+    /// Indirect dispatch arguments (`dispatch.wgsl`): shade, allocate, backed pages.
+    pub dispatch: wgpu::Buffer,
+    /// `dispatch` as storage, for the passes that write it (group 2).
+    pub dispatch_layout: wgpu::BindGroupLayout,
+    pub dispatch_group: wgpu::BindGroup,
     pub layout: wgpu::BindGroupLayout,
     pub bind_group: wgpu::BindGroup,
+    virtual_pages: u32,
 }
+
+/// Indirect dispatch offsets in [`Resources::dispatch`] (bytes).
+pub const SHADE_ARGS: u64 = 0;
+pub const ALLOCATE_ARGS: u64 = 16;
+pub const BACKED_ARGS: u64 = 32;
 
 impl Resources {
     pub fn new(
         device: &wgpu::Device,
         atlas_layout: &AtlasLayout,
-        triangle_map: &wgpu::Texture,
+        pool: PagePool,
         triangle_charts: &wgpu::Buffer,
         targets: &Targets,
     ) -> Self {
-        let atlas = atlas_layout.page_array_texture(
+        let atlas = pool.texture(
             device,
             "shading atlas",
             ATLAS_FORMAT,
             wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
         );
+        // COPY_SRC: debug and test read-backs.
+        let triangle_map = pool.texture(
+            device,
+            "triangle maps",
+            TRIANGLE_MAP_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+        );
         let visibility = VisibilityBuffer::new(device, targets);
+        // Zero-initialised: 0 = never visible, never shaded, not backed, free.
+        // COPY_SRC: tests and debug views read them back.
         let storage = |label, size: u64, extra| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size: size.max(16),
-                usage: wgpu::BufferUsages::STORAGE | extra,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | extra,
                 mapped_at_creation: false,
             })
         };
-        let tiles = atlas_layout.tile_count as u64;
+        let none = wgpu::BufferUsages::empty();
+        let page_tiles = (pool.page_size / atlas_layout.tile_size).pow(2) as u64;
+        let tiles = pool.pages as u64 * page_tiles;
+        let virtual_pages = atlas_layout.page_count as u64;
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("object-space params"),
             size: size_of::<GpuParams>() as u64,
@@ -90,14 +138,22 @@ impl Resources {
             contents: bytemuck::cast_slice(&entry_data),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         });
-        // Zero-initialised: 0 = never visible / never shaded. COPY_SRC: tests read them back.
-        let tile_visible = storage("tile visible", tiles * 4, wgpu::BufferUsages::COPY_SRC);
-        let tile_shaded = storage("tile shaded", tiles * 4, wgpu::BufferUsages::COPY_SRC);
-        let work_queue = storage("shade queue", tiles * 8, wgpu::BufferUsages::COPY_SRC);
-        let counter_bytes = TileCounter::SLOTS as u64 * 4;
-        let counters =
-            storage("tile counters", counter_bytes, wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST);
-        let shade_dispatch = storage("shade dispatch", 16, wgpu::BufferUsages::INDIRECT);
+        let tile_visible = storage("tile visible", tiles * 4, none);
+        let tile_shaded = storage("tile shaded", tiles * 4, none);
+        let work_queue = storage("shade queue", tiles * 8, none);
+        let counters = storage("tile counters", TileCounter::SLOTS as u64 * 4, wgpu::BufferUsages::COPY_DST);
+        let page_table = storage("page table", virtual_pages * 4, none);
+        let page_used = storage("page used", pool.pages as u64 * 4, none);
+        let page_owner = storage("page owner", pool.pages as u64 * 4, none);
+        let page_requests = storage("page requests", virtual_pages * 4, none);
+        let request_list = storage("page request list", pool.pages as u64 * 8, none);
+        let candidates = storage("page candidates", pool.pages as u64 * 4, none);
+        let backed = storage("backed pages", pool.pages as u64 * 16, none);
+        let dispatch = storage("object-space dispatch", 48, wgpu::BufferUsages::INDIRECT);
+        let dispatch_layout =
+            bind_group_layout(device, "object-space dispatch", &[Binding::Storage { read_only: false }]);
+        let dispatch_group =
+            bind_group(device, "object-space dispatch", &dispatch_layout, &[dispatch.as_entire_binding()]);
 
         let rw = Binding::Storage { read_only: false };
         let uint = wgpu::TextureSampleType::Uint;
@@ -112,8 +168,14 @@ impl Resources {
                 rw,
                 rw,
                 Binding::Texture { sample: uint, dimension: wgpu::TextureViewDimension::D2 },
-                Binding::Texture { sample: uint, dimension: wgpu::TextureViewDimension::D2Array },
                 Binding::Storage { read_only: true },
+                rw,
+                rw,
+                rw,
+                rw,
+                rw,
+                rw,
+                rw,
             ],
         );
         let bind_group = bind_group(
@@ -128,13 +190,22 @@ impl Resources {
                 work_queue.as_entire_binding(),
                 counters.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&visibility.view),
-                wgpu::BindingResource::TextureView(&view_as(triangle_map, wgpu::TextureViewDimension::D2Array)),
                 triangle_charts.as_entire_binding(),
+                page_table.as_entire_binding(),
+                page_used.as_entire_binding(),
+                page_owner.as_entire_binding(),
+                page_requests.as_entire_binding(),
+                request_list.as_entire_binding(),
+                candidates.as_entire_binding(),
+                backed.as_entire_binding(),
             ],
         );
         Self {
+            pool,
             atlas_array: view_as(&atlas, wgpu::TextureViewDimension::D2Array),
             atlas,
+            triangle_map_array: view_as(&triangle_map, wgpu::TextureViewDimension::D2Array),
+            triangle_map,
             visibility,
             params,
             entries,
@@ -143,15 +214,37 @@ impl Resources {
             tile_shaded,
             work_queue,
             counters,
-            shade_dispatch,
+            page_table,
+            page_used,
+            page_owner,
+            page_requests,
+            request_list,
+            candidates,
+            backed,
+            dispatch,
+            dispatch_layout,
+            dispatch_group,
             layout,
             bind_group,
+            virtual_pages: virtual_pages as u32,
         }
+    }
+
+    /// Shade queue capacity: every tile of the physical atlas.
+    pub fn max_queue(&self, tile_size: u32) -> u32 {
+        (self.pool.pages as u64 * (self.pool.page_size / tile_size).pow(2) as u64).min(u32::MAX as u64) as u32
+    }
+
+    /// Bytes of the page table and page state (per virtual page: table
+    /// entry and request mask; per physical page: owner, last use, request,
+    /// candidate and backed slots).
+    pub fn page_table_bytes(&self) -> u64 {
+        self.virtual_pages as u64 * (4 + 4) + self.pool.pages as u64 * (4 + 4 + 8 + 4 + 16)
     }
 
     /// Uploads this frame's settings (and, when the shades went stale, the
     /// atlas table with its new `valid_since`) and clears the counters.
-    /// `mip_bias`: the configured bias plus what the shading budget adds.
+    /// `mip_bias`: the configured bias plus what the budget adds.
     #[allow(clippy::too_many_arguments)]
     pub fn begin_frame(
         &mut self,
@@ -161,7 +254,6 @@ impl Resources {
         stale: bool,
         config: &ObjectSpaceConfig,
         mip_bias: f32,
-        max_queue: u32,
     ) {
         if stale {
             for e in &mut self.entry_data {
@@ -176,8 +268,16 @@ impl Resources {
             view_mode: config.view as u32,
             mip_bias,
             variable_rate: config.variable_rate,
-            max_queue,
-            pad: 0,
+            max_queue: self.max_queue(config.tile_size),
+            spread: config.spread_reshading as u32,
+            page_size: self.pool.page_size,
+            physical_pages: self.pool.pages,
+            layer_pages: self.pool.layer_pages,
+            virtual_pages: self.virtual_pages,
+            pad_d: 0,
+            pad_a: 0,
+            pad_b: 0,
+            pad_c: 0,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(&self.counters, 0, None);

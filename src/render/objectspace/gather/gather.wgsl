@@ -6,13 +6,16 @@
 // the shade.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
-#import shadespace::pixel_surface::{sample_pixel, pixel_surface}
+#import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, tile_shaded, visibility, chart_footprint, select_level,
-    bilinear, level_origin, AtlasLevel, triangle_map, triangle_charts}
+    bilinear, AtlasTexel, triangle_charts, locate, physical_page, virtual_page, physical_tile,
+    NOT_BACKED}
 
 @group(2) @binding(0) var atlas: texture_2d_array<f32>;
 @group(2) @binding(1) var hdr: texture_storage_2d<rgba16float, write>;
+// Per atlas texel: triangle + 1 covering it; 0 = empty.
+@group(2) @binding(2) var triangle_map: texture_2d_array<u32>;
 
 // Debug colours go through the tone mapper: pre-invert Reinhard so that they
 // come out as written.
@@ -28,8 +31,8 @@ fn level_color(level: u32) -> vec3f {
     return palette[min(level, 7u)];
 }
 
-fn fetch(l: AtlasLevel, texel: vec2i) -> vec3f {
-    return textureLoad(atlas, level_origin(l) + vec2u(texel), l.page, 0).rgb;
+fn fetch(at: AtlasTexel) -> vec3f {
+    return textureLoad(atlas, at.xy, at.layer, 0).rgb;
 }
 
 // Chart island of triangle `triangle` of `object`.
@@ -37,11 +40,17 @@ fn island(object: u32, triangle: u32) -> u32 {
     return triangle_charts[objects[object].first_index / 3u + triangle];
 }
 
-// 1 when texel `texel` of level `l` belongs to chart island `own` of
-// `object` (its triangle map names a triangle of that island), else 0.
-fn in_island(object: u32, own: u32, l: AtlasLevel, texel: vec2i) -> f32 {
-    let id = textureLoad(triangle_map, level_origin(l) + vec2u(texel), l.page, 0).x;
+// 1 when the texel at `at` belongs to chart island `own` of `object` (its
+// triangle map names a triangle of that island), else 0.
+fn in_island(object: u32, own: u32, at: AtlasTexel) -> f32 {
+    let id = textureLoad(triangle_map, at.xy, at.layer, 0).x;
     return select(0.0, 1.0, id != 0u && island(object, id - 1u) == own);
+}
+
+// Shades the pixel here, as forward shading would.
+fn shade_forward(p: PixelSample) -> vec4f {
+    let s = pixel_surface(p);
+    return vec4f(light_surface_in_cell(objects[p.object], s, world_cell_of(s.position)), 1.0);
 }
 
 @compute @workgroup_size(8, 8)
@@ -58,9 +67,7 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
     let p = sample_pixel(id.xy, ids);
     let e = atlas_entries[p.object];
     if e.size == 0u {
-        let o = objects[p.object];
-        let s = pixel_surface(p);
-        textureStore(hdr, id.xy, vec4f(light_surface_in_cell(o, s, world_cell_of(s.position)), 1.0));
+        textureStore(hdr, id.xy, shade_forward(p));
         return;
     }
     let f = chart_footprint(p);
@@ -76,13 +83,16 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
             out = display(level_color(level_index));
         }
         case VIEW_TILE_MASK, VIEW_CACHE_AGE: {
-            let tiles_per_row = l.size / params.tile_size;
-            let t = vec2u(b.texel) / params.tile_size;
-            let tile = l.tile_base + t.y * tiles_per_row + t.x;
-            let age = params.stamp - tile_shaded[tile];
-            if params.view_mode == VIEW_TILE_MASK {
+            let t = vec2u(b.texel);
+            let page = physical_page(virtual_page(l, t));
+            let age = params.stamp - tile_shaded[physical_tile(page, t)];
+            let tile = t / params.tile_size;
+            if page == NOT_BACKED {
+                // Magenta: no physical page (the atlas was full).
+                out = display(vec3f(0.9, 0.1, 0.9));
+            } else if params.view_mode == VIEW_TILE_MASK {
                 // Red: shaded this frame; green: reused. Darker checker per tile.
-                let checker = f32((t.x + t.y) & 1u) * 0.25;
+                let checker = f32((tile.x + tile.y) & 1u) * 0.25;
                 out = display(select(vec3f(0.1, 0.8, 0.2), vec3f(0.9, 0.15, 0.1), age == 0u) * (1.0 - checker));
             } else {
                 out = display(vec3f(f32(age) / f32(max(params.reuse, 1u))));
@@ -94,8 +104,18 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
             // levels) would bleed its colour across the border. With no tap
             // in the island (a sliver thinner than the level's texels), all
             // four are kept.
-            let t10 = vec2i(b.texel_hi.x, b.texel.y);
-            let t01 = vec2i(b.texel.x, b.texel_hi.y);
+            let taps = array<AtlasTexel, 4>(
+                locate(l, b.texel),
+                locate(l, vec2i(b.texel_hi.x, b.texel.y)),
+                locate(l, vec2i(b.texel.x, b.texel_hi.y)),
+                locate(l, b.texel_hi),
+            );
+            if taps[0].layer == NOT_BACKED || taps[1].layer == NOT_BACKED || taps[2].layer == NOT_BACKED
+                || taps[3].layer == NOT_BACKED {
+                // The atlas was full this frame: shade the pixel forward.
+                textureStore(hdr, id.xy, shade_forward(p));
+                return;
+            }
             let own = island(p.object, ids.y);
             var w = vec4f(
                 (1.0 - b.weight.x) * (1.0 - b.weight.y),
@@ -104,16 +124,16 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
                 b.weight.x * b.weight.y,
             );
             let keep = vec4f(
-                in_island(p.object, own, l, b.texel),
-                in_island(p.object, own, l, t10),
-                in_island(p.object, own, l, t01),
-                in_island(p.object, own, l, b.texel_hi),
+                in_island(p.object, own, taps[0]),
+                in_island(p.object, own, taps[1]),
+                in_island(p.object, own, taps[2]),
+                in_island(p.object, own, taps[3]),
             );
             let kept = dot(w, keep);
             if kept > 0.0 {
                 w = w * keep / kept;
             }
-            let c = fetch(l, b.texel) * w.x + fetch(l, t10) * w.y + fetch(l, t01) * w.z + fetch(l, b.texel_hi) * w.w;
+            let c = fetch(taps[0]) * w.x + fetch(taps[1]) * w.y + fetch(taps[2]) * w.z + fetch(taps[3]) * w.w;
             out = vec4f(c, 1.0);
         }
     }

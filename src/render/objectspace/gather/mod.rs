@@ -15,7 +15,7 @@ pub const SHADER: ShaderSource = ShaderSource::new("gather.wgsl", include_str!("
 
 pub struct GatherPass {
     pipeline: wgpu::ComputePipeline,
-    /// The atlas (read) and the HDR target (written).
+    /// The atlas and triangle maps (read) and the HDR target (written).
     io: wgpu::BindGroup,
 }
 
@@ -37,6 +37,10 @@ impl GatherPass {
                     dimension: wgpu::TextureViewDimension::D2Array,
                 },
                 Binding::StorageTexture { format: HDR_FORMAT, dimension: wgpu::TextureViewDimension::D2 },
+                Binding::Texture {
+                    sample: wgpu::TextureSampleType::Uint,
+                    dimension: wgpu::TextureViewDimension::D2Array,
+                },
             ],
         );
         let io = bind_group(
@@ -46,6 +50,7 @@ impl GatherPass {
             &[
                 wgpu::BindingResource::TextureView(&res.atlas_array),
                 wgpu::BindingResource::TextureView(&targets.hdr_view),
+                wgpu::BindingResource::TextureView(&res.triangle_map_array),
             ],
         );
         let groups = [&scene.layout, &res.layout, &layout, &grid.layout];

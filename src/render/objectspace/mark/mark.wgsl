@@ -1,38 +1,101 @@
 // Tile marking and queueing, in one pass over the visibility buffer: each
 // pixel finds its mip level and the texels of its bilinear footprint, and
-// marks their tiles visible for this frame. The first pixel to mark a tile
-// this frame decides whether the tile's cached shade is still good (younger
-// than N frames and not invalidated) or queues it for shading.
-#import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW}
+// marks their tiles visible for this frame. A tile on a backed page is
+// marked in the page's tile stamps: the first pixel to mark it this frame
+// decides whether its cached shade is still good (younger than N frames and
+// not invalidated) or queues it for shading. A tile on a page with no
+// physical page yet sets its bit in the page's request mask, and the first
+// such pixel lists the page; `mark_backed` marks those tiles once paging
+// has backed the page.
+#import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_PAGES_USED, COUNT_PAGES_REQUESTED, COUNT_PAGES_FAILED,
+    COUNT_PAGES_BACKED}
 #import shadespace::pixel_surface::sample_pixel
+#import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, tile_visible, tile_shaded, queue, counters, visibility,
-    chart_footprint, select_level, bilinear, AtlasLevel}
+    chart_footprint, select_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
+    virtual_page, physical_page, virtual_tile, tile_in_page, physical_tile, NOT_BACKED}
 
-fn mark_tile(object: u32, level_index: u32, l: AtlasLevel, valid_since: u32, texel: vec2i) {
-    let tiles_per_row = l.size / params.tile_size;
-    let t = vec2u(texel) / params.tile_size;
-    let tile = l.tile_base + t.y * tiles_per_row + t.x;
-    // Most pixels find their tile already marked: read before writing.
-    if atomicLoad(&tile_visible[tile]) == params.stamp {
+// A small integer hash (PCG's output permutation) for tile phases.
+fn hash(x: u32) -> u32 {
+    let state = x * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// Whether a visible tile shaded at stamp `shaded` is shaded again this frame.
+fn due(shaded: u32, valid_since: u32, tile: u32) -> bool {
+    if shaded == 0u || shaded < valid_since {
+        return true;
+    }
+    let age = params.stamp - shaded;
+    if params.spread == 0u {
+        return age >= params.reuse;
+    }
+    // Decoupled shading rate: every tile has a phase frame in each window of
+    // N frames and is shaded again on it, so a frame shades about 1/N of the
+    // visible tiles (plus the new ones), not all of them every N frames.
+    return age >= 1u && (params.stamp + hash(tile)) % params.reuse == 0u;
+}
+
+// Queues virtual tile `tile` (physical tile `slot`) when its shade is due.
+fn queue_if_due(slot: u32, tile: u32, object: u32, level_index: u32, valid_since: u32) {
+    // Only this invocation touches tile_shaded[slot] this frame.
+    if due(tile_shaded[slot], valid_since, tile) {
+        tile_shaded[slot] = params.stamp;
+        let n = atomicAdd(&counters[COUNT_QUEUED], 1u);
+        if n < params.max_queue {
+            queue[n] = vec2u(tile, (object << 8u) | level_index);
+        }
+    }
+}
+
+// Asks for a physical page for virtual page `page`, remembering the tile of
+// `texel` in the page's request mask: the pixel that finds the mask empty
+// lists the page.
+fn request_tile(page: u32, object: u32, level_index: u32, texel: vec2u) {
+    let m = 1u << tile_in_page(texel);
+    if (atomicLoad(&page_requests[page]) & m) != 0u {
         return;
     }
-    let previous = atomicExchange(&tile_visible[tile], params.stamp);
+    if atomicOr(&page_requests[page], m) != 0u {
+        return;
+    }
+    let n = atomicAdd(&counters[COUNT_PAGES_REQUESTED], 1u);
+    if n < params.physical_pages {
+        request_list[n] = vec2u(page, (object << 8u) | level_index);
+    } else {
+        // More requests than physical pages: this one cannot be backed. Its
+        // pixels are shaded forward; an empty mask lets the next frame ask again.
+        atomicStore(&page_requests[page], 0u);
+        atomicAdd(&counters[COUNT_PAGES_FAILED], 1u);
+    }
+}
+
+fn mark_tile(object: u32, level_index: u32, l: AtlasLevel, valid_since: u32, texel: vec2i) {
+    let t = vec2u(texel);
+    let page = virtual_page(l, t);
+    let physical = physical_page(page);
+    if physical == NOT_BACKED {
+        request_tile(page, object, level_index, t);
+        return;
+    }
+    let slot = physical_tile(physical, t);
+    // Most pixels find their tile already marked: read before writing.
+    if atomicLoad(&tile_visible[slot]) == params.stamp {
+        return;
+    }
+    let previous = atomicExchange(&tile_visible[slot], params.stamp);
     if previous == params.stamp {
         return;
+    }
+    if atomicExchange(&page_used[physical], params.stamp) != params.stamp {
+        atomicAdd(&counters[COUNT_PAGES_USED], 1u);
     }
     atomicAdd(&counters[COUNT_VISIBLE], 1u);
     if previous == 0u || previous + 1u != params.stamp {
         atomicAdd(&counters[COUNT_NEW], 1u);
     }
-    // Only this invocation touches tile_shaded[tile] this frame.
-    let shaded = tile_shaded[tile];
-    if shaded == 0u || params.stamp - shaded >= params.reuse || shaded < valid_since {
-        tile_shaded[tile] = params.stamp;
-        let slot = atomicAdd(&counters[COUNT_QUEUED], 1u);
-        if slot < params.max_queue {
-            queue[slot] = vec2u(tile, (object << 8u) | level_index);
-        }
-    }
+    queue_if_due(slot, virtual_tile(l, t), object, level_index, valid_since);
 }
 
 @compute @workgroup_size(8, 8)
@@ -69,15 +132,48 @@ fn mark(@builtin(global_invocation_id) id: vec3u) {
     }
 }
 
-@group(2) @binding(0) var<storage, read_write> shade_dispatch: array<u32, 4>;
+// Per page backed this frame (one workgroup each, one invocation per tile of
+// the page, at most 16): the page's tiles start over (never visible, never shaded), and
+// those the request mask names are marked visible and queued.
+@compute @workgroup_size(16)
+fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+               @builtin(local_invocation_index) lid: u32) {
+    let index = wg.y * groups.x + wg.x;
+    if index >= min(atomicLoad(&counters[COUNT_PAGES_BACKED]), params.physical_pages) {
+        return;
+    }
+    let b = backed[index];
+    let object = b.y >> 8u;
+    let level_index = b.y & 0xffu;
+    let e = atlas_entries[object];
+    let l = e.levels[level_index];
+    let per_row = params.page_size / params.tile_size;
+    let mask = atomicLoad(&page_requests[b.x]);
+    let level_pages = (l.size + params.page_size - 1u) / params.page_size;
+    let local = b.x - l.page_base;
+    let page_origin = vec2u(local % level_pages, local / level_pages) * params.page_size;
+    let t = lid;
+    if t < per_row * per_row {
+        let slot = b.z * per_row * per_row + t;
+        let requested = (mask >> t) & 1u;
+        atomicStore(&tile_visible[slot], select(0u, params.stamp, requested != 0u));
+        tile_shaded[slot] = 0u;
+        if requested != 0u {
+            atomicAdd(&counters[COUNT_VISIBLE], 1u);
+            atomicAdd(&counters[COUNT_NEW], 1u);
+            let texel = page_origin + vec2u(t % per_row, t / per_row) * params.tile_size;
+            queue_if_due(slot, virtual_tile(l, texel), object, level_index, e.valid_since);
+        }
+    }
+    workgroupBarrier();
+    // The mask is spent (a page requested again later starts from zero).
+    if lid == 0u {
+        atomicStore(&page_requests[b.x], 0u);
+    }
+}
 
-// Indirect dispatch arguments for shading: one workgroup per queued tile,
-// spread over x and y because one dimension holds at most 65535 groups.
+// Indirect dispatch arguments for shading: one workgroup per queued tile.
 @compute @workgroup_size(1)
 fn queue_args() {
-    let n = min(atomicLoad(&counters[COUNT_QUEUED]), params.max_queue);
-    let x = min(n, 65535u);
-    shade_dispatch[0] = x;
-    shade_dispatch[1] = select(0u, (n + x - 1u) / max(x, 1u), n > 0u);
-    shade_dispatch[2] = 1u;
+    write_dispatch(SHADE_ARGS, min(atomicLoad(&counters[COUNT_QUEUED]), params.max_queue));
 }

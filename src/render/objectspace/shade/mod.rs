@@ -3,7 +3,7 @@
 //! map and runs the shared lighting model with the global lights and the
 //! lights of its world-grid cell.
 
-use super::resources::{ATLAS_FORMAT, Resources};
+use super::resources::{ATLAS_FORMAT, Resources, SHADE_ARGS};
 use crate::render::frame::Frame;
 use crate::render::passes::light_grid::{LightGrid, READ_GROUP};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
@@ -14,7 +14,7 @@ pub const SHADER: ShaderSource = ShaderSource::new("shade.wgsl", include_str!("s
 
 pub struct ShadePass {
     pipeline: wgpu::ComputePipeline,
-    /// The atlas as a storage texture.
+    /// The atlas as a storage texture, the triangle maps to read.
     outputs: wgpu::BindGroup,
 }
 
@@ -27,10 +27,23 @@ impl ShadePass {
         grid: &LightGrid,
     ) -> Result<Self, ShaderError> {
         let dimension = wgpu::TextureViewDimension::D2Array;
-        let layout =
-            bind_group_layout(device, "shade outputs", &[Binding::StorageTexture { format: ATLAS_FORMAT, dimension }]);
-        let outputs =
-            bind_group(device, "shade outputs", &layout, &[wgpu::BindingResource::TextureView(&res.atlas_array)]);
+        let layout = bind_group_layout(
+            device,
+            "shade io",
+            &[
+                Binding::StorageTexture { format: ATLAS_FORMAT, dimension },
+                Binding::Texture { sample: wgpu::TextureSampleType::Uint, dimension },
+            ],
+        );
+        let outputs = bind_group(
+            device,
+            "shade io",
+            &layout,
+            &[
+                wgpu::BindingResource::TextureView(&res.atlas_array),
+                wgpu::BindingResource::TextureView(&res.triangle_map_array),
+            ],
+        );
         let groups = [&scene.layout, &res.layout, &layout, &grid.layout];
         let pipeline = compute_pipeline(device, shaders, SHADER, "shade", &groups)?;
         Ok(Self { pipeline, outputs })
@@ -46,5 +59,5 @@ pub fn shade_tiles(frame: &mut Frame, pass: &ShadePass, res: &Resources, grid: &
     res.bind(&mut cp, scene);
     cp.set_bind_group(2, &pass.outputs, &[]);
     cp.set_bind_group(READ_GROUP, grid.bind_group(), &[]);
-    cp.dispatch_workgroups_indirect(&res.shade_dispatch, 0);
+    cp.dispatch_workgroups_indirect(&res.dispatch, SHADE_ARGS);
 }

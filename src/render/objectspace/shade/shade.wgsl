@@ -8,9 +8,12 @@
 #import shadespace::surface::{surface_point, albedo_lod}
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::contract::COUNT_QUEUED
-#import shadespace::objectspace::{params, atlas_entries, queue, counters, triangle_map, level_origin}
+#import shadespace::objectspace::{params, atlas_entries, queue, counters, virtual_page, physical_page,
+    atlas_texel}
 
 @group(2) @binding(0) var atlas: texture_storage_2d_array<rgba16float, write>;
+// Per atlas texel: triangle + 1 covering it; 0 = empty.
+@group(2) @binding(1) var triangle_map: texture_2d_array<u32>;
 
 // Barycentrics of `uv` in the chart triangle (a, c, d); extrapolated outside
 // it, which is what dilated texels at chart borders want.
@@ -42,13 +45,14 @@ fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     let tiles_per_row = l.size / params.tile_size;
     let local_tile = item.x - l.tile_base;
     let tile_origin = vec2u(local_tile % tiles_per_row, local_tile / tiles_per_row) * params.tile_size;
-    let page_origin = level_origin(l);
+    // Marking queued the tile this frame, so its page is backed.
+    let page = physical_page(virtual_page(l, tile_origin));
     let blocks = params.tile_size / 8u;
     for (var by = 0u; by < blocks; by++) {
         for (var bx = 0u; bx < blocks; bx++) {
             let texel = tile_origin + vec2u(bx, by) * 8u + lid.xy;
-            let atlas_texel = page_origin + texel;
-            let id = textureLoad(triangle_map, atlas_texel, l.page, 0).x;
+            let at = atlas_texel(page, texel);
+            let id = textureLoad(triangle_map, at.xy, at.layer, 0).x;
             var color = vec3f(0.0);
             if id != 0u {
                 let tri = triangle_vertices(o, id - 1u);
@@ -70,7 +74,7 @@ fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
                 let s = surface_point(o, tri, b, albedo_lod(du, dv));
                 color = light_surface_in_cell(o, s, world_cell_of(s.position));
             }
-            textureStore(atlas, atlas_texel, l.page, vec4f(color, 1.0));
+            textureStore(atlas, at.xy, at.layer, vec4f(color, 1.0));
         }
     }
 }

@@ -1,99 +1,143 @@
-// Triangle-index maps: rasterize an object's charts in UV space into its
-// square of the atlas (the viewport), writing triangle + 1 per texel, every
-// texel a triangle touches. `vs_main`/`fs_main` rely on the hardware's
-// conservative rasterization; where the adapter has none, `vs_conservative`/
-// `fs_conservative` emulate it (Hasselgren, Akenine-Moller and Ohlsson,
-// "Conservative Rasterization", GPU Gems 2, ch. 42): each edge moves outward
-// by half a texel's extent along its normal, so that every texel the
-// triangle touches has its centre inside the enlarged triangle, and
-// fragments beyond the triangle's bounding box grown by half a texel are
-// discarded (the enlarged corners overreach there).
-enable primitive_index;
+// Triangle-index maps, built per page when paging backs it (one workgroup
+// per backed page): each texel gets the triangle that covers it, found
+// through the object's chart grid (the triangles overlapping each cell of
+// its chart UV square). A texel takes, of the triangles touching its square
+// (conservative coverage, so that chart parts thinner than a texel at coarse
+// levels still own their texels), the one nearest its centre; a texel no
+// triangle touches takes the nearest triangle touching its 3x3 neighbourhood
+// (one ring of dilation, so that bilinear taps just outside a chart find a
+// triangle to extrapolate); else 0. `cpu.rs` has the same rule in Rust.
+#import shadespace::contract::COUNT_PAGES_BACKED
 #import shadespace::scene_bindings::{vertices, objects, triangle_vertices}
+#import shadespace::scene::Object
+#import shadespace::objectspace::{params, atlas_entries, counters, backed, atlas_texel}
 
-@vertex
-fn vs_main(@builtin(vertex_index) vi: u32) -> @builtin(position) vec4f {
-    let uv = vertices[vi].chart_uv;
-    return vec4f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.5, 1.0);
+// Mirrors `trimap::GpuChartGrid`.
+struct ChartGrid {
+    // Index of the object's first cell in `cell_start`.
+    cell_base: u32,
+    // Cells per side.
+    side: u32,
 }
 
-@fragment
-fn fs_main(@builtin(primitive_index) triangle: u32) -> @location(0) u32 {
-    return triangle + 1u;
-}
-
-// Mirrors `trimap::GpuTrimapDraw`: one object's level, drawn as instance k.
-struct TrimapDraw {
-    object: u32,
-    // The level's side in texels, and its square's corner in the page.
-    size: u32,
-    origin: vec2u,
-}
-
-@group(1) @binding(0) var<storage, read> draws: array<TrimapDraw>;
-
-struct Enlarged {
-    @builtin(position) position: vec4f,
-    @location(0) @interpolate(flat) triangle: u32,
-    // The triangle's bounding box in page texels, grown by half a texel.
-    @location(1) @interpolate(flat) bounds: vec4f,
-}
+@group(2) @binding(0) var map: texture_storage_2d_array<r32uint, write>;
+@group(2) @binding(1) var<storage, read> grids: array<ChartGrid>;
+// Per cell: its first entry in `cell_triangles` (one more entry closes the last cell).
+@group(2) @binding(2) var<storage, read> cell_start: array<u32>;
+// Object-local triangle indices, cell after cell.
+@group(2) @binding(3) var<storage, read> cell_triangles: array<u32>;
 
 fn cross2(a: vec2f, b: vec2f) -> f32 {
     return a.x * b.y - a.y * b.x;
 }
 
-// Non-indexed: vertex `vi` is corner vi % 3 of the object's triangle vi / 3.
-@vertex
-fn vs_conservative(@builtin(vertex_index) vi: u32, @builtin(instance_index) k: u32) -> Enlarged {
-    let d = draws[k];
-    let triangle = vi / 3u;
-    let corner = vi % 3u;
-    let tri = triangle_vertices(objects[d.object], triangle);
-    let size = f32(d.size);
-    // Texel units of this level (y down, as the viewport maps it).
-    let p = array<vec2f, 3>(
-        vertices[tri.x].chart_uv * size,
-        vertices[tri.y].chart_uv * size,
-        vertices[tri.z].chart_uv * size,
-    );
-    var out: Enlarged;
-    out.triangle = triangle;
-    let lo = min(min(p[0], p[1]), p[2]);
-    let hi = max(max(p[0], p[1]), p[2]);
-    out.bounds = vec4f(lo - 0.5, hi + 0.5) + vec4f(vec2f(d.origin), vec2f(d.origin));
+// Whether triangle p and the square [lo, hi] overlap (separating axes: the
+// square's and the triangle's edge normals; a degenerate triangle keeps
+// only its bounding box test).
+fn overlaps(p: array<vec2f, 3>, lo: vec2f, hi: vec2f) -> bool {
+    if any(max(max(p[0], p[1]), p[2]) < lo) || any(min(min(p[0], p[1]), p[2]) > hi) {
+        return false;
+    }
     let area = cross2(p[1] - p[0], p[2] - p[0]);
-    var q = p[corner];
-    if area != 0.0 {
-        // The two edges meeting at this corner, each moved out by the half
-        // extent of a texel along its unit outward normal; the corner moves
-        // to where the moved lines cross.
-        let a = p[(corner + 2u) % 3u];
-        let b = p[(corner + 1u) % 3u];
-        let n1 = normalize(vec2f(q.y - a.y, a.x - q.x)) * sign(area);
-        let n2 = normalize(vec2f(b.y - q.y, q.x - b.x)) * sign(area);
-        let c1 = dot(n1, q) + 0.5 * (abs(n1.x) + abs(n1.y));
-        let c2 = dot(n2, q) + 0.5 * (abs(n2.x) + abs(n2.y));
-        let det = n1.x * n2.y - n1.y * n2.x;
-        if det != 0.0 {
-            let moved = vec2f(c1 * n2.y - c2 * n1.y, n1.x * c2 - n2.x * c1) / det;
-            // A very sharp corner moves far out; the bounding box discards
-            // what lies beyond, so cap the move (keeps the numbers finite).
-            let offset = moved - q;
-            let reach = length(offset);
-            q += offset * min(1.0, 4.0 * size / max(reach, 1e-20));
+    for (var i = 0u; i < 3u; i++) {
+        let a = p[i];
+        let e = p[(i + 1u) % 3u] - a;
+        // Outward normal of edge a -> a + e.
+        let n = vec2f(e.y, -e.x) * sign(area);
+        // The square's corner farthest inside.
+        let corner = select(hi, lo, n > vec2f(0.0));
+        if dot(n, corner - a) > 0.0 {
+            return false;
         }
     }
-    let uv = q / size;
-    out.position = vec4f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.5, 1.0);
-    return out;
+    return true;
 }
 
-@fragment
-fn fs_conservative(in: Enlarged) -> @location(0) u32 {
-    let c = in.position.xy;
-    if any(c < in.bounds.xy) || any(c > in.bounds.zw) {
-        discard;
+fn segment_distance(q: vec2f, a: vec2f, b: vec2f) -> f32 {
+    let e = b - a;
+    let t = clamp(dot(q - a, e) / max(dot(e, e), 1e-30), 0.0, 1.0);
+    return length(q - (a + e * t));
+}
+
+// Distance from q to triangle p (0 inside).
+fn triangle_distance(p: array<vec2f, 3>, q: vec2f) -> f32 {
+    let area = cross2(p[1] - p[0], p[2] - p[0]);
+    let w0 = cross2(p[1] - q, p[2] - q) * sign(area);
+    let w1 = cross2(p[2] - q, p[0] - q) * sign(area);
+    let w2 = cross2(p[0] - q, p[1] - q) * sign(area);
+    if area != 0.0 && w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0 {
+        return 0.0;
     }
-    return in.triangle + 1u;
+    return min(segment_distance(q, p[0], p[1]), min(segment_distance(q, p[1], p[2]), segment_distance(q, p[2], p[0])));
+}
+
+// Triangle + 1 for texel `texel` of a level `size` texels wide, 0 for none.
+fn covering_triangle(o: Object, g: ChartGrid, size: u32, texel: vec2u) -> u32 {
+    let s = f32(size);
+    let side = f32(g.side);
+    let lo = vec2f(texel);
+    let ring_lo = lo - 1.0;
+    let ring_hi = lo + 2.0;
+    let c0 = vec2u(clamp(floor(ring_lo / s * side), vec2f(0.0), vec2f(side - 1.0)));
+    let c1 = vec2u(clamp(floor(ring_hi / s * side), vec2f(0.0), vec2f(side - 1.0)));
+    let centre = lo + 0.5;
+    var touching = 3.0e38;
+    var touching_id = 0u;
+    var near = 3.0e38;
+    var near_id = 0u;
+    for (var cy = c0.y; cy <= c1.y; cy++) {
+        for (var cx = c0.x; cx <= c1.x; cx++) {
+            let cell = g.cell_base + cy * g.side + cx;
+            for (var k = cell_start[cell]; k < cell_start[cell + 1u]; k++) {
+                let triangle = cell_triangles[k];
+                let tri = triangle_vertices(o, triangle);
+                let p = array<vec2f, 3>(vertices[tri.x].chart_uv * s, vertices[tri.y].chart_uv * s,
+                    vertices[tri.z].chart_uv * s);
+                if !overlaps(p, ring_lo, ring_hi) {
+                    continue;
+                }
+                let d = triangle_distance(p, centre);
+                // Ties go to the lower index (a triangle can sit in several cells).
+                if overlaps(p, lo, lo + 1.0) {
+                    if d < touching || (d == touching && triangle + 1u < touching_id) {
+                        touching = d;
+                        touching_id = triangle + 1u;
+                    }
+                } else if d < near || (d == near && triangle + 1u < near_id) {
+                    near = d;
+                    near_id = triangle + 1u;
+                }
+            }
+        }
+    }
+    return select(near_id, touching_id, touching_id != 0u);
+}
+
+@compute @workgroup_size(8, 8)
+fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+         @builtin(local_invocation_id) lid: vec3u) {
+    let index = wg.y * groups.x + wg.x;
+    if index >= min(atomicLoad(&counters[COUNT_PAGES_BACKED]), params.physical_pages) {
+        return;
+    }
+    let b = backed[index];
+    let object = b.y >> 8u;
+    let l = atlas_entries[object].levels[b.y & 0xffu];
+    let o = objects[object];
+    let g = grids[object];
+    let level_pages = (l.size + params.page_size - 1u) / params.page_size;
+    let local = b.x - l.page_base;
+    let origin = vec2u(local % level_pages, local / level_pages) * params.page_size;
+    let blocks = params.page_size / 8u;
+    for (var by = 0u; by < blocks; by++) {
+        for (var bx = 0u; bx < blocks; bx++) {
+            let texel = origin + vec2u(bx, by) * 8u + lid.xy;
+            var id = 0u;
+            if all(texel < vec2u(l.size)) {
+                id = covering_triangle(o, g, l.size, texel);
+            }
+            let at = atlas_texel(b.z, texel);
+            textureStore(map, at.xy, at.layer, vec4u(id, 0u, 0u, 0u));
+        }
+    }
 }

@@ -1,15 +1,17 @@
-//! A stable shading budget (Oxide's object space lighting): when the tiles a
-//! frame shades exceed a budget of texels, every pixel's mip level is biased
-//! coarser until they fit, and the bias falls back when there is room, so
-//! the shading cost per frame stays flat while quality gives.
+//! A stable budget (Oxide's object space lighting): when a frame needs more
+//! than the physical atlas holds, or shades more texels than the shading
+//! budget, every pixel's mip level is biased coarser until it fits, and the
+//! bias falls back when there is room, so memory and the shading cost per
+//! frame stay flat while quality gives.
 //!
-//! The controller sees each frame's shaded texels a few frames late (the
+//! The controller sees each frame's load (demand over budget, the larger of
+//! the two) a few frames late (the
 //! counters' read-back never stalls the frame), so it corrects the bias that
 //! frame was shaded with, not the current one: frames still in flight would
 //! otherwise push the same error in again and again, and the bias would
-//! overshoot and swing. Shaded texels scale as 4^-bias (a level coarser has a
-//! quarter of the texels), so the bias that fits a count `s` into budget `b`
-//! is half of log2(s / b) more than the frame's; half of that step is taken.
+//! overshoot and swing. Texels and pages scale as 4^-bias (a level coarser
+//! has a quarter of the texels), so the bias that fits a load `l` is half of
+//! log2(l) more than the frame's; half of that step is taken.
 
 /// Largest bias the controller adds (levels).
 pub const MAX_BIAS: f32 = 8.0;
@@ -21,33 +23,28 @@ const GAIN: f32 = 0.5;
 /// per-pixel levels round, so without it the count would creep in slowly.
 const MIN_STEP: f32 = 1.0 / 16.0;
 
-/// The budget and the bias it currently adds.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ShadeBudget {
-    /// Most texels shaded per frame.
-    pub texels: f64,
+/// The bias the budget currently adds.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Budget {
     /// Levels added to every pixel's mip level, in [0, MAX_BIAS].
     pub bias: f32,
     /// The newest frame observed (older counts arriving late are ignored).
     newest: Option<u64>,
 }
 
-impl ShadeBudget {
-    pub fn new(texels: f64) -> Self {
-        Self { texels, bias: 0.0, newest: None }
-    }
-
-    /// Takes frame `frame`'s count of shaded texels, shaded with `used` (the
-    /// bias this controller gave that frame), into account.
-    pub fn observe(&mut self, frame: u64, used: f32, shaded: f64) {
+impl Budget {
+    /// Takes frame `frame`'s load (its demand over the budget: 1 is at the
+    /// budget), at `used` (the bias this controller gave that frame), into
+    /// account.
+    pub fn observe(&mut self, frame: u64, used: f32, load: f64) {
         if self.newest.is_some_and(|n| frame <= n) {
             return;
         }
         self.newest = Some(frame);
-        let over = shaded > self.texels;
-        let room = shaded < ROOM * self.texels && used > 0.0;
+        let over = load > 1.0;
+        let room = load < ROOM && used > 0.0;
         if over || room {
-            let step = GAIN * 0.5 * (shaded.max(1.0) / self.texels).log2() as f32;
+            let step = GAIN * 0.5 * load.max(1e-6).log2() as f32;
             let step = if over { step.max(MIN_STEP) } else { step.min(-MIN_STEP) };
             self.bias = (used + step).clamp(0.0, MAX_BIAS);
         }
@@ -66,7 +63,7 @@ mod tests {
         let demand = |bias: f32, base: f64| base * 4f64.powf(-bias as f64);
         // Counts arrive LAG frames late, as the read-back delivers them.
         const LAG: usize = 3;
-        let mut b = ShadeBudget::new(1.0e6);
+        let mut b = Budget::default();
         let mut used = Vec::new();
         let mut base = 16.0e6;
         for frame in 0..80usize {
@@ -76,7 +73,7 @@ mod tests {
             used.push(b.bias);
             if frame >= LAG {
                 let seen = frame - LAG;
-                b.observe(seen as u64, used[seen], demand(used[seen], base));
+                b.observe(seen as u64, used[seen], demand(used[seen], base) / 1.0e6);
             }
             if frame == 39 {
                 let shaded = demand(b.bias, 16.0e6);
@@ -89,7 +86,7 @@ mod tests {
         }
         assert_eq!(b.bias, 0.0, "demand under the budget needs no bias");
         let before = b.clone();
-        b.observe(10, 0.0, 1.0e9);
+        b.observe(10, 0.0, 1.0e3);
         assert_eq!(b, before, "a late count of an old frame changes nothing");
     }
 }

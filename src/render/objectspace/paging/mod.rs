@@ -1,0 +1,69 @@
+//! Paging (`paging.wgsl`): after marking, the virtual pages this frame's
+//! tiles need that have no physical page get one, on the GPU, least
+//! recently used first (free pages, then by age bucket), with no CPU round
+//! trip. The pages backed this frame are then built (`trimap`) and their
+//! requested tiles marked (`mark::mark_backed`).
+
+use super::resources::{ALLOCATE_ARGS, Resources};
+use crate::render::frame::Frame;
+use crate::render::passes::compute_pipeline;
+use crate::render::scene_gpu::SceneGpu;
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
+
+pub const SHADER: ShaderSource = ShaderSource::new("paging.wgsl", include_str!("paging.wgsl"));
+
+pub struct PagingPass {
+    age_pages: wgpu::ComputePipeline,
+    page_offsets: wgpu::ComputePipeline,
+    list_candidates: wgpu::ComputePipeline,
+    allocate: wgpu::ComputePipeline,
+    backed_args: wgpu::ComputePipeline,
+}
+
+impl PagingPass {
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        res: &Resources,
+    ) -> Result<Self, ShaderError> {
+        let plain = [&scene.layout, &res.layout];
+        let with_dispatch = [&scene.layout, &res.layout, &res.dispatch_layout];
+        Ok(Self {
+            age_pages: compute_pipeline(device, shaders, SHADER, "age_pages", &plain)?,
+            page_offsets: compute_pipeline(device, shaders, SHADER, "page_offsets", &with_dispatch)?,
+            list_candidates: compute_pipeline(device, shaders, SHADER, "list_candidates", &plain)?,
+            allocate: compute_pipeline(device, shaders, SHADER, "allocate", &plain)?,
+            backed_args: compute_pipeline(device, shaders, SHADER, "backed_args", &with_dispatch)?,
+        })
+    }
+}
+
+/// Reads: the page requests, page use and owners. Writes: the page table,
+/// page owners and use, the backed-page list, the counters, the dispatches
+/// of allocation and of the backed pages' passes.
+pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
+    let scene = frame.scene.bind_group();
+    let pages = res.pool.pages.div_ceil(64);
+    let mut cp = frame.compute_pass("paging");
+    res.bind(&mut cp, scene);
+    cp.set_bind_group(2, &res.dispatch_group, &[]);
+    cp.set_pipeline(&pass.age_pages);
+    cp.dispatch_workgroups(pages, 1, 1);
+    cp.set_pipeline(&pass.page_offsets);
+    cp.dispatch_workgroups(1, 1, 1);
+    cp.set_pipeline(&pass.list_candidates);
+    cp.dispatch_workgroups(pages, 1, 1);
+    drop(cp);
+    // A pass of its own: it reads the dispatch buffer as INDIRECT.
+    let mut cp = frame.compute_pass("allocate");
+    res.bind(&mut cp, scene);
+    cp.set_pipeline(&pass.allocate);
+    cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
+    drop(cp);
+    let mut cp = frame.compute_pass("backed args");
+    res.bind(&mut cp, scene);
+    cp.set_bind_group(2, &res.dispatch_group, &[]);
+    cp.set_pipeline(&pass.backed_args);
+    cp.dispatch_workgroups(1, 1, 1);
+}

@@ -1,0 +1,115 @@
+//! CPU twin of the triangle-map rule in `trimap.wgsl` (same tests, same
+//! order, in `f32`), for the tests that check coverage and the GPU build.
+
+use glam::Vec2;
+
+use super::grid::ChartGrid;
+
+fn cross2(a: Vec2, b: Vec2) -> f32 {
+    a.x * b.y - a.y * b.x
+}
+
+/// Whether triangle `p` and the square [lo, hi] overlap (separating axes).
+pub fn overlaps(p: [Vec2; 3], lo: Vec2, hi: Vec2) -> bool {
+    let (tlo, thi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+    if thi.x < lo.x || thi.y < lo.y || tlo.x > hi.x || tlo.y > hi.y {
+        return false;
+    }
+    let area = cross2(p[1] - p[0], p[2] - p[0]);
+    (0..3).all(|i| {
+        let a = p[i];
+        let e = p[(i + 1) % 3] - a;
+        let n = Vec2::new(e.y, -e.x) * sign(area);
+        let corner = Vec2::new(if n.x > 0.0 { lo.x } else { hi.x }, if n.y > 0.0 { lo.y } else { hi.y });
+        n.dot(corner - a) <= 0.0
+    })
+}
+
+/// WGSL's `sign` (0 for 0, unlike `f32::signum`).
+fn sign(x: f32) -> f32 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+fn segment_distance(q: Vec2, a: Vec2, b: Vec2) -> f32 {
+    let e = b - a;
+    let t = ((q - a).dot(e) / e.dot(e).max(1e-30)).clamp(0.0, 1.0);
+    (q - (a + e * t)).length()
+}
+
+/// Distance from `q` to triangle `p` (0 inside).
+pub fn triangle_distance(p: [Vec2; 3], q: Vec2) -> f32 {
+    let area = cross2(p[1] - p[0], p[2] - p[0]);
+    let s = sign(area);
+    let w = [cross2(p[1] - q, p[2] - q) * s, cross2(p[2] - q, p[0] - q) * s, cross2(p[0] - q, p[1] - q) * s];
+    if area != 0.0 && w.iter().all(|&w| w >= 0.0) {
+        return 0.0;
+    }
+    segment_distance(q, p[0], p[1]).min(segment_distance(q, p[1], p[2])).min(segment_distance(q, p[2], p[0]))
+}
+
+/// Triangle + 1 for texel `texel` of a level `size` texels wide (0 for
+/// none): of the triangles touching the texel's square, the nearest to its
+/// centre; else the nearest touching its 3x3 neighbourhood.
+pub fn covering_triangle(grid: &ChartGrid, uv: &[Vec2], indices: &[u32], size: u32, texel: [u32; 2]) -> u32 {
+    let s = size as f32;
+    let lo = Vec2::new(texel[0] as f32, texel[1] as f32);
+    let (ring_lo, ring_hi) = (lo - 1.0, lo + 2.0);
+    let centre = lo + 0.5;
+    let (mut touching, mut near) = ((f32::MAX, 0u32), (f32::MAX, 0u32));
+    for triangle in grid.near(ring_lo / s, ring_hi / s) {
+        let p = [0, 1, 2].map(|k| uv[indices[3 * triangle as usize + k] as usize] * s);
+        if !overlaps(p, ring_lo, ring_hi) {
+            continue;
+        }
+        let d = triangle_distance(p, centre);
+        let best = if overlaps(p, lo, lo + 1.0) { &mut touching } else { &mut near };
+        if d < best.0 || (d == best.0 && triangle + 1 < best.1) {
+            *best = (d, triangle + 1);
+        }
+    }
+    if touching.1 != 0 { touching.1 } else { near.1 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn squares_overlap_triangles_by_separating_axes() {
+        let t = [Vec2::new(0.0, 0.0), Vec2::new(4.0, 0.0), Vec2::new(0.0, 4.0)];
+        assert!(overlaps(t, Vec2::new(1.0, 1.0), Vec2::new(2.0, 2.0)));
+        // Inside the box but beyond the hypotenuse x + y = 4.
+        assert!(!overlaps(t, Vec2::new(2.5, 2.5), Vec2::new(3.5, 3.5)));
+        // Touching the hypotenuse at a corner counts.
+        assert!(overlaps(t, Vec2::new(2.0, 2.0), Vec2::new(3.0, 3.0)));
+        assert_eq!(triangle_distance(t, Vec2::new(1.0, 1.0)), 0.0);
+        assert!((triangle_distance(t, Vec2::new(3.0, 3.0)) - 2.0f32.sqrt()).abs() < 1e-5);
+        assert!((triangle_distance(t, Vec2::new(-1.0, 2.0)) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn texels_take_touching_triangles_then_one_ring_of_neighbours() {
+        // Two triangles of a quad [2, 6]^2 in texel units of a 16-texel level.
+        let uv: Vec<Vec2> =
+            [(2.0, 2.0), (6.0, 2.0), (6.0, 6.0), (2.0, 6.0)].map(|(x, y)| Vec2::new(x, y) / 16.0).to_vec();
+        let indices = [0, 1, 2, 0, 2, 3];
+        let grid = ChartGrid::new(&uv, &indices);
+        let at = |x, y| covering_triangle(&grid, &uv, &indices, 16, [x, y]);
+        // Below the diagonal (x > y) is triangle 0; above it triangle 1.
+        assert_eq!(at(4, 2), 1);
+        assert_eq!(at(2, 4), 2);
+        // The ring just outside the quad takes the nearest triangle; two texels out, nothing.
+        assert_eq!(at(6, 3), 1);
+        assert_eq!(at(3, 6), 2);
+        assert_eq!(at(1, 1), 1);
+        assert_eq!(at(8, 3), 0);
+        assert_eq!(at(0, 4), 2);
+        assert_eq!(at(9, 9), 0);
+    }
+}
