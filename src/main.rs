@@ -317,8 +317,9 @@ struct ObjectSpaceArgs {
     /// Physical atlas in Mi texels (12 bytes each with the triangle maps):
     /// the pages that back the objects' virtual textures where visible tiles
     /// need them. When a frame needs more, the mip bias rises until it fits
-    /// (the counters report `budget_bias`). Default: 1.25 texels per screen
-    /// pixel, at least 1 Mi.
+    /// (the counters report `budget_bias`). Default: 1.25 texels per pixel at
+    /// 1920x1080 (2.6 Mi), growing as the square root of the pixels (5.2 Mi
+    /// at 3840x2160), at least 1 Mi.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1 << 14))]
     atlas_budget: Option<u64>,
     /// Page side of the virtual textures in texels (a power of two, at most

@@ -175,7 +175,15 @@ pub struct Renderer {
     shadows: ShadowMaps,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
+    /// Submissions of the frames the GPU may still be working on.
+    in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
 }
+
+/// Most frames queued ahead of the GPU, as a swap chain allows: without a
+/// limit the CPU runs arbitrarily far ahead (bench has no presentation), and
+/// what the GPU reports back (counters driving the budget) arrives that many
+/// frames late.
+pub const MAX_FRAMES_IN_FLIGHT: usize = 3;
 
 impl Renderer {
     pub fn new(ctx: &GpuContext, scene: &Scene, options: &RenderOptions) -> Result<Self, RenderError> {
@@ -226,6 +234,7 @@ impl Renderer {
             sun_shadow: false,
             shadows,
             lights_hash: None,
+            in_flight: Default::default(),
         })
     }
 
@@ -248,6 +257,11 @@ impl Renderer {
         lights: &[Light],
         frame: u64,
     ) -> Result<FrameStats, RenderError> {
+        while self.in_flight.len() >= MAX_FRAMES_IN_FLIGHT {
+            let oldest = self.in_flight.pop_front().expect("not empty");
+            let wait = wgpu::PollType::Wait { submission_index: Some(oldest), timeout: None };
+            ctx.device.poll(wait).map_err(|e| RenderError::Gpu(GpuError::Readback(format!("waiting for a frame: {e}"))))?;
+        }
         let start = Instant::now();
         if !(0.0..=1.0).contains(&self.bloom) {
             return Err(RenderError::BadBloom(self.bloom));
@@ -325,7 +339,7 @@ impl Renderer {
             }
         }
         self.timer.resolve(&mut encoder);
-        ctx.queue.submit([encoder.finish()]);
+        self.in_flight.push_back(ctx.queue.submit([encoder.finish()]));
         self.timer.end_frame(frame);
         self.pipeline.after_submit();
         ctx.check_errors()?;

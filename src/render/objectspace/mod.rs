@@ -82,20 +82,31 @@ pub const COARSEST_LEVEL: u32 = 128;
 /// 1.6 times the visible texels (3.0 at 32, 6.3 at 64, with a page table 4
 /// and 16 times smaller).
 pub const DEFAULT_PAGE_SIZE: u32 = 16;
-/// Default physical atlas: this many texels per screen pixel. A frame at
-/// 1920x1080 on Sponza (path frame 120) sees 0.56 texels per pixel in
-/// visible tiles, on pages holding 0.89; the rest keeps recently seen pages
-/// for reuse and room for frames that see more.
+/// Default physical atlas at 1920x1080: this many texels per screen pixel.
+/// Sponza along its path at the default density sees 1.27 M texels in
+/// visible tiles (median), on pages holding 2.0 M: the atlas (2.6 M) holds
+/// them with room for newly visible pages.
 pub const DEFAULT_TEXELS_PER_PIXEL: f64 = 1.25;
 /// ... and at least this many texels (16 MiB of shades and triangle maps):
 /// small frames fill pages poorly (few visible tiles per chart).
 pub const MIN_DEFAULT_ATLAS_TEXELS: u64 = 1 << 20;
+
+/// The default physical atlas for a frame of `pixels` pixels: it grows as
+/// the square root of the pixels, as the texels a frame sees do (Sponza at
+/// 3840x2160 sees 2.58 M texels, 2.0 times 1920x1080 for 4 times the pixels:
+/// near surfaces reach their finest level).
+pub fn default_atlas_texels(pixels: u64) -> u64 {
+    let reference = 1920.0 * 1080.0;
+    let texels = DEFAULT_TEXELS_PER_PIXEL * reference * (pixels as f64 / reference).sqrt();
+    (texels as u64).max(MIN_DEFAULT_ATLAS_TEXELS)
+}
+
 /// Most virtual pages (a page table of 128 MiB, as much again for the request
 /// masks): 8 G virtual texels at the default page size.
 const MAX_VIRTUAL_PAGES: u64 = 32 << 20;
 /// The page budget: past this share of the physical pages in use, the mip
 /// bias rises (the rest is room for newly visible pages).
-const PAGE_FILL: f64 = 0.85;
+const PAGE_FILL: f64 = 0.95;
 
 /// Debug views that replace the gathered shade (`render --view`); the values
 /// are exported to WGSL as `VIEW_*`.
@@ -231,8 +242,7 @@ pub struct ObjectSpaceConfig {
     /// Page side of the virtual textures (a power of two, at most four
     /// times the tile size; raised to the tile size).
     pub page_size: u32,
-    /// Texels of the physical atlas; `None`: [`DEFAULT_TEXELS_PER_PIXEL`]
-    /// per screen pixel, at least [`MIN_DEFAULT_ATLAS_TEXELS`]. When a frame needs more pages than it holds, the
+    /// Texels of the physical atlas; `None`: [`default_atlas_texels`]. When a frame needs more pages than it holds, the
     /// mip bias rises ([`budget`]).
     pub atlas_budget_texels: Option<u64>,
     /// Lay down depth before the id pass, which then writes each pixel once
@@ -354,8 +364,7 @@ impl ObjectSpace {
             tracing::info!("virtual textures halved {virtual_halvings} time(s) to fit the page table");
         }
         let pixels = targets.width as u64 * targets.height as u64;
-        let default = ((pixels as f64 * DEFAULT_TEXELS_PER_PIXEL) as u64).max(MIN_DEFAULT_ATLAS_TEXELS);
-        let texels = config.atlas_budget_texels.unwrap_or(default);
+        let texels = config.atlas_budget_texels.unwrap_or_else(|| default_atlas_texels(pixels));
         let pool = PagePool::new(page_size, texels, device.limits().max_texture_dimension_2d);
         // The largest per-tile buffer is the shade queue: 8 bytes a tile.
         let queue_bytes = pool.texels() / (config.tile_size as u64).pow(2) * 8;
