@@ -14,7 +14,7 @@ use shadespace::experiments::marking::Marking;
 use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::atlas::MAX_TEXTURE_SIZE;
-use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, DebugView, MAX_DENSITY_SIZE, ObjectSpace};
+use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, DebugView, ExtraViews, MAX_DENSITY_SIZE, ObjectSpace};
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, Exposure, ForwardConfig, ForwardMultipassConfig,
     ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, ShadowRefresh, VisibilityMethod,
@@ -330,6 +330,12 @@ struct ObjectSpaceArgs {
     /// pixel's ids are written once; measured faster on the H100).
     #[arg(long)]
     no_visibility_prepass: bool,
+    /// More views marking into the same atlas in each frame, each tile shaded
+    /// once for all (compute visibility): `stereo:D` (a right eye D scene
+    /// units to the right of the camera) or `fixed` (the scene's fixed
+    /// cameras other than --camera's). The image written is the first view's.
+    #[arg(long, value_parser = parse_views)]
+    views: Option<ViewsArg>,
     /// Shade these objects (comma-separated names) forward instead of in object space.
     #[arg(long, value_delimiter = ',')]
     forward_only: Vec<String>,
@@ -488,6 +494,24 @@ fn bloom_strength(s: &str) -> Result<f32, String> {
     finite_in(s, 0.0..=1.0, "a strength from 0 to 1")
 }
 
+/// `--views`: the extra views that share the atlas.
+#[derive(Clone, Copy, Debug)]
+enum ViewsArg {
+    Stereo(f32),
+    Fixed,
+}
+
+fn parse_views(s: &str) -> Result<ViewsArg, String> {
+    if s == "fixed" {
+        return Ok(ViewsArg::Fixed);
+    }
+    let d = s.strip_prefix("stereo:").ok_or_else(|| format!("'{s}': expected 'stereo:D' or 'fixed'"))?;
+    match d.parse::<f32>() {
+        Ok(d) if d.is_finite() && d > 0.0 => Ok(ViewsArg::Stereo(d)),
+        _ => Err(format!("'{d}': the eye distance must be a number above 0")),
+    }
+}
+
 fn hertz(s: &str) -> Result<f64, String> {
     let v: f64 = s.parse().map_err(|_| format!("'{s}' is not a number"))?;
     if v.is_finite() && v > 0.0 && v <= 1000.0 {
@@ -591,6 +615,8 @@ struct Setup {
     camera_label: String,
     lights: Vec<Light>,
     lights_spec: String,
+    /// Object space: views besides the camera's.
+    extra_views: ExtraViews,
 }
 
 fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
@@ -607,6 +633,18 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     let aspect = a.size.0 as f32 / a.size.1 as f32;
     let cameras = input(path::cameras_for_scene(&a.scene, &scene, aspect))?;
     let (path, camera_label) = camera_path(a, &cameras, &bounds)?;
+    let extra_views = match a.objectspace.views {
+        None => ExtraViews::None,
+        Some(ViewsArg::Stereo(eye_distance)) => ExtraViews::Stereo { eye_distance },
+        Some(ViewsArg::Fixed) => {
+            let own = match a.camera.parse() {
+                Ok(path::CameraChoice::Fixed(k)) => Some(k),
+                _ => None,
+            };
+            let others = cameras.fixed.iter().enumerate().filter(|(k, _)| Some(*k) != own).map(|(_, c)| *c);
+            ExtraViews::Cameras(others.collect())
+        }
+    };
     let spec: LightSpec = input(a.lights.parse())?;
     let reference: Camera = path.camera_at(0);
     let placement = if cameras.source.seen_from_outside() { lights::region_around(&bounds) } else { bounds };
@@ -617,7 +655,7 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     } else {
         (scene, None)
     };
-    Ok(Setup { scene, texture_sizes, path, camera_label, lights, lights_spec: spec.to_string() })
+    Ok(Setup { scene, texture_sizes, path, camera_label, lights, lights_spec: spec.to_string(), extra_views })
 }
 
 /// The camera path the options ask for, and its label for reports: a free
@@ -659,12 +697,7 @@ impl Setup {
 
 /// Renderer options from the command line, for object space the texture
 /// sizes the charts gave, and for `--visibility auto` the adapter's features.
-fn render_options(
-    a: &SceneArgs,
-    texture_sizes: &Option<Vec<Option<u32>>>,
-    view: DebugView,
-    features: wgpu::Features,
-) -> RenderOptions {
+fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu::Features) -> RenderOptions {
     let visibility = a.visibility.0.unwrap_or_else(|| VisibilityMethod::preferred(features));
     let pipeline = match a.pipeline {
         PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
@@ -682,7 +715,8 @@ fn render_options(
             shade_budget_texels: a.objectspace.shade_budget.map(|m| (m * 1.0e6) as u64),
             variable_rate: a.objectspace.variable_rate,
             view,
-            texture_sizes: texture_sizes.clone().unwrap_or_default(),
+            texture_sizes: s.texture_sizes.clone().unwrap_or_default(),
+            extra_views: s.extra_views.clone(),
             atlas_budget_texels: a.objectspace.atlas_budget.map(|m| m << 20),
             visibility_prepass: !a.objectspace.no_visibility_prepass,
             visibility,
@@ -727,8 +761,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
-    let mut renderer =
-        Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s.texture_sizes, a.view, ctx.device.features()))?;
+    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s, a.view, ctx.device.features()))?;
     renderer.exposure = a.scene.exposure;
     renderer.bloom = a.scene.bloom;
     renderer.shadow_refresh = a.scene.shadow_refresh;
@@ -804,11 +837,8 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
-    let mut renderer = Renderer::new(
-        &ctx,
-        &s.scene,
-        &render_options(&a.scene, &s.texture_sizes, DebugView::Shade, ctx.device.features()),
-    )?;
+    let mut renderer =
+        Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s, DebugView::Shade, ctx.device.features()))?;
     renderer.exposure = a.scene.exposure;
     renderer.bloom = a.scene.bloom;
     renderer.shadow_refresh = a.scene.shadow_refresh;

@@ -2,6 +2,8 @@
 mod common;
 
 use shadespace::metrics;
+use shadespace::render::objectspace::{ExtraViews, ObjectSpace};
+use shadespace::render::passes::visibility::VisibilityMethod;
 use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 
 fn forward() -> RenderOptions {
@@ -202,4 +204,41 @@ fn spread_reshading_shades_a_share_of_the_tiles_each_frame() {
     // Over any four consecutive frames every tile is shaded once.
     let window: f64 = shaded[4..8].iter().sum();
     assert!((window - visible[7]).abs() <= visible[7] * 0.02, "{window} shaded over 4 frames, {} visible", visible[7]);
+}
+
+/// Views share shades: a stereo pair marks into one atlas, each tile shaded
+/// once; the right eye's gathered image matches object space rendering the
+/// right eye alone, and the pair shades fewer tiles than two separate views.
+#[test]
+fn a_stereo_pair_shares_one_atlas() {
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let eye_distance = 0.5;
+    let options = |extra_views| {
+        let config = ObjectSpaceConfig {
+            texture_sizes: vec![Some(512)],
+            visibility: VisibilityMethod::Compute,
+            extra_views,
+            ..Default::default()
+        };
+        RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config) }
+    };
+    let stereo = ExtraViews::Stereo { eye_distance };
+    let right = stereo.camera(0, &camera);
+    let mut pair = Renderer::new(&ctx, &scene, &options(stereo)).unwrap();
+    let mut counters = Vec::new();
+    for frame in 0..3 {
+        pair.render(&ctx, &camera, &lights, frame).unwrap();
+        counters.extend(pair.collect_counters(&ctx, true));
+    }
+    let right_image = pair.pipeline::<ObjectSpace>().unwrap().read_extra_view(&ctx, 1).unwrap();
+    ctx.check_errors().unwrap();
+    let mut alone = Renderer::new(&ctx, &scene, &options(ExtraViews::None)).unwrap();
+    alone.render(&ctx, &right, &lights, 0).unwrap();
+    let (err, _) = metrics::compare(&alone.read_image(&ctx).unwrap(), &right_image);
+    eprintln!("right eye in the pair against alone: {err:?}");
+    assert!(err.flip_mean < 0.01, "{err:?}");
+    let (shared, summed) = (counter(&counters, "shared_view_tiles")[2], counter(&counters, "view_tiles")[2]);
+    eprintln!("tiles: {shared} shared by the pair, {summed} summed over the eyes");
+    assert!(shared > 0.0 && shared < 0.8 * summed && shared >= summed / 2.0, "{shared} shared, {summed} summed");
 }

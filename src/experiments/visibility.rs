@@ -102,6 +102,7 @@ impl VisibilityRenderer {
                 device: &ctx.device,
                 queue: &ctx.queue,
                 scene: &self.scene,
+                scene_group: self.scene.bind_group(),
                 targets: t,
                 camera,
                 lights,

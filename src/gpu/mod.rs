@@ -130,11 +130,12 @@ impl GpuContext {
         let l = &self.limits;
         s += &format!(
             "limits: max_texture_dimension_2d {}, max_texture_array_layers {}, max_storage_buffer_binding_size {} MiB, \
-             max_storage_textures_per_shader_stage {}, max_compute_workgroup_storage_size {} KiB, \
+             max_storage_buffers_per_shader_stage {}, max_storage_textures_per_shader_stage {}, max_compute_workgroup_storage_size {} KiB, \
              max_compute_invocations_per_workgroup {}, max_buffer_size {} MiB\n",
             l.max_texture_dimension_2d,
             l.max_texture_array_layers,
             l.max_storage_buffer_binding_size >> 20,
+            l.max_storage_buffers_per_shader_stage,
             l.max_storage_textures_per_shader_stage,
             l.max_compute_workgroup_storage_size >> 10,
             l.max_compute_invocations_per_workgroup,

@@ -22,6 +22,9 @@ pub struct Frame<'a> {
     pub device: &'a wgpu::Device,
     pub queue: &'a wgpu::Queue,
     pub scene: &'a SceneGpu,
+    /// The scene as group 0 of the passes: `scene.bind_group()`, or the
+    /// scene seen from another view for passes recorded for that view.
+    pub scene_group: &'a wgpu::BindGroup,
     pub targets: &'a Targets,
     pub camera: &'a Camera,
     /// The frame's lights in GPU order: the `view.global_light_count`
@@ -40,6 +43,27 @@ pub struct Frame<'a> {
 }
 
 impl Frame<'_> {
+    /// This frame as passes recorded for another view see it: the same
+    /// encoder and inputs, with `scene_group` as group 0 (the scene with
+    /// that view's uniform).
+    pub fn with_scene_group<'b>(&'b mut self, scene_group: &'b wgpu::BindGroup) -> Frame<'b> {
+        Frame {
+            device: self.device,
+            queue: self.queue,
+            scene: self.scene,
+            scene_group,
+            targets: self.targets,
+            camera: self.camera,
+            lights: self.lights,
+            view: self.view,
+            visible: self.visible,
+            number: self.number,
+            lights_changed: self.lights_changed,
+            encoder: &mut *self.encoder,
+            profiler: self.profiler,
+        }
+    }
+
     /// A compute pass timed as `label`.
     pub fn compute_pass(&mut self, label: &str) -> OwningScope<'_, wgpu::ComputePass<'_>> {
         let query = self.profiler.begin_pass_query(label, self.encoder);

@@ -260,7 +260,9 @@ impl Renderer {
         while self.in_flight.len() >= MAX_FRAMES_IN_FLIGHT {
             let oldest = self.in_flight.pop_front().expect("not empty");
             let wait = wgpu::PollType::Wait { submission_index: Some(oldest), timeout: None };
-            ctx.device.poll(wait).map_err(|e| RenderError::Gpu(GpuError::Readback(format!("waiting for a frame: {e}"))))?;
+            ctx.device
+                .poll(wait)
+                .map_err(|e| RenderError::Gpu(GpuError::Readback(format!("waiting for a frame: {e}"))))?;
         }
         let start = Instant::now();
         if !(0.0..=1.0).contains(&self.bloom) {
@@ -315,6 +317,7 @@ impl Renderer {
                 device: &ctx.device,
                 queue: &ctx.queue,
                 scene: &self.scene,
+                scene_group: self.scene.bind_group(),
                 targets: &self.targets,
                 camera,
                 lights: &lights,

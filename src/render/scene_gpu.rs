@@ -235,6 +235,21 @@ impl SceneGpu {
         }
     }
 
+    /// The scene bind group with another view uniform (`view`, a buffer of
+    /// one [`GpuView`]): for passes that render the scene from a second
+    /// camera in the same frame. Built anew each frame (the scene's own
+    /// group is rebuilt when its buffers grow).
+    pub fn bind_group_with_view(&self, device: &wgpu::Device, view: &wgpu::Buffer) -> wgpu::BindGroup {
+        make_bind_group(
+            device,
+            &self.layout,
+            [view, &self.objects, &self.vertices, &self.lights.buffer, &self.light_indices.buffer, &self.indices],
+            &self.albedo_view,
+            &self.sampler,
+            &self.shadow_atlas,
+        )
+    }
+
     fn rebuild_bind_group(&mut self, device: &wgpu::Device) {
         self.bind_group = make_bind_group(
             device,

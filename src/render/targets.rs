@@ -18,25 +18,41 @@ pub struct Targets {
     pub ldr_view: wgpu::TextureView,
 }
 
+fn texture(
+    device: &wgpu::Device,
+    label: &str,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+    width: u32,
+    height: u32,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
 impl Targets {
     pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
-        let make = |label, format, usage| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
         use wgpu::TextureUsages as U;
-        let hdr = make("hdr", HDR_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::STORAGE_BINDING | U::COPY_SRC);
+        let make = |label, format, usage| texture(device, label, format, usage, width, height);
+        let hdr = Self::hdr_texture(device, width, height);
         let depth = make("depth", DEPTH_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
         let ldr = make("ldr", LDR_FORMAT, U::STORAGE_BINDING | U::COPY_SRC);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         Self { width, height, hdr_view: view(&hdr), depth_view: view(&depth), ldr_view: view(&ldr), hdr, depth, ldr }
+    }
+
+    /// An HDR image like the targets' own (for a second view's gather).
+    pub fn hdr_texture(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Texture {
+        use wgpu::TextureUsages as U;
+        let usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::STORAGE_BINDING | U::COPY_SRC;
+        texture(device, "hdr", HDR_FORMAT, usage, width, height)
     }
 }

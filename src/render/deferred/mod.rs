@@ -127,7 +127,7 @@ impl Pipeline for Deferred {
 /// Writes: every pixel of `targets.hdr` (through `output`).
 fn lights_globals(frame: &mut Frame, pipeline: &wgpu::ComputePipeline, gbuffer: &GBuffer, output: &wgpu::BindGroup) {
     let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
-    let scene = frame.scene.bind_group();
+    let scene = frame.scene_group;
     let mut cp = frame.compute_pass("lights ambient+directional");
     cp.set_pipeline(pipeline);
     cp.set_bind_group(0, scene, &[]);

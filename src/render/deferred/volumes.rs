@@ -450,7 +450,7 @@ pub fn classify_volumes(frame: &mut Frame, volumes: &mut LightVolumes) {
         ..Default::default()
     };
     frame.queue.write_buffer(&volumes.params, 0, bytemuck::bytes_of(&params));
-    let scene = frame.scene.bind_group();
+    let scene = frame.scene_group;
     let mut cp = frame.compute_pass("light volumes");
     cp.set_pipeline(&volumes.classify);
     cp.set_bind_group(0, scene, &[]);

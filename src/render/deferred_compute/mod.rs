@@ -175,7 +175,7 @@ fn tiled_lighting(
     output: &wgpu::BindGroup,
 ) {
     let (w, h) = (frame.targets.width.div_ceil(TILE_SIZE), frame.targets.height.div_ceil(TILE_SIZE));
-    let scene = frame.scene.bind_group();
+    let scene = frame.scene_group;
     let mut cp = frame.compute_pass("tiled lighting");
     cp.set_pipeline(pipeline);
     cp.set_bind_group(0, scene, &[]);

@@ -152,6 +152,19 @@ impl ObjectSpace {
         Ok((size, ids.into_iter().map(|id| (id != u32::MAX).then_some(id)).collect()))
     }
 
+    /// Extra view `k`'s image (1 is the first extra view), tone mapped as
+    /// the renderer does at exposure 1 (Reinhard, sRGB).
+    pub fn read_extra_view(&self, ctx: &GpuContext, k: usize) -> Result<image::RgbaImage, GpuError> {
+        let Some(texture) = self.extra_view_images().nth(k.wrapping_sub(1)) else {
+            return Err(GpuError::Readback(format!("no extra view {k}")));
+        };
+        let halves: Vec<half::f16> = bytemuck::pod_collect_to_vec(&readback::read_texture(ctx, texture, 8)?);
+        let pixels = halves.chunks_exact(4).flat_map(|p| {
+            [reinhard_srgb8(p[0].to_f32()), reinhard_srgb8(p[1].to_f32()), reinhard_srgb8(p[2].to_f32()), 255]
+        });
+        Ok(image::RgbaImage::from_raw(texture.width(), texture.height(), pixels.collect()).expect("size matches"))
+    }
+
     /// Every layer of a physical texture, one after the other.
     fn read_layers(&self, ctx: &GpuContext, texture: &wgpu::Texture, texel: u32) -> Result<Vec<u8>, GpuError> {
         let mut all = Vec::new();

@@ -37,19 +37,23 @@ use std::str::FromStr;
 
 use serde::Serialize;
 
+use super::culling::Frustum;
 use super::frame::Frame;
+use super::gpu_types::GpuView;
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::light_grid::LightGrid;
 use super::passes::light_grid::world::{WorldGrid, build_world_grid};
+use super::passes::visibility::VisibilityBuffer;
 use super::passes::visibility::compute::{ComputeVisibility, ComputeVisibilityError, compute_visibility};
 use super::passes::visibility::{VisibilityMethod, VisibilityPass, visibility};
 use super::report::{Counters, ObjectMemory, PipelineReport};
 use super::scene_gpu::SceneGpu;
+use super::scene_gpu::gpu_view;
 use super::targets::Targets;
 use super::{Pipeline, PipelineConfig};
 use crate::gpu::GpuContext;
 use crate::gpu::readback::ReadbackRing;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 use atlas::{AtlasError, AtlasLayout, PagePool};
 use gather::{GatherPass, gather};
@@ -184,10 +188,15 @@ pub enum TileCounter {
     PagesFailed = 6,
     /// Physical pages no visible tile used this frame (free or evictable).
     Candidates = 7,
+    /// With several views: tiles on backed pages summed over the views (what
+    /// independent views would each mark).
+    ViewTiles = 8,
+    /// Tiles marked on the pages backed this frame (after paging).
+    BackedTiles = 9,
 }
 
 impl TileCounter {
-    pub const ALL: [Self; 8] = [
+    pub const ALL: [Self; 10] = [
         Self::Queued,
         Self::Visible,
         Self::New,
@@ -196,10 +205,12 @@ impl TileCounter {
         Self::PagesBacked,
         Self::PagesFailed,
         Self::Candidates,
+        Self::ViewTiles,
+        Self::BackedTiles,
     ];
     /// First slot of the age buckets (free pages, then unused for 128 or
     /// more frames, 64-127, ..., 1 frame).
-    pub const AGE_BUCKET_BASE: usize = 8;
+    pub const AGE_BUCKET_BASE: usize = 10;
     pub const AGE_BUCKETS: usize = 9;
     /// Slots in the counter buffer (a multiple of four: 16-byte rows).
     pub const SLOTS: usize = 20;
@@ -214,8 +225,55 @@ impl TileCounter {
             Self::PagesBacked => "COUNT_PAGES_BACKED",
             Self::PagesFailed => "COUNT_PAGES_FAILED",
             Self::Candidates => "COUNT_CANDIDATES",
+            Self::ViewTiles => "COUNT_VIEW_TILES",
+            Self::BackedTiles => "COUNT_BACKED_TILES",
         }
     }
+}
+
+/// Views besides the frame's camera that mark into the same atlas in the
+/// same frame: each tile is shaded once for all of them, and each view
+/// gathers its own image.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ExtraViews {
+    #[default]
+    None,
+    /// A stereo pair: the frame's camera is the left eye, the right eye is
+    /// this far (scene units) along the camera's right.
+    Stereo { eye_distance: f32 },
+    /// Fixed cameras (for example a scene's other fixed cameras).
+    Cameras(Vec<Camera>),
+}
+
+impl ExtraViews {
+    pub fn count(&self) -> usize {
+        match self {
+            Self::None => 0,
+            Self::Stereo { .. } => 1,
+            Self::Cameras(c) => c.len(),
+        }
+    }
+
+    /// The `k`-th extra camera for a frame seen by `camera`.
+    pub fn camera(&self, k: usize, camera: &Camera) -> Camera {
+        match self {
+            Self::None => unreachable!("no extra views"),
+            Self::Stereo { eye_distance } => {
+                let right = camera.forward.cross(camera.up).normalize();
+                Camera { position: camera.position + right * *eye_distance, ..*camera }
+            }
+            Self::Cameras(c) => c[k],
+        }
+    }
+}
+
+/// One extra view's own resources: its view uniform, visibility buffer
+/// and rasterizer, and HDR image.
+struct ExtraView {
+    uniform: wgpu::Buffer,
+    visibility: Box<ComputeVisibility>,
+    pub hdr: wgpu::Texture,
 }
 
 /// Settings of the object-space pipeline.
@@ -259,6 +317,9 @@ pub struct ObjectSpaceConfig {
     /// Most texels shaded per frame: above it the mip levels are biased
     /// coarser until the shading fits ([`budget`]). `None`: no limit.
     pub shade_budget_texels: Option<u64>,
+    /// Views besides the frame's camera that share the atlas (compute
+    /// visibility only).
+    pub extra_views: ExtraViews,
 }
 
 impl Default for ObjectSpaceConfig {
@@ -277,6 +338,7 @@ impl Default for ObjectSpaceConfig {
             visibility: VisibilityMethod::Raster,
             count_visibility: false,
             shade_budget_texels: None,
+            extra_views: ExtraViews::None,
         }
     }
 }
@@ -297,6 +359,8 @@ pub enum ObjectSpaceError {
     NoPrimitiveIndex(String),
     #[error("{0} texture sizes given for {1} objects")]
     SizeCount(usize, usize),
+    #[error("extra views need compute visibility (--visibility compute)")]
+    ViewsNeedComputeVisibility,
     #[error("an atlas of {texels} texels needs {bytes} bytes of tile state, more than the adapter's largest buffer")]
     AtlasTooLarge { texels: u64, bytes: u64 },
 }
@@ -323,6 +387,7 @@ pub struct ObjectSpace {
     frames: u32,
     budget: Budget,
     virtual_halvings: u32,
+    extra_views: Vec<ExtraView>,
     /// The bias the budget added to each frame still in flight.
     budget_bias: std::collections::BTreeMap<u64, f32>,
 }
@@ -371,7 +436,11 @@ impl ObjectSpace {
         if queue_bytes > device.limits().max_storage_buffer_binding_size {
             return Err(ObjectSpaceError::AtlasTooLarge { texels: pool.texels(), bytes: queue_bytes });
         }
-        let res = Resources::new(device, &layout, pool, &scene.triangle_charts, targets);
+        let view_count = 1 + config.extra_views.count() as u32;
+        if view_count > 1 && config.visibility != VisibilityMethod::Compute {
+            return Err(ObjectSpaceError::ViewsNeedComputeVisibility);
+        }
+        let mut res = Resources::new(device, &layout, pool, &scene.triangle_charts, targets, view_count);
         let visibility = match config.visibility {
             VisibilityMethod::Raster => Visibility::Raster {
                 prepass: config.visibility_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?,
@@ -390,13 +459,30 @@ impl ObjectSpace {
             }
         };
         let grid = WorldGrid::new(device, shaders, scene)?;
+        let mut gather = GatherPass::new(device, shaders, scene, &res, targets, &grid.grid)?;
+        let mut extra_views = Vec::new();
+        for _ in 1..view_count {
+            let ids = VisibilityBuffer::new(device, targets);
+            res.add_view(device, &ids.view);
+            let hdr = Targets::hdr_texture(device, targets.width, targets.height);
+            gather.add_view(device, &res, &hdr.create_view(&Default::default()));
+            let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("extra view"),
+                size: size_of::<GpuView>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let visibility = Box::new(ComputeVisibility::new(device, shaders, scene, targets, &ids, false)?);
+            extra_views.push(ExtraView { uniform, visibility, hdr });
+        }
         Ok(Self {
+            extra_views,
             visibility,
             mark: MarkPass::new(device, shaders, scene, &res)?,
             paging: PagingPass::new(device, shaders, scene, &res)?,
             trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
-            gather: GatherPass::new(device, shaders, scene, &res, targets, &grid.grid)?,
+            gather,
             grid,
             res,
             layout,
@@ -411,6 +497,34 @@ impl ObjectSpace {
 
     pub fn config(&self) -> &ObjectSpaceConfig {
         &self.config
+    }
+
+    /// Renders the extra views' visibility and marks their tiles; returns
+    /// each view's scene group for its gather.
+    fn mark_extra_views(&mut self, frame: &mut Frame) -> Vec<wgpu::BindGroup> {
+        let (w, h) = (frame.targets.width, frame.targets.height);
+        let mut groups = Vec::new();
+        for (k, extra) in self.extra_views.iter_mut().enumerate() {
+            let camera = self.config.extra_views.camera(k, frame.camera);
+            // The frame's view (its light counts) seen from the other camera.
+            let seen = gpu_view(&camera, w, h);
+            let view = GpuView { view_proj: seen.view_proj, camera_position: seen.camera_position, ..*frame.view };
+            frame.queue.write_buffer(&extra.uniform, 0, bytemuck::bytes_of(&view));
+            let frustum = Frustum::from_view_projection(view.view_proj);
+            let visible: Vec<bool> = frame.scene.object_bounds.iter().map(|b| frustum.intersects_aabb(b)).collect();
+            let group = frame.scene.bind_group_with_view(frame.device, &extra.uniform);
+            let mut sub = frame.with_scene_group(&group);
+            sub.visible = &visible;
+            compute_visibility(&mut sub, &mut extra.visibility);
+            mark_tiles(&mut sub, &self.mark, &self.res, k + 1);
+            groups.push(group);
+        }
+        groups
+    }
+
+    /// The extra views' HDR images (view 1 onwards), for tests and reports.
+    pub fn extra_view_images(&self) -> impl Iterator<Item = &wgpu::Texture> {
+        self.extra_views.iter().map(|v| &v.hdr)
     }
 
     /// The physical atlas.
@@ -441,13 +555,18 @@ impl Pipeline for ObjectSpace {
             }
             Visibility::Compute(pass) => compute_visibility(frame, pass),
         }
-        mark_tiles(frame, &self.mark, &self.res);
+        mark_tiles(frame, &self.mark, &self.res, 0);
+        let views = self.mark_extra_views(frame);
         back_pages(frame, &self.paging, &self.res);
         build_triangle_maps(frame, &self.trimap, &self.res);
         mark_backed_pages(frame, &self.mark, &self.res);
         build_world_grid(frame, &mut self.grid);
         shade_tiles(frame, &self.shade, &self.res, &self.grid.grid);
-        gather(frame, &self.gather, &self.res, &self.grid.grid);
+        gather(frame, &self.gather, &self.res, &self.grid.grid, 0);
+        for (k, group) in views.iter().enumerate() {
+            let mut view = frame.with_scene_group(group);
+            gather(&mut view, &self.gather, &self.res, &self.grid.grid, k + 1);
+        }
         let counter_bytes = TileCounter::SLOTS as u64 * 4;
         self.readback.copy(frame.device, frame.encoder, &self.res.counters, counter_bytes, frame.number);
     }
@@ -472,8 +591,11 @@ impl Pipeline for ObjectSpace {
     /// (backing visible tiles this frame), `pages_backed` (newly),
     /// `pages_failed` (found no page: the atlas was full), `page_texels`
     /// (texels of the pages in use) and `budget_bias` (levels the budget
-    /// added); with `count_visibility`, the compute rasterizer's counts too
-    /// (in entries of their own).
+    /// added); with extra views, `shared_view_tiles` (tiles on pages
+    /// backed before this frame, marked once for all views) and
+    /// `view_tiles` (the same summed over the views: what independent views
+    /// would mark); with `count_visibility`, the compute rasterizer's counts
+    /// too (in entries of their own).
     fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
         let counts = match &mut self.visibility {
             Visibility::Compute(pass) => pass.collect_counts(device, wait),
@@ -501,7 +623,7 @@ impl Pipeline for ObjectSpace {
                     load = load.max(shaded * tile_texels / budget as f64);
                 }
                 self.budget.observe(frame, used, load);
-                let counters = [
+                let mut counters = vec![
                     ("visible_tiles", visible),
                     ("shaded_tiles", shaded),
                     ("reused_tiles", (visible - shaded).max(0.0)),
@@ -517,6 +639,13 @@ impl Pipeline for ObjectSpace {
                     ("page_texels", in_use * page_texels),
                     ("budget_bias", used as f64),
                 ];
+                if !self.extra_views.is_empty() {
+                    // Like for like: tiles on pages already backed, shared
+                    // by the views against summed over them.
+                    let backed_tiles = count(TileCounter::BackedTiles);
+                    counters.push(("shared_view_tiles", visible - backed_tiles));
+                    counters.push(("view_tiles", count(TileCounter::ViewTiles)));
+                }
                 (frame, counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect())
             })
             .chain(counts)

@@ -82,6 +82,21 @@ struct Params {
 // Pages backed this frame: (virtual page, object << 8 | level, physical page, 0).
 @group(1) @binding(14) var<storage, read_write> backed: array<vec4u>;
 
+// Mirrors `objectspace::resources::GpuViewSlot`.
+struct ViewSlot {
+    index: u32,
+    count: u32,
+    pad_a: u32,
+    pad_b: u32,
+}
+
+// The view this pass records for (several views mark into one atlas). A
+// storage buffer, not a second uniform: lavapipe (Mesa 22.3) crashes on a
+// second uniform buffer in this group.
+@group(1) @binding(15) var<storage, read> view_slot: ViewSlot;
+// Per physical tile: the views that marked it this frame, one bit each.
+@group(1) @binding(16) var<storage, read_write> tile_views: array<atomic<u32>>;
+
 const NOT_BACKED: u32 = 0xffffffffu;
 
 // Virtual page of texel `texel` of level `l`.

@@ -42,6 +42,17 @@ gpu_struct! {
     }
 }
 
+gpu_struct! {
+    /// Which view a pass records for (`ViewSlot` in `objectspace.wgsl`).
+    pub struct GpuViewSlot as "ViewSlot" {
+        pub index: u32,
+        /// Views marking into the atlas this frame.
+        pub count: u32,
+        pub pad_a: u32,
+        pub pad_b: u32,
+    }
+}
+
 pub struct Resources {
     pub pool: PagePool,
     pub atlas: wgpu::Texture,
@@ -80,8 +91,15 @@ pub struct Resources {
     /// `dispatch` as storage, for the passes that write it (group 2).
     pub dispatch_layout: wgpu::BindGroupLayout,
     pub dispatch_group: wgpu::BindGroup,
+    /// Per physical tile: the views that marked it this frame (one bit each),
+    /// cleared every frame when there are several views.
+    pub tile_views: wgpu::Buffer,
+    /// The scene's chart islands per triangle (bound for the gather's filter).
+    triangle_charts: wgpu::Buffer,
     pub layout: wgpu::BindGroupLayout,
-    pub bind_group: wgpu::BindGroup,
+    /// Group 1 per view (its visibility buffer and view slot; 0 is the main view).
+    pub view_groups: Vec<wgpu::BindGroup>,
+    view_count: u32,
     virtual_pages: u32,
 }
 
@@ -97,6 +115,7 @@ impl Resources {
         pool: PagePool,
         triangle_charts: &wgpu::Buffer,
         targets: &Targets,
+        view_count: u32,
     ) -> Self {
         let atlas = pool.texture(
             device,
@@ -150,6 +169,7 @@ impl Resources {
         let candidates = storage("page candidates", pool.pages as u64 * 4, none);
         let backed = storage("backed pages", pool.pages as u64 * 16, none);
         let dispatch = storage("object-space dispatch", 48, wgpu::BufferUsages::INDIRECT);
+        let tile_views = storage("tile views", tiles * 4, wgpu::BufferUsages::COPY_DST);
         let dispatch_layout =
             bind_group_layout(device, "object-space dispatch", &[Binding::Storage { read_only: false }]);
         let dispatch_group =
@@ -176,31 +196,15 @@ impl Resources {
                 rw,
                 rw,
                 rw,
+                Binding::Storage { read_only: true },
+                rw,
             ],
         );
-        let bind_group = bind_group(
-            device,
-            "object space",
-            &layout,
-            &[
-                params.as_entire_binding(),
-                entries.as_entire_binding(),
-                tile_visible.as_entire_binding(),
-                tile_shaded.as_entire_binding(),
-                work_queue.as_entire_binding(),
-                counters.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&visibility.view),
-                triangle_charts.as_entire_binding(),
-                page_table.as_entire_binding(),
-                page_used.as_entire_binding(),
-                page_owner.as_entire_binding(),
-                page_requests.as_entire_binding(),
-                request_list.as_entire_binding(),
-                candidates.as_entire_binding(),
-                backed.as_entire_binding(),
-            ],
-        );
-        Self {
+        let mut res = Self {
+            view_groups: Vec::new(),
+            view_count,
+            tile_views,
+            triangle_charts: triangle_charts.clone(),
             pool,
             atlas_array: view_as(&atlas, wgpu::TextureViewDimension::D2Array),
             atlas,
@@ -225,9 +229,48 @@ impl Resources {
             dispatch_layout,
             dispatch_group,
             layout,
-            bind_group,
             virtual_pages: virtual_pages as u32,
-        }
+        };
+        let main = res.visibility.view.clone();
+        res.add_view(device, &main);
+        res
+    }
+
+    /// Adds group 1 of the next view: these resources with the view's
+    /// visibility buffer and its view slot.
+    pub fn add_view(&mut self, device: &wgpu::Device, visibility: &wgpu::TextureView) {
+        let index = self.view_groups.len() as u32;
+        let slot = GpuViewSlot { index, count: self.view_count, pad_a: 0, pad_b: 0 };
+        let slot = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("view slot"),
+            contents: bytemuck::bytes_of(&slot),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let group = bind_group(
+            device,
+            "object space",
+            &self.layout,
+            &[
+                self.params.as_entire_binding(),
+                self.entries.as_entire_binding(),
+                self.tile_visible.as_entire_binding(),
+                self.tile_shaded.as_entire_binding(),
+                self.work_queue.as_entire_binding(),
+                self.counters.as_entire_binding(),
+                wgpu::BindingResource::TextureView(visibility),
+                self.triangle_charts.as_entire_binding(),
+                self.page_table.as_entire_binding(),
+                self.page_used.as_entire_binding(),
+                self.page_owner.as_entire_binding(),
+                self.page_requests.as_entire_binding(),
+                self.request_list.as_entire_binding(),
+                self.candidates.as_entire_binding(),
+                self.backed.as_entire_binding(),
+                slot.as_entire_binding(),
+                self.tile_views.as_entire_binding(),
+            ],
+        );
+        self.view_groups.push(group);
     }
 
     /// Shade queue capacity: every tile of the physical atlas.
@@ -281,11 +324,21 @@ impl Resources {
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(&self.counters, 0, None);
+        if self.view_count > 1 {
+            encoder.clear_buffer(&self.tile_views, 0, None);
+        }
+    }
+
+    /// Binds the scene as view `view` sees it (group 0) and these resources
+    /// for that view (group 1) on a compute pass.
+    pub fn bind_view(&self, pass: &mut wgpu::ComputePass, scene: &wgpu::BindGroup, view: usize) {
+        pass.set_bind_group(0, scene, &[]);
+        pass.set_bind_group(1, &self.view_groups[view], &[]);
     }
 
     /// Binds the scene (group 0) and these resources (group 1) on a compute pass.
     pub fn bind(&self, pass: &mut wgpu::ComputePass, scene: &wgpu::BindGroup) {
         pass.set_bind_group(0, scene, &[]);
-        pass.set_bind_group(1, &self.bind_group, &[]);
+        pass.set_bind_group(1, &self.view_groups[0], &[]);
     }
 }

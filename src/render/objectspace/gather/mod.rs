@@ -15,8 +15,9 @@ pub const SHADER: ShaderSource = ShaderSource::new("gather.wgsl", include_str!("
 
 pub struct GatherPass {
     pipeline: wgpu::ComputePipeline,
-    /// The atlas and triangle maps (read) and the HDR target (written).
-    io: wgpu::BindGroup,
+    io_layout: wgpu::BindGroupLayout,
+    /// Per view: the atlas and triangle maps (read) and its HDR target (written).
+    io: Vec<wgpu::BindGroup>,
 }
 
 impl GatherPass {
@@ -43,32 +44,38 @@ impl GatherPass {
                 },
             ],
         );
-        let io = bind_group(
-            device,
-            "gather io",
-            &layout,
-            &[
-                wgpu::BindingResource::TextureView(&res.atlas_array),
-                wgpu::BindingResource::TextureView(&targets.hdr_view),
-                wgpu::BindingResource::TextureView(&res.triangle_map_array),
-            ],
-        );
         let groups = [&scene.layout, &res.layout, &layout, &grid.layout];
         let pipeline = compute_pipeline(device, shaders, SHADER, "gather", &groups)?;
-        Ok(Self { pipeline, io })
+        let mut pass = Self { pipeline, io_layout: layout, io: Vec::new() };
+        pass.add_view(device, res, &targets.hdr_view);
+        Ok(pass)
+    }
+
+    /// Adds the output of the next view: its HDR target.
+    pub fn add_view(&mut self, device: &wgpu::Device, res: &Resources, hdr: &wgpu::TextureView) {
+        self.io.push(bind_group(
+            device,
+            "gather io",
+            &self.io_layout,
+            &[
+                wgpu::BindingResource::TextureView(&res.atlas_array),
+                wgpu::BindingResource::TextureView(hdr),
+                wgpu::BindingResource::TextureView(&res.triangle_map_array),
+            ],
+        ));
     }
 }
 
 /// Reads: the visibility buffer, the atlas and its table (and the tile
 /// stamps for the debug views; the world grid for forward-only objects).
-/// Writes: `targets.hdr`.
-pub fn gather(frame: &mut Frame, pass: &GatherPass, res: &Resources, grid: &LightGrid) {
+/// Writes: view `view`'s HDR target (`targets.hdr` for view 0).
+pub fn gather(frame: &mut Frame, pass: &GatherPass, res: &Resources, grid: &LightGrid, view: usize) {
     let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
-    let scene = frame.scene.bind_group();
-    let mut cp = frame.compute_pass("gather");
+    let scene = frame.scene_group;
+    let mut cp = frame.compute_pass(if view == 0 { "gather" } else { "gather: other views" });
     cp.set_pipeline(&pass.pipeline);
-    res.bind(&mut cp, scene);
-    cp.set_bind_group(2, &pass.io, &[]);
+    res.bind_view(&mut cp, scene, view);
+    cp.set_bind_group(2, &pass.io[view], &[]);
     cp.set_bind_group(READ_GROUP, grid.bind_group(), &[]);
     cp.dispatch_workgroups(w, h, 1);
 }

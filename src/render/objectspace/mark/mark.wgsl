@@ -8,12 +8,12 @@
 // such pixel lists the page; `mark_backed` marks those tiles once paging
 // has backed the page.
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_PAGES_USED, COUNT_PAGES_REQUESTED, COUNT_PAGES_FAILED,
-    COUNT_PAGES_BACKED}
+    COUNT_PAGES_BACKED, COUNT_VIEW_TILES, COUNT_BACKED_TILES}
 #import shadespace::pixel_surface::sample_pixel
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
-    virtual_page, physical_page, virtual_tile, tile_in_page, physical_tile, NOT_BACKED}
+    virtual_page, physical_page, virtual_tile, tile_in_page, physical_tile, NOT_BACKED, view_slot, tile_views}
 
 // A small integer hash (PCG's output permutation) for tile phases.
 fn hash(x: u32) -> u32 {
@@ -80,6 +80,15 @@ fn mark_tile(object: u32, level_index: u32, l: AtlasLevel, valid_since: u32, tex
         return;
     }
     let slot = physical_tile(physical, t);
+    if view_slot.count > 1u {
+        // Count the tile once per view that needs it (tiles shaded for K
+        // independent views), before the shared marking below.
+        let bit = 1u << view_slot.index;
+        if (atomicLoad(&tile_views[slot]) & bit) != 0u || (atomicOr(&tile_views[slot], bit) & bit) != 0u {
+            return;
+        }
+        atomicAdd(&counters[COUNT_VIEW_TILES], 1u);
+    }
     // Most pixels find their tile already marked: read before writing.
     if atomicLoad(&tile_visible[slot]) == params.stamp {
         return;
@@ -160,6 +169,7 @@ fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups
         tile_shaded[slot] = 0u;
         if requested != 0u {
             atomicAdd(&counters[COUNT_VISIBLE], 1u);
+            atomicAdd(&counters[COUNT_BACKED_TILES], 1u);
             atomicAdd(&counters[COUNT_NEW], 1u);
             let texel = page_origin + vec2u(t % per_row, t / per_row) * params.tile_size;
             queue_if_due(slot, virtual_tile(l, texel), object, level_index, e.valid_since);

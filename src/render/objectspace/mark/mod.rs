@@ -40,12 +40,13 @@ impl MarkPass {
 /// Reads: the visibility buffer, the atlas table, the page table, the tile
 /// stamps. Writes: the tile stamps, page use, page requests, the shade
 /// queue, the counters.
-pub fn mark_tiles(frame: &mut Frame, pass: &MarkPass, res: &Resources) {
+/// `view`: which view's visibility buffer (0: the main view).
+pub fn mark_tiles(frame: &mut Frame, pass: &MarkPass, res: &Resources, view: usize) {
     let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
-    let scene = frame.scene.bind_group();
-    let mut cp = frame.compute_pass("mark");
+    let scene = frame.scene_group;
+    let mut cp = frame.compute_pass(if view == 0 { "mark" } else { "mark: other views" });
     cp.set_pipeline(&pass.mark);
-    res.bind(&mut cp, scene);
+    res.bind_view(&mut cp, scene, view);
     cp.dispatch_workgroups(w, h, 1);
 }
 
@@ -53,7 +54,7 @@ pub fn mark_tiles(frame: &mut Frame, pass: &MarkPass, res: &Resources) {
 /// of the backed pages, the shade queue, the counters; then the shade
 /// dispatch.
 pub fn mark_backed_pages(frame: &mut Frame, pass: &MarkPass, res: &Resources) {
-    let scene = frame.scene.bind_group();
+    let scene = frame.scene_group;
     {
         let mut cp = frame.compute_pass("mark backed");
         cp.set_pipeline(&pass.mark_backed);

@@ -43,7 +43,7 @@ impl PagingPass {
 /// page owners and use, the backed-page list, the counters, the dispatches
 /// of allocation and of the backed pages' passes.
 pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
-    let scene = frame.scene.bind_group();
+    let scene = frame.scene_group;
     let pages = res.pool.pages.div_ceil(64);
     let mut cp = frame.compute_pass("paging");
     res.bind(&mut cp, scene);

@@ -53,7 +53,7 @@ impl ShadePass {
 /// Reads: the shade queue and its count, the triangle-index maps, the scene,
 /// its lights and the world grid. Writes: the queued tiles of the atlas.
 pub fn shade_tiles(frame: &mut Frame, pass: &ShadePass, res: &Resources, grid: &LightGrid) {
-    let scene = frame.scene.bind_group();
+    let scene = frame.scene_group;
     let mut cp = frame.compute_pass("shade");
     cp.set_pipeline(&pass.pipeline);
     res.bind(&mut cp, scene);

@@ -92,7 +92,7 @@ impl TrimapPass {
 /// Reads: the backed-page list, the chart grids, the scene's chart UVs.
 /// Writes: the triangle maps of the pages backed this frame.
 pub fn build_triangle_maps(frame: &mut Frame, pass: &TrimapPass, res: &Resources) {
-    let scene = frame.scene.bind_group();
+    let scene = frame.scene_group;
     let mut cp = frame.compute_pass("triangle maps");
     cp.set_pipeline(&pass.pipeline);
     res.bind(&mut cp, scene);

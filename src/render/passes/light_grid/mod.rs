@@ -325,7 +325,7 @@ impl LightGrid {
         let light_groups = split(lights.div_ceil(LIGHTS_PER_GROUP));
         let cell_groups = split(params.cell_count.div_ceil(CELL_THREADS));
         let blocks = params.cell_count.div_ceil(SCAN_BLOCK);
-        let scene = frame.scene.bind_group();
+        let scene = frame.scene_group;
         let run = |frame: &mut Frame, name: &str, steps: &[(&wgpu::ComputePipeline, (u32, u32))]| {
             let mut cp = frame.compute_pass(&format!("{}: {name}", self.label));
             cp.set_bind_group(0, scene, &[]);

@@ -390,7 +390,7 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1);
     }
     if triangles > 0 {
-        let scene = frame.scene.bind_group();
+        let scene = frame.scene_group;
         let groups = triangles.div_ceil(RASTER_WORKGROUP);
         let groups_x = groups.min(MAX_GROUPS_X);
         {
