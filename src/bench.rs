@@ -177,13 +177,20 @@ pub fn run(
     let measured = |frame: u64| frame >= warmup as u64;
     let path_len = path.frame_count().max(1) as u64;
     let path_frame = |i: u64| ((first as u64 + i * step as u64) % path_len) as u32;
-    let mut stats: Vec<FrameStats> = Vec::with_capacity(total as usize);
+    let mut stats: Vec<FrameStats> = Vec::with_capacity(frames as usize);
     let mut timings: BTreeMap<u64, FrameTimings> = BTreeMap::new();
     let mut counters: BTreeMap<u64, Counters> = BTreeMap::new();
     for i in 0..total as u64 {
-        stats.push(renderer.render(ctx, &path.camera_at(path_frame(i)), lights, i)?);
-        timings.extend(renderer.collect_timings(ctx, false).into_iter().map(|t| (t.frame, t)));
-        merge_counters(&mut counters, renderer.collect_counters(ctx, false));
+        let s = renderer.render(ctx, &path.camera_at(path_frame(i)), lights, i)?;
+        // Warm-up frames are not reported: keep nothing of them, so that a
+        // long warm-up (`render --history`) holds memory flat.
+        if measured(i) {
+            stats.push(s);
+        }
+        let arrived = renderer.collect_timings(ctx, false).into_iter().filter(|t| measured(t.frame));
+        timings.extend(arrived.map(|t| (t.frame, t)));
+        let arrived = renderer.collect_counters(ctx, false).into_iter().filter(|(f, _)| measured(*f)).collect();
+        merge_counters(&mut counters, arrived);
         progress(i as u32 + 1);
     }
     timings.extend(renderer.collect_timings(ctx, true).into_iter().map(|t| (t.frame, t)));

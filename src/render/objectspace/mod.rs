@@ -300,7 +300,7 @@ pub struct ObjectSpaceConfig {
     /// Page side of the virtual textures (a power of two, at most four
     /// times the tile size; raised to the tile size).
     pub page_size: u32,
-    /// Texels of the physical atlas; `None`: [`default_atlas_texels`]. When a frame needs more pages than it holds, the
+    /// Texels of the physical atlas; `None`: [`default_atlas_texels`] per view. When a frame needs more pages than it holds, the
     /// mip bias rises ([`budget`]).
     pub atlas_budget_texels: Option<u64>,
     /// Lay down depth before the id pass, which then writes each pixel once
@@ -428,8 +428,10 @@ impl ObjectSpace {
         if virtual_halvings > 0 {
             tracing::info!("virtual textures halved {virtual_halvings} time(s) to fit the page table");
         }
+        // Each view sees its own pixels: the default atlas holds all of them.
+        let views = 1 + config.extra_views.count() as u64;
         let pixels = targets.width as u64 * targets.height as u64;
-        let texels = config.atlas_budget_texels.unwrap_or_else(|| default_atlas_texels(pixels));
+        let texels = config.atlas_budget_texels.unwrap_or_else(|| default_atlas_texels(pixels) * views);
         let pool = PagePool::new(page_size, texels, device.limits().max_texture_dimension_2d);
         // The largest per-tile buffer is the shade queue: 8 bytes a tile.
         let queue_bytes = pool.texels() / (config.tile_size as u64).pow(2) * 8;
