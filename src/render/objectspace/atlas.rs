@@ -267,7 +267,8 @@ gpu_struct! {
         pub level_count: u32,
         /// Shades older than this frame stamp are stale (lights or object changed).
         pub valid_since: u32,
-        /// Per-object mip bias, added to every pixel's level.
+        /// The budget's bias for this object (by its screen importance), added
+        /// to its pixels' levels.
         pub mip_bias: f32,
         pub levels: [GpuAtlasLevel; MAX_LEVELS],
     }

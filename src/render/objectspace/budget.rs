@@ -51,9 +51,47 @@ impl Budget {
     }
 }
 
+/// Levels of the budget's bias that every object takes alike; past them
+/// the rest goes to the objects that cover less of the screen first.
+pub const UNIFORM_BIAS: f32 = 1.0;
+
+/// Per-object share of the budget's `bias`, by screen importance (`shares`:
+/// each object's share of the screen; `None` for objects outside the atlas
+/// or the view, which take the plain bias): every object takes the bias up
+/// to [`UNIFORM_BIAS`]; of the rest, an object takes twice as much times
+/// one minus its importance rank (0 for the object covering most of the
+/// screen, 2 for the one covering least), so that on average the rest is
+/// taken once, but the objects the viewer sees most stay sharpest.
+pub fn object_biases(bias: f32, shares: &[Option<f32>]) -> Vec<f32> {
+    let uniform = bias.min(UNIFORM_BIAS);
+    let rest = (bias - UNIFORM_BIAS).max(0.0);
+    let mut ranked: Vec<(usize, f32)> = shares.iter().enumerate().filter_map(|(i, s)| s.map(|s| (i, s))).collect();
+    ranked.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+    let mut out = vec![bias; shares.len()];
+    let last = ranked.len().saturating_sub(1).max(1) as f32;
+    for (rank, (object, _)) in ranked.iter().enumerate() {
+        // rank 0: the smallest share; `last`: the largest.
+        let importance = if ranked.len() == 1 { 0.5 } else { rank as f32 / last };
+        out[*object] = uniform + rest * 2.0 * (1.0 - importance);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn past_one_level_the_least_seen_objects_take_the_bias() {
+        // Under one level every object alike.
+        assert_eq!(object_biases(0.6, &[Some(0.5), Some(0.01), None]), vec![0.6, 0.6, 0.6]);
+        // Past it: the largest object keeps one level, the smallest takes 1 + 2 x 1.5.
+        let b = object_biases(2.5, &[Some(0.5), Some(0.01), None, Some(0.1)]);
+        assert_eq!(b, vec![1.0, 4.0, 2.5, 2.5]);
+        // On average over the visible objects the rest is taken once.
+        let visible = [b[0], b[1], b[3]];
+        assert!((visible.iter().sum::<f32>() / 3.0 - 2.5).abs() < 1e-6);
+    }
 
     /// Against a model where shaded texels fall 4x per level of bias, the
     /// controller settles inside [ROOM, 1] of the budget, comes back down

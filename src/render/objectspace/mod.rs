@@ -540,14 +540,33 @@ impl ObjectSpace {
     }
 }
 
+/// The share of the screen that object `o`'s bounding box covers (1 when
+/// the camera is inside or near it).
+fn screen_share(frame: &Frame, o: usize) -> f32 {
+    let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
+    for c in frame.scene.object_bounds[o].corners() {
+        let p = frame.view.view_proj * c.extend(1.0);
+        if p.w <= 1e-4 {
+            return 1.0;
+        }
+        let ndc = glam::Vec2::new(p.x, p.y) / p.w;
+        (lo, hi) = (lo.min(ndc), hi.max(ndc));
+    }
+    let (lo, hi) = (lo.clamp(glam::Vec2::NEG_ONE, glam::Vec2::ONE), hi.clamp(glam::Vec2::NEG_ONE, glam::Vec2::ONE));
+    ((hi - lo).x * (hi - lo).y / 4.0).max(0.0)
+}
+
 impl Pipeline for ObjectSpace {
     fn encode(&mut self, frame: &mut Frame) {
         self.frames += 1;
         let stale = frame.lights_changed || self.frames == 1;
         let added = self.budget.bias;
         self.budget_bias.insert(frame.number, added);
-        let mip_bias = self.config.mip_bias + added;
-        self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, &self.config, mip_bias);
+        let shares: Vec<Option<f32>> = (0..frame.scene.object_bounds.len())
+            .map(|o| (frame.visible[o] && self.layout.objects[o].is_some()).then(|| screen_share(frame, o)))
+            .collect();
+        self.res.set_object_biases(frame.queue, &budget::object_biases(added, &shares));
+        self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, &self.config);
         match &mut self.visibility {
             Visibility::Raster { prepass, ids } => {
                 if let Some(prepass) = prepass {

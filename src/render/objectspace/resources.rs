@@ -285,10 +285,22 @@ impl Resources {
         self.virtual_pages as u64 * (4 + 4) + self.pool.pages as u64 * (4 + 4 + 8 + 4 + 16)
     }
 
+    /// Sets each object's mip bias (the budget's share per object), uploading
+    /// the atlas table when they changed.
+    pub fn set_object_biases(&mut self, queue: &wgpu::Queue, biases: &[f32]) {
+        let mut changed = false;
+        for (e, &b) in self.entry_data.iter_mut().zip(biases) {
+            changed |= e.mip_bias != b;
+            e.mip_bias = b;
+        }
+        if changed {
+            queue.write_buffer(&self.entries, 0, bytemuck::cast_slice(&self.entry_data));
+        }
+    }
+
     /// Uploads this frame's settings (and, when the shades went stale, the
     /// atlas table with its new `valid_since`) and clears the counters.
-    /// `mip_bias`: the configured bias plus what the budget adds.
-    #[allow(clippy::too_many_arguments)]
+    /// The budget's bias is per object, in the table ([`Self::set_object_biases`]).
     pub fn begin_frame(
         &mut self,
         queue: &wgpu::Queue,
@@ -296,7 +308,6 @@ impl Resources {
         stamp: u32,
         stale: bool,
         config: &ObjectSpaceConfig,
-        mip_bias: f32,
     ) {
         if stale {
             for e in &mut self.entry_data {
@@ -309,7 +320,7 @@ impl Resources {
             reuse: config.reuse,
             tile_size: config.tile_size,
             view_mode: config.view as u32,
-            mip_bias,
+            mip_bias: config.mip_bias,
             variable_rate: config.variable_rate,
             max_queue: self.max_queue(config.tile_size),
             spread: config.spread_reshading as u32,
