@@ -333,7 +333,8 @@ struct ObjectSpaceArgs {
     /// More views marking into the same atlas in each frame, each tile shaded
     /// once for all (compute visibility): `stereo:D` (a right eye D scene
     /// units to the right of the camera) or `fixed` (the scene's fixed
-    /// cameras other than --camera's). The image written is the first view's.
+    /// cameras other than --camera's). `render` writes view K beside --out
+    /// as NAME-viewK.png.
     #[arg(long, value_parser = parse_views)]
     views: Option<ViewsArg>,
     /// Shade these objects (comma-separated names) forward instead of in object space.
@@ -620,6 +621,16 @@ struct Setup {
 }
 
 fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
+    let os = &a.objectspace;
+    let (page, tile) = (os.page_size, os.tile_size);
+    if !page.is_power_of_two() || page > 4 * tile {
+        return input(Err(anyhow::anyhow!(
+            "--page-size {page}: expected a power of two at most four times the tile size ({tile})"
+        )));
+    }
+    if os.views.is_some() && a.visibility.0 == Some(VisibilityMethod::Raster) {
+        return input(Err(anyhow::anyhow!("--views needs compute visibility, not --visibility raster")));
+    }
     let mut scene = input(scene::load(&a.scene))?;
     scene.cull_back_faces = a.cull_back_faces;
     for name in &a.objectspace.forward_only {
@@ -776,6 +787,13 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let report = bench::run(&ctx, &mut renderer, &plan, &s.bench_setup(&a.scene), |_| {})?;
     let image = renderer.read_image(&ctx)?;
     save_png(&image, &a.out)?;
+    if let Some(os) = renderer.pipeline::<ObjectSpace>() {
+        // --views: each extra view's image beside the first, as NAME-viewK.png.
+        for k in 1..=os.extra_view_count() {
+            let stem = a.out.file_stem().and_then(|s| s.to_str()).unwrap_or("shadespace");
+            save_png(&input(os.read_extra_view(&ctx, k))?, &a.out.with_file_name(format!("{stem}-view{k}.png")))?;
+        }
+    }
     if let (Some(path), Some(os)) = (&a.atlas_out, renderer.pipeline::<ObjectSpace>()) {
         save_png(&input(os.read_atlas(&ctx, a.atlas_object, 0))?, path)?;
     }

@@ -60,6 +60,18 @@ fn bad_options_say_what_is_wrong() {
     let (code, err) = run(&["render", "--pipeline", "objectspace", "--visibility", "software"]);
     assert_eq!(code, 2);
     assert!(err.contains("'software' is not auto, raster or compute"), "{err}");
+    let (code, err) = run(&["render", "--pipeline", "objectspace", "--page-size", "64"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--page-size 64") && err.contains("four times the tile size"), "{err}");
+    let (code, err) = run(&["render", "--pipeline", "objectspace", "--views", "fixed", "--visibility", "raster"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--views needs compute visibility"), "{err}");
+    let (code, err) = run(&["render", "--pipeline", "objectspace", "--views", "stereo:abc"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("eye distance"), "{err}");
+    let (code, err) = run(&["render", "--pipeline", "objectspace", "--shade-hz", "30", "--reuse", "2"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--shade-hz") && err.contains("--reuse"), "{err}");
     let (code, err) = run(&["bench", "--forward-only", "nothing-called-this"]);
     assert_eq!(code, 2);
     assert!(err.contains("nothing-called-this"), "{err}");
@@ -151,4 +163,15 @@ fn shadowed_lights_render_shadow_maps() {
     let (code, err) = run(&["render", "--shadow-refresh", "sometimes", "--size", "32x18", "--out", out_s]);
     assert_ne!(code, 0);
     assert!(err.contains("on-change or every-frame"), "{err}");
+}
+
+/// `render --views stereo:D` writes the second eye beside the first.
+#[test]
+fn stereo_views_write_both_eyes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("frame.png");
+    let args = ["render", "--pipeline", "objectspace", "--views", "stereo:0.1", "--size", "32x18"];
+    let (code, err) = run(&[&args[..], &["--visibility", "compute", "--out", out.to_str().unwrap()]].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(out.is_file() && dir.path().join("frame-view1.png").is_file());
 }

@@ -152,6 +152,11 @@ impl ObjectSpace {
         Ok((size, ids.into_iter().map(|id| (id != u32::MAX).then_some(id)).collect()))
     }
 
+    /// How many extra views share the atlas.
+    pub fn extra_view_count(&self) -> usize {
+        self.extra_view_images().count()
+    }
+
     /// Extra view `k`'s image (1 is the first extra view), tone mapped as
     /// the renderer does at exposure 1 (Reinhard, sRGB).
     pub fn read_extra_view(&self, ctx: &GpuContext, k: usize) -> Result<image::RgbaImage, GpuError> {

@@ -524,14 +524,9 @@ impl ObjectSpace {
         groups
     }
 
-    /// The extra views' HDR images (view 1 onwards), for tests and reports.
-    pub fn extra_view_images(&self) -> impl Iterator<Item = &wgpu::Texture> {
+    /// The extra views' HDR images (view 1 onwards).
+    fn extra_view_images(&self) -> impl Iterator<Item = &wgpu::Texture> {
         self.extra_views.iter().map(|v| &v.hdr)
-    }
-
-    /// The physical atlas.
-    pub fn pool(&self) -> &PagePool {
-        &self.res.pool
     }
 
     /// The world grid (its last build can be read back).
