@@ -11,6 +11,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use shadespace::bench::{self, BenchPlan, BenchSetup, RunReport};
 use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::experiments::marking::Marking;
+use shadespace::experiments::scenarios::Scenario;
+use shadespace::experiments::timing::{Sweep, TimingGrid};
 use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::atlas::MAX_TEXTURE_SIZE;
@@ -42,10 +44,11 @@ enum Command {
     /// Print, per object, where its unique UV layout (chart) comes from, its
     /// overlap, surface area, texel density and shading-texture size.
     Charts(ChartsArgs),
-    /// Compare two images: mean FLIP error, PSNR, largest channel difference.
+    /// Compare two images: mean FLIP error, PSNR, SSIM, largest channel difference.
     Compare(CompareArgs),
     /// Run one of the studies behind the project (overshading, overlap,
-    /// reuse) and write its data, summary, plots and report into a folder.
+    /// reuse, lights, speedup) and write its data, summary, plots and report
+    /// into a folder.
     #[command(long_about = EXPERIMENT_ABOUT)]
     Experiment(ExperimentArgs),
 }
@@ -71,6 +74,20 @@ with the study's projection (60 degrees, near 0.3, far 1000).
   reuse        per pair of consecutive path frames: previous tiles still needed, new tiles;
                over all frames and the windows 100-120, 300-320, 500-520
 
+The timing studies run every pipeline over light sets with `bench`'s loop (GPU-timestamp
+medians over --frames frames after --warmup frames, one renderer per configuration kept across
+light sets) at --size:
+
+  lights       every pipeline, scenarios small, big, shadowed, mixed-1:5, mixed-1:10, counts
+               1-10, 12-20 by 2, 30-100 by 10, 200, 500, 1000, 2000, 5000, 10000; frame time,
+               fps, and the cost per light (slope of a least-squares line)
+  speedup      forward, the other conventional pipelines, object space with reuse 1-4 and
+               variable rate 1 and 2; shadowed lights 0-30, big unshadowed lights 0-1000;
+               speed-up over forward and over the fastest conventional pipeline, the fixed
+               overhead at 0 and 1 light, image error against forward (FLIP, PSNR, SSIM)
+
+A configuration slower than --cap-ms at a count skips the larger counts of that scenario.
+
 The study's Sponza run: shadespace experiment overshading --scene ../shared/scenes/sponza-thesis \\
   --exclude sponza_plantsA,sponza_plantsB --out results/overshading";
 
@@ -83,6 +100,10 @@ enum ExperimentChoice {
     Overlap,
     /// Share of the previous path frame's tiles still needed, and of new tiles.
     Reuse,
+    /// GPU frame time of every pipeline against the light count, four scenarios; cost per light.
+    Lights,
+    /// Object space (reuse 1-4, variable rate) against forward and the fastest conventional pipeline.
+    Speedup,
 }
 
 #[derive(Args)]
@@ -125,11 +146,37 @@ struct ExperimentArgs {
     /// K times less work, the same distribution sampled more thinly.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=600))]
     frame_step: Option<u32>,
+    #[command(flatten)]
+    timing: TimingArgs,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
     #[command(flatten)]
     gpu: GpuArgs,
+}
+
+#[derive(Args)]
+#[command(next_help_heading = "Timing studies (lights, speedup)")]
+struct TimingArgs {
+    /// Image size, WIDTHxHEIGHT (default 1920x1080; quick: 160x90).
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Measured frames per point (default 20; quick: 2).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+    /// Frames rendered before each point's measured ones (default 5; quick: 1).
+    #[arg(long)]
+    warmup: Option<u32>,
+    /// Light counts, comma-separated, instead of the grid's (for `speedup`: in every sweep).
+    #[arg(long, value_delimiter = ',')]
+    counts: Vec<u32>,
+    /// Scenarios, comma-separated, instead of the grid's: small, big, shadowed, mixed-1:R.
+    #[arg(long, value_delimiter = ',', value_parser = Scenario::from_str)]
+    scenarios: Vec<Scenario>,
+    /// A configuration whose median frame time passes this many ms at a
+    /// count skips the larger counts of that scenario (default 200; quick: 10000).
+    #[arg(long, value_parser = cap_ms)]
+    cap_ms: Option<f64>,
 }
 
 #[derive(Args)]
@@ -543,6 +590,13 @@ fn variable_rate(s: &str) -> Result<f32, String> {
     finite_in(s, 0.0..=16.0, "a strength from 0 to 16 levels")
 }
 
+fn cap_ms(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("'{s}' is not a frame time above 0 ms")),
+    }
+}
+
 fn parse_tile_size(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
         Ok(t @ (8 | 16 | 32 | 64)) => Ok(t),
@@ -658,8 +712,7 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     };
     let spec: LightSpec = input(a.lights.parse())?;
     let reference: Camera = path.camera_at(0);
-    let placement = if cameras.source.seen_from_outside() { lights::region_around(&bounds) } else { bounds };
-    let lights = input(lights::build_lights(&spec, &placement, &reference, aspect, a.seed))?;
+    let lights = input(lights::build_lights(&spec, &cameras.light_region(&bounds), &reference, aspect, a.seed))?;
     let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {
         let (charted, charts) = chart(&scene, &a.objectspace)?;
         (charted, Some(charts.texture_sizes()))
@@ -925,7 +978,10 @@ fn compare(a: CompareArgs) -> Result<(), Failure> {
         )));
     }
     let (err, map) = shadespace::metrics::compare(&reference, &test);
-    println!("FLIP mean {:.4}  PSNR {:.2} dB  max channel difference {}", err.flip_mean, err.psnr_db, err.max_abs);
+    println!(
+        "FLIP mean {:.4}  PSNR {:.2} dB  SSIM {:.4}  max channel difference {}",
+        err.flip_mean, err.psnr_db, err.ssim, err.max_abs
+    );
     if let Some(path) = &a.flip_map {
         let mut bytes = Vec::new();
         map.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).context("encoding PNG")?;
@@ -939,6 +995,8 @@ fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
         ExperimentChoice::Overshading => ExperimentName::Overshading,
         ExperimentChoice::Overlap => ExperimentName::Overlap,
         ExperimentChoice::Reuse => ExperimentName::Reuse,
+        ExperimentChoice::Lights => ExperimentName::Lights,
+        ExperimentChoice::Speedup => ExperimentName::Speedup,
     };
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("experiment-{}", name.name())));
     if out.exists() && !out.is_dir() {
@@ -954,12 +1012,14 @@ fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
     if let Some(step) = a.frame_step {
         grid.sample_frames(step);
     }
+    let timing = name.timing_grid(a.quick).map(|g| timing_grid(g, &a.timing));
     let options = ExperimentOptions {
         name,
         scene: a.scene.clone(),
         exclude: a.exclude.clone(),
         markings: a.marking.clone(),
         grid,
+        timing,
         quick: a.quick,
         texel_density: a.texel_density,
         out,
@@ -968,10 +1028,13 @@ fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
     };
     let ctx = open_gpu(&a.gpu)?;
     let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
+    let unit = if name.is_timing() { "frames" } else { "views" };
     bar.set_style(
-        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} views, {elapsed} elapsed, eta {eta}")
-            .expect("valid template")
-            .progress_chars("=> "),
+        ProgressStyle::with_template(&format!(
+            "{{msg}} [{{bar:40}}] {{pos}}/{{len}} {unit}, {{elapsed}} elapsed, eta {{eta}}"
+        ))
+        .expect("valid template")
+        .progress_chars("=> "),
     );
     let written = match experiments::run(&ctx, &options, &bar) {
         Ok(w) => w,
@@ -981,6 +1044,33 @@ fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
     bar.finish_and_clear();
     println!("{}: {} -> {}", name.name(), written.headline, written.report.display());
     Ok(())
+}
+
+/// A timing study's grid with the command line's changes.
+fn timing_grid(mut grid: TimingGrid, a: &TimingArgs) -> TimingGrid {
+    if let Some((w, h)) = a.size {
+        (grid.width, grid.height) = (w, h);
+    }
+    grid.frames = a.frames.unwrap_or(grid.frames);
+    grid.warmup = a.warmup.unwrap_or(grid.warmup);
+    grid.cap_ms = a.cap_ms.unwrap_or(grid.cap_ms);
+    if !a.scenarios.is_empty() {
+        // Keep each listed scenario's own counts where the grid has it (speedup's sweeps differ).
+        let counts = |s: Scenario| {
+            grid.sweeps.iter().find(|w| w.scenario == s).or(grid.sweeps.first()).map(|w| w.counts.clone())
+        };
+        grid.sweeps =
+            a.scenarios.iter().map(|&s| Sweep { scenario: s, counts: counts(s).unwrap_or_default() }).collect();
+    }
+    if !a.counts.is_empty() {
+        let mut counts = a.counts.clone();
+        counts.sort_unstable();
+        counts.dedup();
+        for sweep in &mut grid.sweeps {
+            sweep.counts = counts.clone();
+        }
+    }
+    grid
 }
 
 /// The command line as typed, arguments with spaces or quotes single-quoted.

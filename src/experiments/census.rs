@@ -122,6 +122,13 @@ impl StudyScene {
     }
 }
 
+impl StudyScene {
+    /// The scene with our charts in `uv1`, as `--pipeline objectspace` shades it.
+    pub fn charted(&self) -> &Scene {
+        &self.charted
+    }
+}
+
 /// One tile index space: a variant at a tile size.
 #[derive(Clone, Debug)]
 pub struct Space {

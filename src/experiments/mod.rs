@@ -6,17 +6,24 @@
 //! visibility buffer once per view and resolution with the renderer's own
 //! visibility pass, read it back, and mark tiles on the CPU in every variant
 //! ([`marking::Variant`]) and tile size at once ([`census::Census`]).
+//!
+//! The timing studies (`lights`, `speedup`) measure GPU frame times of
+//! pipelines over light sets with `bench`'s run loop ([`timing::Bench`]).
 
 pub mod census;
+pub mod lights;
 pub mod marking;
 pub mod overlap;
 pub mod overshading;
 pub mod plot;
 pub mod report;
 pub mod reuse;
+pub mod scenarios;
+pub mod speedup;
 pub mod stats;
 pub mod study_path;
 pub mod tile_set;
+pub mod timing;
 pub mod visibility;
 
 use std::path::{Path, PathBuf};
@@ -29,11 +36,14 @@ use crate::gpu::GpuContext;
 use crate::render::RenderError;
 use crate::render::objectspace::atlas::AtlasError;
 use crate::scene::Camera;
+use crate::scene::lights::LightSetError;
+use crate::scene::path::{SceneCameras, cameras_for_scene};
 use census::{Census, StudyScene, StudySceneError};
 use marking::{Marking, Variant};
 use report::{Provenance, Section, Table};
 use study_path::{PATH_FRAMES, StudyCameras};
 use tile_set::TileSet;
+use timing::TimingGrid;
 use visibility::VisibilityRenderer;
 
 /// The experiments (`shadespace experiment NAME`).
@@ -46,6 +56,10 @@ pub enum ExperimentName {
     Overlap,
     /// Tiles of the previous path frame still needed, and new ones.
     Reuse,
+    /// Frame time of every pipeline against the light count, four scenarios.
+    Lights,
+    /// Object space's speed-up and image error against conventional shading.
+    Speedup,
 }
 
 impl ExperimentName {
@@ -54,6 +68,23 @@ impl ExperimentName {
             Self::Overshading => "overshading",
             Self::Overlap => "overlap",
             Self::Reuse => "reuse",
+            Self::Lights => "lights",
+            Self::Speedup => "speedup",
+        }
+    }
+
+    /// Whether it measures frame times (its grid is a [`TimingGrid`], its
+    /// progress counts frames) rather than tiles (a [`Grid`], views).
+    pub fn is_timing(self) -> bool {
+        matches!(self, Self::Lights | Self::Speedup)
+    }
+
+    /// The timing grid of a timing study, full or quick; `None` for the tile studies.
+    pub fn timing_grid(self, quick: bool) -> Option<TimingGrid> {
+        match self {
+            Self::Lights => Some(lights::grid(quick)),
+            Self::Speedup => Some(speedup::grid(quick)),
+            Self::Overshading | Self::Overlap | Self::Reuse => None,
         }
     }
 }
@@ -122,7 +153,10 @@ pub struct ExperimentOptions {
     /// Objects left out (the study ran Sponza without its plants).
     pub exclude: Vec<String>,
     pub markings: Vec<Marking>,
+    /// The tile studies' grid.
     pub grid: Grid,
+    /// The timing studies' grid ([`ExperimentName::timing_grid`]); unused by the tile studies.
+    pub timing: Option<TimingGrid>,
     pub quick: bool,
     /// Our texel density (texels per metre) for the density variant.
     pub texel_density: f32,
@@ -148,6 +182,12 @@ pub enum ExperimentError {
     Output { path: PathBuf, message: String },
     #[error(transparent)]
     Plot(#[from] plot::PlotError),
+    #[error("light set: {0}")]
+    Lights(#[from] LightSetError),
+    #[error("{0} has no timestamp queries: the timing studies need GPU times")]
+    NoTimestamps(String),
+    #[error("experiment {0} needs a timing grid")]
+    NoTimingGrid(&'static str),
 }
 
 impl ExperimentError {
@@ -156,8 +196,8 @@ impl ExperimentError {
     pub fn is_input(&self) -> bool {
         match self {
             Self::Scene(StudySceneError::Charts(_)) => false,
-            Self::Scene(_) | Self::Cameras(_) | Self::Output { .. } => true,
-            Self::Atlas(_) | Self::Render(_) | Self::Plot(_) => false,
+            Self::Scene(_) | Self::Cameras(_) | Self::Output { .. } | Self::Lights(_) => true,
+            Self::Atlas(_) | Self::Render(_) | Self::Plot(_) | Self::NoTimestamps(_) | Self::NoTimingGrid(_) => false,
         }
     }
 
@@ -175,8 +215,7 @@ pub struct Study<'a> {
     pub census: Census<'a>,
     renderer: VisibilityRenderer,
     pub grid: &'a Grid,
-    /// The output folder (figures are written as they are made).
-    pub out: &'a Path,
+    pub output: Output<'a>,
     pub progress: &'a ProgressBar,
 }
 
@@ -193,17 +232,25 @@ impl Study<'_> {
         v.dedup();
         v
     }
+}
 
+/// The output folder, where figures and `data.csv` are written as they are made.
+#[derive(Clone, Copy)]
+pub struct Output<'a> {
+    pub dir: &'a Path,
+}
+
+impl Output<'_> {
     /// Writes a figure into the output folder as `stem.png` and `stem.svg`;
     /// returns the PNG's name for the report.
     pub fn figure(&self, stem: &str, figure: &impl plot::Figure) -> Result<PathBuf, ExperimentError> {
-        figure.write(&self.out.join(stem))?;
+        figure.write(&self.dir.join(stem))?;
         Ok(PathBuf::from(format!("{stem}.png")))
     }
 
     /// Writes `data.csv`.
     pub fn write_rows<R: Serialize>(&self, rows: &[R]) -> Result<(), ExperimentError> {
-        let path = self.out.join("data.csv");
+        let path = self.dir.join("data.csv");
         report::write_csv(&path, rows).map_err(|e| ExperimentError::output(&path, e))
     }
 }
@@ -224,6 +271,15 @@ pub struct Written {
     pub headline: String,
 }
 
+/// What one kind of study hands back to [`run`].
+struct Outcome {
+    /// The keys of `summary.json` particular to the kind (its grid, its method).
+    summary: serde_json::Value,
+    /// The setup and the differences from the study's method.
+    sections: Vec<Section>,
+    findings: Findings,
+}
+
 /// Runs an experiment and writes its outputs into `options.out`.
 pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar) -> Result<Written, ExperimentError> {
     let out = options.out.as_path();
@@ -232,33 +288,27 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
     progress.set_message(format!("{}: preparing {}", options.name.name(), options.scene));
     let cache = options.chart_cache.as_ref().map_or_else(ChartCache::from_env, ChartCache::in_dir);
     let scene = StudyScene::load(&options.scene, &options.exclude, options.texel_density, &cache)?;
-    // Framing (for scenes without a camera path) fits the first resolution's aspect.
-    let aspect = options.grid.resolutions.first().map_or(4.0 / 3.0, |&(w, h)| w as f32 / h as f32);
-    let cameras = StudyCameras::for_scene(&options.scene, &scene.render, aspect)?;
-    let variants = Variant::for_markings(&options.markings);
-    let census = Census::new(&scene, &variants, &options.grid.tile_sizes)?;
-    let renderer = VisibilityRenderer::new(ctx, &scene.render, &options.grid.resolutions)?;
-    let method = renderer.method;
-    let mut study = Study { ctx, scene: &scene, cameras, census, renderer, grid: &options.grid, out, progress };
-    progress.set_message(format!("{} {}", options.name.name(), scene.name));
-    let findings = match options.name {
-        ExperimentName::Overshading => overshading::run(&mut study)?,
-        ExperimentName::Overlap => overlap::run(&mut study)?,
-        ExperimentName::Reuse => reuse::run(&mut study)?,
+    let output = Output { dir: out };
+    let outcome = match options.name {
+        ExperimentName::Overshading => tile_study(ctx, options, &scene, output, progress, overshading::run)?,
+        ExperimentName::Overlap => tile_study(ctx, options, &scene, output, progress, overlap::run)?,
+        ExperimentName::Reuse => tile_study(ctx, options, &scene, output, progress, reuse::run)?,
+        ExperimentName::Lights => {
+            timing_study(ctx, options, &scene, (output, progress), lights::run, lights::differences())?
+        }
+        ExperimentName::Speedup => {
+            timing_study(ctx, options, &scene, (output, progress), speedup::run, speedup::differences())?
+        }
     };
+    let findings = outcome.findings;
     let headline = findings.results.get("headline").and_then(|h| h.as_str()).unwrap_or_default().to_string();
 
-    let summary = serde_json::json!({
+    let mut summary = serde_json::json!({
         "experiment": options.name,
         "scene": scene.name,
         "scene_spec": options.scene,
         "quick": options.quick,
         "provenance": provenance,
-        "grid": options.grid,
-        "markings": options.markings,
-        "variants": variants,
-        "visibility": method.name(),
-        "camera_source": study.cameras.source,
         "setup": {
             "excluded": scene.excluded,
             "texel_density": scene.texel_density,
@@ -266,17 +316,85 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
         },
         "results": findings.results,
     });
+    if let (Some(all), serde_json::Value::Object(own)) = (summary.as_object_mut(), outcome.summary) {
+        all.extend(own);
+    }
     let summary_path = out.join("summary.json");
     let text = serde_json::to_string_pretty(&summary).expect("the summary serializes");
     std::fs::write(&summary_path, text).map_err(|e| ExperimentError::output(&summary_path, e))?;
 
-    let mut sections = vec![setup_section(options, &study, method.name()), differences_section(&scene, &variants)];
+    let mut sections = outcome.sections;
     sections.extend(findings.sections);
     let title = format!("Experiment `{}`: {}", options.name.name(), scene.name);
     let report_path = out.join("report.md");
     std::fs::write(&report_path, report::markdown(&title, &provenance, &sections))
         .map_err(|e| ExperimentError::output(&report_path, e))?;
     Ok(Written { folder: out.to_path_buf(), report: report_path, headline })
+}
+
+/// `overshading`, `overlap`, `reuse`: tiles marked from read-back visibility buffers.
+fn tile_study(
+    ctx: &GpuContext,
+    options: &ExperimentOptions,
+    scene: &StudyScene,
+    output: Output,
+    progress: &ProgressBar,
+    study_run: fn(&mut Study) -> Result<Findings, ExperimentError>,
+) -> Result<Outcome, ExperimentError> {
+    // Framing (for scenes without a camera path) fits the first resolution's aspect.
+    let aspect = options.grid.resolutions.first().map_or(4.0 / 3.0, |&(w, h)| w as f32 / h as f32);
+    let cameras = StudyCameras::for_scene(&options.scene, &scene.render, aspect)?;
+    let variants = Variant::for_markings(&options.markings);
+    let census = Census::new(scene, &variants, &options.grid.tile_sizes)?;
+    let renderer = VisibilityRenderer::new(ctx, &scene.render, &options.grid.resolutions)?;
+    let method = renderer.method;
+    let mut study = Study { ctx, scene, cameras, census, renderer, grid: &options.grid, output, progress };
+    progress.set_message(format!("{} {}", options.name.name(), scene.name));
+    let findings = study_run(&mut study)?;
+    Ok(Outcome {
+        summary: serde_json::json!({
+            "grid": options.grid,
+            "markings": options.markings,
+            "variants": variants,
+            "visibility": method.name(),
+            "camera_source": study.cameras.source,
+        }),
+        sections: vec![setup_section(options, &study, method.name()), differences_section(scene, &variants)],
+        findings,
+    })
+}
+
+/// `lights`, `speedup`: GPU frame times over light sets; `own` lists the
+/// study's own differences from its source's method.
+fn timing_study(
+    ctx: &GpuContext,
+    options: &ExperimentOptions,
+    scene: &StudyScene,
+    (output, progress): (Output, &ProgressBar),
+    study_run: fn(&timing::Bench, Output) -> Result<Findings, ExperimentError>,
+    own: Vec<String>,
+) -> Result<Outcome, ExperimentError> {
+    let grid = options.timing.as_ref().ok_or(ExperimentError::NoTimingGrid(options.name.name()))?;
+    let cameras: SceneCameras =
+        cameras_for_scene(&options.scene, &scene.render, grid.width as f32 / grid.height as f32)?;
+    let bench = timing::Bench::new(ctx, scene, &cameras, grid, progress);
+    progress.set_length(grid.total_frames());
+    let findings = study_run(&bench, output)?;
+    let mut items = timing::differences();
+    items.extend(own);
+    let source = cameras.source.to_string();
+    Ok(Outcome {
+        summary: serde_json::json!({
+            "grid": grid,
+            "visibility": bench.visibility().name(),
+            "camera_source": source,
+        }),
+        sections: vec![
+            timing::setup_section(grid, scene, &source, bench.visibility(), options.quick),
+            differences(&items),
+        ],
+        findings,
+    })
 }
 
 fn setup_section(options: &ExperimentOptions, study: &Study, visibility: &str) -> Section {
@@ -361,6 +479,12 @@ fn differences_section(scene: &StudyScene, variants: &[Variant]) -> Section {
                 .to_string(),
         );
     }
+    differences(&items)
+}
+
+/// The report section listing where our figures differ from what the
+/// study's method would give, and why.
+fn differences(items: &[String]) -> Section {
     let text = items.iter().map(|i| format!("- {i}\n")).collect();
     Section { heading: "Differences from the study's method".into(), text, ..Default::default() }
 }

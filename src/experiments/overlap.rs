@@ -136,7 +136,7 @@ pub fn run(study: &mut Study) -> Result<Findings, ExperimentError> {
             });
         }
     }
-    study.write_rows(&rows)?;
+    study.output.write_rows(&rows)?;
 
     // The heat maps' resolution: 1920x1080 where measured, else the largest.
     let heat_res = if grid.resolutions.contains(&(1920, 1080)) {
@@ -184,7 +184,7 @@ pub fn run(study: &mut Study) -> Result<Findings, ExperimentError> {
             let stem = format!("overlap-{}-{}-tile{}", v.marking.name(), v.texture.name(), c.tile_size);
             figures.push((
                 format!("Tiles of {}, {}x{}, {v}", c.tile_size, c.width, c.height),
-                study.figure(&stem, &heat)?,
+                study.output.figure(&stem, &heat)?,
             ));
         }
         sections.push(Section {

@@ -69,7 +69,7 @@ pub fn run(study: &mut Study) -> Result<Findings, ExperimentError> {
             study.progress.inc(1);
         }
     }
-    study.write_rows(&rows)?;
+    study.output.write_rows(&rows)?;
 
     // Cells in variant, tile size, resolution order.
     let mut samples: BTreeMap<(Variant, u32, (u32, u32)), Vec<f64>> = BTreeMap::new();
@@ -117,7 +117,7 @@ pub fn run(study: &mut Study) -> Result<Findings, ExperimentError> {
                 series,
             };
             let stem = format!("overshading-{}-{}-tile{tile_size}", v.marking.name(), v.texture.name());
-            figures.push((format!("Tiles of {tile_size}, {v}"), study.figure(&stem, &plot)?));
+            figures.push((format!("Tiles of {tile_size}, {v}"), study.output.figure(&stem, &plot)?));
         }
         sections.push(Section {
             heading: format!("Overshading: {v}"),

@@ -102,7 +102,7 @@ pub fn run(study: &mut Study) -> Result<Findings, ExperimentError> {
             study.progress.inc(1);
         }
     }
-    study.write_rows(&rows)?;
+    study.output.write_rows(&rows)?;
 
     let mut groups: BTreeMap<CellKey, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
     let window_names: Vec<String> =
@@ -173,7 +173,7 @@ pub fn run(study: &mut Study) -> Result<Findings, ExperimentError> {
                     series,
                 };
                 let stem = format!("reuse-{measure}-{}-{}-tile{tile_size}", v.marking.name(), v.texture.name());
-                figures.push((format!("{measure}, tiles of {tile_size}, {v}"), study.figure(&stem, &plot)?));
+                figures.push((format!("{measure}, tiles of {tile_size}, {v}"), study.output.figure(&stem, &plot)?));
             }
         }
         sections.push(Section {

@@ -1,5 +1,7 @@
 //! Image error between two renders: FLIP (NVIDIA's perceptual metric, through
-//! `nv-flip`) and PSNR. Used by golden-image tests and pipeline comparisons.
+//! `nv-flip`), PSNR and SSIM. Used by golden-image tests and pipeline comparisons.
+
+pub mod ssim;
 
 use image::{RgbImage, RgbaImage};
 use serde::Serialize;
@@ -13,9 +15,11 @@ pub struct ImageError {
     pub psnr_db: f64,
     /// Largest absolute difference of an 8-bit channel.
     pub max_abs: u8,
+    /// Mean SSIM of the luma ([`ssim::ssim`]; 1 = identical).
+    pub ssim: f64,
 }
 
-/// FLIP and PSNR of `test` against `reference`, plus the FLIP error map as a
+/// FLIP, PSNR and SSIM of `test` against `reference`, plus the FLIP error map as a
 /// colour image (magma), for writing next to a failing test's output.
 ///
 /// Panics if the sizes differ (callers compare renders of one size).
@@ -41,7 +45,7 @@ pub fn compare(reference: &RgbaImage, test: &RgbaImage) -> (ImageError, RgbImage
     }
     let mse = sq / a.len().max(1) as f64;
     let psnr_db = if mse == 0.0 { f64::INFINITY } else { 10.0 * (255.0f64 * 255.0 / mse).log10() };
-    (ImageError { flip_mean, psnr_db, max_abs }, map)
+    (ImageError { flip_mean, psnr_db, max_abs, ssim: ssim::ssim(reference, test) }, map)
 }
 
 #[cfg(test)]
@@ -54,10 +58,12 @@ mod tests {
         let (e, _) = compare(&a, &a);
         assert_eq!(e.flip_mean, 0.0);
         assert!(e.psnr_db.is_infinite());
+        assert!((e.ssim - 1.0).abs() < 1e-12);
         let b = RgbaImage::from_fn(32, 32, |x, y| image::Rgba([(y * 8) as u8, (x * 8) as u8, 0, 255]));
         let (e, map) = compare(&a, &b);
         assert!(e.flip_mean > 0.1, "flip {}", e.flip_mean);
         assert!(e.psnr_db < 20.0);
+        assert!(e.ssim < 0.9, "ssim {}", e.ssim);
         assert_eq!(map.dimensions(), (32, 32));
     }
 }

@@ -314,6 +314,13 @@ pub struct SceneCameras {
 }
 
 impl SceneCameras {
+    /// Where generated lights go in a scene of `bounds` seen through these
+    /// cameras: inside the scene when the cameras move through it, around
+    /// it when they look at it from outside ([`CameraSource::seen_from_outside`]).
+    pub fn light_region(&self, bounds: &Aabb) -> Aabb {
+        if self.source.seen_from_outside() { super::lights::region_around(bounds) } else { *bounds }
+    }
+
     /// The path `choice` selects: the scene path, or one fixed or file camera
     /// as a [`CameraPath::Fixed`]. Fails when the index is out of range.
     pub fn select(&self, choice: CameraChoice) -> Result<CameraPath, CameraChoiceError> {

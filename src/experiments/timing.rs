@@ -1,0 +1,405 @@
+//! Frame times of shading configurations over light sets, for the timing
+//! studies (`lights`, `speedup`). One renderer per configuration is kept
+//! across all its light sets: a new set is uploaded by the renderer's own
+//! light-change path (lists, shadow maps), nothing else is rebuilt. Each
+//! point runs `bench`'s loop ([`crate::bench::run`]): GPU-timestamp medians
+//! over the frames after a warm-up. Points of a scenario above a
+//! configuration's frame-time cap are skipped and recorded as such.
+
+use std::time::Instant;
+
+use indicatif::ProgressBar;
+use serde::Serialize;
+
+use super::ExperimentError;
+use super::census::StudyScene;
+use super::report::Section;
+use super::scenarios::Scenario;
+use crate::bench::{self, BenchPlan, BenchSetup};
+use crate::gpu::GpuContext;
+use crate::render::{
+    ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,
+    PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
+};
+use crate::scene::lights::build_lights;
+use crate::scene::path::SceneCameras;
+use crate::scene::{Aabb, CameraPath, Light};
+
+/// A pipeline and the settings it is measured with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shading {
+    Forward,
+    ForwardMultipass,
+    Clustered,
+    Deferred,
+    DeferredCompute,
+    /// Object space with reuse N (1: shade every visible tile every frame)
+    /// and variable-rate strength (0: off).
+    ObjectSpace {
+        reuse: u32,
+        variable_rate: f32,
+    },
+}
+
+impl Shading {
+    /// The conventional pipelines the fastest baseline is chosen from.
+    pub const CONVENTIONAL: [Shading; 5] =
+        [Shading::Forward, Shading::ForwardMultipass, Shading::Clustered, Shading::Deferred, Shading::DeferredCompute];
+
+    /// Object space as `--pipeline objectspace` runs by default.
+    pub const OBJECT_SPACE: Shading = Shading::ObjectSpace { reuse: 1, variable_rate: 0.0 };
+
+    /// Every pipeline at its default settings.
+    pub fn pipelines() -> Vec<Shading> {
+        let mut all = Self::CONVENTIONAL.to_vec();
+        all.push(Self::OBJECT_SPACE);
+        all
+    }
+
+    /// The label of tables, plots and the CSV: the pipeline's name, and for
+    /// object space its non-default settings (`objectspace-reuse2`, `objectspace-vr1`).
+    pub fn label(&self) -> String {
+        match *self {
+            Shading::ObjectSpace { reuse, variable_rate } => {
+                let mut label = "objectspace".to_string();
+                if reuse != 1 {
+                    label += &format!("-reuse{reuse}");
+                }
+                if variable_rate != 0.0 {
+                    label += &format!("-vr{variable_rate}");
+                }
+                label
+            }
+            other => other.config(&[], VisibilityMethod::Raster).name().to_string(),
+        }
+    }
+
+    pub fn is_conventional(&self) -> bool {
+        !matches!(self, Shading::ObjectSpace { .. })
+    }
+
+    /// Its pipeline configuration: object space shades the objects at
+    /// `texture_sizes`; object space and deferred-compute find surfaces with
+    /// `visibility`.
+    pub fn config(&self, texture_sizes: &[Option<u32>], visibility: VisibilityMethod) -> PipelineConfig {
+        match *self {
+            Shading::Forward => PipelineConfig::Forward(ForwardConfig::default()),
+            Shading::ForwardMultipass => PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
+            Shading::Clustered => PipelineConfig::Clustered(ClusteredConfig::default()),
+            Shading::Deferred => PipelineConfig::Deferred(DeferredConfig::default()),
+            Shading::DeferredCompute => {
+                PipelineConfig::DeferredCompute(DeferredComputeConfig { visibility, ..Default::default() })
+            }
+            Shading::ObjectSpace { reuse, variable_rate } => PipelineConfig::ObjectSpace(ObjectSpaceConfig {
+                reuse,
+                variable_rate,
+                texture_sizes: texture_sizes.to_vec(),
+                visibility,
+                ..Default::default()
+            }),
+        }
+    }
+}
+
+impl Serialize for Shading {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.label())
+    }
+}
+
+/// One scenario at several light counts, in increasing order.
+#[derive(Clone, Debug, Serialize)]
+pub struct Sweep {
+    pub scenario: Scenario,
+    pub counts: Vec<u32>,
+}
+
+/// What a timing study measures, and how.
+#[derive(Clone, Debug, Serialize)]
+pub struct TimingGrid {
+    pub width: u32,
+    pub height: u32,
+    /// Frames rendered before each point's measured frames (the new light
+    /// set's shadow maps and, in object space, its first shading fall here).
+    pub warmup: u32,
+    /// Measured frames per point.
+    pub frames: u32,
+    /// Path frame of each point's first rendered frame (frames step by one).
+    pub first_frame: u32,
+    /// A configuration whose median frame time exceeds this at a light count
+    /// skips the larger counts of that scenario.
+    pub cap_ms: f64,
+    /// Seed of the light placement (as `bench --seed`).
+    pub seed: u64,
+    pub shadings: Vec<Shading>,
+    pub sweeps: Vec<Sweep>,
+}
+
+impl TimingGrid {
+    /// Points per configuration.
+    pub fn points(&self) -> usize {
+        self.sweeps.iter().map(|s| s.counts.len()).sum()
+    }
+
+    /// Frames rendered in all, if nothing is skipped.
+    pub fn total_frames(&self) -> u64 {
+        (self.shadings.len() * self.points()) as u64 * u64::from(self.warmup + self.frames)
+    }
+}
+
+/// The default frame-time cap: 200 ms, or in quick mode 10 s (a CPU driver
+/// takes over 100 ms for a small frame, and quick runs should measure all).
+pub fn cap_ms(quick: bool) -> f64 {
+    if quick { 10_000.0 } else { 200.0 }
+}
+
+/// Whether a point was measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Status {
+    Measured,
+    /// A smaller count of the scenario was above the frame-time cap.
+    Skipped,
+}
+
+/// One configuration at one light set: a row of `data.csv`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Measurement {
+    pub shading: Shading,
+    pub scenario: Scenario,
+    /// Generated lights (the ambient and the sun every set has are not counted).
+    pub lights: u32,
+    /// The set as `--lights` takes it.
+    pub lights_spec: String,
+    pub status: Status,
+    /// Measured frames (0 when skipped).
+    pub frames: u32,
+    /// GPU frame time over the measured frames, milliseconds.
+    pub median_ms: Option<f64>,
+    pub p95_ms: Option<f64>,
+    pub mean_ms: Option<f64>,
+    /// 1000 / median.
+    pub fps: Option<f64>,
+    /// Median CPU time to record and submit a frame.
+    pub cpu_ms: Option<f64>,
+    /// Wall-clock seconds to build the light set and render the point's
+    /// frames, warm-up included (what a run's length is estimated from).
+    pub wall_s: f64,
+}
+
+/// The scene, camera path and light placement every point shares.
+pub struct Bench<'a> {
+    ctx: &'a GpuContext,
+    scene: &'a StudyScene,
+    path: CameraPath,
+    camera_label: String,
+    region: Aabb,
+    visibility: VisibilityMethod,
+    pub grid: &'a TimingGrid,
+    progress: &'a ProgressBar,
+}
+
+impl<'a> Bench<'a> {
+    pub fn new(
+        ctx: &'a GpuContext,
+        scene: &'a StudyScene,
+        cameras: &SceneCameras,
+        grid: &'a TimingGrid,
+        progress: &'a ProgressBar,
+    ) -> Self {
+        Self {
+            ctx,
+            scene,
+            path: cameras.path.clone(),
+            camera_label: format!("path from frame {}", grid.first_frame),
+            region: cameras.light_region(&scene.render.bounds()),
+            visibility: VisibilityMethod::preferred(ctx.device.features()),
+            grid,
+            progress,
+        }
+    }
+
+    pub fn ctx(&self) -> &GpuContext {
+        self.ctx
+    }
+
+    /// How object space and deferred-compute find surfaces on this adapter.
+    pub fn visibility(&self) -> VisibilityMethod {
+        self.visibility
+    }
+
+    /// The light set of `count` lights of `scenario`, placed as `bench` places
+    /// `--lights` with the grid's seed.
+    fn lights(&self, scenario: Scenario, count: u32) -> Result<Vec<Light>, ExperimentError> {
+        let g = self.grid;
+        let aspect = g.width as f32 / g.height as f32;
+        let reference = self.path.camera_at(0);
+        Ok(build_lights(&scenario.spec(count), &self.region, &reference, aspect, g.seed)?)
+    }
+
+    /// Measures `shading` at every point of the grid, in sweep order, with
+    /// one renderer; `after` sees each measured point and the renderer with
+    /// its last frame (for reading the image back).
+    pub fn measure(
+        &self,
+        shading: Shading,
+        mut after: impl FnMut(&Measurement, &Renderer) -> Result<(), ExperimentError>,
+    ) -> Result<Vec<Measurement>, ExperimentError> {
+        let g = self.grid;
+        let label = shading.label();
+        self.progress.set_message(format!("{label}: building"));
+        // Object space shades the charted scene; the others draw the same
+        // triangles without the charts, as `bench` does.
+        let scene = if shading.is_conventional() { &self.scene.render } else { self.scene.charted() };
+        let options = RenderOptions {
+            width: g.width,
+            height: g.height,
+            pipeline: shading.config(&self.scene.density_sizes, self.visibility),
+        };
+        let mut renderer = Renderer::new(self.ctx, scene, &options)?;
+        if !renderer.timing_enabled() {
+            return Err(ExperimentError::NoTimestamps(self.ctx.info.name.clone()));
+        }
+        let per_point = u64::from(g.warmup + g.frames);
+        let mut rows = Vec::new();
+        for sweep in &g.sweeps {
+            let mut over_cap = false;
+            for &count in &sweep.counts {
+                let spec = sweep.scenario.spec(count).to_string();
+                let mut row = Measurement {
+                    shading,
+                    scenario: sweep.scenario,
+                    lights: count,
+                    lights_spec: spec.clone(),
+                    status: Status::Skipped,
+                    frames: 0,
+                    median_ms: None,
+                    p95_ms: None,
+                    mean_ms: None,
+                    fps: None,
+                    cpu_ms: None,
+                    wall_s: 0.0,
+                };
+                if over_cap {
+                    self.progress.inc(per_point);
+                    rows.push(row);
+                    continue;
+                }
+                self.progress.set_message(format!("{label} {spec}"));
+                let start = Instant::now();
+                let lights = self.lights(sweep.scenario, count)?;
+                let plan = BenchPlan {
+                    path: &self.path,
+                    lights: &lights,
+                    warmup: g.warmup,
+                    frames: g.frames,
+                    first: g.first_frame,
+                    step: 1,
+                };
+                let setup = BenchSetup {
+                    scene_name: &self.scene.name,
+                    objects: self.scene.render.objects.len(),
+                    lights_spec: &spec,
+                    seed: g.seed,
+                    camera: &self.camera_label,
+                };
+                let report = bench::run(self.ctx, &mut renderer, &plan, &setup, |_| self.progress.inc(1))?;
+                let gpu = report.summary.gpu_frame_ms;
+                row.status = Status::Measured;
+                row.frames = gpu.samples as u32;
+                row.median_ms = Some(gpu.median);
+                row.p95_ms = Some(gpu.p95);
+                row.mean_ms = Some(gpu.mean);
+                row.fps = Some(1000.0 / gpu.median);
+                row.cpu_ms = Some(report.summary.cpu_frame_ms.median);
+                row.wall_s = start.elapsed().as_secs_f64();
+                after(&row, &renderer)?;
+                over_cap = gpu.median > g.cap_ms;
+                rows.push(row);
+            }
+        }
+        Ok(rows)
+    }
+}
+
+/// The setup section of a timing study's report.
+pub fn setup_section(
+    grid: &TimingGrid,
+    scene: &StudyScene,
+    camera_source: &str,
+    visibility: VisibilityMethod,
+    quick: bool,
+) -> Section {
+    let shadings: Vec<String> = grid.shadings.iter().map(Shading::label).collect();
+    let sweeps: Vec<String> = grid.sweeps.iter().map(|s| format!("{} at {:?}", s.scenario, s.counts)).collect();
+    let text = format!(
+        "Scene `{}` ({} objects{}), camera path from {camera_source}, path frames {} to {} (one step a frame), \
+         {}x{}; {}. Each point: {} warm-up frames, then {} measured frames; the figure is the median of the GPU \
+         frame time (timestamps around every pass, as `shadespace bench` reports it), fps = 1000 / median. A \
+         configuration whose median passes {} ms skips the larger counts of that scenario. Lights placed with \
+         seed {} (as `bench --lights SPEC --seed {}`), plus the ambient light and the sun every set has. \
+         Visibility of object space and deferred-compute: {}; object space at {} texels per metre.\n\n\
+         Configurations: {}.\n\nSweeps: {}.\n",
+        scene.name,
+        scene.render.objects.len(),
+        if scene.excluded.is_empty() { String::new() } else { format!("; left out: {}", scene.excluded.join(", ")) },
+        grid.first_frame,
+        grid.first_frame + grid.warmup + grid.frames - 1,
+        grid.width,
+        grid.height,
+        if quick { "quick mode (a reduced grid)" } else { "the full grid" },
+        grid.warmup,
+        grid.frames,
+        grid.cap_ms,
+        grid.seed,
+        grid.seed,
+        visibility.name(),
+        scene.texel_density,
+        shadings.join(", "),
+        sweeps.join("; "),
+    );
+    Section { heading: "Setup".into(), text, ..Default::default() }
+}
+
+/// Where every timing study's figures differ from what its source's method
+/// would give.
+pub fn differences() -> Vec<String> {
+    vec![
+        "Frame time: the GPU time from the first pass's start to the last pass's end (timestamp queries), \
+         median over the measured frames; the sources timed whole frames on the CPU, presentation included."
+            .into(),
+        "Shadow maps are rendered when the lights change (here: in each point's warm-up), not every frame: \
+         the lights are static, so the measured frames hold the shadow look-ups but not the map renders that \
+         a renderer re-rendering every frame would add."
+            .into(),
+        "Shadow faces: the shadow atlas holds as many faces as the adapter has texture array layers; beyond \
+         that, shadowed lights cast no shadow (the run warns), which makes the largest shadowed counts cheaper."
+            .into(),
+        "Light culling: forward and multi-pass forward get per-object light lists (per (object, light) pairs) \
+         culled on the CPU, sphere or cone against boxes, as the study did; deferred draws light volumes; \
+         clustered, deferred-compute and object space build their light grids on the GPU."
+            .into(),
+    ]
+}
+
+/// The measured median frame time of `shading` at `scenario` and `count`.
+pub fn median_of(rows: &[Measurement], shading: Shading, scenario: Scenario, count: u32) -> Option<f64> {
+    rows.iter().find(|r| r.shading == shading && r.scenario == scenario && r.lights == count).and_then(|r| r.median_ms)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn labels_name_the_pipeline_and_object_space_settings() {
+        let labels: Vec<String> = Shading::pipelines().iter().map(Shading::label).collect();
+        assert_eq!(
+            labels,
+            ["forward", "forward-multipass", "clustered", "deferred", "deferred-compute", "objectspace"]
+        );
+        assert_eq!(Shading::ObjectSpace { reuse: 3, variable_rate: 0.0 }.label(), "objectspace-reuse3");
+        assert_eq!(Shading::ObjectSpace { reuse: 1, variable_rate: 2.0 }.label(), "objectspace-vr2");
+        assert!(Shading::CONVENTIONAL.iter().all(Shading::is_conventional) && !Shading::OBJECT_SPACE.is_conventional());
+    }
+}
