@@ -149,17 +149,18 @@ pub fn run(bench: &Bench, output: Output) -> Result<Findings, ExperimentError> {
     let mut header = vec!["pipeline"];
     header.extend(names.iter().map(String::as_str));
     let cost = |f: &Option<LinearFit>| f.map_or("-".into(), |f| format!("{:.2} (r² {:.2})", 1e3 * f.slope, f.r2));
-    let mut fits: Vec<(&str, fn(&PerLight) -> &Option<LinearFit>)> =
-        vec![("Over the study's counts (1-100 lights):", |p| &p.study_range)];
+    // (caption, whether the fit is over every count rather than the study's)
+    let mut fits = vec![("Over the study's counts (1-100 lights):", false)];
     if grid.sweeps.iter().any(|s| s.counts.iter().any(|&n| n > STUDY_MAX)) {
-        fits.push(("Over every measured count:", |p| &p.all));
+        fits.push(("Over every measured count:", true));
     }
     let mut tables = Vec::new();
-    for (caption, pick) in fits {
+    for (caption, all) in fits {
         let mut t = Table::new(&header);
         for shading in &grid.shadings {
             let mut row = vec![shading.label()];
-            row.extend(per_light.iter().filter(|p| p.shading == *shading).map(|p| cost(pick(p))));
+            let of_shading = per_light.iter().filter(|p| p.shading == *shading);
+            row.extend(of_shading.map(|p| cost(if all { &p.all } else { &p.study_range })));
             t.rows.push(row);
         }
         tables.push((caption.to_string(), t));
