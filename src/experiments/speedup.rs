@@ -407,23 +407,12 @@ pub fn differences() -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiments::timing::Status;
 
     fn row(shading: Shading, lights: u32, ms: Option<f64>) -> Measurement {
-        Measurement {
-            shading,
-            scenario: Scenario::Shadowed,
-            lights,
-            lights_spec: String::new(),
-            status: if ms.is_some() { Status::Measured } else { Status::Skipped },
-            frames: 1,
-            median_ms: ms,
-            p95_ms: ms,
-            mean_ms: ms,
-            fps: None,
-            cpu_ms: None,
-            wall_s: 0.0,
-        }
+        let row = Measurement::skipped(shading, Scenario::Shadowed, lights);
+        ms.map_or(row.clone(), |ms| {
+            row.measured(&crate::bench::Summary { median: ms, p95: ms, mean: ms, samples: 1 }, 0.0)
+        })
     }
 
     #[test]

@@ -187,6 +187,40 @@ pub struct Measurement {
     pub wall_s: f64,
 }
 
+impl Measurement {
+    /// `shading` at `count` lights of `scenario`, not measured.
+    pub fn skipped(shading: Shading, scenario: Scenario, lights: u32) -> Self {
+        Self {
+            shading,
+            scenario,
+            lights,
+            lights_spec: scenario.spec(lights).to_string(),
+            status: Status::Skipped,
+            frames: 0,
+            median_ms: None,
+            p95_ms: None,
+            mean_ms: None,
+            fps: None,
+            cpu_ms: None,
+            wall_s: 0.0,
+        }
+    }
+
+    /// The point measured: GPU frame times `gpu`, median CPU time `cpu_ms`.
+    pub fn measured(self, gpu: &bench::Summary, cpu_ms: f64) -> Self {
+        Self {
+            status: Status::Measured,
+            frames: gpu.samples as u32,
+            median_ms: Some(gpu.median),
+            p95_ms: Some(gpu.p95),
+            mean_ms: Some(gpu.mean),
+            fps: Some(1000.0 / gpu.median),
+            cpu_ms: Some(cpu_ms),
+            ..self
+        }
+    }
+}
+
 /// The scene, camera path and light placement every point shares.
 pub struct Bench<'a> {
     ctx: &'a GpuContext,
@@ -265,27 +299,13 @@ impl<'a> Bench<'a> {
         for sweep in &g.sweeps {
             let mut over_cap = false;
             for &count in &sweep.counts {
-                let spec = sweep.scenario.spec(count).to_string();
-                let mut row = Measurement {
-                    shading,
-                    scenario: sweep.scenario,
-                    lights: count,
-                    lights_spec: spec.clone(),
-                    status: Status::Skipped,
-                    frames: 0,
-                    median_ms: None,
-                    p95_ms: None,
-                    mean_ms: None,
-                    fps: None,
-                    cpu_ms: None,
-                    wall_s: 0.0,
-                };
+                let row = Measurement::skipped(shading, sweep.scenario, count);
                 if over_cap {
                     self.progress.inc(per_point);
                     rows.push(row);
                     continue;
                 }
-                self.progress.set_message(format!("{label} {spec}"));
+                self.progress.set_message(format!("{label} {}", row.lights_spec));
                 let start = Instant::now();
                 let lights = self.lights(sweep.scenario, count)?;
                 let plan = BenchPlan {
@@ -299,19 +319,13 @@ impl<'a> Bench<'a> {
                 let setup = BenchSetup {
                     scene_name: &self.scene.name,
                     objects: self.scene.render.objects.len(),
-                    lights_spec: &spec,
+                    lights_spec: &row.lights_spec,
                     seed: g.seed,
                     camera: &self.camera_label,
                 };
                 let report = bench::run(self.ctx, &mut renderer, &plan, &setup, |_| self.progress.inc(1))?;
                 let gpu = report.summary.gpu_frame_ms;
-                row.status = Status::Measured;
-                row.frames = gpu.samples as u32;
-                row.median_ms = Some(gpu.median);
-                row.p95_ms = Some(gpu.p95);
-                row.mean_ms = Some(gpu.mean);
-                row.fps = Some(1000.0 / gpu.median);
-                row.cpu_ms = Some(report.summary.cpu_frame_ms.median);
+                let mut row = row.measured(&gpu, report.summary.cpu_frame_ms.median);
                 row.wall_s = start.elapsed().as_secs_f64();
                 after(&row, &renderer)?;
                 over_cap = gpu.median > g.cap_ms;
