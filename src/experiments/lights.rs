@@ -9,7 +9,7 @@ use super::plot::{LinePlot, Series};
 use super::report::{Section, Table, f3};
 use super::scenarios::{Scenario, study_counts};
 use super::stats::LinearFit;
-use super::timing::{Bench, Measurement, Shading, Sweep, TimingGrid, cap_ms};
+use super::timing::{Bench, Measurement, Shading, Status, Sweep, TimingGrid, cap_ms};
 use super::{ExperimentError, Findings, Output};
 
 /// The largest count of the study's own grid; ours continue to 10,000.
@@ -77,6 +77,7 @@ pub fn series(rows: &[Measurement], shadings: &[Shading], scenario: Scenario, ma
 pub fn ms_cell(r: Option<&Measurement>) -> String {
     match r {
         Some(Measurement { median_ms: Some(ms), fps: Some(fps), .. }) => format!("{} ({fps:.0})", f3(*ms)),
+        Some(Measurement { status: Status::Failed, .. }) => "failed".into(),
         Some(_) => "skipped".into(),
         None => "-".into(),
     }
@@ -123,7 +124,8 @@ pub fn run(bench: &Bench, output: Output) -> Result<Findings, ExperimentError> {
             heading: format!("Frame time: {scenario}"),
             text: format!(
                 "Median GPU frame time in ms (fps in brackets) of each pipeline with {scenario} lights \
-                 (`{}` for 12). `skipped`: a smaller count was above the {} ms cap.",
+                 (`{}` for 12). `skipped`: a smaller count was above the {} ms cap or failed; `failed`: the GPU could not render it \
+                 (data.csv's `note` says why).",
                 scenario.spec(12),
                 grid.cap_ms
             ),
@@ -197,7 +199,8 @@ pub fn run(bench: &Bench, output: Output) -> Result<Findings, ExperimentError> {
         results: serde_json::json!({
             "points": rows.len(),
             "measured": measured,
-            "skipped": rows.len() - measured,
+            "skipped": rows.iter().filter(|r| r.status == Status::Skipped).count(),
+            "failed": rows.iter().filter(|r| r.status == Status::Failed).count(),
             "per_light": per_light,
             "headline": headline,
         }),

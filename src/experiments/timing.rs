@@ -158,8 +158,10 @@ pub fn cap_ms(quick: bool) -> f64 {
 #[serde(rename_all = "kebab-case")]
 pub enum Status {
     Measured,
-    /// A smaller count of the scenario was above the frame-time cap.
+    /// A smaller count of the scenario was above the frame-time cap, or failed.
     Skipped,
+    /// The GPU could not render it (the note says why).
+    Failed,
 }
 
 /// One configuration at one light set: a row of `data.csv`.
@@ -185,6 +187,8 @@ pub struct Measurement {
     /// Wall-clock seconds to build the light set and render the point's
     /// frames, warm-up included (what a run's length is estimated from).
     pub wall_s: f64,
+    /// Why a point has no time: the cap, or the GPU's error.
+    pub note: String,
 }
 
 impl Measurement {
@@ -203,6 +207,7 @@ impl Measurement {
             fps: None,
             cpu_ms: None,
             wall_s: 0.0,
+            note: String::new(),
         }
     }
 
@@ -271,9 +276,57 @@ impl<'a> Bench<'a> {
         Ok(build_lights(&scenario.spec(count), &self.region, &reference, aspect, g.seed)?)
     }
 
+    /// A renderer for `shading`. Object space shades the charted scene; the
+    /// others draw the same triangles without the charts, as `bench` does.
+    fn renderer(&self, shading: Shading) -> Result<Renderer, ExperimentError> {
+        let g = self.grid;
+        let scene = if shading.is_conventional() { &self.scene.render } else { self.scene.charted() };
+        let options = RenderOptions {
+            width: g.width,
+            height: g.height,
+            pipeline: shading.config(&self.scene.density_sizes, self.visibility),
+        };
+        let renderer = Renderer::new(self.ctx, scene, &options)?;
+        if !renderer.timing_enabled() {
+            return Err(ExperimentError::NoTimestamps(self.ctx.info.name.clone()));
+        }
+        Ok(renderer)
+    }
+
+    /// Renders `row`'s point with `renderer` and returns it measured.
+    fn point(&self, renderer: &mut Renderer, row: Measurement) -> Result<Measurement, ExperimentError> {
+        let g = self.grid;
+        let start = Instant::now();
+        let lights = self.lights(row.scenario, row.lights)?;
+        let plan = BenchPlan {
+            path: &self.path,
+            lights: &lights,
+            warmup: g.warmup,
+            frames: g.frames,
+            first: g.first_frame,
+            step: 1,
+        };
+        let setup = BenchSetup {
+            scene_name: &self.scene.name,
+            objects: self.scene.render.objects.len(),
+            lights_spec: &row.lights_spec,
+            seed: g.seed,
+            camera: &self.camera_label,
+        };
+        let report = bench::run(self.ctx, renderer, &plan, &setup, |_| self.progress.inc(1))?;
+        let mut row = row.measured(&report.summary.gpu_frame_ms, report.summary.cpu_frame_ms.median);
+        row.wall_s = start.elapsed().as_secs_f64();
+        Ok(row)
+    }
+
     /// Measures `shading` at every point of the grid, in sweep order, with
     /// one renderer; `after` sees each measured point and the renderer with
     /// its last frame (for reading the image back).
+    ///
+    /// A point the GPU cannot render (for example a shadow atlas larger
+    /// than its memory) is recorded as failed, the larger counts of its
+    /// scenario as skipped, and the next scenario gets a new renderer, since
+    /// the failure may have left this one's resources invalid.
     pub fn measure(
         &self,
         shading: Shading,
@@ -281,55 +334,47 @@ impl<'a> Bench<'a> {
     ) -> Result<Vec<Measurement>, ExperimentError> {
         let g = self.grid;
         let label = shading.label();
-        self.progress.set_message(format!("{label}: building"));
-        // Object space shades the charted scene; the others draw the same
-        // triangles without the charts, as `bench` does.
-        let scene = if shading.is_conventional() { &self.scene.render } else { self.scene.charted() };
-        let options = RenderOptions {
-            width: g.width,
-            height: g.height,
-            pipeline: shading.config(&self.scene.density_sizes, self.visibility),
-        };
-        let mut renderer = Renderer::new(self.ctx, scene, &options)?;
-        if !renderer.timing_enabled() {
-            return Err(ExperimentError::NoTimestamps(self.ctx.info.name.clone()));
-        }
         let per_point = u64::from(g.warmup + g.frames);
+        let mut renderer = None;
         let mut rows = Vec::new();
         for sweep in &g.sweeps {
-            let mut over_cap = false;
+            // Why the rest of this sweep is skipped, once it is.
+            let mut skip: Option<String> = None;
             for &count in &sweep.counts {
                 let row = Measurement::skipped(shading, sweep.scenario, count);
-                if over_cap {
+                if let Some(why) = &skip {
                     self.progress.inc(per_point);
-                    rows.push(row);
+                    rows.push(Measurement { note: why.clone(), ..row });
                     continue;
                 }
+                let built = match renderer.take() {
+                    Some(r) => r,
+                    None => {
+                        self.progress.set_message(format!("{label}: building"));
+                        self.renderer(shading)?
+                    }
+                };
+                let r = renderer.insert(built);
                 self.progress.set_message(format!("{label} {}", row.lights_spec));
-                let start = Instant::now();
-                let lights = self.lights(sweep.scenario, count)?;
-                let plan = BenchPlan {
-                    path: &self.path,
-                    lights: &lights,
-                    warmup: g.warmup,
-                    frames: g.frames,
-                    first: g.first_frame,
-                    step: 1,
-                };
-                let setup = BenchSetup {
-                    scene_name: &self.scene.name,
-                    objects: self.scene.render.objects.len(),
-                    lights_spec: &row.lights_spec,
-                    seed: g.seed,
-                    camera: &self.camera_label,
-                };
-                let report = bench::run(self.ctx, &mut renderer, &plan, &setup, |_| self.progress.inc(1))?;
-                let gpu = report.summary.gpu_frame_ms;
-                let mut row = row.measured(&gpu, report.summary.cpu_frame_ms.median);
-                row.wall_s = start.elapsed().as_secs_f64();
-                after(&row, &renderer)?;
-                over_cap = gpu.median > g.cap_ms;
-                rows.push(row);
+                match self.point(r, row.clone()) {
+                    Ok(measured) => {
+                        after(&measured, r)?;
+                        let median = measured.median_ms.unwrap_or_default();
+                        if median > g.cap_ms {
+                            skip = Some(format!("{median:.1} ms at {count} lights is above the {} ms cap", g.cap_ms));
+                        }
+                        rows.push(measured);
+                    }
+                    Err(ExperimentError::Render(e)) => {
+                        tracing::warn!("{label} {}: {e}", row.lights_spec);
+                        self.progress.inc(per_point);
+                        let first_line = e.to_string().lines().next().unwrap_or_default().to_string();
+                        rows.push(Measurement { status: Status::Failed, note: first_line, ..row });
+                        skip = Some(format!("{count} lights failed"));
+                        renderer = None;
+                    }
+                    Err(e) => return Err(e),
+                }
             }
         }
         Ok(rows)
