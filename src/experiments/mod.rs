@@ -294,10 +294,10 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
         ExperimentName::Overlap => tile_study(ctx, options, &scene, output, progress, overlap::run)?,
         ExperimentName::Reuse => tile_study(ctx, options, &scene, output, progress, reuse::run)?,
         ExperimentName::Lights => {
-            timing_study(ctx, options, &scene, (output, progress), lights::run, lights::differences())?
+            timing_study(ctx, options, &scene, (output, progress), lights::run, lights::differences)?
         }
         ExperimentName::Speedup => {
-            timing_study(ctx, options, &scene, (output, progress), speedup::run, speedup::differences())?
+            timing_study(ctx, options, &scene, (output, progress), speedup::run, speedup::differences)?
         }
     };
     let findings = outcome.findings;
@@ -365,14 +365,14 @@ fn tile_study(
 }
 
 /// `lights`, `speedup`: GPU frame times over light sets; `own` lists the
-/// study's own differences from its source's method.
+/// study's own differences from its source's method for a grid.
 fn timing_study(
     ctx: &GpuContext,
     options: &ExperimentOptions,
     scene: &StudyScene,
     (output, progress): (Output, &ProgressBar),
     study_run: fn(&timing::Bench, Output) -> Result<Findings, ExperimentError>,
-    own: Vec<String>,
+    own: fn(&TimingGrid) -> Vec<String>,
 ) -> Result<Outcome, ExperimentError> {
     let grid = options.timing.as_ref().ok_or(ExperimentError::NoTimingGrid(options.name.name()))?;
     let cameras: SceneCameras =
@@ -381,7 +381,7 @@ fn timing_study(
     progress.set_length(grid.total_frames());
     let findings = study_run(&bench, output)?;
     let mut items = timing::differences();
-    items.extend(own);
+    items.extend(own(grid));
     let source = cameras.source.to_string();
     Ok(Outcome {
         summary: serde_json::json!({

@@ -434,6 +434,9 @@ pub fn differences() -> Vec<String> {
         "Shadow faces: the shadow atlas holds as many faces as the adapter has texture array layers; beyond \
          that, shadowed lights cast no shadow (the run warns), which makes the largest shadowed counts cheaper."
             .into(),
+        "Failures: a point the GPU cannot render (a shadow atlas of thousands of faces beyond its memory) is \
+         recorded as failed, with the error in data.csv's note, and the larger counts of its scenario as skipped."
+            .into(),
         "Light culling: forward and multi-pass forward get per-object light lists (per (object, light) pairs) \
          culled on the CPU, sphere or cone against boxes, as the study did; deferred draws light volumes; \
          clustered, deferred-compute and object space build their light grids on the GPU."
