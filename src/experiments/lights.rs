@@ -5,11 +5,11 @@
 
 use serde::Serialize;
 
-use super::plot::{LinePlot, Series};
-use super::report::{Section, Table, f3};
+use super::plot::LinePlot;
+use super::report::{Section, Table};
 use super::scenarios::{Scenario, study_counts};
 use super::stats::LinearFit;
-use super::timing::{Bench, Measurement, Shading, Status, Sweep, TimingGrid, cap_ms};
+use super::timing::{Bench, Measurement, Shading, Status, Sweep, TimingGrid, cap_ms, ms_cell, series};
 use super::{ExperimentError, Findings, Output};
 
 /// The largest count of the study's own grid; ours continue to 10,000.
@@ -58,31 +58,7 @@ fn fit(rows: &[Measurement], shading: Shading, scenario: Scenario, max: u32) -> 
     LinearFit::of(&points)
 }
 
-/// Frame-time series of every shading in `scenario` up to `max` lights.
-pub fn series(rows: &[Measurement], shadings: &[Shading], scenario: Scenario, max: u32) -> Vec<Series> {
-    shadings
-        .iter()
-        .map(|&s| Series {
-            label: s.label(),
-            points: rows
-                .iter()
-                .filter(|r| r.shading == s && r.scenario == scenario && r.lights <= max)
-                .filter_map(|r| r.median_ms.map(|ms| (f64::from(r.lights), ms)))
-                .collect(),
-        })
-        .collect()
-}
-
-/// A table cell: the median in ms, or why there is none.
-pub fn ms_cell(r: Option<&Measurement>) -> String {
-    match r {
-        Some(Measurement { median_ms: Some(ms), fps: Some(fps), .. }) => format!("{} ({fps:.0})", f3(*ms)),
-        Some(Measurement { status: Status::Failed, .. }) => "failed".into(),
-        Some(_) => "skipped".into(),
-        None => "-".into(),
-    }
-}
-
+/// Measures every pipeline over the grid and writes `data.csv` and the figures.
 pub fn run(bench: &Bench, output: Output) -> Result<Findings, ExperimentError> {
     let grid = bench.grid;
     let mut rows = Vec::new();

@@ -13,7 +13,8 @@ use serde::Serialize;
 
 use super::ExperimentError;
 use super::census::StudyScene;
-use super::report::Section;
+use super::plot::Series;
+use super::report::{Section, f3};
 use super::scenarios::Scenario;
 use crate::bench::{self, BenchPlan, BenchSetup};
 use crate::gpu::GpuContext;
@@ -442,6 +443,31 @@ pub fn differences() -> Vec<String> {
          clustered, deferred-compute and object space build their light grids on the GPU."
             .into(),
     ]
+}
+
+/// Frame-time series of every shading in `scenario` up to `max` lights.
+pub fn series(rows: &[Measurement], shadings: &[Shading], scenario: Scenario, max: u32) -> Vec<Series> {
+    shadings
+        .iter()
+        .map(|&s| Series {
+            label: s.label(),
+            points: rows
+                .iter()
+                .filter(|r| r.shading == s && r.scenario == scenario && r.lights <= max)
+                .filter_map(|r| r.median_ms.map(|ms| (f64::from(r.lights), ms)))
+                .collect(),
+        })
+        .collect()
+}
+
+/// A table cell: the median in ms, or why there is none.
+pub fn ms_cell(r: Option<&Measurement>) -> String {
+    match r {
+        Some(Measurement { median_ms: Some(ms), fps: Some(fps), .. }) => format!("{} ({fps:.0})", f3(*ms)),
+        Some(Measurement { status: Status::Failed, .. }) => "failed".into(),
+        Some(_) => "skipped".into(),
+        None => "-".into(),
+    }
 }
 
 /// The measured median frame time of `shading` at `scenario` and `count`.
