@@ -164,7 +164,9 @@ struct TimingArgs {
     /// Measured frames per point (default 20; quick: 2).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     frames: Option<u32>,
-    /// Frames rendered before each point's measured ones (default 5; quick: 1).
+    /// Frames rendered before each point's measured ones (default 5, speedup
+    /// 4; quick: 1). For speedup keep warm-up + frames a multiple of 12, so
+    /// that the compared last frame shows every reuse N of 1-4 at its oldest shades.
     #[arg(long)]
     warmup: Option<u32>,
     /// Light counts, comma-separated, instead of the grid's (for `speedup`: in every sweep).
