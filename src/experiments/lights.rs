@@ -9,31 +9,22 @@ use super::plot::LinePlot;
 use super::report::{Section, Table};
 use super::scenarios::{Scenario, study_counts};
 use super::stats::LinearFit;
-use super::timing::{Bench, Measurement, Shading, Status, Sweep, TimingGrid, cap_ms, ms_cell, series};
+use super::timing::{Bench, Measurement, Shading, Status, Sweep, TimingGrid, ms_cell, series};
 use super::{ExperimentError, Findings, Output};
 
 /// The largest count of the study's own grid; ours continue to 10,000.
 const STUDY_MAX: u32 = 100;
 
 /// The grid: every pipeline, every scenario, the study's counts and ours
-/// (quick: two scenarios at 1, 4 and 16 lights, 160x90, 1 + 2 frames).
+/// (quick: two scenarios at 1, 4 and 16 lights).
 pub fn grid(quick: bool) -> TimingGrid {
-    let (scenarios, counts, (width, height), warmup, frames) = if quick {
-        (vec![Scenario::Small, Scenario::Mixed(5)], vec![1, 4, 16], (160, 90), 1, 2)
+    let (scenarios, counts) = if quick {
+        (vec![Scenario::Small, Scenario::Mixed(5)], vec![1, 4, 16])
     } else {
-        (Scenario::STUDY.to_vec(), study_counts(), (1920, 1080), 5, 20)
+        (Scenario::STUDY.to_vec(), study_counts())
     };
-    TimingGrid {
-        width,
-        height,
-        warmup,
-        frames,
-        first_frame: 0,
-        cap_ms: cap_ms(quick),
-        seed: 1,
-        shadings: Shading::pipelines(),
-        sweeps: scenarios.into_iter().map(|scenario| Sweep { scenario, counts: counts.clone() }).collect(),
-    }
+    let sweeps = scenarios.into_iter().map(|scenario| Sweep { scenario, counts: counts.clone() }).collect();
+    TimingGrid::new(quick, Shading::pipelines(), sweeps)
 }
 
 /// Cost per light of one pipeline in one scenario.

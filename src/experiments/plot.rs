@@ -147,6 +147,11 @@ impl Figure for LinePlot {
                 .draw_series(LineSeries::new(s.points.iter().copied(), color.stroke_width(2)))?
                 .label(&s.label)
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
+            // A line needs two points: mark a lone one (a configuration
+            // measured at one count only) so that it still shows.
+            if let [p] = s.points[..] {
+                chart.draw_series(std::iter::once(Circle::new(p, 4, color.filled())))?;
+            }
         }
         chart
             .configure_series_labels()

@@ -17,41 +17,31 @@ use super::plot::{LinePlot, Series};
 use super::report::{Section, Table, f3};
 use super::scenarios::Scenario;
 use super::stats::Summary;
-use super::timing::{Bench, Measurement, Shading, Sweep, TimingGrid, cap_ms, median_of, ms_cell, series};
+use super::timing::{Bench, Measurement, Shading, Sweep, TimingGrid, median_of, ms_cell, series};
 use super::{ExperimentError, Findings, Output};
 use crate::metrics;
 
 /// The grid: forward first (every image is compared with its), the other
 /// conventional pipelines, then object space with reuse 1-4 and variable
-/// rate 1 and 2 (quick: 0, 1 and 4 lights of each kind, 160x90, 1 + 2 frames).
+/// rate 1 and 2 (quick: 0, 1 and 4 lights of each kind).
 ///
 /// 4 + 20 frames a point: a new light set invalidates every shade, so each
 /// tile is shaded in a point's first frame and every N frames after; the
 /// 24th frame, the one compared with forward, then shows every reuse N of
 /// 1-4 at its oldest shades (N - 1 frames old), the worst of its cycle.
 pub fn grid(quick: bool) -> TimingGrid {
-    let (shadowed, big, (width, height), warmup, frames) = if quick {
-        (vec![0, 1, 4], vec![0, 1, 4], (160, 90), 1, 2)
+    let (shadowed, big) = if quick {
+        (vec![0, 1, 4], vec![0, 1, 4])
     } else {
-        (vec![0, 1, 2, 4, 6, 8, 10, 15, 20, 25, 30], vec![0, 1, 10, 20, 50, 100, 200, 500, 1000], (1920, 1080), 4, 20)
+        (vec![0, 1, 2, 4, 6, 8, 10, 15, 20, 25, 30], vec![0, 1, 10, 20, 50, 100, 200, 500, 1000])
     };
     let mut shadings = Shading::CONVENTIONAL.to_vec();
     shadings.extend((1..=4).map(|reuse| Shading::ObjectSpace { reuse, variable_rate: 0.0 }));
     shadings.extend([1.0, 2.0].map(|variable_rate| Shading::ObjectSpace { reuse: 1, variable_rate }));
-    TimingGrid {
-        width,
-        height,
-        warmup,
-        frames,
-        first_frame: 0,
-        cap_ms: cap_ms(quick),
-        seed: 1,
-        shadings,
-        sweeps: vec![
-            Sweep { scenario: Scenario::Shadowed, counts: shadowed },
-            Sweep { scenario: Scenario::Big, counts: big },
-        ],
-    }
+    let sweeps =
+        vec![Sweep { scenario: Scenario::Shadowed, counts: shadowed }, Sweep { scenario: Scenario::Big, counts: big }];
+    let grid = TimingGrid::new(quick, shadings, sweeps);
+    if quick { grid } else { TimingGrid { warmup: 4, ..grid } }
 }
 
 /// Image error of a point's last frame against forward's; empty for forward

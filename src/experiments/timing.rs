@@ -137,6 +137,17 @@ pub struct TimingGrid {
 }
 
 impl TimingGrid {
+    /// `shadings` over `sweeps` at the timing studies' defaults: 1920x1080,
+    /// 5 warm-up and 20 measured frames a point from path frame 0, a 200 ms
+    /// cap, seed 1. Quick: 160x90, 1 + 2 frames, and a 10 s cap (a CPU
+    /// driver takes over 100 ms for a small frame, and quick runs should
+    /// measure every point).
+    pub fn new(quick: bool, shadings: Vec<Shading>, sweeps: Vec<Sweep>) -> Self {
+        let ((width, height), warmup, frames, cap_ms) =
+            if quick { ((160, 90), 1, 2, 10_000.0) } else { ((1920, 1080), 5, 20, 200.0) };
+        Self { width, height, warmup, frames, first_frame: 0, cap_ms, seed: 1, shadings, sweeps }
+    }
+
     /// Points per configuration.
     pub fn points(&self) -> usize {
         self.sweeps.iter().map(|s| s.counts.len()).sum()
@@ -146,12 +157,6 @@ impl TimingGrid {
     pub fn total_frames(&self) -> u64 {
         (self.shadings.len() * self.points()) as u64 * u64::from(self.warmup + self.frames)
     }
-}
-
-/// The default frame-time cap: 200 ms, or in quick mode 10 s (a CPU driver
-/// takes over 100 ms for a small frame, and quick runs should measure all).
-pub fn cap_ms(quick: bool) -> f64 {
-    if quick { 10_000.0 } else { 200.0 }
 }
 
 /// Whether a point was measured.
