@@ -201,10 +201,7 @@ mod tests {
     use super::*;
 
     fn row(shading: Shading, lights: u32, ms: Option<f64>) -> Measurement {
-        let row = Measurement::skipped(shading, Scenario::Small, lights);
-        ms.map_or(row.clone(), |ms| {
-            row.measured(&crate::bench::Summary { median: ms, p95: ms, mean: ms, samples: 1 }, 0.0)
-        })
+        Measurement::for_test(shading, Scenario::Small, lights, ms)
     }
 
     #[test]

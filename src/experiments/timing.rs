@@ -218,6 +218,13 @@ impl Measurement {
     }
 
     /// The point measured: GPU frame times `gpu`, median CPU time `cpu_ms`.
+    /// A point of `scenario` at `lights` measured at `ms` (skipped for `None`), for tests.
+    #[cfg(test)]
+    pub fn for_test(shading: Shading, scenario: Scenario, lights: u32, ms: Option<f64>) -> Self {
+        let row = Self::skipped(shading, scenario, lights);
+        ms.map_or(row.clone(), |ms| row.measured(&bench::Summary { median: ms, p95: ms, mean: ms, samples: 1 }, 0.0))
+    }
+
     pub fn measured(self, gpu: &bench::Summary, cpu_ms: f64) -> Self {
         Self {
             status: Status::Measured,

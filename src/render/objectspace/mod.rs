@@ -557,8 +557,10 @@ impl Pipeline for ObjectSpace {
         let stale = frame.lights_changed || self.frames == 1;
         let added = self.budget.bias;
         self.budget_bias.insert(frame.number, added);
+        // Screen shares only matter once the bias goes past its uniform part.
+        let ranked = added > budget::UNIFORM_BIAS;
         let shares: Vec<Option<f32>> = (0..frame.scene.object_bounds.len())
-            .map(|o| (frame.visible[o] && self.layout.objects[o].is_some()).then(|| screen_share(frame, o)))
+            .map(|o| (ranked && frame.visible[o] && self.layout.objects[o].is_some()).then(|| screen_share(frame, o)))
             .collect();
         self.res.set_object_biases(frame.queue, &budget::object_biases(added, &shares));
         self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, &self.config);

@@ -99,11 +99,21 @@ struct ViewSlot {
 
 const NOT_BACKED: u32 = 0xffffffffu;
 
+// Pages per row of level `l` (the last row and column may be partly outside it).
+fn pages_per_row(l: AtlasLevel) -> u32 {
+    return (l.size + params.page_size - 1u) / params.page_size;
+}
+
 // Virtual page of texel `texel` of level `l`.
 fn virtual_page(l: AtlasLevel, texel: vec2u) -> u32 {
-    let per_row = (l.size + params.page_size - 1u) / params.page_size;
     let p = texel / params.page_size;
-    return l.page_base + p.y * per_row + p.x;
+    return l.page_base + p.y * pages_per_row(l) + p.x;
+}
+
+// First texel (level-local) of virtual page `page` of level `l`.
+fn page_origin(l: AtlasLevel, page: u32) -> vec2u {
+    let local = page - l.page_base;
+    return vec2u(local % pages_per_row(l), local / pages_per_row(l)) * params.page_size;
 }
 
 // The physical page backing virtual page `page`, or NOT_BACKED.

@@ -13,7 +13,7 @@
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
-    virtual_page, physical_page, virtual_tile, tile_in_page, physical_tile, NOT_BACKED, view_slot, tile_views}
+    virtual_page, physical_page, virtual_tile, tile_in_page, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin}
 
 // A small integer hash (PCG's output permutation) for tile phases.
 fn hash(x: u32) -> u32 {
@@ -158,9 +158,7 @@ fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups
     let l = e.levels[level_index];
     let per_row = params.page_size / params.tile_size;
     let mask = atomicLoad(&page_requests[b.x]);
-    let level_pages = (l.size + params.page_size - 1u) / params.page_size;
-    let local = b.x - l.page_base;
-    let page_origin = vec2u(local % level_pages, local / level_pages) * params.page_size;
+    let origin = page_origin(l, b.x);
     let t = lid;
     if t < per_row * per_row {
         let slot = b.z * per_row * per_row + t;
@@ -171,7 +169,7 @@ fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups
             atomicAdd(&counters[COUNT_VISIBLE], 1u);
             atomicAdd(&counters[COUNT_BACKED_TILES], 1u);
             atomicAdd(&counters[COUNT_NEW], 1u);
-            let texel = page_origin + vec2u(t % per_row, t / per_row) * params.tile_size;
+            let texel = origin + vec2u(t % per_row, t / per_row) * params.tile_size;
             queue_if_due(slot, virtual_tile(l, texel), object, level_index, e.valid_since);
         }
     }

@@ -10,7 +10,7 @@
 #import shadespace::contract::COUNT_PAGES_BACKED
 #import shadespace::scene_bindings::{vertices, objects, triangle_vertices}
 #import shadespace::scene::Object
-#import shadespace::objectspace::{params, atlas_entries, counters, backed, atlas_texel}
+#import shadespace::objectspace::{params, atlas_entries, counters, backed, atlas_texel, page_origin}
 
 // Mirrors `trimap::GpuChartGrid`.
 struct ChartGrid {
@@ -125,9 +125,7 @@ fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     let l = atlas_entries[object].levels[b.y & 0xffu];
     let o = objects[object];
     let g = grids[object];
-    let level_pages = (l.size + params.page_size - 1u) / params.page_size;
-    let local = b.x - l.page_base;
-    let origin = vec2u(local % level_pages, local / level_pages) * params.page_size;
+    let origin = page_origin(l, b.x);
     let blocks = params.page_size / 8u;
     for (var by = 0u; by < blocks; by++) {
         for (var bx = 0u; bx < blocks; bx++) {
