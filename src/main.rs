@@ -19,7 +19,7 @@ use shadespace::render::objectspace::atlas::MAX_TEXTURE_SIZE;
 use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, DebugView, ExtraViews, MAX_DENSITY_SIZE, ObjectSpace};
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, Exposure, ForwardConfig, ForwardMultipassConfig,
-    ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, ShadowRefresh, VisibilityMethod,
+    ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, ShadingModel, ShadowRefresh, VisibilityMethod,
 };
 use shadespace::scene::free_camera::{self, LookAt, OrbitSpec};
 use shadespace::scene::path::SceneCameras;
@@ -210,6 +210,13 @@ struct GpuArgs {
     adapter: Option<String>,
 }
 
+/// `--textures`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum TextureChoice {
+    File,
+    Detailed,
+}
+
 #[derive(Args)]
 struct SceneArgs {
     /// `atrium` (default), `voxels`, or a path: a .gltf/.glb file, an .obj file,
@@ -261,6 +268,20 @@ struct SceneArgs {
     /// the camera moves). Default `off`: the generated sets' sun is a dim fill.
     #[arg(long, default_value = "off", value_parser = on_off, action = clap::ArgAction::Set)]
     sun_shadow: bool,
+    /// Lighting model, the same in every pipeline: `phong` (default, the
+    /// studies' model: materials' specular strength and exponent) or `pbr`
+    /// (GGX metallic-roughness, as glTF 2.0 defines it: the materials'
+    /// metallic and roughness factors; OBJ materials get roughness from `Ns`).
+    #[arg(long, value_enum, default_value = "phong")]
+    shading: ShadingModel,
+    /// `file` (default): the scene's own textures (generated scenes: UV
+    /// checkers); `detailed`: every material gets a procedural high-frequency
+    /// albedo (bricks and grain down to 4 texels, tinted with its old
+    /// texture's mean colour) and the matching normal map, 512x512 per
+    /// repeat of its `uv0`: texture detail that shows what object-space
+    /// shading blurs.
+    #[arg(long, value_enum, default_value = "file")]
+    textures: TextureChoice,
     /// Cull back faces in every pipeline (the compute rasterizer too), for
     /// scenes whose meshes are closed or seen from the front only: about
     /// half the rasterization work on Sponza. Default: both faces drawn.
@@ -689,6 +710,9 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     }
     let mut scene = input(scene::load(&a.scene))?;
     scene.cull_back_faces = a.cull_back_faces;
+    if a.textures == TextureChoice::Detailed {
+        scene::detail::add_detailed_textures(&mut scene);
+    }
     for name in &a.objectspace.forward_only {
         let Some(o) = scene.objects.iter_mut().find(|o| &o.name == name) else {
             let known: Vec<_> = scene.objects.iter().map(|o| o.name.as_str()).collect();
@@ -823,15 +847,21 @@ fn open_gpu(a: &GpuArgs) -> Result<GpuContext, Failure> {
     Ok(GpuContext::new(&GpuOptions { adapter: a.adapter.clone() })?)
 }
 
+/// The renderer settings the scene options choose (besides the pipeline).
+fn configure(renderer: &mut Renderer, a: &SceneArgs) {
+    renderer.exposure = a.exposure;
+    renderer.bloom = a.bloom;
+    renderer.shadow_refresh = a.shadow_refresh;
+    renderer.sun_shadow = a.sun_shadow;
+    renderer.shading = a.shading;
+}
+
 fn render(a: RenderArgs) -> Result<(), Failure> {
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
     let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s, a.view, ctx.device.features()))?;
-    renderer.exposure = a.scene.exposure;
-    renderer.bloom = a.scene.bloom;
-    renderer.shadow_refresh = a.scene.shadow_refresh;
-    renderer.sun_shadow = a.scene.sun_shadow;
+    configure(&mut renderer, &a.scene);
     if a.atlas_out.is_some() && renderer.pipeline::<ObjectSpace>().is_none() {
         return input(Err(anyhow::anyhow!("--atlas-out needs --pipeline objectspace")));
     }
@@ -912,10 +942,7 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
     let (w, h) = a.scene.size;
     let mut renderer =
         Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s, DebugView::Shade, ctx.device.features()))?;
-    renderer.exposure = a.scene.exposure;
-    renderer.bloom = a.scene.bloom;
-    renderer.shadow_refresh = a.scene.shadow_refresh;
-    renderer.sun_shadow = a.scene.sun_shadow;
+    configure(&mut renderer, &a.scene);
     if !renderer.timing_enabled() {
         tracing::warn!("{} has no timestamp queries: the result has CPU times only", ctx.info.name);
     }

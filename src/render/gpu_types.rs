@@ -3,18 +3,21 @@
 //! layouts are compared member by member with naga's (`shaders::layout`).
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
+use serde::Serialize;
 
 use crate::scene::{Light, LightKind};
 use crate::shaders::gpu_struct;
 
 gpu_struct! {
-    /// 48 bytes: pulled from a storage buffer by index, so raster and compute
+    /// 64 bytes: pulled from a storage buffer by index, so raster and compute
     /// passes read the same data.
     pub struct GpuVertex as "Vertex" {
         pub position: Vec3,
         pub uv0_x: f32,
         pub normal: Vec3,
         pub uv0_y: f32,
+        /// MikkTSpace tangent (xyz) and bitangent sign (w), for normal maps.
+        pub tangent: Vec4,
         /// The object's unique chart (object-space shading).
         pub chart_uv: Vec2,
         pub pad_a: f32,
@@ -35,12 +38,22 @@ gpu_struct! {
         pub light_count: u32,
         pub first_index: u32,
         pub base_vertex: u32,
+        /// Phong's specular strength and exponent.
         pub specular: f32,
         pub shininess: f32,
+        /// GGX's metallic and perceptual roughness.
+        pub metallic: f32,
+        pub roughness: f32,
+        /// Layer of the normal-map array, or [`NO_NORMAL_MAP`].
+        pub normal_layer: u32,
         pub pad_a: u32,
         pub pad_b: u32,
+        pub pad_c: u32,
     }
 }
+
+/// `Object.normal_layer` of an object without a normal map.
+pub const NO_NORMAL_MAP: u32 = u32::MAX;
 
 gpu_struct! {
     pub struct GpuView as "View" {
@@ -53,7 +66,8 @@ gpu_struct! {
         /// The first `global_light_count` lights are ambient or directional:
         /// they reach everywhere, so light grids list only the others.
         pub global_light_count: u32,
-        pub pad_a: u32,
+        /// A [`ShadingModel`] (the lighting model every pass evaluates).
+        pub shading: u32,
         pub pad_b: u32,
     }
 }
@@ -76,6 +90,32 @@ gpu_struct! {
         /// (cube) or, for the sun, its cascades.
         pub shadow_faces: u32,
         pub pad_c: u32,
+    }
+}
+
+/// The lighting model of `lighting.wgsl` (`--shading`), the same in every
+/// pipeline; `View.shading` in WGSL (`SHADING_*` in `shaders::contract`).
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum ShadingModel {
+    /// Phong: diffuse plus a specular lobe `specular * max(R.V, 0)^shininess`
+    /// (the studies' model).
+    #[default]
+    Phong = 0,
+    /// GGX metallic-roughness (Cook-Torrance: GGX distribution, height-correlated
+    /// Smith visibility, Schlick Fresnel), as glTF 2.0 materials define it.
+    Pbr = 1,
+}
+
+impl ShadingModel {
+    pub const ALL: [Self; 2] = [Self::Phong, Self::Pbr];
+
+    pub fn wgsl_name(self) -> &'static str {
+        match self {
+            Self::Phong => "SHADING_PHONG",
+            Self::Pbr => "SHADING_PBR",
+        }
     }
 }
 

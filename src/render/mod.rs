@@ -39,6 +39,7 @@ pub use deferred_compute::DeferredComputeConfig;
 pub use forward::ForwardConfig;
 pub use forward_multipass::ForwardMultipassConfig;
 pub use frame::Frame;
+pub use gpu_types::ShadingModel;
 pub use objectspace::ObjectSpaceConfig;
 use passes::bloom::{Bloom, bloom};
 pub use passes::exposure::Exposure;
@@ -172,6 +173,8 @@ pub struct Renderer {
     /// off: the generated sets' sun is a dim fill meant to cost nothing, and
     /// the goldens are rendered without it).
     pub sun_shadow: bool,
+    /// The lighting model every pass evaluates (default Phong, the studies').
+    pub shading: ShadingModel,
     shadows: ShadowMaps,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
@@ -232,6 +235,7 @@ impl Renderer {
             bloom: 0.0,
             shadow_refresh: ShadowRefresh::default(),
             sun_shadow: false,
+            shading: ShadingModel::Phong,
             shadows,
             lights_hash: None,
             in_flight: Default::default(),
@@ -278,6 +282,7 @@ impl Renderer {
         let mut view = scene_gpu::gpu_view(camera, w, h);
         view.light_count = lights.len() as u32;
         view.global_light_count = global_lights;
+        view.shading = self.shading as u32;
         let frustum = Frustum::from_view_projection(view.view_proj);
         let lists = if self.pipeline.uses_object_light_lists() {
             culling::lights_per_object(&lights, &self.scene.object_bounds, Some(&frustum))

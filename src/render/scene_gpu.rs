@@ -6,7 +6,7 @@ use image::imageops::FilterType;
 use wgpu::util::DeviceExt;
 
 use super::culling::LightLists;
-use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
+use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView, NO_NORMAL_MAP};
 use super::passes::shadows::{ShadowAtlas, ShadowPlan};
 use super::passes::{Binding, bind_group_layout_for};
 use crate::charts::islands::triangle_islands;
@@ -78,6 +78,7 @@ pub struct SceneGpu {
     lights: GrowableBuffer,
     light_indices: GrowableBuffer,
     albedo_view: wgpu::TextureView,
+    normal_maps_view: wgpu::TextureView,
     sampler: wgpu::Sampler,
     pub layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
@@ -100,12 +101,13 @@ impl SceneGpu {
                 uv0_x: mesh.uv0[i].x,
                 normal: mesh.normals[i],
                 uv0_y: mesh.uv0[i].y,
+                tangent: mesh.tangents[i],
                 chart_uv: charts[i],
                 ..Default::default()
             }));
             indices.extend_from_slice(&mesh.indices);
         }
-        let (albedo, white_layer) = upload_albedo(device, queue, scene);
+        let (albedo, white_layer, normal_maps, normal_layers) = upload_textures(device, queue, scene);
         let draws: Vec<DrawRange> = scene.objects.iter().map(|o| mesh_ranges[o.mesh]).collect();
         let object_data: Vec<GpuObject> = scene
             .objects
@@ -125,6 +127,9 @@ impl SceneGpu {
                     base_vertex: d.base_vertex,
                     specular: m.specular,
                     shininess: m.shininess,
+                    metallic: m.metallic,
+                    roughness: m.roughness,
+                    normal_layer: m.normal_texture.and_then(|t| normal_layers[t]).unwrap_or(NO_NORMAL_MAP),
                     ..Default::default()
                 }
             })
@@ -155,10 +160,14 @@ impl SceneGpu {
         });
         let lights = GrowableBuffer::new(device, "lights", 64 * 1024);
         let light_indices = GrowableBuffer::new(device, "light indices", 64 * 1024);
-        let albedo_view = albedo.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
+        let array_view = |t: &wgpu::Texture| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            })
+        };
+        let albedo_view = array_view(&albedo);
+        let normal_maps_view = array_view(&normal_maps);
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("albedo"),
             address_mode_u: wgpu::AddressMode::Repeat,
@@ -174,7 +183,7 @@ impl SceneGpu {
             device,
             &layout,
             [&view, &objects, &vertices_buf, &lights.buffer, &light_indices.buffer, &indices_buf],
-            &albedo_view,
+            [&albedo_view, &normal_maps_view],
             &sampler,
             &shadow_atlas,
         );
@@ -195,6 +204,7 @@ impl SceneGpu {
             lights,
             light_indices,
             albedo_view,
+            normal_maps_view,
             sampler,
             layout,
             bind_group,
@@ -244,7 +254,7 @@ impl SceneGpu {
             device,
             &self.layout,
             [view, &self.objects, &self.vertices, &self.lights.buffer, &self.light_indices.buffer, &self.indices],
-            &self.albedo_view,
+            [&self.albedo_view, &self.normal_maps_view],
             &self.sampler,
             &self.shadow_atlas,
         )
@@ -255,7 +265,7 @@ impl SceneGpu {
             device,
             &self.layout,
             [&self.view, &self.objects, &self.vertices, &self.lights.buffer, &self.light_indices.buffer, &self.indices],
-            &self.albedo_view,
+            [&self.albedo_view, &self.normal_maps_view],
             &self.sampler,
             &self.shadow_atlas,
         );
@@ -296,22 +306,24 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let depth = Binding::Texture { sample: wgpu::TextureSampleType::Depth, dimension: array };
     // Bindings 0-7: view, objects, vertices, lights, light indices, albedo,
     // its sampler, indices; 8-11: shadow atlas, comparison sampler, shadow
-    // faces, sun cascades.
+    // faces, sun cascades; 12: normal maps.
     let bindings = [Binding::Uniform, read, read, read, read, albedo, Binding::Sampler, read];
     let shadows = [depth, Binding::ComparisonSampler, read, depth];
-    bind_group_layout_for(device, "scene", stages, &[bindings.as_slice(), &shadows].concat())
+    bind_group_layout_for(device, "scene", stages, &[bindings.as_slice(), &shadows, &[albedo]].concat())
 }
 
-/// Buffers in binding order 0, 1, 2, 3, 4, 7; the shadow maps are 8-11.
+/// Buffers in binding order 0, 1, 2, 3, 4, 7; the shadow maps are 8-11;
+/// textures: albedo (5) and normal maps (12).
 fn make_bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     buffers: [&wgpu::Buffer; 6],
-    albedo: &wgpu::TextureView,
+    textures: [&wgpu::TextureView; 2],
     sampler: &wgpu::Sampler,
     shadows: &ShadowAtlas,
 ) -> wgpu::BindGroup {
     let [view, objects, vertices, lights, light_indices, indices] = buffers;
+    let [albedo, normal_maps] = textures;
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("scene"),
         layout,
@@ -328,15 +340,24 @@ fn make_bind_group(
             wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::Sampler(&shadows.sampler) },
             wgpu::BindGroupEntry { binding: 10, resource: shadows.faces_buffer().as_entire_binding() },
             wgpu::BindGroupEntry { binding: 11, resource: wgpu::BindingResource::TextureView(shadows.cascades_view()) },
+            wgpu::BindGroupEntry { binding: 12, resource: wgpu::BindingResource::TextureView(normal_maps) },
         ],
     })
 }
 
-/// Uploads every scene texture as one layer of an sRGB 2D array with a full
-/// mip chain (mips filtered on the CPU), plus a white layer for untextured
-/// materials. One array keeps the binding count constant in the number of
-/// objects, which lavapipe (no binding arrays) requires.
-fn upload_albedo(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> (wgpu::Texture, u32) {
+/// Uploads the scene's textures as two 2D arrays of one size with full mip
+/// chains (mips filtered on the CPU): colour (sRGB: every texture, plus a
+/// white layer for untextured materials) and normal maps (linear: the
+/// textures materials use as normal maps). One size lets a pass sample both
+/// at one mip level; one array each keeps the binding count constant in the
+/// number of objects, which lavapipe (no binding arrays) requires.
+/// Returns the colour array, its white layer, the normal-map array and each
+/// texture's layer in it.
+fn upload_textures(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &Scene,
+) -> (wgpu::Texture, u32, wgpu::Texture, Vec<Option<u32>>) {
     let size = scene
         .textures
         .iter()
@@ -345,21 +366,46 @@ fn upload_albedo(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> (
         .unwrap_or(1)
         .clamp(1, MAX_ALBEDO_SIZE)
         .next_power_of_two();
+    let white = image::RgbaImage::from_pixel(size, size, image::Rgba([255; 4]));
+    let colour: Vec<&crate::scene::Texture> = scene.textures.iter().collect();
+    let albedo =
+        upload_array(device, queue, "albedo array", wgpu::TextureFormat::Rgba8UnormSrgb, size, &colour, &white);
+    let mut normal_layers = vec![None; scene.textures.len()];
+    let mut normal: Vec<&crate::scene::Texture> = Vec::new();
+    for t in scene.materials.iter().filter_map(|m| m.normal_texture) {
+        if t < normal_layers.len() && normal_layers[t].is_none() {
+            normal_layers[t] = Some(normal.len() as u32);
+            normal.push(&scene.textures[t]);
+        }
+    }
+    let flat = image::RgbaImage::from_pixel(size, size, image::Rgba([128, 128, 255, 255]));
+    let normal_maps = upload_array(device, queue, "normal maps", wgpu::TextureFormat::Rgba8Unorm, size, &normal, &flat);
+    (albedo, scene.textures.len() as u32, normal_maps, normal_layers)
+}
+
+/// One layer per texture (resized to `size`), then `last`.
+fn upload_array(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    label: &str,
+    format: wgpu::TextureFormat,
+    size: u32,
+    textures: &[&crate::scene::Texture],
+    last: &image::RgbaImage,
+) -> wgpu::Texture {
     let mip_count = size.ilog2() + 1;
-    let layers = scene.textures.len() as u32 + 1;
+    let layers = textures.len() as u32 + 1;
     let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("albedo array"),
+        label: Some(label),
         size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
         mip_level_count: mip_count,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        format,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    let white = image::RgbaImage::from_pixel(size, size, image::Rgba([255; 4]));
-    let images = scene
-        .textures
+    let images = textures
         .iter()
         .map(|t| {
             image::RgbaImage::from_raw(t.width, t.height, t.rgba8.clone())
@@ -370,9 +416,9 @@ fn upload_albedo(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> (
                         image::imageops::resize(&img, size, size, FilterType::Triangle)
                     }
                 })
-                .unwrap_or_else(|| white.clone())
+                .unwrap_or_else(|| last.clone())
         })
-        .chain(std::iter::once(white.clone()));
+        .chain(std::iter::once(last.clone()));
     for (layer, mut img) in images.enumerate() {
         for mip in 0..mip_count {
             let s = (size >> mip).max(1);
@@ -392,5 +438,5 @@ fn upload_albedo(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> (
             );
         }
     }
-    (texture, layers - 1)
+    texture
 }

@@ -6,6 +6,7 @@
 
 pub mod camera;
 pub mod checker;
+pub mod detail;
 pub mod error;
 pub mod framing;
 pub mod free_camera;
@@ -123,33 +124,55 @@ impl Mesh {
     }
 }
 
-/// Per-vertex tangents from UV gradients (Lengyel's method), orthogonalised
-/// against the normal. Degenerate UVs give an arbitrary tangent perpendicular to N.
+/// Per-vertex tangents by MikkTSpace (`bevy_mikktspace`, a port that gives
+/// the reference implementation's results), the tangent space that glTF and
+/// the usual bakers assume, so that normal maps come out as baked. MikkTSpace
+/// works per triangle corner; corners that share a vertex almost always get
+/// the same tangent (it welds equal vertices first). Where they differ
+/// (corners split by its angle threshold), the vertex keeps their average.
+/// Vertices no triangle uses, or with degenerate UVs, get a tangent
+/// perpendicular to their normal.
 pub fn generate_tangents(positions: &[Vec3], normals: &[Vec3], uvs: &[Vec2], indices: &[u32]) -> Vec<Vec4> {
-    let mut tan = vec![Vec3::ZERO; positions.len()];
-    let mut bit = vec![Vec3::ZERO; positions.len()];
-    for t in indices.chunks_exact(3) {
-        let [i0, i1, i2] = [t[0] as usize, t[1] as usize, t[2] as usize];
-        let (e1, e2) = (positions[i1] - positions[i0], positions[i2] - positions[i0]);
-        let (d1, d2) = (uvs[i1] - uvs[i0], uvs[i2] - uvs[i0]);
-        let det = d1.x * d2.y - d2.x * d1.y;
-        if det.abs() < 1e-12 {
-            continue;
+    struct Corners<'a> {
+        positions: &'a [Vec3],
+        normals: &'a [Vec3],
+        uvs: &'a [Vec2],
+        indices: &'a [u32],
+        sums: Vec<Vec4>,
+    }
+    impl bevy_mikktspace::Geometry for Corners<'_> {
+        fn num_faces(&self) -> usize {
+            self.indices.len() / 3
         }
-        let r = 1.0 / det;
-        let s = (e1 * d2.y - e2 * d1.y) * r;
-        let u = (e2 * d1.x - e1 * d2.x) * r;
-        for i in [i0, i1, i2] {
-            tan[i] += s;
-            bit[i] += u;
+        fn num_vertices_of_face(&self, _face: usize) -> usize {
+            3
+        }
+        fn position(&self, face: usize, vert: usize) -> [f32; 3] {
+            self.positions[self.indices[face * 3 + vert] as usize].to_array()
+        }
+        fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
+            self.normals[self.indices[face * 3 + vert] as usize].to_array()
+        }
+        fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
+            self.uvs[self.indices[face * 3 + vert] as usize].to_array()
+        }
+        fn set_tangent(&mut self, tangent: Option<bevy_mikktspace::TangentSpace>, face: usize, vert: usize) {
+            if let Some(t) = tangent {
+                self.sums[self.indices[face * 3 + vert] as usize] += Vec4::from(t.tangent_encoded());
+            }
         }
     }
-    (0..positions.len())
-        .map(|i| {
-            let n = normals[i];
-            let t = (tan[i] - n * n.dot(tan[i])).try_normalize().unwrap_or_else(|| n.any_orthonormal_vector());
-            let w = if n.cross(t).dot(bit[i]) < 0.0 { -1.0 } else { 1.0 };
-            t.extend(w)
+    let mut corners = Corners { positions, normals, uvs, indices, sums: vec![Vec4::ZERO; positions.len()] };
+    // The generator has no failure cases (its error type has no variants).
+    let _ = bevy_mikktspace::generate_tangents(&mut corners);
+    corners
+        .sums
+        .iter()
+        .zip(normals)
+        .map(|(sum, &n)| {
+            let t = sum.truncate();
+            let t = (t - n * n.dot(t)).try_normalize().unwrap_or_else(|| n.any_orthonormal_vector());
+            t.extend(if sum.w < 0.0 { -1.0 } else { 1.0 })
         })
         .collect()
 }
@@ -375,4 +398,33 @@ pub fn load(spec: &str) -> Result<Scene, SceneError> {
     };
     scene.validate().map_err(|problem| SceneError::Invalid { path: spec.into(), problem })?;
     Ok(scene)
+}
+
+#[cfg(test)]
+mod tangent_tests {
+    use super::*;
+
+    /// A unit quad in the xy plane facing +z, its u along +x; v along -y
+    /// (glTF's convention: v grows down the image) or, mirrored, along +y.
+    fn quad_tangents(v_along_y: f32) -> Vec<Vec4> {
+        let positions =
+            [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let uvs: Vec<Vec2> = positions.iter().map(|p| Vec2::new(p.x, v_along_y * p.y)).collect();
+        generate_tangents(&positions, &[Vec3::Z; 4], &uvs, &[0, 1, 2, 0, 2, 3])
+    }
+
+    #[test]
+    fn tangents_follow_u_and_the_sign_follows_v() {
+        // Bitangent = w * cross(n, t): with t = +x and n = +z, cross is +y,
+        // so w = +1 where v grows along +y and -1 where it grows along -y.
+        for (v_along_y, sign) in [(1.0, 1.0), (-1.0, -1.0)] {
+            for t in quad_tangents(v_along_y) {
+                assert!((t.truncate() - Vec3::X).length() < 1e-5, "tangent {t} should be +x");
+                assert_eq!(t.w, sign, "bitangent sign for v along {v_along_y} y");
+            }
+        }
+        // A vertex no triangle uses still gets a unit tangent perpendicular to its normal.
+        let t = generate_tangents(&[Vec3::ZERO], &[Vec3::Y], &[Vec2::ZERO], &[]);
+        assert!((t[0].truncate().length() - 1.0).abs() < 1e-5 && t[0].truncate().dot(Vec3::Y).abs() < 1e-5);
+    }
 }

@@ -48,6 +48,7 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/lighting.wgsl", include_str!("shared/lighting.wgsl")),
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
+    ShaderSource::new("shared/normal_map.wgsl", include_str!("shared/normal_map.wgsl")),
     ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
     ShaderSource::new("shared/pixel_surface.wgsl", include_str!("shared/pixel_surface.wgsl")),
     ShaderSource::new("shared/raster_surface.wgsl", include_str!("shared/raster_surface.wgsl")),

@@ -3,7 +3,7 @@
 // instance index is its pair's index (its `first_instance`).
 #import shadespace::contract::PAIR_EMISSION
 #import shadespace::lighting::light_radiance
-#import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, fragment_surface}
+#import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, fragment_surface}
 #import shadespace::scene_bindings::{view, objects, lights}
 
 // Mirrors `render::forward_multipass::LightPair`.
@@ -26,10 +26,11 @@ fn fs_main(in: VertexOut) -> @location(0) vec4f {
     let o = objects[pair.object];
     // Sampled before the branch: implicit derivatives need uniform control flow.
     let texel = sample_albedo(o, in);
+    let normal_texel = sample_normal_map(o, in);
     if pair.light == PAIR_EMISSION {
         return vec4f(o.emissive, 1.0);
     }
-    let s = fragment_surface(o, in, texel);
+    let s = fragment_surface(o, in, texel, normal_texel);
     let to_eye = normalize(view.camera_position.xyz - s.position);
     return vec4f(light_radiance(lights[pair.light], s, to_eye), 1.0);
 }

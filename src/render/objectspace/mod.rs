@@ -193,10 +193,14 @@ pub enum TileCounter {
     ViewTiles = 8,
     /// Tiles marked on the pages backed this frame (after paging).
     BackedTiles = 9,
+    /// Pixels shaded through the atlas (summed over the views).
+    AtlasPixels = 10,
+    /// Of those, pixels whose level holds fewer than one texel per pixel.
+    UnderShadedPixels = 11,
 }
 
 impl TileCounter {
-    pub const ALL: [Self; 10] = [
+    pub const ALL: [Self; 12] = [
         Self::Queued,
         Self::Visible,
         Self::New,
@@ -207,13 +211,15 @@ impl TileCounter {
         Self::Candidates,
         Self::ViewTiles,
         Self::BackedTiles,
+        Self::AtlasPixels,
+        Self::UnderShadedPixels,
     ];
     /// First slot of the age buckets (free pages, then unused for 128 or
     /// more frames, 64-127, ..., 1 frame).
-    pub const AGE_BUCKET_BASE: usize = 10;
+    pub const AGE_BUCKET_BASE: usize = 12;
     pub const AGE_BUCKETS: usize = 9;
     /// Slots in the counter buffer (a multiple of four: 16-byte rows).
-    pub const SLOTS: usize = 20;
+    pub const SLOTS: usize = 24;
 
     pub fn wgsl_name(self) -> &'static str {
         match self {
@@ -227,6 +233,8 @@ impl TileCounter {
             Self::Candidates => "COUNT_CANDIDATES",
             Self::ViewTiles => "COUNT_VIEW_TILES",
             Self::BackedTiles => "COUNT_BACKED_TILES",
+            Self::AtlasPixels => "COUNT_ATLAS_PIXELS",
+            Self::UnderShadedPixels => "COUNT_UNDER_SHADED_PIXELS",
         }
     }
 }
@@ -656,6 +664,12 @@ impl Pipeline for ObjectSpace {
                     ("pages_failed", failed),
                     ("page_texels", in_use * page_texels),
                     ("budget_bias", used as f64),
+                    // Share of the atlas-shaded pixels whose level gives them
+                    // fewer than one shading texel (blurrier than the screen).
+                    (
+                        "under_shaded_share",
+                        count(TileCounter::UnderShadedPixels) / count(TileCounter::AtlasPixels).max(1.0),
+                    ),
                 ];
                 if !self.extra_views.is_empty() {
                     // Like for like: tiles on pages already backed, shared

@@ -1,13 +1,20 @@
-// The lighting model of every pipeline (forward and object space), so that
-// all of them compute the same image.
+// The lighting models of every pipeline (forward and object space), so that
+// all of them compute the same image. Two models (`View.shading`, carried by
+// each Surface):
 //
-// Phong: diffuse max(N.L, 0), specular max(R.V, 0)^p, point/spot attenuation
-// 1 / (1 + d^2) cut off at the light's radius, spot factor
-// (cos(theta) - cos_outer) / (cos_inner - cos_outer) clamped, times albedo,
+// Phong (the studies'): diffuse max(N.L, 0), specular max(R.V, 0)^p.
+// GGX metallic-roughness (glTF 2.0's BRDF): Cook-Torrance with the GGX
+// distribution, height-correlated Smith visibility and Schlick Fresnel;
+// diffuse Lambert on the non-metallic part.
+// Both: point/spot attenuation 1 / (1 + d^2) cut off at the light's radius,
+// spot factor (cos(theta) - cos_outer) / (cos_inner - cos_outer) clamped,
 // times the shadow factor of lights that cast shadows (`shadows.wgsl`).
+// Light radiance is in units where a white Lambert surface facing the light
+// reflects it unchanged (pi folded into the light), so the two models light a
+// rough dielectric alike.
 #define_import_path shadespace::lighting
 
-#import shadespace::contract::{LIGHT_AMBIENT, LIGHT_DIRECTIONAL, LIGHT_SPOT}
+#import shadespace::contract::{LIGHT_AMBIENT, LIGHT_DIRECTIONAL, LIGHT_SPOT, SHADING_PBR}
 #import shadespace::shadows::shadow_factor
 
 // 64 bytes; mirrors `render::gpu_types::GpuLight`.
@@ -34,8 +41,57 @@ struct Surface {
     // Unit normal.
     normal: vec3f,
     albedo: vec3f,
+    // Phong's specular strength and exponent.
     specular: f32,
     shininess: f32,
+    // GGX's metallic and perceptual roughness.
+    metallic: f32,
+    roughness: f32,
+    // SHADING_PHONG or SHADING_PBR.
+    model: u32,
+}
+
+const PI: f32 = 3.14159265;
+
+// Dielectric reflectance at normal incidence (4 %), as glTF specifies.
+const DIELECTRIC_F0: f32 = 0.04;
+
+// Reflectance at normal incidence: 4 % for dielectrics, the albedo for metals.
+fn specular_color(s: Surface) -> vec3f {
+    return mix(vec3f(DIELECTRIC_F0), s.albedo, s.metallic);
+}
+
+// GGX reflectance for light arriving along `l` and leaving along `v`, times
+// N.L, in the units above (the Lambert term is albedo x N.L, without 1/pi).
+fn ggx(s: Surface, l: vec3f, v: vec3f, n_dot_l: f32) -> vec3f {
+    let n = s.normal;
+    let h = normalize(l + v);
+    let n_dot_v = max(dot(n, v), 1e-4);
+    let n_dot_h = max(dot(n, h), 0.0);
+    let v_dot_h = max(dot(v, h), 0.0);
+    // Perceptual roughness squared; floored so that highlights of point
+    // lights stay finite.
+    let a = max(s.roughness * s.roughness, 2e-3);
+    let a2 = a * a;
+    let d_denom = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+    let d = a2 / (PI * d_denom * d_denom);
+    let vis_l = n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2);
+    let vis_v = n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2);
+    let vis = 0.5 / max(vis_l + vis_v, 1e-6);
+    let f0 = specular_color(s);
+    let f = f0 + (vec3f(1.0) - f0) * pow(1.0 - v_dot_h, 5.0);
+    let diffuse = (vec3f(1.0) - f) * s.albedo * (1.0 - s.metallic);
+    return (diffuse + PI * d * vis * f) * n_dot_l;
+}
+
+// What an ambient light of unit radiance reflects: the albedo (Phong), or
+// the diffuse colour plus the reflectance at normal incidence (GGX: uniform
+// light from every direction; no environment map, so no split-sum integral).
+fn ambient_reflectance(s: Surface) -> vec3f {
+    if s.model == SHADING_PBR {
+        return s.albedo * (1.0 - s.metallic) + specular_color(s);
+    }
+    return s.albedo;
 }
 
 // The cut-off at the radius is a linear fade over the last tenth of it, so a
@@ -49,7 +105,7 @@ fn attenuation(d: f32, radius: f32) -> f32 {
 // Radiance reflected towards `to_eye` (unit vector from the point to the eye).
 fn light_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
     if light.kind == LIGHT_AMBIENT {
-        return light.radiance * s.albedo;
+        return light.radiance * ambient_reflectance(s);
     }
     var to_light: vec3f;
     var falloff = 1.0;
@@ -74,6 +130,9 @@ fn light_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
     }
     if light.shadow_faces != 0u {
         falloff *= shadow_factor(light.kind, light.shadow_face, light.shadow_faces, light.position, s.position, s.normal, to_light, n_dot_l);
+    }
+    if s.model == SHADING_PBR {
+        return light.radiance * falloff * ggx(s, to_light, to_eye, n_dot_l);
     }
     let r = reflect(-to_light, s.normal);
     let spec = s.specular * pow(max(dot(r, to_eye), 0.0), s.shininess);

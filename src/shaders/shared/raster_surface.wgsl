@@ -4,7 +4,8 @@
 #define_import_path shadespace::raster_surface
 #import shadespace::lighting::Surface
 #import shadespace::scene::{Object, vertex_uv0}
-#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, object_clip_position}
+#import shadespace::scene_bindings::{view, objects, vertices, albedo, albedo_sampler, normal_maps, object_clip_position}
+#import shadespace::normal_map::{mapped_normal, sample_layer}
 
 struct VertexOut {
     @builtin(position) @invariant clip: vec4f,
@@ -13,6 +14,8 @@ struct VertexOut {
     @location(2) uv: vec2f,
     // The object (multi-pass forward: the draw's light pair).
     @location(3) @interpolate(flat) tag: u32,
+    // World tangent and bitangent sign.
+    @location(4) tangent: vec4f,
 }
 
 // Vertex `vi` of `object`, tagged `tag`. The clip position is
@@ -27,6 +30,7 @@ fn object_vertex(object: u32, vi: u32, tag: u32) -> VertexOut {
     out.normal = (o.normal_model * vec4f(v.normal, 0.0)).xyz;
     out.uv = vertex_uv0(v);
     out.tag = tag;
+    out.tangent = vec4f((o.model * vec4f(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
     return out;
 }
 
@@ -36,13 +40,23 @@ fn sample_albedo(o: Object, in: VertexOut) -> vec3f {
     return textureSample(albedo, albedo_sampler, in.uv, o.albedo_layer).rgb;
 }
 
-// The surface of object `o` at a fragment whose albedo texel is `texel`.
-fn fragment_surface(o: Object, in: VertexOut, texel: vec3f) -> Surface {
+// The object's normal-map texel at the fragment (uniform control flow, as
+// `sample_albedo`; meaningless for objects without a map).
+fn sample_normal_map(o: Object, in: VertexOut) -> vec3f {
+    return textureSample(normal_maps, albedo_sampler, in.uv, sample_layer(o.normal_layer)).rgb;
+}
+
+// The surface of object `o` at a fragment whose albedo texel is `texel` and
+// normal-map texel `normal_texel`.
+fn fragment_surface(o: Object, in: VertexOut, texel: vec3f, normal_texel: vec3f) -> Surface {
     var s: Surface;
     s.position = in.world;
-    s.normal = normalize(in.normal);
+    s.normal = mapped_normal(in.normal, in.tangent, normal_texel, o.normal_layer);
     s.albedo = texel * o.base_color.rgb;
     s.specular = o.specular;
     s.shininess = o.shininess;
+    s.metallic = o.metallic;
+    s.roughness = o.roughness;
+    s.model = view.shading;
     return s;
 }

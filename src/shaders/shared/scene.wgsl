@@ -2,13 +2,15 @@
 // `render::gpu_types` (compared member by member by `shaders::layout`).
 #define_import_path shadespace::scene
 
-// 48 bytes. Vertices are pulled from a storage buffer by index, so raster and
+// 64 bytes. Vertices are pulled from a storage buffer by index, so raster and
 // compute passes read the same data.
 struct Vertex {
     position: vec3f,
     uv0_x: f32,
     normal: vec3f,
     uv0_y: f32,
+    // MikkTSpace tangent (xyz) and bitangent sign (w), for normal maps.
+    tangent: vec4f,
     // The object's unique chart (object-space shading).
     chart_uv: vec2f,
     pad_a: f32,
@@ -26,10 +28,16 @@ struct Object {
     light_count: u32,
     first_index: u32,
     base_vertex: u32,
+    // Phong's specular strength and exponent; GGX's metallic and roughness.
     specular: f32,
     shininess: f32,
+    metallic: f32,
+    roughness: f32,
+    // Layer of the normal-map array, or NO_NORMAL_MAP.
+    normal_layer: u32,
     pad_a: u32,
     pad_b: u32,
+    pad_c: u32,
 }
 
 struct View {
@@ -42,7 +50,8 @@ struct View {
     // others).
     light_count: u32,
     global_light_count: u32,
-    pad_a: u32,
+    // SHADING_PHONG or SHADING_PBR.
+    shading: u32,
     pad_b: u32,
 }
 

@@ -8,7 +8,7 @@
 // such pixel lists the page; `mark_backed` marks those tiles once paging
 // has backed the page.
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_PAGES_USED, COUNT_PAGES_REQUESTED, COUNT_PAGES_FAILED,
-    COUNT_PAGES_BACKED, COUNT_VIEW_TILES, COUNT_BACKED_TILES}
+    COUNT_PAGES_BACKED, COUNT_VIEW_TILES, COUNT_BACKED_TILES, COUNT_ATLAS_PIXELS, COUNT_UNDER_SHADED_PIXELS}
 #import shadespace::pixel_surface::sample_pixel
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, tile_visible, tile_shaded, queue, counters, visibility,
@@ -107,23 +107,52 @@ fn mark_tile(object: u32, level_index: u32, l: AtlasLevel, valid_since: u32, tex
     queue_if_due(slot, virtual_tile(l, t), object, level_index, valid_since);
 }
 
+// What a pixel is, for the under-shading counters.
+const PIXEL_NOT_IN_ATLAS: u32 = 0u;
+const PIXEL_SHADED: u32 = 1u;
+// Its level holds fewer than one texel per pixel (along the footprint's
+// longer axis): level > log2(texels per pixel at level 0).
+const PIXEL_UNDER_SHADED: u32 = 2u;
+
+var<workgroup> atlas_pixels: atomic<u32>;
+var<workgroup> under_shaded_pixels: atomic<u32>;
+
 @compute @workgroup_size(8, 8)
-fn mark(@builtin(global_invocation_id) id: vec3u) {
+fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) local: u32) {
+    let kind = mark_pixel(id.xy);
+    // Counted per workgroup first: one global atomic per 64 pixels.
+    if kind != PIXEL_NOT_IN_ATLAS {
+        atomicAdd(&atlas_pixels, 1u);
+    }
+    if kind == PIXEL_UNDER_SHADED {
+        atomicAdd(&under_shaded_pixels, 1u);
+    }
+    workgroupBarrier();
+    if local == 0u {
+        atomicAdd(&counters[COUNT_ATLAS_PIXELS], atomicLoad(&atlas_pixels));
+        atomicAdd(&counters[COUNT_UNDER_SHADED_PIXELS], atomicLoad(&under_shaded_pixels));
+    }
+}
+
+// Marks one pixel's tiles; returns what kind of pixel it is.
+fn mark_pixel(pixel: vec2u) -> u32 {
     let size = textureDimensions(visibility);
-    if id.x >= size.x || id.y >= size.y {
-        return;
+    if pixel.x >= size.x || pixel.y >= size.y {
+        return PIXEL_NOT_IN_ATLAS;
     }
-    let ids = textureLoad(visibility, id.xy, 0).xy;
+    let ids = textureLoad(visibility, pixel, 0).xy;
     if ids.x == 0u {
-        return;
+        return PIXEL_NOT_IN_ATLAS;
     }
-    let p = sample_pixel(id.xy, ids);
+    let p = sample_pixel(pixel, ids);
     let e = atlas_entries[p.object];
     if e.size == 0u {
-        return; // shaded forward, in the gather
+        return PIXEL_NOT_IN_ATLAS; // shaded forward, in the gather
     }
     let f = chart_footprint(p);
     let level_index = select_level(e, p, f);
+    let texels_per_pixel = max(length(f.du_dx), length(f.du_dy)) * f32(e.size);
+    let kind = select(PIXEL_SHADED, PIXEL_UNDER_SHADED, f32(level_index) > log2(max(texels_per_pixel, 1e-8)));
     let l = e.levels[level_index];
     let b = bilinear(l, f.uv);
     mark_tile(p.object, level_index, l, e.valid_since, b.texel);
@@ -139,6 +168,7 @@ fn mark(@builtin(global_invocation_id) id: vec3u) {
     if hi.x != lo.x && hi.y != lo.y {
         mark_tile(p.object, level_index, l, e.valid_since, b.texel_hi);
     }
+    return kind;
 }
 
 // Per page backed this frame (one workgroup each, one invocation per tile of

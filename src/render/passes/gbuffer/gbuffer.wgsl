@@ -1,17 +1,20 @@
 // G-buffer pass: rasterize the scene and store, per pixel, what lighting
-// needs besides depth: the octahedral-encoded unit normal, the albedo, and the
-// object (its specular, shininess and emission are per object, so the index
-// carries them exactly). Positions come back from depth. Its clip position is
+// needs besides depth: the octahedral-encoded unit normal (normal-mapped),
+// the albedo, and the object (its specular, shininess, metallic, roughness
+// and emission are per object, so the index carries them exactly). Positions come back from depth. Its clip position is
 // `object_clip_position`, so after a depth pre-pass the `Equal` test passes.
 #import shadespace::octahedral::oct_encode
 #import shadespace::scene::vertex_uv0
-#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, object_clip_position}
+#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, normal_maps, object_clip_position}
+#import shadespace::normal_map::{mapped_normal, sample_layer}
 
 struct VertexOut {
     @builtin(position) @invariant clip: vec4f,
     @location(0) normal: vec3f,
     @location(1) uv0: vec2f,
     @location(2) @interpolate(flat) object: u32,
+    // World tangent and bitangent sign.
+    @location(3) tangent: vec4f,
 }
 
 struct GbufferOut {
@@ -28,6 +31,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
     out.normal = (objects[object].normal_model * vec4f(v.normal, 0.0)).xyz;
     out.uv0 = vertex_uv0(v);
     out.object = object;
+    out.tangent = vec4f((objects[object].model * vec4f(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
     return out;
 }
 
@@ -35,7 +39,8 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
 fn fs_main(in: VertexOut) -> GbufferOut {
     let o = objects[in.object];
     var out: GbufferOut;
-    out.normal = oct_encode(normalize(in.normal));
+    let normal_texel = textureSample(normal_maps, albedo_sampler, in.uv0, sample_layer(o.normal_layer)).rgb;
+    out.normal = oct_encode(mapped_normal(in.normal, in.tangent, normal_texel, o.normal_layer));
     out.albedo_color = vec4f(textureSample(albedo, albedo_sampler, in.uv0, o.albedo_layer).rgb * o.base_color.rgb, 1.0);
     out.object = in.object;
     return out;

@@ -48,6 +48,9 @@ fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
     t.surface.albedo = textureLoad(gbuffer_albedo, pixel, 0).rgb;
     t.surface.specular = o.specular;
     t.surface.shininess = o.shininess;
+    t.surface.metallic = o.metallic;
+    t.surface.roughness = o.roughness;
+    t.surface.model = view.shading;
     t.emissive = o.emissive;
     t.to_eye = normalize(view.camera_position.xyz - t.surface.position);
     return t;
