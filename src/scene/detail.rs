@@ -11,7 +11,7 @@
 use glam::{Vec2, Vec3};
 
 use super::{Scene, Texture};
-use crate::color::linear_to_srgb8;
+use crate::color::{linear_to_srgb8, srgb8_to_linear};
 use crate::hash::fnv1a;
 
 /// Side of the generated textures.
@@ -49,10 +49,7 @@ pub fn add_detailed_textures(scene: &mut Scene) {
 
 /// The mean linear colour of an sRGB texture.
 fn mean_linear(t: &Texture) -> Vec3 {
-    let decode = |c: u8| {
-        let c = c as f32 / 255.0;
-        if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
-    };
+    let decode = srgb8_to_linear;
     let n = (t.rgba8.len() / 4).max(1) as f32;
     let sum =
         t.rgba8.chunks_exact(4).fold(Vec3::ZERO, |acc, p| acc + Vec3::new(decode(p[0]), decode(p[1]), decode(p[2])));

@@ -189,10 +189,15 @@ fn variable_rate_bias(p: PixelSample) -> f32 {
 
 // The mip level a pixel shades at and gathers from:
 // round(log2(max(|dUV/dx|, |dUV/dy|) * size) + biases), clamped to the levels.
+// Level-0 texels per pixel along the footprint's longer axis, as a level:
+// log2 of it (negative where level 0 is magnified).
+fn footprint_level(e: AtlasEntry, f: ChartFootprint) -> f32 {
+    let rho = max(length(f.du_dx), length(f.du_dy)) * f32(e.size);
+    return log2(max(rho, 1e-8));
+}
+
 fn select_level(e: AtlasEntry, p: PixelSample, f: ChartFootprint) -> u32 {
-    let size = f32(e.size);
-    let rho = max(length(f.du_dx), length(f.du_dy)) * size;
-    let lod = log2(max(rho, 1e-8)) + params.mip_bias + e.mip_bias + variable_rate_bias(p);
+    let lod = footprint_level(e, f) + params.mip_bias + e.mip_bias + variable_rate_bias(p);
     return u32(clamp(round(lod), 0.0, f32(e.level_count - 1u)));
 }
 

@@ -4,7 +4,8 @@
 #define_import_path shadespace::raster_surface
 #import shadespace::lighting::Surface
 #import shadespace::scene::{Object, vertex_uv0}
-#import shadespace::scene_bindings::{view, objects, vertices, albedo, albedo_sampler, normal_maps, object_clip_position}
+#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, normal_maps, object_clip_position}
+#import shadespace::surface::object_surface
 #import shadespace::normal_map::{mapped_normal, sample_layer}
 
 struct VertexOut {
@@ -49,14 +50,9 @@ fn sample_normal_map(o: Object, in: VertexOut) -> vec3f {
 // The surface of object `o` at a fragment whose albedo texel is `texel` and
 // normal-map texel `normal_texel`.
 fn fragment_surface(o: Object, in: VertexOut, texel: vec3f, normal_texel: vec3f) -> Surface {
-    var s: Surface;
+    var s = object_surface(o);
     s.position = in.world;
     s.normal = mapped_normal(in.normal, in.tangent, normal_texel, o.normal_layer);
     s.albedo = texel * o.base_color.rgb;
-    s.specular = o.specular;
-    s.shininess = o.shininess;
-    s.metallic = o.metallic;
-    s.roughness = o.roughness;
-    s.model = view.shading;
     return s;
 }

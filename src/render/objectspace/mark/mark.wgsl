@@ -12,7 +12,7 @@
 #import shadespace::pixel_surface::sample_pixel
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, tile_visible, tile_shaded, queue, counters, visibility,
-    chart_footprint, select_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
+    chart_footprint, select_level, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, tile_in_page, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin}
 
 // A small integer hash (PCG's output permutation) for tile phases.
@@ -151,8 +151,7 @@ fn mark_pixel(pixel: vec2u) -> u32 {
     }
     let f = chart_footprint(p);
     let level_index = select_level(e, p, f);
-    let texels_per_pixel = max(length(f.du_dx), length(f.du_dy)) * f32(e.size);
-    let kind = select(PIXEL_SHADED, PIXEL_UNDER_SHADED, f32(level_index) > log2(max(texels_per_pixel, 1e-8)));
+    let kind = select(PIXEL_SHADED, PIXEL_UNDER_SHADED, f32(level_index) > footprint_level(e, f));
     let l = e.levels[level_index];
     let b = bilinear(l, f.uv);
     mark_tile(p.object, level_index, l, e.valid_since, b.texel);

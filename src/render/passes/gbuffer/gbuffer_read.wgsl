@@ -5,6 +5,7 @@
 #import shadespace::lighting::Surface
 #import shadespace::octahedral::oct_decode
 #import shadespace::scene_bindings::{view, objects}
+#import shadespace::surface::object_surface
 
 // Mirrors `render::passes::gbuffer::GpuUnproject`.
 struct Unproject {
@@ -43,14 +44,10 @@ fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
     let object = textureLoad(gbuffer_object, pixel, 0).x;
     let o = objects[object];
     var t: GbufferTexel;
+    t.surface = object_surface(o);
     t.surface.position = world_position(pixel, depth);
     t.surface.normal = oct_decode(textureLoad(gbuffer_normal, pixel, 0).xy);
     t.surface.albedo = textureLoad(gbuffer_albedo, pixel, 0).rgb;
-    t.surface.specular = o.specular;
-    t.surface.shininess = o.shininess;
-    t.surface.metallic = o.metallic;
-    t.surface.roughness = o.roughness;
-    t.surface.model = view.shading;
     t.emissive = o.emissive;
     t.to_eye = normalize(view.camera_position.xyz - t.surface.position);
     return t;
