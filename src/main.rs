@@ -246,12 +246,15 @@ struct SceneArgs {
     /// Seed of the light placement (same seed, same lights).
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Exposure before tone mapping: a multiplier (positive, finite; the
-    /// default is 1), or `auto`: computed on the GPU every frame, the HDR
-    /// frame's log-average luminance over the pixels any light reached,
-    /// mapped to mid-grey 0.18.
-    #[arg(long, default_value = "1", value_parser = parse_exposure)]
-    exposure: Exposure,
+    /// Exposure before tone mapping: a multiplier (positive, finite), or
+    /// `auto`: computed on the GPU every frame, the HDR frame's log-average
+    /// luminance over the pixels any light reached, mapped to mid-grey 0.18.
+    /// Default: `auto` for a model seen from outside (a glTF or OBJ file
+    /// framed automatically or seen through its own camera), 1 for scenes
+    /// the camera moves through (the generated scenes, scenes with a camera
+    /// file), as the studies and goldens use.
+    #[arg(long, value_parser = parse_exposure)]
+    exposure: Option<Exposure>,
     /// Bloom strength, 0 to 1: the fraction of the HDR image replaced by its
     /// glow (an average of blurs from half to 1/64 of the image size) before
     /// tone mapping; 0 (default) turns bloom off.
@@ -695,6 +698,8 @@ struct Setup {
     lights_spec: String,
     /// Object space: views besides the camera's.
     extra_views: ExtraViews,
+    /// `--exposure`, or its default for how the scene is seen.
+    exposure: Exposure,
 }
 
 fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
@@ -745,7 +750,9 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     } else {
         (scene, None)
     };
-    Ok(Setup { scene, texture_sizes, path, camera_label, lights, lights_spec: spec.to_string(), extra_views })
+    let exposure =
+        a.exposure.unwrap_or(if cameras.source.seen_from_outside() { Exposure::Auto } else { Exposure::default() });
+    Ok(Setup { scene, texture_sizes, path, camera_label, lights, lights_spec: spec.to_string(), extra_views, exposure })
 }
 
 /// The camera path the options ask for, and its label for reports: a free
@@ -848,8 +855,8 @@ fn open_gpu(a: &GpuArgs) -> Result<GpuContext, Failure> {
 }
 
 /// The renderer settings the scene options choose (besides the pipeline).
-fn configure(renderer: &mut Renderer, a: &SceneArgs) {
-    renderer.exposure = a.exposure;
+fn configure(renderer: &mut Renderer, a: &SceneArgs, s: &Setup) {
+    renderer.exposure = s.exposure;
     renderer.bloom = a.bloom;
     renderer.shadow_refresh = a.shadow_refresh;
     renderer.sun_shadow = a.sun_shadow;
@@ -861,7 +868,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
     let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s, a.view, ctx.device.features()))?;
-    configure(&mut renderer, &a.scene);
+    configure(&mut renderer, &a.scene, &s);
     if a.atlas_out.is_some() && renderer.pipeline::<ObjectSpace>().is_none() {
         return input(Err(anyhow::anyhow!("--atlas-out needs --pipeline objectspace")));
     }
@@ -942,7 +949,7 @@ fn run_bench(a: BenchArgs) -> Result<(), Failure> {
     let (w, h) = a.scene.size;
     let mut renderer =
         Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s, DebugView::Shade, ctx.device.features()))?;
-    configure(&mut renderer, &a.scene);
+    configure(&mut renderer, &a.scene, &s);
     if !renderer.timing_enabled() {
         tracing::warn!("{} has no timestamp queries: the result has CPU times only", ctx.info.name);
     }

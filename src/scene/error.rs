@@ -13,7 +13,7 @@ pub enum SceneError {
     Parse { path: PathBuf, message: String },
     #[error("{path}: invalid scene: {problem}")]
     Invalid { path: PathBuf, problem: String },
-    #[error("{path}: {source}")]
+    #[error("{path}: cannot read")]
     Io {
         path: PathBuf,
         #[source]

@@ -68,13 +68,15 @@ pub fn frame(points: &[Vec3], aspect: f32) -> Option<Framed> {
         (0..TURN_SAMPLES).map(|k| -view_direction(TAU * k as f32 / TURN_SAMPLES as f32, elevation)).collect();
     let (lift, distance) = fit(points, centre, &turn, aspect);
     let target = centre + lift * Vec3::Y;
-    let turntable = Turntable {
+    let mut turntable = Turntable {
         target,
         radius: distance * elevation.cos(),
         height: distance * elevation.sin(),
         frames: super::path::Orbit::FRAMES,
+        start: 0.0,
         projection: clip_planes_around(target - distance * turn[0], centre, radius),
     };
+    turntable.start = widest_angle(&turntable, points, aspect);
     let mut fixed: Vec<Camera> =
         (0..4).map(|k| turntable.camera_at_angle((45.0 + 90.0 * k as f32).to_radians())).collect();
     let overview = -view_direction(45f32.to_radians(), OVERVIEW_ELEVATION_DEG.to_radians());
@@ -83,6 +85,25 @@ pub fn frame(points: &[Vec3], aspect: f32) -> Option<Framed> {
     let eye = target - d * overview;
     fixed.push(look_at(eye, target, clip_planes_around(eye, centre, radius)));
     Some(Framed { turntable, fixed })
+}
+
+/// The sampled turn angle at which the model's projected bounding rectangle
+/// is largest, so that frame 0 (the default camera) shows its broad side: a
+/// flat model seen edge-on, or a row of objects seen end-on, would fill
+/// little of the frame.
+fn widest_angle(turntable: &Turntable, points: &[Vec3], aspect: f32) -> f32 {
+    let stride = points.len().div_ceil(SEARCH_POINTS).max(1);
+    let area = |angle: f32| {
+        let vp = turntable.camera_at_angle(angle).view_projection(aspect);
+        let (lo, hi) = points.iter().step_by(stride).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+            let ndc = vp.project_point3(p);
+            (lo.min(ndc), hi.max(ndc))
+        });
+        (hi.x - lo.x) * (hi.y - lo.y)
+    };
+    let angles = (0..TURN_SAMPLES).map(|k| TAU * k as f32 / TURN_SAMPLES as f32);
+    // Ties (a sphere, a cube's symmetric views) go to the first angle.
+    angles.fold((0.0, f32::NEG_INFINITY), |best, a| if area(a) > best.1 + 1e-4 { (a, area(a)) } else { best }).0
 }
 
 /// Clip planes for a camera at `eye` that should see the sphere of `radius`
@@ -106,7 +127,10 @@ fn fit(points: &[Vec3], centre: Vec3, forwards: &[Vec3], aspect: f32) -> (f32, f
         forwards.iter().map(|&f| fit_distance(points, centre + lift * Vec3::Y, f, aspect)).fold(0.0, f32::max)
     };
     let half_height = points.iter().map(|p| (p.y - centre.y).abs()).fold(0.0, f32::max);
-    let (mut lo, mut hi) = (-half_height, half_height);
+    // Lowering the target below a quarter of the height would bring the
+    // closest fit with the eye level with the model's top: a box would show
+    // no top face.
+    let (mut lo, mut hi) = (-0.25 * half_height, half_height);
     for _ in 0..SEARCH_STEPS {
         let (a, b) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
         if needed(&sample, a) <= needed(&sample, b) {

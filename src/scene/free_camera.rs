@@ -102,6 +102,7 @@ impl OrbitSpec {
             radius: self.radius,
             height: self.height,
             frames: self.frames,
+            start: 0.0,
             projection: clip_planes(fov_y, nearest, farthest),
         })
     }

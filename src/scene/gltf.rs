@@ -32,6 +32,9 @@
 //!   every byte range, count and index checked (the `gltf` crate's readers
 //!   can panic or read garbage on malformed files), and the GLB header, URIs
 //!   and buffer views are checked before the `gltf` crate uses them.
+//! - Extensions other than `KHR_lights_punctual`, skins, morph targets and
+//!   animations are ignored with a warning (`extensionsRequired` of any
+//!   other extension is an error).
 
 use std::collections::HashMap;
 use std::fs;
@@ -50,6 +53,28 @@ use crate::color::linear_to_srgb8;
 /// and a corrupt count must not allocate gigabytes.
 const MAX_ACCESSOR_BYTES: usize = 1 << 30;
 
+/// Warns about what the file uses and the renderer ignores: extensions
+/// besides `KHR_lights_punctual` (`extensionsRequired` ones are already
+/// refused by the parser), skins, morph targets and animations (meshes are
+/// drawn in their bind pose, without morphs).
+fn warn_ignored(document: &Document, path: &Path) {
+    let path = path.display();
+    let extensions: Vec<&str> = document.extensions_used().filter(|e| *e != "KHR_lights_punctual").collect();
+    if !extensions.is_empty() {
+        tracing::warn!("{path}: extensions ignored: {}", extensions.join(", "));
+    }
+    let morphed = document.meshes().filter(|m| m.primitives().any(|p| p.morph_targets().len() > 0)).count();
+    for (count, what) in [
+        (document.skins().len(), "skins ignored (meshes drawn in their bind pose)"),
+        (morphed, "meshes with morph targets drawn without them"),
+        (document.animations().len(), "animations ignored"),
+    ] {
+        if count > 0 {
+            tracing::warn!("{path}: {count} {what}");
+        }
+    }
+}
+
 /// Loads a `.gltf` or `.glb` file as a scene named after the file stem. The
 /// scene is validated.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
@@ -63,6 +88,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     };
     let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
     check_uris_and_views(&document).map_err(|m| parse_error(path, m))?;
+    warn_ignored(&document, path);
     let buffers = load_buffers(&document, &base, blob, path)?;
 
     let mut builder = Builder {

@@ -171,8 +171,8 @@ pub fn look_at(eye: Vec3, target: Vec3, p: Projection) -> Camera {
 
 /// A camera circling `target` on a horizontal circle of `radius` at `height`
 /// above it, always looking at it: the framed default of scenes without a
-/// camera path ([`framing`]) and `--orbit`. Frame k is at angle `2π k /
-/// frames` from the +x side, turning towards +z.
+/// camera path ([`framing`]) and `--orbit`. Frame k is at angle `start +
+/// 2π k / frames` from the +x side, turning towards +z.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Turntable {
     /// The point circled and looked at.
@@ -183,6 +183,8 @@ pub struct Turntable {
     pub height: f32,
     /// Frames per full turn; later frames wrap around.
     pub frames: u32,
+    /// Turn angle of frame 0 (radians; 0 is on the +x side).
+    pub start: f32,
     /// Projection of every camera of the turn.
     pub projection: Projection,
 }
@@ -196,7 +198,7 @@ impl Turntable {
 
     fn camera_at(&self, frame: u32) -> Camera {
         let frames = self.frames.max(1);
-        self.camera_at_angle(TAU * (frame % frames) as f32 / frames as f32)
+        self.camera_at_angle(self.start + TAU * (frame % frames) as f32 / frames as f32)
     }
 }
 
