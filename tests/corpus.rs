@@ -11,6 +11,9 @@
 //! unsupported extension (a custom one, Draco compression) is refused with
 //! an error naming the file and the extension, never a panic.
 //!
+//! Object space agrees with forward on every model within [`MAX_FLIP`]
+//! (textured files included: the Cesium logo box, the voxel knight).
+//!
 //! The test writes each render, a contact sheet and a table of the measures
 //! to `target/tmp/corpus/`.
 
@@ -86,6 +89,11 @@ const MIN_SPAN: f32 = 0.60;
 const MIN_LUMA: f32 = 0.06;
 /// Most of the model's pixels that may be white in every channel.
 const MAX_BLOWN: f32 = 0.05;
+/// Most mean FLIP of object space against forward on a corpus model at
+/// 320x180 (measured: 0.012 or less, and 0.040 on `sparse-morph-cube.glb`,
+/// whose checker lines object space blurs: the default texel density gives
+/// this cube fewer shading texels than pixels).
+const MAX_FLIP: f32 = 0.05;
 /// A pixel brighter than this in some channel belongs to the model (the
 /// background is black; the ambient light keeps every surface above it).
 const MODEL_THRESHOLD: u8 = 2;
@@ -202,7 +210,11 @@ fn every_corpus_model_renders_framed_and_lit_in_forward_and_object_space() {
                 m.file, shot.silhouette, shot.extent, shot.span, shot.luma, shot.blown
             )
             .unwrap();
-            if !(m.own_camera || shot.framed(m.min_span)) || shot.luma < MIN_LUMA || shot.blown > MAX_BLOWN {
+            if !(m.own_camera || shot.framed(m.min_span))
+                || shot.luma < MIN_LUMA
+                || shot.blown > MAX_BLOWN
+                || flip > MAX_FLIP
+            {
                 failures.push(format!("{} ({pipeline}): {shot:?}", m.file));
             }
             if p == 0 {
@@ -218,7 +230,7 @@ fn every_corpus_model_renders_framed_and_lit_in_forward_and_object_space() {
     println!("{table}");
     assert!(
         failures.is_empty(),
-        "not framed ({COVERAGE:?} of the frame, or a span of {MIN_SPAN}, uncut), black (luma < {MIN_LUMA}) or blown out (> {MAX_BLOWN} white):\n{}",
+        "not framed ({COVERAGE:?} of the frame, or a span of {MIN_SPAN}, uncut), black (luma < {MIN_LUMA}), blown out (> {MAX_BLOWN} white) or object space off forward (FLIP > {MAX_FLIP}):\n{}",
         failures.join("\n")
     );
 }
