@@ -8,7 +8,9 @@
 //! field of view; horizontally: the image's aspect) at every sampled angle of
 //! the turn. The point it looks at is lifted or lowered on that vertical so
 //! that the model sits in the middle of the frame (seen from above, its near
-//! bottom looms larger than its far top). Fitting the bounding sphere (or
+//! bottom looms larger than its far top), but not below a quarter of the
+//! model's height, which would leave the eye level with its top. Frame 0
+//! (the default camera) is the side where the model looks widest. Fitting the bounding sphere (or
 //! box) instead leaves a box-like model covering about a fifth of a 16:9
 //! frame and a round one a sixth; fitting the vertices keeps the model itself
 //! at the margin. Clip planes come from the bounding sphere, so a 5 cm model
