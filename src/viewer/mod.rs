@@ -334,7 +334,9 @@ impl Viewer {
         let Some(run) = &mut self.script else { return Ok(None) };
         while run.frames_left == 0 {
             if let Some(step) = run.player.as_mut().and_then(Player::next_step) {
-                let (frames, shot) = apply_step(&step, &mut self.wanted, &mut self.camera, &mut self.ui_shown)?;
+                let current = self.camera.camera(self.session.path(), &self.session.bounds());
+                let mut target = StepTarget { wanted: &mut self.wanted, camera: &mut self.camera, current };
+                let (frames, shot) = apply_step(&step, &mut target, &mut self.ui_shown)?;
                 run.frames_left = frames;
                 self.shots.extend(shot);
             } else if run.after > 0 {
@@ -622,15 +624,23 @@ const WHEEL_STEP: f32 = 1.25;
 /// Fly speed per second as a share of the scene's bounding-box diagonal.
 const FLY_SPEED_PER_SCENE_SIZE: f32 = 0.1;
 
+/// What a script step changes.
+struct StepTarget<'a> {
+    wanted: &'a mut Settings,
+    camera: &'a mut CameraMode,
+    /// The camera being rendered (moves and turns on the path start from it).
+    current: crate::scene::Camera,
+}
+
 /// Applies a script step to the wanted settings and the camera; returns the
 /// frames to render before the next step and a screenshot to take.
-fn apply_step(
-    step: &Step,
-    wanted: &mut Settings,
-    camera: &mut CameraMode,
-    ui_shown: &mut bool,
-) -> anyhow::Result<(u32, Option<PathBuf>)> {
+fn apply_step(step: &Step, t: &mut StepTarget, ui_shown: &mut bool) -> anyhow::Result<(u32, Option<PathBuf>)> {
     use crate::render::Exposure;
+    let (wanted, camera) = (&mut *t.wanted, &mut *t.camera);
+    // Moves and turns fly from the current view, as the keys and mouse do.
+    if matches!(step, Step::Move(_) | Step::Turn(_)) && !matches!(camera, CameraMode::Fly(_)) {
+        *camera = CameraMode::Fly(FlyCamera::from_camera(&t.current, 1.0));
+    }
     let os = &mut wanted.objectspace;
     match step {
         Step::Frames(n) => return Ok((*n, None)),
@@ -649,15 +659,16 @@ fn apply_step(
             let look = LookAt { eye: (*eye).into(), target: (*target).into(), fov_deg: *fov };
             *camera = CameraMode::Fly(FlyCamera::from_look_at(&look, 1.0));
         }
-        Step::Move([right, up, forward]) => match camera {
-            CameraMode::Fly(f) => f.fly(*right, *up, *forward),
-            _ => anyhow::bail!("script: 'move' needs a free camera ('camera' first)"),
-        },
-        Step::Turn([yaw, pitch]) => match camera {
-            CameraMode::Fly(f) => f.turn(*yaw, *pitch),
-            CameraMode::Orbit(o) => o.turn(*yaw, *pitch),
-            CameraMode::Path { .. } => anyhow::bail!("script: 'turn' needs a free camera ('camera' first)"),
-        },
+        Step::Move([right, up, forward]) => {
+            if let CameraMode::Fly(f) = camera {
+                f.fly(*right, *up, *forward);
+            }
+        }
+        Step::Turn([yaw, pitch]) => {
+            if let CameraMode::Fly(f) = camera {
+                f.turn(*yaw, *pitch);
+            }
+        }
         Step::PathFrame(k) => *camera = CameraMode::Path { frame: *k, playing: false },
         Step::Ui(shown) => *ui_shown = *shown,
     }

@@ -61,7 +61,8 @@ pub enum Step {
         target: [f32; 3],
         fov: f32,
     },
-    /// Fly right, up and forward by scene units (from the current view).
+    /// Fly right, up and forward by scene units (from the current view,
+    /// entering the fly camera).
     Move([f32; 3]),
     /// Turn right and up by degrees.
     Turn([f32; 2]),
