@@ -167,7 +167,8 @@ fn viewer_screenshot_matches_render_objectspace() {
 #[test]
 fn switching_pipelines_and_options_keeps_memory_flat() {
     let Some(x) = xvfb(2) else { return };
-    let switches: u32 = std::env::var("SHADESPACE_VIEWER_SWITCHES").ok().and_then(|v| v.parse().ok()).unwrap_or(SWITCHES);
+    let switches: u32 =
+        std::env::var("SHADESPACE_VIEWER_SWITCHES").ok().and_then(|v| v.parse().ok()).unwrap_or(SWITCHES);
     let dir = tempfile::tempdir().unwrap();
     // Five renderer builds a round: every pipeline, and object space with other options.
     let script = serde_json::json!({ "repeat": switches.div_ceil(5), "steps": [

@@ -427,7 +427,8 @@ impl Viewer {
         });
         self.egui_input.handle_platform_output(&self.window, output.platform_output);
         let primitives = egui.tessellate(output.shapes, output.pixels_per_point);
-        (EguiFrame { textures: output.textures_delta, primitives, pixels_per_point: output.pixels_per_point }, actions)
+        self.presenter.update_textures(&self.ctx, output.textures_delta);
+        (EguiFrame { primitives, pixels_per_point: output.pixels_per_point }, actions)
     }
 
     /// The current camera as `render` takes it.

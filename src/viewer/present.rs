@@ -16,11 +16,13 @@ pub struct Presenter {
     /// A copy of the renderer's `ldr` image that egui can sample.
     image: wgpu::Texture,
     image_id: egui::TextureId,
+    /// egui textures to free once the frame that dropped them is painted.
+    to_free: Vec<egui::TextureId>,
 }
 
-/// One frame of egui's output, tessellated.
+/// One frame of egui's output, tessellated (its texture changes already
+/// handed to [`Presenter::update_textures`]).
 pub struct EguiFrame {
-    pub textures: egui::TexturesDelta,
     pub primitives: Vec<egui::ClippedPrimitive>,
     pub pixels_per_point: f32,
 }
@@ -78,7 +80,7 @@ impl Presenter {
             ..Default::default()
         });
         let image_id = egui.register_native_texture(&ctx.device, &view, wgpu::FilterMode::Nearest);
-        Ok(Self { surface, config, egui, image, image_id })
+        Ok(Self { surface, config, egui, image, image_id, to_free: Vec::new() })
     }
 
     /// The texture id under which egui shows the rendered image.
@@ -110,24 +112,23 @@ impl Presenter {
     /// Paints `frame` onto the window. A surface that is out of date is
     /// configured again and the frame skipped.
     pub fn present(&mut self, ctx: &GpuContext, frame: &EguiFrame) {
-        self.upload(ctx, frame);
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 self.surface.configure(&ctx.device, &self.config);
-                self.free(frame);
+                self.free();
                 return;
             }
             other => {
                 tracing::debug!("viewer: frame skipped: {other:?}");
-                self.free(frame);
+                self.free();
                 return;
             }
         };
         let view = texture.texture.create_view(&Default::default());
         self.paint(ctx, frame, &view, (self.config.width, self.config.height));
         ctx.queue.present(texture);
-        self.free(frame);
+        self.free();
     }
 
     /// Paints `frame` into an offscreen texture of the window's size and
@@ -144,7 +145,6 @@ impl Presenter {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
-        self.upload(ctx, frame);
         self.paint(ctx, frame, &target.create_view(&Default::default()), (width, height));
         let mut bytes = readback::read_texture_rgba8(ctx, &target)?;
         if self.config.format == wgpu::TextureFormat::Bgra8Unorm {
@@ -153,18 +153,21 @@ impl Presenter {
         image::RgbaImage::from_raw(width, height, bytes).context("capture has the window's size")
     }
 
-    fn upload(&mut self, ctx: &GpuContext, frame: &EguiFrame) {
-        for (id, deltas) in &frame.textures.set {
-            for d in deltas {
-                self.egui.update_texture(&ctx.device, &ctx.queue, *id, d);
+    /// Applies egui's texture changes of a frame: new and changed textures
+    /// now, the ones it dropped after the frame is presented.
+    pub fn update_textures(&mut self, ctx: &GpuContext, mut delta: egui::TexturesDelta) {
+        for (id, changes) in &delta.set {
+            for change in changes {
+                self.egui.update_texture(&ctx.device, &ctx.queue, *id, change);
             }
         }
+        self.to_free.extend(delta.free.iter().copied());
+        delta.clear();
     }
 
-    /// Frees the textures egui no longer needs (after the frame's last paint).
-    fn free(&mut self, frame: &EguiFrame) {
-        for id in &frame.textures.free {
-            self.egui.free_texture(id);
+    fn free(&mut self) {
+        for id in std::mem::take(&mut self.to_free) {
+            self.egui.free_texture(&id);
         }
     }
 
