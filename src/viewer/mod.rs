@@ -102,6 +102,10 @@ pub struct RunReport {
     pub rss_kib_start: u64,
     pub rss_kib_first_frame: u64,
     pub rss_kib_end: u64,
+    /// A scripted run's resident set size, KiB, as each round of its steps
+    /// ended: flat once the first rounds have built every kind of renderer
+    /// when nothing leaks.
+    pub rss_kib_rounds: Vec<u64>,
 }
 
 /// Opens the window and runs until it is closed or, for a scripted run,
@@ -294,7 +298,7 @@ impl Viewer {
     fn frame(&mut self, report: &mut RunReport) -> anyhow::Result<Flow> {
         let dt = self.last_frame.elapsed().as_secs_f32().min(0.25);
         self.last_frame = Instant::now();
-        if let Some(flow) = self.advance_script()? {
+        if let Some(flow) = self.advance_script(report)? {
             return Ok(flow);
         }
         if self.script.is_none() {
@@ -307,7 +311,7 @@ impl Viewer {
         self.frame += 1;
         report.frames += 1;
         if let CameraMode::Path { frame, playing: true } = &mut self.camera {
-            *frame = (*frame + 1) % path.frame_count().max(1) as u32;
+            *frame = (*frame + 1) % path.frame_count().max(1);
         }
         self.timings.push(self.renderer.collect_timings(&self.ctx, false));
         self.timings.push_counters(self.renderer.collect_counters(&self.ctx, false));
@@ -330,10 +334,16 @@ impl Viewer {
 
     /// Plays script steps up to the next frame to render; `Some(Exit)` once
     /// the run is over (after its last frame is saved).
-    fn advance_script(&mut self) -> anyhow::Result<Option<Flow>> {
+    fn advance_script(&mut self, report: &mut RunReport) -> anyhow::Result<Option<Flow>> {
         let Some(run) = &mut self.script else { return Ok(None) };
         while run.frames_left == 0 {
-            if let Some(step) = run.player.as_mut().and_then(Player::next_step) {
+            let rounds_before = run.player.as_ref().map_or(0, Player::rounds_done);
+            let step = run.player.as_mut().and_then(Player::next_step);
+            let rounds = run.player.as_ref().map_or(0, Player::rounds_done);
+            if rounds > rounds_before {
+                report.rss_kib_rounds.push(memory::resident_kib().unwrap_or(0));
+            }
+            if let Some(step) = step {
                 let current = self.camera.camera(self.session.path(), &self.session.bounds());
                 let mut target = StepTarget { wanted: &mut self.wanted, camera: &mut self.camera, current };
                 let (frames, shot) = apply_step(&step, &mut target, &mut self.ui_shown)?;
@@ -402,7 +412,7 @@ impl Viewer {
         let input = self.egui_input.take_egui_input(&self.window);
         let view_camera = self.view_camera();
         let command = self.session.render_command(&self.wanted, &view_camera);
-        let path_frames = self.session.path().frame_count() as u32;
+        let path_frames = self.session.path().frame_count();
         let image = self.presenter.image_id();
         let mut actions = Vec::new();
         let egui = self.egui.clone();
@@ -536,7 +546,7 @@ impl Viewer {
                 }
             }
             KeyCode::ArrowLeft | KeyCode::ArrowRight => {
-                let n = self.session.path().frame_count().max(1) as u32;
+                let n = self.session.path().frame_count().max(1);
                 if let CameraMode::Path { frame, .. } = &mut self.camera {
                     *frame = if code == KeyCode::ArrowRight { (*frame + 1) % n } else { (*frame + n - 1) % n };
                 }

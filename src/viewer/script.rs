@@ -93,6 +93,11 @@ impl Player {
         Self { script, round: 0, next: 0 }
     }
 
+    /// Rounds of the steps completed so far.
+    pub fn rounds_done(&self) -> u32 {
+        self.round
+    }
+
     /// The next step, or `None` when the script has ended.
     pub fn next_step(&mut self) -> Option<Step> {
         if self.script.steps.is_empty() {
@@ -138,6 +143,7 @@ mod tests {
             n += 1;
         }
         assert_eq!(n, 6);
+        assert_eq!(p.rounds_done(), 3);
         assert_eq!(Player::new(Script { repeat: 5, steps: vec![] }).next_step(), None);
     }
 }
