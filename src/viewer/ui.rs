@@ -95,7 +95,7 @@ fn pipeline(ui: &mut Ui, settings: &mut Settings, pipelines: &[&'static str]) {
 }
 
 fn lights(ui: &mut Ui, settings: &mut Settings) {
-    ui.collapsing("lights", |ui| {
+    egui::CollapsingHeader::new("lights").default_open(true).show(ui, |ui| {
         match LightKind::parse(&settings.lights) {
             Some((mut kind, mut count)) => {
                 egui::ComboBox::from_label("kind").selected_text(kind.name()).show_ui(ui, |ui| {
@@ -119,7 +119,7 @@ fn lights(ui: &mut Ui, settings: &mut Settings) {
 }
 
 fn objectspace(ui: &mut Ui, settings: &mut Settings) {
-    ui.collapsing("object space", |ui| {
+    egui::CollapsingHeader::new("object space").default_open(true).show(ui, |ui| {
         let os = &mut settings.objectspace;
         egui::ComboBox::from_label("tile size").selected_text(os.tile_size.to_string()).show_ui(ui, |ui| {
             for t in [8, 16, 32, 64] {
@@ -162,7 +162,7 @@ fn exposure(ui: &mut Ui, exposure: &mut Exposure) {
 }
 
 fn camera(ui: &mut Ui, mode: &mut CameraMode, path_frames: u32, actions: &mut Vec<Action>) {
-    ui.collapsing("camera", |ui| {
+    egui::CollapsingHeader::new("camera").default_open(true).show(ui, |ui| {
         ui.horizontal(|ui| {
             let on_path = matches!(mode, CameraMode::Path { .. });
             if ui.selectable_label(on_path, "path").clicked() && !on_path {
