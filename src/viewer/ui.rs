@@ -64,6 +64,8 @@ pub fn panel(ui: &mut Ui, s: PanelState) -> Vec<Action> {
                 ui.colored_label(Color32::from_rgb(255, 190, 80), s.status);
             }
             pipeline(ui, s.settings, s.pipelines);
+            timing_graph(ui, s.timings);
+            counters(ui, s.timings);
             lights(ui, s.settings);
             if s.settings.pipeline == "objectspace" {
                 objectspace(ui, s.settings);
@@ -78,9 +80,6 @@ pub fn panel(ui: &mut Ui, s: PanelState) -> Vec<Action> {
             ui.collapsing("render command", |ui| {
                 ui.add(egui::Label::new(egui::RichText::new(s.render_command).monospace().small()).wrap());
             });
-            ui.separator();
-            timing_graph(ui, s.timings);
-            counters(ui, s.timings);
         });
     });
     actions
@@ -239,7 +238,7 @@ fn timing_graph(ui: &mut Ui, timings: &TimingHistory) {
     let (response, painter) = ui.allocate_painter(vec2(ui.available_width(), GRAPH_HEIGHT), Sense::hover());
     let rect = response.rect;
     painter.rect_filled(rect, 0.0, Color32::from_black_alpha(160));
-    let scale = timings.max_frame_ms().max(1e-3);
+    let scale = timings.graph_scale_ms().max(1e-3);
     let names = timings.pass_names();
     let bar = rect.width() / super::timings::HISTORY_FRAMES as f32;
     let frames: Vec<_> = timings.frames().collect();
@@ -248,7 +247,7 @@ fn timing_graph(ui: &mut Ui, timings: &TimingHistory) {
         let x = first_x + bar * i as f32;
         let mut y = rect.bottom();
         for (name, ms) in top_level(f) {
-            let h = (ms / scale) as f32 * rect.height();
+            let h = ((ms / scale) as f32 * rect.height()).min(y - rect.top());
             let k = names.iter().position(|n| n == name).unwrap_or(0);
             painter.rect_filled(Rect::from_min_max(pos2(x, y - h), pos2(x + bar.max(1.0), y)), 0.0, pass_colour(k));
             y -= h;
