@@ -608,7 +608,10 @@ impl Viewer {
             }
             ui::Action::AddBookmark => {
                 let look = self.camera.look_at(self.session.path());
-                self.bookmarks.push(Bookmark::new(format!("view {}", self.bookmarks.len() + 1), &look));
+                let name = format!("view {}", self.bookmarks.len() + 1);
+                // The same view from the command line (render has no camera-file option).
+                println!("{name}: {}", self.session.render_command(&self.built, &ViewCamera::Free(look)));
+                self.bookmarks.push(Bookmark::new(name, &look));
             }
             ui::Action::GoTo(k) => {
                 if let Some(b) = self.bookmarks.get(k) {
