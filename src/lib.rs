@@ -16,3 +16,5 @@ pub mod metrics;
 pub mod render;
 pub mod scene;
 pub mod shaders;
+#[cfg(feature = "viewer")]
+pub mod viewer;

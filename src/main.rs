@@ -51,6 +51,12 @@ enum Command {
     /// into a folder.
     #[command(long_about = EXPERIMENT_ABOUT)]
     Experiment(ExperimentArgs),
+    /// Open a window that renders the scene with the same options as
+    /// `render`: fly, orbit or path camera, pipelines and options switched
+    /// from a panel, live GPU timings, screenshots (F12). With --script,
+    /// --frames or --screenshot it plays, saves and exits (for tests).
+    #[cfg(feature = "viewer")]
+    View(view::ViewArgs),
 }
 
 const EXPERIMENT_ABOUT: &str = "\
@@ -201,7 +207,7 @@ struct ChartsArgs {
     objectspace: ObjectSpaceArgs,
 }
 
-#[derive(Args)]
+#[derive(Args, Clone)]
 #[command(next_help_heading = "GPU")]
 struct GpuArgs {
     /// Use the first adapter whose name contains this text (case-insensitive);
@@ -217,7 +223,7 @@ enum TextureChoice {
     Detailed,
 }
 
-#[derive(Args)]
+#[derive(Args, Clone)]
 struct SceneArgs {
     /// `atrium` (default), `voxels`, or a path: a .gltf/.glb file, an .obj file,
     /// or a folder of .obj files (e.g. ../shared/scenes/sponza-thesis).
@@ -316,7 +322,7 @@ struct SceneArgs {
     gpu: GpuArgs,
 }
 
-#[derive(Args)]
+#[derive(Args, Clone)]
 #[command(next_help_heading = "Free cameras (instead of --camera)")]
 struct FreeCameraArgs {
     /// Place the camera at X,Y,Z (world metres, +y up) looking at --target;
@@ -348,7 +354,7 @@ struct OrbitArg {
     frames: u32,
 }
 
-#[derive(Args)]
+#[derive(Args, Clone)]
 #[command(next_help_heading = "Object-space shading (--pipeline objectspace)")]
 struct ObjectSpaceArgs {
     /// Tile side in texels: 8, 16, 32 or 64.
@@ -639,6 +645,9 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     }
 }
 
+#[cfg(feature = "viewer")]
+mod view;
+
 /// Errors caused by the user's input exit with status 2; others with 1.
 struct InputError(anyhow::Error);
 
@@ -658,6 +667,8 @@ fn main() -> ExitCode {
         Command::Charts(a) => print_charts(a),
         Command::Compare(a) => compare(a),
         Command::Experiment(a) => experiment(a),
+        #[cfg(feature = "viewer")]
+        Command::View(a) => view::view(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -741,9 +752,7 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
             ExtraViews::Cameras(others.collect())
         }
     };
-    let spec: LightSpec = input(a.lights.parse())?;
-    let reference: Camera = path.camera_at(0);
-    let lights = input(lights::build_lights(&spec, &cameras.light_region(&bounds), &reference, aspect, a.seed))?;
+    let (lights, lights_spec) = light_set(a, &cameras.light_region(&bounds), &path)?;
     let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {
         let (charted, charts) = chart(&scene, &a.objectspace)?;
         (charted, Some(charts.texture_sizes()))
@@ -752,7 +761,17 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     };
     let exposure =
         a.exposure.unwrap_or(if cameras.source.seen_from_outside() { Exposure::Auto } else { Exposure::default() });
-    Ok(Setup { scene, texture_sizes, path, camera_label, lights, lights_spec: spec.to_string(), extra_views, exposure })
+    Ok(Setup { scene, texture_sizes, path, camera_label, lights, lights_spec, extra_views, exposure })
+}
+
+/// The `--lights` set placed in `region` for the path's first camera, and
+/// its spec as text.
+fn light_set(a: &SceneArgs, region: &Aabb, path: &CameraPath) -> Result<(Vec<Light>, String), Failure> {
+    let spec: LightSpec = input(a.lights.parse())?;
+    let reference: Camera = path.camera_at(0);
+    let aspect = a.size.0 as f32 / a.size.1 as f32;
+    let lights = input(lights::build_lights(&spec, region, &reference, aspect, a.seed))?;
+    Ok((lights, spec.to_string()))
 }
 
 /// The camera path the options ask for, and its label for reports: a free
@@ -1111,14 +1130,16 @@ fn timing_grid(mut grid: TimingGrid, a: &TimingArgs) -> TimingGrid {
 
 /// The command line as typed, arguments with spaces or quotes single-quoted.
 fn command_line() -> String {
-    let quote = |s: String| {
-        if s.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:,+@".contains(c)) {
-            s
-        } else {
-            format!("'{}'", s.replace('\'', "'\\''"))
-        }
-    };
-    std::env::args().map(quote).collect::<Vec<_>>().join(" ")
+    std::env::args().map(|a| shell_quote(&a)).collect::<Vec<_>>().join(" ")
+}
+
+/// A word as a shell reads it back: single-quoted when it holds spaces or quotes.
+fn shell_quote(s: &str) -> String {
+    if s.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:,+@".contains(c)) {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
 }
 
 fn info(a: GpuArgs) -> Result<(), Failure> {

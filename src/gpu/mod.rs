@@ -68,7 +68,20 @@ pub struct GpuContext {
 impl GpuContext {
     pub fn new(options: &GpuOptions) -> Result<Self, GpuError> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        Self::with_instance(instance, options, None)
+    }
+
+    /// Opens a device on an adapter of `instance`; with `surface`, only on
+    /// one that can present to it (the viewer's window).
+    pub fn with_instance(
+        instance: wgpu::Instance,
+        options: &GpuOptions,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Self, GpuError> {
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        if let Some(surface) = surface {
+            adapters.retain(|a| a.is_surface_supported(surface));
+        }
         let wanted = options.adapter.clone().or_else(|| std::env::var(ADAPTER_ENV).ok()).filter(|s| !s.is_empty());
         let adapter = choose_adapter(adapters, wanted.as_deref())?;
         let info = adapter.get_info();

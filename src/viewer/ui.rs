@@ -1,0 +1,281 @@
+//! The control panel (egui): pipeline, lights, object-space options, debug
+//! view, exposure, camera and bookmarks, and the timing graph. It edits the
+//! viewer's state in place and returns what the viewer itself must do.
+
+use egui::{Color32, Rect, Sense, Stroke, Ui, pos2, vec2};
+
+use super::camera::{Bookmark, CameraMode};
+use super::settings::{LightKind, MAX_LIGHTS, Settings};
+use super::timings::{TimingHistory, top_level};
+use crate::render::Exposure;
+use crate::render::objectspace::DebugView;
+
+/// Width of the panel, points.
+const PANEL_WIDTH: f32 = 280.0;
+/// Height of the timing graph, points.
+const GRAPH_HEIGHT: f32 = 110.0;
+
+/// What the panel shows and edits.
+pub struct PanelState<'a> {
+    /// The settings the next frame is rendered with.
+    pub settings: &'a mut Settings,
+    pub camera: &'a mut CameraMode,
+    /// Frames of the camera path.
+    pub path_frames: u32,
+    pub bookmarks: &'a mut Vec<Bookmark>,
+    pub timings: &'a TimingHistory,
+    /// The `--pipeline` names.
+    pub pipelines: &'a [&'static str],
+    /// The last error or notice, shown at the top.
+    pub status: &'a str,
+    /// The `shadespace render` command of the current view.
+    pub render_command: &'a str,
+    /// Adapter and present mode, one line.
+    pub device: &'a str,
+}
+
+/// What the viewer does after the panel was drawn.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    Screenshot,
+    /// Enter the fly or orbit camera from the current view.
+    Fly,
+    Orbit,
+    AddBookmark,
+    /// Go to bookmark K.
+    GoTo(usize),
+    SaveBookmarks,
+    LoadBookmarks,
+}
+
+/// Paints the rendered image over the whole window (under the panel).
+pub fn background(ctx: &egui::Context, image: egui::TextureId) {
+    let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0));
+    ctx.layer_painter(egui::LayerId::background()).image(image, ctx.content_rect(), uv, Color32::WHITE);
+}
+
+/// Draws the panel; returns the actions asked for.
+pub fn panel(ui: &mut Ui, s: PanelState) -> Vec<Action> {
+    let mut actions = Vec::new();
+    egui::Panel::left("controls").default_size(PANEL_WIDTH).show(ui, |ui| {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            ui.label(s.device);
+            if !s.status.is_empty() {
+                ui.colored_label(Color32::from_rgb(255, 190, 80), s.status);
+            }
+            pipeline(ui, s.settings, s.pipelines);
+            timing_graph(ui, s.timings);
+            counters(ui, s.timings);
+            lights(ui, s.settings);
+            if s.settings.pipeline == "objectspace" {
+                objectspace(ui, s.settings);
+            }
+            exposure(ui, &mut s.settings.exposure);
+            camera(ui, s.camera, s.path_frames, &mut actions);
+            bookmarks(ui, s.bookmarks, &mut actions);
+            ui.separator();
+            if ui.button("Screenshot (F12)").clicked() {
+                actions.push(Action::Screenshot);
+            }
+            ui.collapsing("render command", |ui| {
+                ui.add(egui::Label::new(egui::RichText::new(s.render_command).monospace().small()).wrap());
+            });
+        });
+    });
+    actions
+}
+
+fn pipeline(ui: &mut Ui, settings: &mut Settings, pipelines: &[&'static str]) {
+    egui::ComboBox::from_label("pipeline").selected_text(settings.pipeline.clone()).show_ui(ui, |ui| {
+        for p in pipelines {
+            ui.selectable_value(&mut settings.pipeline, p.to_string(), *p);
+        }
+    });
+}
+
+fn lights(ui: &mut Ui, settings: &mut Settings) {
+    egui::CollapsingHeader::new("lights").default_open(true).show(ui, |ui| {
+        match LightKind::parse(&settings.lights) {
+            Some((mut kind, mut count)) => {
+                egui::ComboBox::from_label("kind").selected_text(kind.name()).show_ui(ui, |ui| {
+                    for k in LightKind::ALL {
+                        ui.selectable_value(&mut kind, k, k.name());
+                    }
+                });
+                ui.add(egui::Slider::new(&mut count, 0..=MAX_LIGHTS).logarithmic(true).text("count"));
+                settings.lights = kind.spec(count);
+            }
+            // Mixed sets and light files are kept as given.
+            None => {
+                ui.label(format!("set: {}", settings.lights));
+                if ui.button("replace with small:32").clicked() {
+                    settings.lights = LightKind::Small.spec(32);
+                }
+            }
+        }
+        ui.add(egui::DragValue::new(&mut settings.seed).prefix("seed "));
+    });
+}
+
+fn objectspace(ui: &mut Ui, settings: &mut Settings) {
+    egui::CollapsingHeader::new("object space").default_open(true).show(ui, |ui| {
+        let os = &mut settings.objectspace;
+        egui::ComboBox::from_label("tile size").selected_text(os.tile_size.to_string()).show_ui(ui, |ui| {
+            for t in [8, 16, 32, 64] {
+                ui.selectable_value(&mut os.tile_size, t, t.to_string());
+            }
+        });
+        ui.add(egui::Slider::new(&mut os.reuse, 1..=8).text("reuse (frames)"));
+        ui.add(egui::Slider::new(&mut os.mip_bias, -4.0..=4.0).step_by(0.25).text("mip bias"));
+        ui.add(egui::Slider::new(&mut os.texel_density, 16.0..=2048.0).logarithmic(true).text("texels/m"));
+        let mut limited = os.shade_budget.is_some();
+        ui.checkbox(&mut limited, "shade budget");
+        if limited {
+            let mut m = os.shade_budget.unwrap_or(1.0);
+            ui.add(egui::Slider::new(&mut m, 0.01..=100.0).logarithmic(true).text("M texels"));
+            os.shade_budget = Some(m);
+        } else {
+            os.shade_budget = None;
+        }
+        egui::ComboBox::from_label("view").selected_text(settings.view.name()).show_ui(ui, |ui| {
+            for v in DebugView::ALL {
+                ui.selectable_value(&mut settings.view, v, v.name());
+            }
+        });
+    });
+}
+
+fn exposure(ui: &mut Ui, exposure: &mut Exposure) {
+    ui.horizontal(|ui| {
+        let mut auto = *exposure == Exposure::Auto;
+        ui.checkbox(&mut auto, "auto exposure");
+        match (auto, *exposure) {
+            (true, _) => *exposure = Exposure::Auto,
+            (false, Exposure::Auto) => *exposure = Exposure::Fixed(1.0),
+            (false, Exposure::Fixed(mut e)) => {
+                ui.add(egui::Slider::new(&mut e, 0.05..=20.0).logarithmic(true).text("exposure"));
+                *exposure = Exposure::Fixed(e);
+            }
+        }
+    });
+}
+
+fn camera(ui: &mut Ui, mode: &mut CameraMode, path_frames: u32, actions: &mut Vec<Action>) {
+    egui::CollapsingHeader::new("camera").default_open(true).show(ui, |ui| {
+        ui.horizontal(|ui| {
+            let on_path = matches!(mode, CameraMode::Path { .. });
+            if ui.selectable_label(on_path, "path").clicked() && !on_path {
+                *mode = CameraMode::Path { frame: 0, playing: false };
+            }
+            if ui.selectable_label(matches!(mode, CameraMode::Fly(_)), "fly").clicked() {
+                actions.push(Action::Fly);
+            }
+            if ui.selectable_label(matches!(mode, CameraMode::Orbit(_)), "orbit").clicked() {
+                actions.push(Action::Orbit);
+            }
+        });
+        match mode {
+            CameraMode::Path { frame, playing } => {
+                ui.horizontal(|ui| {
+                    if ui.button(if *playing { "pause" } else { "play" }).clicked() {
+                        *playing = !*playing;
+                    }
+                    if ui.button("<").clicked() {
+                        *frame = (*frame + path_frames.max(1) - 1) % path_frames.max(1);
+                    }
+                    if ui.button(">").clicked() {
+                        *frame = (*frame + 1) % path_frames.max(1);
+                    }
+                });
+                ui.add(egui::Slider::new(frame, 0..=path_frames.saturating_sub(1)).text("frame"));
+            }
+            CameraMode::Fly(f) => {
+                ui.add(egui::Slider::new(&mut f.speed, 0.01..=100.0).logarithmic(true).text("speed"));
+                ui.add(egui::Slider::new(&mut f.fov_deg, 10.0..=120.0).text("fov"));
+            }
+            CameraMode::Orbit(o) => {
+                ui.add(egui::Slider::new(&mut o.distance, 0.1..=500.0).logarithmic(true).text("distance"));
+                ui.add(egui::Slider::new(&mut o.fov_deg, 10.0..=120.0).text("fov"));
+            }
+        }
+    });
+}
+
+fn bookmarks(ui: &mut Ui, bookmarks: &mut [Bookmark], actions: &mut Vec<Action>) {
+    ui.collapsing("bookmarks", |ui| {
+        ui.horizontal(|ui| {
+            if ui.button("add").clicked() {
+                actions.push(Action::AddBookmark);
+            }
+            if ui.button("save").clicked() {
+                actions.push(Action::SaveBookmarks);
+            }
+            if ui.button("load").clicked() {
+                actions.push(Action::LoadBookmarks);
+            }
+        });
+        for (k, b) in bookmarks.iter().enumerate() {
+            if ui.button(&b.name).clicked() {
+                actions.push(Action::GoTo(k));
+            }
+        }
+    });
+}
+
+/// A colour per pass, distinct for neighbours.
+fn pass_colour(k: usize) -> Color32 {
+    let hue = (k as f32 * 0.618_034).fract();
+    egui::ecolor::Hsva::new(hue, 0.65, 0.9, 1.0).into()
+}
+
+/// The GPU time of each frame, stacked by pass, newest on the right.
+fn timing_graph(ui: &mut Ui, timings: &TimingHistory) {
+    ui.label(format!(
+        "GPU {:.2} ms per frame (mean of the last {})",
+        timings.mean_frame_ms(),
+        timings.frames().count()
+    ));
+    let (response, painter) = ui.allocate_painter(vec2(ui.available_width(), GRAPH_HEIGHT), Sense::hover());
+    let rect = response.rect;
+    painter.rect_filled(rect, 0.0, Color32::from_black_alpha(160));
+    let scale = timings.graph_scale_ms().max(1e-3);
+    let names = timings.pass_names();
+    let bar = rect.width() / super::timings::HISTORY_FRAMES as f32;
+    let frames: Vec<_> = timings.frames().collect();
+    let first_x = rect.right() - bar * frames.len() as f32;
+    for (i, f) in frames.iter().enumerate() {
+        let x = first_x + bar * i as f32;
+        let mut y = rect.bottom();
+        for (name, ms) in top_level(f) {
+            let h = ((ms / scale) as f32 * rect.height()).min(y - rect.top());
+            let k = names.iter().position(|n| n == name).unwrap_or(0);
+            painter.rect_filled(Rect::from_min_max(pos2(x, y - h), pos2(x + bar.max(1.0), y)), 0.0, pass_colour(k));
+            y -= h;
+        }
+    }
+    painter.text(
+        rect.left_top() + vec2(2.0, 2.0),
+        egui::Align2::LEFT_TOP,
+        format!("{scale:.2} ms"),
+        egui::FontId::monospace(10.0),
+        Color32::WHITE,
+    );
+    painter.rect_stroke(rect, 0.0, Stroke::new(1.0, Color32::GRAY), egui::StrokeKind::Inside);
+    for (k, (name, ms)) in timings.mean_pass_ms().into_iter().enumerate() {
+        if !name.contains('/') {
+            ui.colored_label(pass_colour(k), format!("{name:<16} {ms:7.3} ms"));
+        }
+    }
+}
+
+fn counters(ui: &mut Ui, timings: &TimingHistory) {
+    let c = timings.counters();
+    if c.is_empty() {
+        return;
+    }
+    ui.collapsing("counters", |ui| {
+        for (name, v) in c {
+            ui.monospace(format!("{name:<20} {v:.2}"));
+        }
+    });
+}

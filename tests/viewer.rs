@@ -1,0 +1,231 @@
+//! The viewer in a virtual X server (Xvfb) on whatever Vulkan driver is
+//! present (lavapipe in CI): a scripted run's screenshot matches `render`
+//! with the command its sidecar names, the panel is drawn when shown, and
+//! many pipeline and option switches neither crash nor grow host memory.
+//! Without Xvfb these tests print `skipped: Xvfb not installed` and pass.
+#![cfg(feature = "viewer")]
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use shadespace::metrics;
+
+/// Mean FLIP error allowed between the viewer's frame and `render`'s.
+const VIEWER_FLIP: f32 = 0.02;
+/// Pipeline and option switches of the switching test (14 per script
+/// round, 5 of them renderer builds); `SHADESPACE_VIEWER_SWITCHES=1000`
+/// runs more by hand.
+const SWITCHES: u32 = 200;
+/// Setting changes per round of the switching script.
+const SWITCHES_PER_ROUND: u32 = 14;
+/// Host memory the switching run's floor may rise: the lowest RSS of its
+/// last third of rounds against the lowest of rounds 2 and 3 (by then every
+/// kind of renderer was built twice: the driver's and the allocator's
+/// caches are warm). Floors, because single rounds spike (by up to 130 MiB
+/// on lavapipe) while the memory is given back.
+const RSS_GROWTH_KIB: u64 = 64 * 1024;
+const SIZE: &str = "320x240";
+
+/// A private X server, stopped on drop.
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Starts Xvfb on display `:number`, or says why the test is skipped.
+fn xvfb(number: u32) -> Option<Xvfb> {
+    let found = std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join("Xvfb").is_file()));
+    if !found {
+        eprintln!("skipped: Xvfb not installed");
+        return None;
+    }
+    // A display number of this process's own, so that parallel runs do not meet.
+    let number = 100 + (std::process::id() % 400) * 2 + number;
+    let display = format!(":{number}");
+    let child = Command::new("Xvfb")
+        .args([&display, "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start Xvfb");
+    let socket = PathBuf::from(format!("/tmp/.X11-unix/X{number}"));
+    let start = Instant::now();
+    while !socket.exists() {
+        assert!(start.elapsed() < Duration::from_secs(20), "Xvfb {display} did not start");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    Some(Xvfb { child, display })
+}
+
+/// Runs `shadespace ARGS` on `display`; panics with its output unless it exits 0.
+fn shadespace(display: &str, args: &[&str]) -> String {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_shadespace"));
+    cmd.args(args).env("DISPLAY", display);
+    // lavapipe's window-system code needs a runtime folder.
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
+    }
+    let out = cmd.output().expect("run shadespace");
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "shadespace {args:?} failed ({}):\n{stdout}\n{stderr}", out.status);
+    stdout.into_owned()
+}
+
+fn load(path: &Path) -> image::RgbaImage {
+    image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8()
+}
+
+/// The `render` command a screenshot's sidecar names, run with `--out`.
+fn render_like(display: &str, shot: &Path, out: &Path) {
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(shot.with_extension("json")).unwrap()).unwrap();
+    let command = sidecar["render_command"].as_str().expect("sidecar has render_command");
+    let words: Vec<&str> = command.split_whitespace().collect();
+    assert_eq!(words[..2], ["shadespace", "render"], "{command}");
+    assert!(!command.contains('\''), "the test splits on spaces only: {command}");
+    let mut args = words[1..].to_vec();
+    args.extend(["--out", out.to_str().unwrap()]);
+    shadespace(display, &args);
+}
+
+/// A scripted view: moves and turns away from the path's first camera,
+/// then a screenshot without the panel and one with it.
+fn check_screenshot_matches_render(display_number: u32, pipeline: &str) {
+    let Some(x) = xvfb(display_number) else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (hidden, shown) = (dir.path().join("hidden.png"), dir.path().join("shown.png"));
+    let script = serde_json::json!({ "steps": [
+        {"frames": 2},
+        {"move": [0.4, 0.2, 1.0]},
+        {"turn": [12.0, -4.0]},
+        {"frames": 2},
+        {"ui": false},
+        {"screenshot": hidden},
+        {"ui": true},
+        {"frames": 2},
+        {"screenshot": shown},
+    ]});
+    let script_path = dir.path().join("script.json");
+    std::fs::write(&script_path, script.to_string()).unwrap();
+    shadespace(
+        &x.display,
+        &[
+            "view",
+            "--scene",
+            "atrium",
+            "--pipeline",
+            pipeline,
+            "--size",
+            SIZE,
+            "--vsync",
+            "off",
+            "--script",
+            script_path.to_str().unwrap(),
+        ],
+    );
+    let reference = dir.path().join("render.png");
+    render_like(&x.display, &hidden, &reference);
+    let (viewer, render, with_ui) = (load(&hidden), load(&reference), load(&shown));
+    let (err, map) = metrics::compare(&render, &viewer);
+    eprintln!("{pipeline}: viewer against render: FLIP mean {:.5}, PSNR {:.2} dB", err.flip_mean, err.psnr_db);
+    if err.flip_mean > VIEWER_FLIP {
+        let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("viewer");
+        std::fs::create_dir_all(&out).unwrap();
+        for (name, path) in [("viewer.png", &hidden), ("render.png", &reference), ("ui.png", &shown)] {
+            std::fs::copy(path, out.join(format!("{pipeline}-{name}"))).unwrap();
+        }
+        map.save(out.join(format!("{pipeline}-flip.png"))).unwrap();
+        panic!("{pipeline}: the viewer's frame differs from render's: FLIP {} > {VIEWER_FLIP}", err.flip_mean);
+    }
+    // The panel sits on the left: there the shown UI must change the image.
+    assert_eq!(with_ui.dimensions(), viewer.dimensions());
+    let panel_width = viewer.width() / 3;
+    let changed = (0..viewer.height())
+        .flat_map(|y| (0..panel_width).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let (a, b) = (viewer.get_pixel(x, y).0, with_ui.get_pixel(x, y).0);
+            a.iter().zip(b).any(|(a, b)| a.abs_diff(b) > 24)
+        })
+        .count();
+    let share = changed as f64 / (panel_width * viewer.height()) as f64;
+    eprintln!("{pipeline}: the panel changed {:.1}% of the left third", share * 100.0);
+    assert!(share > 0.2, "the panel is not drawn: only {:.1}% of the left third changed", share * 100.0);
+}
+
+#[test]
+fn viewer_screenshot_matches_render_forward() {
+    check_screenshot_matches_render(0, "forward");
+}
+
+#[test]
+fn viewer_screenshot_matches_render_objectspace() {
+    check_screenshot_matches_render(1, "objectspace");
+}
+
+#[test]
+fn switching_pipelines_and_options_keeps_memory_flat() {
+    let Some(x) = xvfb(2) else { return };
+    let switches: u32 =
+        std::env::var("SHADESPACE_VIEWER_SWITCHES").ok().and_then(|v| v.parse().ok()).unwrap_or(SWITCHES);
+    let dir = tempfile::tempdir().unwrap();
+    // Every pipeline, object space with other options, lights, seeds, exposure.
+    let rounds = switches.div_ceil(SWITCHES_PER_ROUND);
+    let script = serde_json::json!({ "repeat": rounds, "steps": [
+        {"pipeline": "deferred"}, {"lights": "small:64"}, {"frames": 1},
+        {"pipeline": "objectspace"}, {"tile_size": 16}, {"view": "tile-mask"}, {"frames": 1},
+        {"pipeline": "clustered"}, {"seed": 2}, {"frames": 1},
+        {"pipeline": "deferred-compute"}, {"lights": "small:32"}, {"tile_size": 8}, {"view": "shade"}, {"frames": 1},
+        {"pipeline": "forward"}, {"seed": 1}, {"exposure": 1.25}, {"frames": 1},
+    ]});
+    let (script_path, report_path) = (dir.path().join("switch.json"), dir.path().join("report.json"));
+    std::fs::write(&script_path, script.to_string()).unwrap();
+    let started = Instant::now();
+    let stdout = shadespace(
+        &x.display,
+        &[
+            "view",
+            "--scene",
+            "voxels",
+            "--size",
+            "160x120",
+            "--vsync",
+            "off",
+            "--hide-ui",
+            "--script",
+            script_path.to_str().unwrap(),
+            "--report",
+            report_path.to_str().unwrap(),
+        ],
+    );
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report_path).unwrap()).unwrap();
+    let kib = |k: &str| report[k].as_u64().unwrap_or_else(|| panic!("report has {k}: {report}"));
+    let (first, end) = (kib("rss_kib_first_frame"), kib("rss_kib_end"));
+    let rounds_rss: Vec<u64> =
+        report["rss_kib_rounds"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+    assert_eq!(rounds_rss.len(), rounds as usize, "{report}");
+    assert!(rounds_rss.len() >= 6, "too few rounds to tell warm-up from growth: {rounds_rss:?}");
+    let warm = *rounds_rss[1..3].iter().min().unwrap();
+    let late = *rounds_rss[rounds_rss.len() * 2 / 3..].iter().min().unwrap();
+    eprintln!(
+        "{} renderer builds in {:.0} s; RSS {} KiB at the start, {first} KiB after the first frame, {warm} KiB lowest of \
+         rounds 2-3, {late} KiB lowest of the last third, {end} KiB at the end; per round {rounds_rss:?}\n{stdout}",
+        kib("renderer_builds"),
+        started.elapsed().as_secs_f64(),
+        kib("rss_kib_start"),
+    );
+    assert_eq!(kib("renderer_builds"), 1 + 5 * rounds as u64, "{report}");
+    assert!(
+        late.saturating_sub(warm) < RSS_GROWTH_KIB,
+        "host memory's floor rose {} KiB over {switches} switches (bound {RSS_GROWTH_KIB} KiB)",
+        late.saturating_sub(warm)
+    );
+}
