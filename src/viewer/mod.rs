@@ -106,6 +106,9 @@ pub struct RunReport {
     /// ended: flat once the first rounds have built every kind of renderer
     /// when nothing leaks.
     pub rss_kib_rounds: Vec<u64>,
+    /// Median GPU milliseconds per top-level pass over the last frames (the
+    /// timing history, at most its length), as `bench` summarises them.
+    pub gpu_pass_ms: Vec<(String, f64)>,
 }
 
 /// Opens the window and runs until it is closed or, for a scripted run,
@@ -165,6 +168,7 @@ impl ApplicationHandler for App {
             Ok(Flow::Exit) => {
                 // Measured with the viewer still open: its memory is what is checked.
                 self.report.rss_kib_end = memory::resident_kib().unwrap_or(0);
+                self.report.gpu_pass_ms = v.timings.median_pass_ms();
                 event_loop.exit();
             }
             Err(e) => {

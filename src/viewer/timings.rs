@@ -79,6 +79,20 @@ impl TimingHistory {
             .collect()
     }
 
+    /// Median GPU milliseconds per top-level pass over the history, in
+    /// first-seen order (frames without the pass left out).
+    pub fn median_pass_ms(&self) -> Vec<(String, f64)> {
+        let names: Vec<&String> = self.passes.iter().filter(|p| !p.contains('/')).collect();
+        names
+            .into_iter()
+            .map(|p| {
+                let ms: Vec<f64> =
+                    self.frames.iter().flat_map(|f| &f.passes).filter(|(q, _)| q == p).map(|(_, ms)| *ms).collect();
+                (p.clone(), crate::bench::Summary::of(&ms).median)
+            })
+            .collect()
+    }
+
     /// Mean GPU frame time over the history, ms (0 without timings).
     pub fn mean_frame_ms(&self) -> f64 {
         self.frames.iter().map(|f| f.total_ms).sum::<f64>() / self.frames.len().max(1) as f64
