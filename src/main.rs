@@ -396,13 +396,14 @@ struct ObjectSpaceArgs {
     /// Physical atlas in Mi texels (12 bytes each with the triangle maps):
     /// the pages that back the objects' virtual textures where visible tiles
     /// need them. When a frame needs more, the mip bias rises until it fits
-    /// (the counters report `budget_bias`). Default: 1.25 texels per pixel at
-    /// 1920x1080 (2.6 Mi), growing as the square root of the pixels (5.2 Mi
+    /// (the counters report `budget_bias`). Default: 1 texel per pixel at
+    /// 1920x1080 (2.1 Mi), growing as the square root of the pixels (4.1 Mi
     /// at 3840x2160), at least 1 Mi.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1 << 14))]
     atlas_budget: Option<u64>,
     /// Page side of the virtual textures in texels (a power of two, at most
-    /// four times the tile size; raised to the tile size).
+    /// four times the tile size; raised to the tile size). Larger pages
+    /// make a smaller page table but hold more texels no pixel needs.
     #[arg(long, default_value_t = DEFAULT_PAGE_SIZE)]
     page_size: u32,
     /// Skip the depth pre-pass before the visibility (id) pass (with it, each

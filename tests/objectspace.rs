@@ -242,3 +242,50 @@ fn a_stereo_pair_shares_one_atlas() {
     eprintln!("tiles: {shared} shared by the pair, {summed} summed over the eyes");
     assert!(shared > 0.0 && shared < 0.8 * summed && shared >= summed / 2.0, "{shared} shared, {summed} summed");
 }
+
+/// The two-level page table stays consistent while pages come and go: the
+/// atrium along its path in an atlas too small to keep what earlier frames
+/// saw, so pages are evicted every frame and their blocks' chunks freed and
+/// given to other blocks. After every frame, each backed page is found
+/// through its block's chunk, each table word names the page that owns it,
+/// and no chunk outlives its last page.
+#[test]
+fn the_page_table_follows_pages_evicted_along_a_path() {
+    use shadespace::scene::{self, lights, path};
+    let ctx = common::gpu();
+    let scene = scene::load("atrium").unwrap();
+    let (width, height) = (192, 108);
+    let path = path::cameras_for_scene("atrium", &scene, width as f32 / height as f32)
+        .unwrap()
+        .select(path::CameraChoice::Path)
+        .unwrap();
+    let spec: scene::LightSpec = "small:8".parse().unwrap();
+    let lights = lights::build_lights(&spec, &scene.bounds(), &path.camera_at(0), 16.0 / 9.0, 7).unwrap();
+    let (scene, texture_sizes) = common::charted(&scene);
+    let config =
+        ObjectSpaceConfig { texture_sizes, page_size: 8, atlas_budget_texels: Some(160 * 1024), ..Default::default() };
+    let options = RenderOptions { width, height, pipeline: PipelineConfig::ObjectSpace(config) };
+    let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
+    let (mut chunk_sets, mut backed, mut pages) = (Vec::new(), 0.0, 0);
+    for frame in 0..12u32 {
+        os.render(&ctx, &path.camera_at(frame * 40), &lights, frame as u64).unwrap();
+        let table = os.pipeline::<ObjectSpace>().unwrap().read_page_table(&ctx).unwrap();
+        let problems = table.inconsistencies();
+        assert!(problems.is_empty(), "frame {frame}: {problems:?}");
+        chunk_sets.push(table.chunks.iter().map(|c| c[1]).collect::<Vec<_>>());
+        pages = table.owners.len();
+        let c = os.collect_counters(&ctx, true);
+        assert_eq!(counter(&c, "table_chunks")[0] as usize, table.chunks_in_use(), "frame {frame}");
+        if frame > 0 {
+            backed += counter(&c, "pages_backed")[0];
+        }
+    }
+    ctx.check_errors().unwrap();
+    assert!(backed > pages as f64, "{backed} pages backed after frame 0: the atlas ({pages}) was not cycled");
+    // Chunks changed hands: some chunk served different blocks.
+    let reassigned = (0..chunk_sets[0].len()).any(|c| {
+        chunk_sets.iter().filter_map(|s| (s[c] != 0).then_some(s[c])).collect::<std::collections::BTreeSet<_>>().len()
+            > 1
+    });
+    assert!(reassigned, "no chunk was freed and given to another block");
+}

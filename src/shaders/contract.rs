@@ -8,7 +8,7 @@ use std::fmt::Write;
 use crate::render::deferred::volumes::VolumeList;
 use crate::render::deferred_compute;
 use crate::render::gpu_types::{GpuLightKind, NO_NORMAL_MAP, ShadingModel};
-use crate::render::objectspace::atlas::MAX_LEVELS;
+use crate::render::objectspace::atlas::{BLOCK_SIDE, MAX_LEVELS};
 use crate::render::objectspace::{DebugView, TileCounter};
 
 /// (WGSL name, value) of every shared `u32` constant.
@@ -22,6 +22,7 @@ pub fn constants() -> Vec<(&'static str, u32)> {
     c.extend(TileCounter::ALL.iter().map(|t| (t.wgsl_name(), *t as u32)));
     c.push(("AGE_BUCKET_BASE", TileCounter::AGE_BUCKET_BASE as u32));
     c.push(("AGE_BUCKETS", TileCounter::AGE_BUCKETS as u32));
+    c.push(("BLOCK_SIDE", BLOCK_SIDE));
     c.extend(VolumeList::ALL.iter().map(|l| (l.wgsl_name(), *l as u32)));
     c.push(("VOLUME_LISTS", VolumeList::ALL.len() as u32));
     c.extend(deferred_compute::wgsl_constants());

@@ -2,8 +2,12 @@
 //! whole mip pyramid, up to 16384 texels a side) is *virtual*: its levels
 //! are cut into square pages, numbered in one flat virtual page space, and
 //! only the pages that visible tiles need are backed by a page of the shared
-//! physical atlas ([`PagePool`]), through a page table the GPU keeps
-//! (`paging/`). Tiles keep a flat virtual numbering too (the shade queue and
+//! physical atlas ([`PagePool`]), through a two-level page table the GPU
+//! keeps (`paging/`). Pages are numbered in blocks of [`BLOCK_SIDE`] x
+//! [`BLOCK_SIDE`] (a level's blocks row-major, the pages of a block
+//! row-major): the page directory has one word per block, and only the
+//! blocks holding backed pages have a table chunk of one word per page, so
+//! the table grows with the pages in use, not with the virtual space. Tiles keep a flat virtual numbering too (the shade queue and
 //! the CPU twin speak of virtual tiles); their state lives with the physical
 //! page that backs them.
 
@@ -15,12 +19,19 @@ use crate::shaders::gpu_struct;
 pub const MAX_LEVELS: usize = 14;
 /// Largest virtual texture side.
 pub const MAX_TEXTURE_SIZE: u32 = 16384;
+/// Pages per side of a page-table block (one directory word, one table
+/// chunk). Small, so that one chunk per physical page (which never runs
+/// out: every chunk in use holds a backed page) costs little: 76 bytes.
+pub const BLOCK_SIDE: u32 = 4;
+/// Pages per block.
+pub const BLOCK_PAGES: u32 = BLOCK_SIDE * BLOCK_SIDE;
 
 /// One mip level of one object's virtual texture.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AtlasLevel {
     pub size: u32,
-    /// Virtual index of the level's first page (pages row-major).
+    /// Virtual index of the level's first page (a multiple of
+    /// [`BLOCK_PAGES`]: the level's pages are numbered block by block).
     pub page_base: u32,
     /// Global index of the level's first tile (tiles row-major).
     pub tile_base: u32,
@@ -30,6 +41,32 @@ impl AtlasLevel {
     /// Pages per row (the last row and column may be partly outside the level).
     pub fn pages_per_row(&self, page_size: u32) -> u32 {
         self.size.div_ceil(page_size)
+    }
+
+    /// Blocks per row of pages.
+    pub fn blocks_per_row(&self, page_size: u32) -> u32 {
+        self.pages_per_row(page_size).div_ceil(BLOCK_SIDE)
+    }
+
+    /// Virtual page numbers the level takes: whole blocks, so a level
+    /// narrower than a block leaves numbers unused (no memory: the table
+    /// holds chunks only for blocks with backed pages).
+    pub fn page_numbers(&self, page_size: u32) -> u64 {
+        (self.blocks_per_row(page_size) as u64).pow(2) * BLOCK_PAGES as u64
+    }
+
+    /// The level-local page (column, row) of virtual page `local` (counted
+    /// from `page_base`).
+    pub fn page_position(&self, page_size: u32, local: u32) -> [u32; 2] {
+        let (block, i) = (local / BLOCK_PAGES, local % BLOCK_PAGES);
+        let per_row = self.blocks_per_row(page_size);
+        [block % per_row * BLOCK_SIDE + i % BLOCK_SIDE, block / per_row * BLOCK_SIDE + i / BLOCK_SIDE]
+    }
+
+    /// The virtual page of level-local page (column, row).
+    pub fn page_number(&self, page_size: u32, page: [u32; 2]) -> u32 {
+        let block = page[1] / BLOCK_SIDE * self.blocks_per_row(page_size) + page[0] / BLOCK_SIDE;
+        self.page_base + block * BLOCK_PAGES + page[1] % BLOCK_SIDE * BLOCK_SIDE + page[0] % BLOCK_SIDE
     }
 }
 
@@ -60,6 +97,8 @@ pub enum AtlasError {
     NotPowerOfTwo { object: usize, size: u32 },
     #[error("the atlas needs {tiles} tiles, more than the 2^32 tile indices")]
     TooManyTiles { tiles: u64 },
+    #[error("the atlas needs {pages} virtual pages, more than the 2^32 page numbers")]
+    TooManyPages { pages: u64 },
 }
 
 /// The virtual layout of all objects' shading textures.
@@ -71,7 +110,8 @@ pub struct AtlasLayout {
     pub objects: Vec<Option<ObjectAtlas>>,
     /// Virtual tiles, all objects and levels.
     pub tile_count: u32,
-    /// Virtual pages, all objects and levels.
+    /// Virtual page numbers, all objects and levels (a multiple of
+    /// [`BLOCK_PAGES`]).
     pub page_count: u32,
 }
 
@@ -115,7 +155,7 @@ impl AtlasLayout {
                         tile_base: tiles.min(u32::MAX as u64) as u32,
                     };
                     tiles += ((size >> l) / tile_size) as u64 * ((size >> l) / tile_size) as u64;
-                    pages += level.pages_per_row(page_size) as u64 * level.pages_per_row(page_size) as u64;
+                    pages += level.page_numbers(page_size);
                     level
                 })
                 .collect();
@@ -124,14 +164,16 @@ impl AtlasLayout {
         if tiles > u32::MAX as u64 {
             return Err(AtlasError::TooManyTiles { tiles });
         }
+        if pages > u32::MAX as u64 {
+            return Err(AtlasError::TooManyPages { pages });
+        }
         Ok(Self { page_size, tile_size, objects, tile_count: tiles as u32, page_count: pages as u32 })
     }
 
     /// [`AtlasLayout::new`], with every object's side halved (down to 64)
-    /// until the layout has at most `max_pages` virtual pages: the page table
-    /// holds one entry per virtual page, and a scene of many large objects
-    /// (the voxel city at the default density: 24 G virtual texels) would
-    /// need more than a GPU buffer holds. Returns the layout and the halvings.
+    /// until the layout has at most `max_pages` virtual pages: virtual pages
+    /// are numbered in 32 bits, and the page directory and request bits grow
+    /// with them. Returns the layout and the halvings.
     pub fn fitting(
         sizes: &[Option<u32>],
         tile_size: u32,
@@ -143,9 +185,12 @@ impl AtlasLayout {
         let mut sizes: Vec<Option<u32>> = sizes.iter().map(|s| s.map(|s| s.min(max_size))).collect();
         let mut halvings = 0;
         loop {
-            let layout = Self::new(&sizes, tile_size, page_size, max_size, coarsest)?;
-            if layout.page_count as u64 <= max_pages || !sizes.iter().flatten().any(|&s| s > 64) {
-                return Ok((layout, halvings));
+            let can_halve = sizes.iter().flatten().any(|&s| s > 64);
+            match Self::new(&sizes, tile_size, page_size, max_size, coarsest) {
+                Ok(layout) if layout.page_count as u64 <= max_pages || !can_halve => return Ok((layout, halvings)),
+                Err(AtlasError::TooManyPages { .. } | AtlasError::TooManyTiles { .. }) if can_halve => {}
+                Ok(_) => {}
+                Err(e) => return Err(e),
             }
             for s in sizes.iter_mut().flatten() {
                 *s = (*s / 2).max(64);
@@ -178,15 +223,15 @@ impl AtlasLayout {
     }
 
     /// Where virtual page `page` lies: (object, level, its first texel in
-    /// the level). `None` past the last page.
+    /// the level). `None` past the last page, or for a number of a block's
+    /// part outside its level.
     pub fn page_origin(&self, page: u32) -> Option<(usize, usize, [u32; 2])> {
         for (object, o) in self.objects.iter().enumerate() {
             let Some(o) = o else { continue };
             for (level, l) in o.levels.iter().enumerate() {
-                let per_row = l.pages_per_row(self.page_size);
-                if (l.page_base..l.page_base + per_row * per_row).contains(&page) {
-                    let local = page - l.page_base;
-                    return Some((object, level, [local % per_row * self.page_size, local / per_row * self.page_size]));
+                if (l.page_base as u64..l.page_base as u64 + l.page_numbers(self.page_size)).contains(&(page as u64)) {
+                    let [x, y] = l.page_position(self.page_size, page - l.page_base).map(|p| p * self.page_size);
+                    return (x < l.size && y < l.size).then_some((object, level, [x, y]));
                 }
             }
         }
@@ -291,24 +336,43 @@ mod tests {
             for l in &o.levels {
                 assert_eq!((l.tile_base, l.page_base), (tiles, pages));
                 tiles += (l.size / t) * (l.size / t);
-                pages += (l.size / 64) * (l.size / 64);
+                // Whole blocks of 4x4 pages of 64 texels.
+                pages += (l.size / 64).div_ceil(4).pow(2) * 16;
             }
         }
         assert_eq!((a.tile_count, a.page_count), (tiles, pages));
-        // Object 1's level 2 (64 texels) is one page; its origin is found back.
+        // Object 1's level 2 (64 texels) is one page; its origin is found
+        // back, and the rest of its block is outside the level.
         let l = a.objects[1].as_ref().unwrap().levels[2];
         assert_eq!(a.page_origin(l.page_base), Some((1, 2, [0, 0])));
+        assert_eq!(a.page_origin(l.page_base + 1), None);
+        // Object 0's level 0: 16x16 pages, 4x4 blocks. Page 11 of block 2
+        // is page (8 + 3, 2).
         let l0 = a.objects[0].as_ref().unwrap().levels[0];
-        assert_eq!(a.page_origin(l0.page_base + 16 + 3), Some((0, 0, [3 * 64, 64])));
+        assert_eq!(a.page_origin(l0.page_base + 2 * 16 + 11), Some((0, 0, [11 * 64, 2 * 64])));
+        assert_eq!(l0.page_number(64, [11, 2]), l0.page_base + 2 * 16 + 11);
         assert_eq!(a.page_origin(a.page_count), None);
     }
 
     #[test]
-    fn a_level_smaller_than_a_page_takes_one_page() {
+    fn page_numbers_and_positions_are_inverse() {
+        let l = AtlasLevel { size: 1000, page_base: 128, tile_base: 0 };
+        let per_row = l.pages_per_row(16);
+        for y in 0..per_row {
+            for x in 0..per_row {
+                let n = l.page_number(16, [x, y]);
+                assert!((l.page_base as u64..l.page_base as u64 + l.page_numbers(16)).contains(&(n as u64)));
+                assert_eq!(l.page_position(16, n - l.page_base), [x, y]);
+            }
+        }
+    }
+
+    #[test]
+    fn a_level_smaller_than_a_block_takes_one_block() {
         let a = AtlasLayout::new(&[Some(256)], 32, 128, 16384, 32).unwrap();
         let sizes: Vec<u32> = a.objects[0].as_ref().unwrap().levels.iter().map(|l| l.size).collect();
         assert_eq!(sizes, vec![256, 128, 64, 32]);
-        assert_eq!(a.page_count, 4 + 1 + 1 + 1);
+        assert_eq!(a.page_count, 4 * BLOCK_PAGES);
     }
 
     #[test]

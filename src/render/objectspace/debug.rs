@@ -2,6 +2,7 @@
 //! the GPU, so they stay out of the frame loop).
 
 use super::ObjectSpace;
+use super::atlas::BLOCK_PAGES;
 use super::resources::{ATLAS_FORMAT, TRIANGLE_MAP_FORMAT};
 use crate::color::reinhard_srgb8;
 use crate::gpu::{GpuContext, GpuError, readback};
@@ -29,7 +30,83 @@ pub struct MarkState {
     pub page_owner: Vec<Option<u32>>,
 }
 
+/// The two-level page table after a frame, read back from the GPU.
+#[derive(Clone, Debug)]
+pub struct PageTableState {
+    /// Per physical page: the virtual page it backs + 1 (0: free).
+    pub owners: Vec<u32>,
+    /// Per block of virtual pages: its chunk + 1 (0: none).
+    pub directory: Vec<u32>,
+    /// Per chunk, per page of its block: physical page + 1 (0: not backed).
+    pub table: Vec<u32>,
+    /// Per chunk: (backed pages it counts, its block + 1).
+    pub chunks: Vec<[u32; 2]>,
+}
+
+impl PageTableState {
+    /// Everything that disagrees between the levels of the table and the
+    /// page owners (empty when consistent): every backed page is found
+    /// through its block's chunk, every table word names a page that owns
+    /// it back, every chunk counts its words, belongs to the block that
+    /// points at it and is freed with its last page.
+    pub fn inconsistencies(&self) -> Vec<String> {
+        let block_pages = BLOCK_PAGES as usize;
+        let mut out = Vec::new();
+        let chunk_of = |block: usize| self.directory.get(block).and_then(|c| c.checked_sub(1)).map(|c| c as usize);
+        for (physical, &owner) in self.owners.iter().enumerate() {
+            let Some(page) = owner.checked_sub(1).map(|p| p as usize) else { continue };
+            let word = chunk_of(page / block_pages).map(|c| self.table[c * block_pages + page % block_pages]);
+            if word != Some(physical as u32 + 1) {
+                out.push(format!("physical page {physical} backs virtual page {page}, the table says {word:?}"));
+            }
+        }
+        for (c, &[pages, block]) in self.chunks.iter().enumerate() {
+            let words = &self.table[c * block_pages..(c + 1) * block_pages];
+            let backed = words.iter().filter(|&&w| w != 0).count() as u32;
+            if backed != pages {
+                out.push(format!("chunk {c} counts {pages} pages and holds {backed}"));
+            }
+            match block.checked_sub(1) {
+                None if backed > 0 => out.push(format!("free chunk {c} holds {backed} pages")),
+                None => {}
+                Some(b) if chunk_of(b as usize) != Some(c) => {
+                    out.push(format!("chunk {c} of block {b} is not its chunk"))
+                }
+                Some(b) if backed == 0 => out.push(format!("chunk {c} of block {b} holds no page and was not freed")),
+                Some(b) => {
+                    for (i, &w) in words.iter().enumerate().filter(|(_, w)| **w != 0) {
+                        let page = b * BLOCK_PAGES + i as u32;
+                        if self.owners.get(w as usize - 1) != Some(&(page + 1)) {
+                            out.push(format!(
+                                "virtual page {page} maps to physical page {}, which backs another",
+                                w - 1
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Chunks holding at least one page.
+    pub fn chunks_in_use(&self) -> usize {
+        self.chunks.iter().filter(|c| c[1] != 0).count()
+    }
+}
+
 impl ObjectSpace {
+    /// The page table and page owners after the last frame.
+    pub fn read_page_table(&self, ctx: &GpuContext) -> Result<PageTableState, GpuError> {
+        let res = &self.res;
+        Ok(PageTableState {
+            owners: Self::words(ctx, &res.page_owner)?,
+            directory: Self::words(ctx, &res.page_directory)?,
+            table: Self::words(ctx, &res.page_table)?,
+            chunks: Self::words(ctx, &res.table_chunks)?.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
+        })
+    }
+
     fn words(ctx: &GpuContext, b: &wgpu::Buffer) -> Result<Vec<u32>, GpuError> {
         Ok(bytemuck::pod_collect_to_vec(&readback::read_whole_buffer(ctx, b)?))
     }

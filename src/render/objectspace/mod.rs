@@ -82,17 +82,19 @@ pub const MAX_DENSITY_SIZE: u32 = 8192;
 /// below 128 texels neighbouring charts would share texels.
 pub const COARSEST_LEVEL: u32 = 128;
 /// Default page side of the virtual textures (raised to the tile size).
-/// Pages of 2x2 tiles of 8: on Sponza at 1920x1080 the pages in use hold
-/// 1.6 times the visible texels (3.0 at 32, 6.3 at 64, with a page table 4
-/// and 16 times smaller).
-pub const DEFAULT_PAGE_SIZE: u32 = 16;
+/// Pages of one tile: the pages in use hold just the visible texels (on
+/// Sponza at 1920x1080, pages of 16 hold 1.6 times them, 3.0 at 32). The
+/// two-level page table keeps the four times more pages cheap (7.6 MB at
+/// 1080p against 2.4 MB at 16, most of it one chunk per physical page).
+pub const DEFAULT_PAGE_SIZE: u32 = 8;
 /// Default physical atlas at 1920x1080: this many texels per screen pixel.
-/// Sponza along its path at the default density sees 1.27 M texels in
-/// visible tiles (median), on pages holding 2.0 M: the atlas (2.6 M) holds
-/// them with room for newly visible pages.
-pub const DEFAULT_TEXELS_PER_PIXEL: f64 = 1.25;
-/// ... and at least this many texels (16 MiB of shades and triangle maps):
-/// small frames fill pages poorly (few visible tiles per chart).
+/// Sponza along its path at the default density sees 1.36 M texels in
+/// visible tiles (median; 1.16 M at path frame 120), on pages of one tile:
+/// the atlas (2.1 M) holds them with room for newly visible pages, at
+/// most 2x their bytes on all but the emptiest frames.
+pub const DEFAULT_TEXELS_PER_PIXEL: f64 = 1.0;
+/// ... and at least this many texels (12 MiB of shades and triangle maps):
+/// small frames need room for the few tiles each of many charts.
 pub const MIN_DEFAULT_ATLAS_TEXELS: u64 = 1 << 20;
 
 /// The default physical atlas for a frame of `pixels` pixels: it grows as
@@ -105,9 +107,9 @@ pub fn default_atlas_texels(pixels: u64) -> u64 {
     (texels as u64).max(MIN_DEFAULT_ATLAS_TEXELS)
 }
 
-/// Most virtual pages (a page table of 128 MiB, as much again for the request
-/// masks): 8 G virtual texels at the default page size.
-const MAX_VIRTUAL_PAGES: u64 = 32 << 20;
+/// Most virtual page numbers: a page directory of 32 MiB (a word per 16
+/// pages) and 16 MiB of page request bits; 8 G virtual texels at pages of 8.
+const MAX_VIRTUAL_PAGES: u64 = 1 << 27;
 /// The page budget: past this share of the physical pages in use, the mip
 /// bias rises (the rest is room for newly visible pages).
 const PAGE_FILL: f64 = 0.95;
@@ -184,7 +186,8 @@ pub enum TileCounter {
     PagesRequested = 4,
     /// Requested pages that got a physical page this frame.
     PagesBacked = 5,
-    /// Requested pages that found none (the atlas was full).
+    /// Requested pages that found none (the atlas or the page table's
+    /// chunks were full).
     PagesFailed = 6,
     /// Physical pages no visible tile used this frame (free or evictable).
     Candidates = 7,
@@ -197,10 +200,16 @@ pub enum TileCounter {
     AtlasPixels = 10,
     /// Of those, pixels whose level holds fewer than one texel per pixel.
     UnderShadedPixels = 11,
+    /// Page-table chunks free after this frame's evictions.
+    FreeChunks = 12,
+    /// Free chunks given to blocks this frame (or wanted: may exceed the free ones).
+    ChunksTaken = 13,
+    /// Page-table chunks in use after this frame's paging.
+    TableChunks = 14,
 }
 
 impl TileCounter {
-    pub const ALL: [Self; 12] = [
+    pub const ALL: [Self; 15] = [
         Self::Queued,
         Self::Visible,
         Self::New,
@@ -213,10 +222,13 @@ impl TileCounter {
         Self::BackedTiles,
         Self::AtlasPixels,
         Self::UnderShadedPixels,
+        Self::FreeChunks,
+        Self::ChunksTaken,
+        Self::TableChunks,
     ];
     /// First slot of the age buckets (free pages, then unused for 128 or
     /// more frames, 64-127, ..., 1 frame).
-    pub const AGE_BUCKET_BASE: usize = 12;
+    pub const AGE_BUCKET_BASE: usize = 15;
     pub const AGE_BUCKETS: usize = 9;
     /// Slots in the counter buffer (a multiple of four: 16-byte rows).
     pub const SLOTS: usize = 24;
@@ -235,6 +247,9 @@ impl TileCounter {
             Self::BackedTiles => "COUNT_BACKED_TILES",
             Self::AtlasPixels => "COUNT_ATLAS_PIXELS",
             Self::UnderShadedPixels => "COUNT_UNDER_SHADED_PIXELS",
+            Self::FreeChunks => "COUNT_FREE_CHUNKS",
+            Self::ChunksTaken => "COUNT_CHUNKS_TAKEN",
+            Self::TableChunks => "COUNT_TABLE_CHUNKS",
         }
     }
 }
@@ -423,8 +438,9 @@ impl ObjectSpace {
             return Err(ObjectSpaceError::SizeCount(config.texture_sizes.len(), scene.draws.len()));
         }
         let page_size = config.page_size.max(config.tile_size);
-        // The page table and request masks are one word per virtual page each.
-        let max_pages = (device.limits().max_storage_buffer_binding_size / 4).min(MAX_VIRTUAL_PAGES);
+        // The request bits hold a bit per virtual page and per virtual tile.
+        let bits_per_page = 1 + (page_size as u64 / config.tile_size as u64).pow(2);
+        let max_pages = (device.limits().max_storage_buffer_binding_size * 8 / bits_per_page).min(MAX_VIRTUAL_PAGES);
         let (layout, virtual_halvings) = AtlasLayout::fitting(
             &config.texture_sizes,
             config.tile_size,
@@ -616,8 +632,8 @@ impl Pipeline for ObjectSpace {
     /// `shaded_texels_per_pixel` (after reuse); paging: `pages_in_use`
     /// (backing visible tiles this frame), `pages_backed` (newly),
     /// `pages_failed` (found no page: the atlas was full), `page_texels`
-    /// (texels of the pages in use) and `budget_bias` (levels the budget
-    /// added); with extra views, `shared_view_tiles` (tiles on pages
+    /// (texels of the pages in use), `table_chunks` (page-table chunks in
+    /// use) and `budget_bias` (levels the budget added); with extra views, `shared_view_tiles` (tiles on pages
     /// backed before this frame, marked once for all views) and
     /// `view_tiles` (the same summed over the views: what independent views
     /// would mark); with `count_visibility`, the compute rasterizer's counts
@@ -663,6 +679,7 @@ impl Pipeline for ObjectSpace {
                     ("pages_backed", backed),
                     ("pages_failed", failed),
                     ("page_texels", in_use * page_texels),
+                    ("table_chunks", count(TileCounter::TableChunks)),
                     ("budget_bias", used as f64),
                     // Share of the atlas-shaded pixels whose level gives them
                     // fewer than one shading texel (blurrier than the screen).

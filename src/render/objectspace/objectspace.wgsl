@@ -2,13 +2,14 @@
 // visibility buffer, and the per-pixel mip selection that tile marking and
 // gathering must compute identically.
 #define_import_path shadespace::objectspace
-#import shadespace::contract::{MAX_LEVELS, TILE_COUNTER_SLOTS}
+#import shadespace::contract::{MAX_LEVELS, TILE_COUNTER_SLOTS, BLOCK_SIDE}
 #import shadespace::scene_bindings::vertices
 #import shadespace::pixel_surface::{PixelSample, interpolate2}
 
 struct AtlasLevel {
     size: u32,
-    // Virtual index of the level's first page, and global index of its first tile.
+    // Virtual index of the level's first page (pages are numbered in blocks
+    // of BLOCK_SIDE x BLOCK_SIDE), and global index of its first tile.
     page_base: u32,
     tile_base: u32,
     pad: u32,
@@ -43,10 +44,12 @@ struct Params {
     // Physical pages, and pages per layer side of the physical atlas.
     physical_pages: u32,
     layer_pages: u32,
-    // Virtual pages (the page table's length).
+    // Virtual page numbers (a multiple of the block's pages).
     virtual_pages: u32,
-    pad_d: u32,
-    pad_a: u32,
+    // Word of `page_requests` where the tile bits start.
+    request_tile_base: u32,
+    // Chunks of the page table.
+    table_chunks: u32,
     pad_b: u32,
     pad_c: u32,
 }
@@ -66,14 +69,17 @@ struct Params {
 // Per triangle of the scene's index buffer: its chart island (a number
 // shared by the triangles of one island of its mesh's chart UVs).
 @group(1) @binding(7) var<storage, read> triangle_charts: array<u32>;
-// Per virtual page: its physical page + 1; 0 = not backed.
+// The page table's second level: chunks of one word per page of a block,
+// its physical page + 1 (0 = not backed); a block's chunk is found in
+// `page_directory`.
 @group(1) @binding(8) var<storage, read_write> page_table: array<u32>;
 // Per physical page: stamp of the last frame a visible tile used it.
 @group(1) @binding(9) var<storage, read_write> page_used: array<atomic<u32>>;
 // Per physical page: the virtual page it backs + 1; 0 = free.
 @group(1) @binding(10) var<storage, read_write> page_owner: array<u32>;
-// Per virtual page: the mask of its tiles this frame's pixels need while it
-// has no physical page (a page holds at most 16 tiles).
+// Request bits: one per virtual page (it was listed in `request_list`
+// this frame), then, from word `params.request_tile_base`, one per virtual
+// tile (this frame's pixels need it while its page has no physical page).
 @group(1) @binding(11) var<storage, read_write> page_requests: array<atomic<u32>>;
 // This frame's requests (at most one per physical page): (virtual page, object << 8 | level).
 @group(1) @binding(12) var<storage, read_write> request_list: array<vec2u>;
@@ -96,6 +102,23 @@ struct ViewSlot {
 @group(1) @binding(15) var<storage, read> view_slot: ViewSlot;
 // Per physical tile: the views that marked it this frame, one bit each.
 @group(1) @binding(16) var<storage, read_write> tile_views: array<atomic<u32>>;
+// The page table's first level: per block of pages, its chunk + 1 (0 = no
+// page of the block is backed).
+@group(1) @binding(17) var<storage, read_write> page_directory: array<atomic<u32>>;
+
+// Mirrors nothing on the CPU: the GPU alone keeps it.
+struct TableChunk {
+    // Backed pages whose table word is in the chunk (0: the chunk is free).
+    pages: atomic<u32>,
+    // The block whose chunk it is + 1 (0 = free).
+    block: u32,
+}
+
+@group(1) @binding(18) var<storage, read_write> table_chunks: array<TableChunk>;
+// This frame's free chunks (their count in COUNT_FREE_CHUNKS).
+@group(1) @binding(19) var<storage, read_write> free_chunks: array<u32>;
+
+const BLOCK_PAGES: u32 = BLOCK_SIDE * BLOCK_SIDE;
 
 const NOT_BACKED: u32 = 0xffffffffu;
 
@@ -104,27 +127,78 @@ fn pages_per_row(l: AtlasLevel) -> u32 {
     return (l.size + params.page_size - 1u) / params.page_size;
 }
 
-// Virtual page of texel `texel` of level `l`.
+// Blocks per row of level `l`.
+fn blocks_per_row(l: AtlasLevel) -> u32 {
+    return (pages_per_row(l) + BLOCK_SIDE - 1u) / BLOCK_SIDE;
+}
+
+// Virtual page of texel `texel` of level `l` (mirrors `AtlasLevel::page_number`).
 fn virtual_page(l: AtlasLevel, texel: vec2u) -> u32 {
     let p = texel / params.page_size;
-    return l.page_base + p.y * pages_per_row(l) + p.x;
+    let b = p / BLOCK_SIDE;
+    let i = p % BLOCK_SIDE;
+    return l.page_base + (b.y * blocks_per_row(l) + b.x) * BLOCK_PAGES + i.y * BLOCK_SIDE + i.x;
 }
 
-// First texel (level-local) of virtual page `page` of level `l`.
+// First texel (level-local) of virtual page `page` of level `l` (mirrors
+// `AtlasLevel::page_position`).
 fn page_origin(l: AtlasLevel, page: u32) -> vec2u {
     let local = page - l.page_base;
-    return vec2u(local % pages_per_row(l), local / pages_per_row(l)) * params.page_size;
+    let block = local / BLOCK_PAGES;
+    let i = local % BLOCK_PAGES;
+    let b = vec2u(block % blocks_per_row(l), block / blocks_per_row(l));
+    return (b * BLOCK_SIDE + vec2u(i % BLOCK_SIDE, i / BLOCK_SIDE)) * params.page_size;
 }
 
-// The physical page backing virtual page `page`, or NOT_BACKED.
+// The physical page backing virtual page `page`, or NOT_BACKED: the block's
+// chunk from the directory, the page's word in the chunk.
 fn physical_page(page: u32) -> u32 {
-    return page_table[page] - 1u;
+    let chunk = atomicLoad(&page_directory[page / BLOCK_PAGES]);
+    if chunk == 0u {
+        return NOT_BACKED;
+    }
+    return page_table[(chunk - 1u) * BLOCK_PAGES + page % BLOCK_PAGES] - 1u;
+}
+
+// Virtual page `page`'s request bit: (word, mask).
+fn page_request_bit(page: u32) -> vec2u {
+    return vec2u(page / 32u, 1u << (page % 32u));
+}
+
+// Virtual tile `tile`'s request bit: (word, mask).
+fn tile_request_bit(tile: u32) -> vec2u {
+    return vec2u(params.request_tile_base + tile / 32u, 1u << (tile % 32u));
 }
 
 // Global virtual tile of texel `texel` of level `l`.
 fn virtual_tile(l: AtlasLevel, texel: vec2u) -> u32 {
     let t = texel / params.tile_size;
     return l.tile_base + t.y * (l.size / params.tile_size) + t.x;
+}
+
+// Level-local first texel of tile `t` (row-major) of the page at `origin`;
+// outside the level when the page is only partly in it.
+fn page_tile_origin(origin: vec2u, t: u32) -> vec2u {
+    let per_row = params.page_size / params.tile_size;
+    return origin + vec2u(t % per_row, t / per_row) * params.tile_size;
+}
+
+// Forgets virtual page `page` of level `l`'s request (it found no physical
+// page: a later frame asks again): its page bit first, then its tiles'
+// bits, so that a pixel setting a tile bit in between lists the page again
+// rather than finding it listed.
+fn forget_request(l: AtlasLevel, page: u32) {
+    let p = page_request_bit(page);
+    atomicAnd(&page_requests[p.x], ~p.y);
+    let origin = page_origin(l, page);
+    let per_row = params.page_size / params.tile_size;
+    for (var t = 0u; t < per_row * per_row; t++) {
+        let texel = page_tile_origin(origin, t);
+        if all(texel < vec2u(l.size)) {
+            let b = tile_request_bit(virtual_tile(l, texel));
+            atomicAnd(&page_requests[b.x], ~b.y);
+        }
+    }
 }
 
 // Index of texel `texel`'s tile inside its page.

@@ -35,8 +35,10 @@ gpu_struct! {
         pub physical_pages: u32,
         pub layer_pages: u32,
         pub virtual_pages: u32,
-        pub pad_d: u32,
-        pub pad_a: u32,
+        /// Word of the request bits where the tile bits start.
+        pub request_tile_base: u32,
+        /// Chunks of the page table ([`table_chunks`]).
+        pub table_chunks: u32,
         pub pad_b: u32,
         pub pad_c: u32,
     }
@@ -74,13 +76,18 @@ pub struct Resources {
     pub work_queue: wgpu::Buffer,
     /// Indexed by [`TileCounter`].
     pub counters: wgpu::Buffer,
-    /// Per virtual page: physical page + 1 (0: not backed).
+    /// The page table's first level: per block of virtual pages, its chunk + 1.
+    pub page_directory: wgpu::Buffer,
+    /// The page table's chunks: per page of a block, physical page + 1 (0: not backed).
     pub page_table: wgpu::Buffer,
+    /// Per chunk: its backed pages and block (GPU state only).
+    pub table_chunks: wgpu::Buffer,
+    pub free_chunks: wgpu::Buffer,
     /// Per physical page: stamp of its last use.
     pub page_used: wgpu::Buffer,
     /// Per physical page: the virtual page it backs + 1 (0: free).
     pub page_owner: wgpu::Buffer,
-    /// Per virtual page: the mask of tiles requested while it has no physical page.
+    /// Request bits: one per virtual page, then one per virtual tile.
     pub page_requests: wgpu::Buffer,
     pub request_list: wgpu::Buffer,
     pub candidates: wgpu::Buffer,
@@ -101,6 +108,17 @@ pub struct Resources {
     pub view_groups: Vec<wgpu::BindGroup>,
     view_count: u32,
     virtual_pages: u32,
+    request_tile_base: u32,
+    chunks: u32,
+}
+
+/// Chunks of the page table for a pool of `pages` physical pages: one per
+/// page, so that a requested block always finds one (a chunk in use holds
+/// at least one backed page). Sponza's pages fill their blocks about half
+/// (9 pages a block of 64 at pages of 8), so most chunks stay free: the
+/// price of never failing a request for want of a chunk.
+pub fn table_chunks(pages: u32) -> u32 {
+    pages
 }
 
 /// Indirect dispatch offsets in [`Resources::dispatch`] (bytes).
@@ -161,10 +179,17 @@ impl Resources {
         let tile_shaded = storage("tile shaded", tiles * 4, none);
         let work_queue = storage("shade queue", tiles * 8, none);
         let counters = storage("tile counters", TileCounter::SLOTS as u64 * 4, wgpu::BufferUsages::COPY_DST);
-        let page_table = storage("page table", virtual_pages * 4, none);
+        let chunks = table_chunks(pool.pages);
+        let block_pages = super::atlas::BLOCK_PAGES as u64;
+        let page_directory = storage("page directory", virtual_pages / block_pages * 4, none);
+        let page_table = storage("page table", chunks as u64 * block_pages * 4, none);
+        let table_chunk_state = storage("page table chunks", chunks as u64 * 8, none);
+        let free_chunks = storage("free page table chunks", chunks as u64 * 4, none);
+        let request_tile_base = virtual_pages.div_ceil(32);
+        let request_words = request_tile_base + (atlas_layout.tile_count as u64).div_ceil(32);
         let page_used = storage("page used", pool.pages as u64 * 4, none);
         let page_owner = storage("page owner", pool.pages as u64 * 4, none);
-        let page_requests = storage("page requests", virtual_pages * 4, none);
+        let page_requests = storage("page requests", request_words * 4, none);
         let request_list = storage("page request list", pool.pages as u64 * 8, none);
         let candidates = storage("page candidates", pool.pages as u64 * 4, none);
         let backed = storage("backed pages", pool.pages as u64 * 16, none);
@@ -198,6 +223,9 @@ impl Resources {
                 rw,
                 Binding::Storage { read_only: true },
                 rw,
+                rw,
+                rw,
+                rw,
             ],
         );
         let mut res = Self {
@@ -218,7 +246,10 @@ impl Resources {
             tile_shaded,
             work_queue,
             counters,
+            page_directory,
             page_table,
+            table_chunks: table_chunk_state,
+            free_chunks,
             page_used,
             page_owner,
             page_requests,
@@ -230,6 +261,8 @@ impl Resources {
             dispatch_group,
             layout,
             virtual_pages: virtual_pages as u32,
+            request_tile_base: request_tile_base as u32,
+            chunks,
         };
         let main = res.visibility.view.clone();
         res.add_view(device, &main);
@@ -268,6 +301,9 @@ impl Resources {
                 self.backed.as_entire_binding(),
                 slot.as_entire_binding(),
                 self.tile_views.as_entire_binding(),
+                self.page_directory.as_entire_binding(),
+                self.table_chunks.as_entire_binding(),
+                self.free_chunks.as_entire_binding(),
             ],
         );
         self.view_groups.push(group);
@@ -278,11 +314,16 @@ impl Resources {
         (self.pool.pages as u64 * (self.pool.page_size / tile_size).pow(2) as u64).min(u32::MAX as u64) as u32
     }
 
-    /// Bytes of the page table and page state (per virtual page: table
-    /// entry and request mask; per physical page: owner, last use, request,
-    /// candidate and backed slots).
+    /// Bytes of the page table and page state: the directory (a word per
+    /// block of virtual pages), the chunks (a word per page of a block, its
+    /// state and free-list slot), the request bits, and per physical page
+    /// its owner, last use, request, candidate and backed slots.
     pub fn page_table_bytes(&self) -> u64 {
-        self.virtual_pages as u64 * (4 + 4) + self.pool.pages as u64 * (4 + 4 + 8 + 4 + 16)
+        let block_pages = super::atlas::BLOCK_PAGES as u64;
+        let directory = self.virtual_pages as u64 / block_pages * 4;
+        let chunks = self.chunks as u64 * (block_pages * 4 + 8 + 4);
+        let request_bits = self.page_requests.size();
+        directory + chunks + request_bits + self.pool.pages as u64 * (4 + 4 + 8 + 4 + 16)
     }
 
     /// Sets each object's mip bias (the budget's share per object), uploading
@@ -328,8 +369,8 @@ impl Resources {
             physical_pages: self.pool.pages,
             layer_pages: self.pool.layer_pages,
             virtual_pages: self.virtual_pages,
-            pad_d: 0,
-            pad_a: 0,
+            request_tile_base: self.request_tile_base,
+            table_chunks: self.chunks,
             pad_b: 0,
             pad_c: 0,
         };

@@ -4,16 +4,17 @@
 // marked in the page's tile stamps: the first pixel to mark it this frame
 // decides whether its cached shade is still good (younger than N frames and
 // not invalidated) or queues it for shading. A tile on a page with no
-// physical page yet sets its bit in the page's request mask, and the first
-// such pixel lists the page; `mark_backed` marks those tiles once paging
-// has backed the page.
+// physical page yet sets its request bit, and the first such pixel of the
+// page sets the page's bit and lists the page; `mark_backed` marks those
+// tiles once paging has backed the page.
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_PAGES_USED, COUNT_PAGES_REQUESTED, COUNT_PAGES_FAILED,
     COUNT_PAGES_BACKED, COUNT_VIEW_TILES, COUNT_BACKED_TILES, COUNT_ATLAS_PIXELS, COUNT_UNDER_SHADED_PIXELS}
 #import shadespace::pixel_surface::sample_pixel
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_level, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
-    virtual_page, physical_page, virtual_tile, tile_in_page, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin}
+    virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
+    page_request_bit, tile_request_bit, page_tile_origin, forget_request}
 
 // A small integer hash (PCG's output permutation) for tile phases.
 fn hash(x: u32) -> u32 {
@@ -50,14 +51,15 @@ fn queue_if_due(slot: u32, tile: u32, object: u32, level_index: u32, valid_since
 }
 
 // Asks for a physical page for virtual page `page`, remembering the tile of
-// `texel` in the page's request mask: the pixel that finds the mask empty
-// lists the page.
-fn request_tile(page: u32, object: u32, level_index: u32, texel: vec2u) {
-    let m = 1u << tile_in_page(texel);
-    if (atomicLoad(&page_requests[page]) & m) != 0u {
+// `texel` in its request bit: the first pixel of the page to set a tile
+// bit and find the page's bit clear lists the page.
+fn request_tile(page: u32, object: u32, level_index: u32, l: AtlasLevel, texel: vec2u) {
+    let tile = tile_request_bit(virtual_tile(l, texel));
+    if (atomicLoad(&page_requests[tile.x]) & tile.y) != 0u || (atomicOr(&page_requests[tile.x], tile.y) & tile.y) != 0u {
         return;
     }
-    if atomicOr(&page_requests[page], m) != 0u {
+    let p = page_request_bit(page);
+    if (atomicOr(&page_requests[p.x], p.y) & p.y) != 0u {
         return;
     }
     let n = atomicAdd(&counters[COUNT_PAGES_REQUESTED], 1u);
@@ -65,8 +67,8 @@ fn request_tile(page: u32, object: u32, level_index: u32, texel: vec2u) {
         request_list[n] = vec2u(page, (object << 8u) | level_index);
     } else {
         // More requests than physical pages: this one cannot be backed. Its
-        // pixels are shaded forward; an empty mask lets the next frame ask again.
-        atomicStore(&page_requests[page], 0u);
+        // pixels are shaded forward; clear bits let the next frame ask again.
+        forget_request(l, page);
         atomicAdd(&counters[COUNT_PAGES_FAILED], 1u);
     }
 }
@@ -76,7 +78,7 @@ fn mark_tile(object: u32, level_index: u32, l: AtlasLevel, valid_since: u32, tex
     let page = virtual_page(l, t);
     let physical = physical_page(page);
     if physical == NOT_BACKED {
-        request_tile(page, object, level_index, t);
+        request_tile(page, object, level_index, l, t);
         return;
     }
     let slot = physical_tile(physical, t);
@@ -171,8 +173,9 @@ fn mark_pixel(pixel: vec2u) -> u32 {
 }
 
 // Per page backed this frame (one workgroup each, one invocation per tile of
-// the page, at most 16): the page's tiles start over (never visible, never shaded), and
-// those the request mask names are marked visible and queued.
+// the page, at most 16): the page's tiles start over (never visible, never
+// shaded), and those whose request bits are set are marked visible and
+// queued; the bits are cleared for a later request.
 @compute @workgroup_size(16)
 fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
                @builtin(local_invocation_index) lid: u32) {
@@ -186,26 +189,27 @@ fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups
     let e = atlas_entries[object];
     let l = e.levels[level_index];
     let per_row = params.page_size / params.tile_size;
-    let mask = atomicLoad(&page_requests[b.x]);
-    let origin = page_origin(l, b.x);
     let t = lid;
     if t < per_row * per_row {
         let slot = b.z * per_row * per_row + t;
-        let requested = (mask >> t) & 1u;
-        atomicStore(&tile_visible[slot], select(0u, params.stamp, requested != 0u));
+        let texel = page_tile_origin(page_origin(l, b.x), t);
+        var requested = false;
+        if all(texel < vec2u(l.size)) {
+            let bit = tile_request_bit(virtual_tile(l, texel));
+            requested = (atomicAnd(&page_requests[bit.x], ~bit.y) & bit.y) != 0u;
+        }
+        atomicStore(&tile_visible[slot], select(0u, params.stamp, requested));
         tile_shaded[slot] = 0u;
-        if requested != 0u {
+        if requested {
             atomicAdd(&counters[COUNT_VISIBLE], 1u);
             atomicAdd(&counters[COUNT_BACKED_TILES], 1u);
             atomicAdd(&counters[COUNT_NEW], 1u);
-            let texel = origin + vec2u(t % per_row, t / per_row) * params.tile_size;
             queue_if_due(slot, virtual_tile(l, texel), object, level_index, e.valid_since);
         }
     }
-    workgroupBarrier();
-    // The mask is spent (a page requested again later starts from zero).
     if lid == 0u {
-        atomicStore(&page_requests[b.x], 0u);
+        let p = page_request_bit(b.x);
+        atomicAnd(&page_requests[p.x], ~p.y);
     }
 }
 

@@ -1,10 +1,11 @@
 //! Paging (`paging.wgsl`): after marking, the virtual pages this frame's
 //! tiles need that have no physical page get one, on the GPU, least
 //! recently used first (free pages, then by age bucket), with no CPU round
-//! trip. The pages backed this frame are then built (`trimap`) and their
+//! trip, and the two-level page table follows (a chunk of table words for
+//! each block of pages with backed pages, freed with its last page). The pages backed this frame are then built (`trimap`) and their
 //! requested tiles marked (`mark::mark_backed`).
 
-use super::resources::{ALLOCATE_ARGS, Resources};
+use super::resources::{ALLOCATE_ARGS, Resources, table_chunks};
 use crate::render::frame::Frame;
 use crate::render::passes::compute_pipeline;
 use crate::render::scene_gpu::SceneGpu;
@@ -17,6 +18,9 @@ pub struct PagingPass {
     page_offsets: wgpu::ComputePipeline,
     list_candidates: wgpu::ComputePipeline,
     allocate: wgpu::ComputePipeline,
+    release_chunks: wgpu::ComputePipeline,
+    claim_blocks: wgpu::ComputePipeline,
+    bind_pages: wgpu::ComputePipeline,
     backed_args: wgpu::ComputePipeline,
 }
 
@@ -34,14 +38,17 @@ impl PagingPass {
             page_offsets: compute_pipeline(device, shaders, SHADER, "page_offsets", &with_dispatch)?,
             list_candidates: compute_pipeline(device, shaders, SHADER, "list_candidates", &plain)?,
             allocate: compute_pipeline(device, shaders, SHADER, "allocate", &plain)?,
+            release_chunks: compute_pipeline(device, shaders, SHADER, "release_chunks", &plain)?,
+            claim_blocks: compute_pipeline(device, shaders, SHADER, "claim_blocks", &plain)?,
+            bind_pages: compute_pipeline(device, shaders, SHADER, "bind_pages", &plain)?,
             backed_args: compute_pipeline(device, shaders, SHADER, "backed_args", &with_dispatch)?,
         })
     }
 }
 
-/// Reads: the page requests, page use and owners. Writes: the page table,
-/// page owners and use, the backed-page list, the counters, the dispatches
-/// of allocation and of the backed pages' passes.
+/// Reads: the page requests, page use and owners. Writes: the page
+/// directory and table chunks, page owners and use, the backed-page list,
+/// the counters, the dispatches of allocation and of the backed pages' passes.
 pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     let scene = frame.scene_group;
     let pages = res.pool.pages.div_ceil(64);
@@ -59,6 +66,12 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     let mut cp = frame.compute_pass("allocate");
     res.bind(&mut cp, scene);
     cp.set_pipeline(&pass.allocate);
+    cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
+    cp.set_pipeline(&pass.release_chunks);
+    cp.dispatch_workgroups(table_chunks(res.pool.pages).div_ceil(64), 1, 1);
+    cp.set_pipeline(&pass.claim_blocks);
+    cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
+    cp.set_pipeline(&pass.bind_pages);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     drop(cp);
     let mut cp = frame.compute_pass("backed args");

@@ -4,13 +4,18 @@
 // age buckets (free pages first, then the oldest), `page_offsets` turns the
 // bucket sizes into offsets, `list_candidates` lists the pages in that
 // order, and `allocate` gives the i-th request the i-th candidate, taking it
-// from the virtual page it backed before. Requests beyond the candidates
-// fail this frame (their pixels are shaded forward in the gather) and the
-// budget raises the mip bias.
+// from the virtual page it backed before. The page table has two levels (a
+// directory word per block of pages, a chunk of page words per block with
+// backed pages): `release_chunks` frees the chunks whose last page was just
+// taken away and lists the free ones, `claim_blocks` gives a chunk to each
+// requested block that has none, and `bind_pages` writes the pages into
+// their chunks and lists them as backed. Requests beyond the candidates (or
+// the free chunks) fail this frame (their pixels are shaded forward in the
+// gather) and the budget raises the mip bias.
 #import shadespace::contract::{COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
-    AGE_BUCKET_BASE, AGE_BUCKETS}
-#import shadespace::objectspace::{params, counters, page_table, page_used, page_owner, page_requests, request_list,
-    candidates, backed}
+    COUNT_FREE_CHUNKS, COUNT_CHUNKS_TAKEN, COUNT_TABLE_CHUNKS, AGE_BUCKET_BASE, AGE_BUCKETS}
+#import shadespace::objectspace::{params, atlas_entries, counters, page_table, page_used, page_owner, request_list,
+    candidates, backed, page_directory, table_chunks, free_chunks, forget_request, BLOCK_PAGES}
 #import shadespace::objectspace_dispatch::{write_dispatch, ALLOCATE_ARGS, BACKED_ARGS}
 
 // Bucket 0: free pages; 1: unused for 128 frames or more; ...; 8: used last frame.
@@ -57,32 +62,128 @@ fn list_candidates(@builtin(global_invocation_id) id: vec3u) {
     }
 }
 
+// Request `i` of this frame's list, when there is one.
+fn request_index(wg: vec3u, groups: vec3u, lid: u32) -> u32 {
+    return (wg.y * groups.x + wg.x) * 64u + lid;
+}
+
+// Requests that got a candidate page.
+fn allocated() -> u32 {
+    return min(requests(), atomicLoad(&counters[COUNT_CANDIDATES]));
+}
+
+// Forgets request `request` (no page for it this frame).
+fn fail(request: vec2u) {
+    atomicAdd(&counters[COUNT_PAGES_FAILED], 1u);
+    forget_request(atlas_entries[request.y >> 8u].levels[request.y & 0xffu], request.x);
+}
+
 @compute @workgroup_size(64)
 fn allocate(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
             @builtin(local_invocation_index) lid: u32) {
-    let i = (wg.y * groups.x + wg.x) * 64u + lid;
+    let i = request_index(wg, groups, lid);
     if i >= requests() {
         return;
     }
-    let request = request_list[i];
-    let page = request.x;
     if i >= atomicLoad(&counters[COUNT_CANDIDATES]) {
-        // No page left: forget the tiles asked for (next frame asks again).
-        atomicAdd(&counters[COUNT_PAGES_FAILED], 1u);
-        atomicStore(&page_requests[page], 0u);
+        fail(request_list[i]);
         return;
     }
     let physical = candidates[i];
     // The evicted page was not used this frame, so no request names it.
     let evicted = page_owner[physical];
     if evicted != 0u {
-        page_table[evicted - 1u] = 0u;
+        let page = evicted - 1u;
+        let chunk = atomicLoad(&page_directory[page / BLOCK_PAGES]) - 1u;
+        page_table[chunk * BLOCK_PAGES + page % BLOCK_PAGES] = 0u;
+        atomicSub(&table_chunks[chunk].pages, 1u);
     }
-    page_table[page] = physical + 1u;
-    page_owner[physical] = page + 1u;
+    page_owner[physical] = request_list[i].x + 1u;
     atomicStore(&page_used[physical], params.stamp);
-    backed[i] = vec4u(page, request.y, physical, 0u);
-    atomicAdd(&counters[COUNT_PAGES_BACKED], 1u);
+}
+
+// Per chunk: a chunk left with no page goes back (its block's directory
+// word cleared); the free ones are listed.
+@compute @workgroup_size(64)
+fn release_chunks(@builtin(global_invocation_id) id: vec3u) {
+    let c = id.x;
+    if c >= params.table_chunks {
+        return;
+    }
+    let block = table_chunks[c].block;
+    if block != 0u && atomicLoad(&table_chunks[c].pages) == 0u {
+        atomicStore(&page_directory[block - 1u], 0u);
+        table_chunks[c].block = 0u;
+    }
+    if table_chunks[c].block == 0u {
+        free_chunks[atomicAdd(&counters[COUNT_FREE_CHUNKS], 1u)] = c;
+    } else {
+        atomicAdd(&counters[COUNT_TABLE_CHUNKS], 1u);
+    }
+}
+
+// A directory word while one request of its block takes a chunk for it.
+const CLAIMING: u32 = 0xffffffffu;
+
+// Per allocated request: the first request of a block with no chunk takes
+// a free one (the others of the block find it taken).
+@compute @workgroup_size(64)
+fn claim_blocks(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+                @builtin(local_invocation_index) lid: u32) {
+    let i = request_index(wg, groups, lid);
+    if i >= allocated() {
+        return;
+    }
+    let block = request_list[i].x / BLOCK_PAGES;
+    // A weak exchange may fail spuriously: retry while the word is still 0.
+    for (var attempt = 0u; attempt < 4u; attempt++) {
+        if atomicLoad(&page_directory[block]) != 0u {
+            return;
+        }
+        let r = atomicCompareExchangeWeak(&page_directory[block], 0u, CLAIMING);
+        if r.exchanged {
+            let n = atomicAdd(&counters[COUNT_CHUNKS_TAKEN], 1u);
+            if n < atomicLoad(&counters[COUNT_FREE_CHUNKS]) {
+                let c = free_chunks[n];
+                table_chunks[c].block = block + 1u;
+                atomicStore(&page_directory[block], c + 1u);
+                atomicAdd(&counters[COUNT_TABLE_CHUNKS], 1u);
+            } else {
+                // No chunk left (with one chunk per physical page this
+                // cannot happen): the block's requests fail this frame.
+                atomicStore(&page_directory[block], 0u);
+            }
+            return;
+        }
+        if r.old_value != 0u {
+            return;
+        }
+    }
+}
+
+// Per allocated request: the page's word in its block's chunk, and the
+// backed-page list; a request whose block found no chunk gives its
+// physical page back.
+@compute @workgroup_size(64)
+fn bind_pages(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+              @builtin(local_invocation_index) lid: u32) {
+    let i = request_index(wg, groups, lid);
+    if i >= allocated() {
+        return;
+    }
+    let request = request_list[i];
+    let page = request.x;
+    let physical = candidates[i];
+    let chunk = atomicLoad(&page_directory[page / BLOCK_PAGES]);
+    if chunk == 0u {
+        page_owner[physical] = 0u;
+        atomicStore(&page_used[physical], 0u);
+        fail(request);
+        return;
+    }
+    page_table[(chunk - 1u) * BLOCK_PAGES + page % BLOCK_PAGES] = physical + 1u;
+    atomicAdd(&table_chunks[chunk - 1u].pages, 1u);
+    backed[atomicAdd(&counters[COUNT_PAGES_BACKED], 1u)] = vec4u(page, request.y, physical, 0u);
 }
 
 @compute @workgroup_size(1)
