@@ -1,5 +1,5 @@
-//! OBJ loading: any bytes give a scene or an error, never a panic; a loaded
-//! scene can be framed.
+//! OBJ loading: any bytes give a scene or an error, never a panic; a small
+//! loaded scene can be framed.
 #![no_main]
 
 mod input_file;
@@ -7,8 +7,17 @@ mod input_file;
 use libfuzzer_sys::fuzz_target;
 use shadespace::scene::{framing, obj};
 
+/// Framing searches 72 angles over up to 4,096 vertices: on every input it
+/// held this target to 350 executions a second, against 10,000 for glTF
+/// (whose inputs rarely load). Small scenes reach framing's edge cases
+/// (degenerate, huge or non-finite positions) just as well.
+const MAX_FRAMED_VERTICES: usize = 64;
+
 fuzz_target!(|data: &[u8]| {
     if let Ok(scene) = obj::load_file(&input_file::input_file("input.obj", data)) {
-        let _ = framing::frame(&scene.world_positions(), 16.0 / 9.0);
+        let positions = scene.world_positions();
+        if positions.len() <= MAX_FRAMED_VERTICES {
+            let _ = framing::frame(&positions, 16.0 / 9.0);
+        }
     }
 });

@@ -417,11 +417,11 @@ impl Viewer {
         let view_camera = self.view_camera();
         let command = self.session.render_command(&self.wanted, &view_camera);
         let path_frames = self.session.path().frame_count();
-        let image = self.presenter.image_id();
+        let (image, image_size) = (self.presenter.image_id(), self.presenter.image_size());
         let mut actions = Vec::new();
         let egui = self.egui.clone();
         let output = egui.run_ui(input, |ui| {
-            ui::background(ui.ctx(), image);
+            ui::background(ui.ctx(), image, image_size);
             if self.ui_shown {
                 actions = ui::panel(
                     ui,

@@ -83,6 +83,11 @@ impl Presenter {
         Ok(Self { surface, config, egui, image, image_id, to_free: Vec::new() })
     }
 
+    /// The rendered image's size in pixels.
+    pub fn image_size(&self) -> (u32, u32) {
+        (self.image.width(), self.image.height())
+    }
+
     /// The texture id under which egui shows the rendered image.
     pub fn image_id(&self) -> egui::TextureId {
         self.image_id

@@ -48,10 +48,22 @@ pub enum Action {
     LoadBookmarks,
 }
 
-/// Paints the rendered image over the whole window (under the panel).
-pub fn background(ctx: &egui::Context, image: egui::TextureId) {
+/// Paints the rendered image (`size` pixels) under the panel, as large as
+/// the window holds it without changing its shape (a resized window shows
+/// bars, not a stretched frame; the renderer keeps `--size`).
+pub fn background(ctx: &egui::Context, image: egui::TextureId, size: (u32, u32)) {
     let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0));
-    ctx.layer_painter(egui::LayerId::background()).image(image, ctx.content_rect(), uv, Color32::WHITE);
+    let window = ctx.content_rect();
+    let painter = ctx.layer_painter(egui::LayerId::background());
+    painter.rect_filled(window, 0.0, Color32::BLACK);
+    painter.image(image, fit(window, size), uv, Color32::WHITE);
+}
+
+/// The largest rectangle of `size`'s aspect ratio centred in `window`.
+fn fit(window: Rect, size: (u32, u32)) -> Rect {
+    let image = vec2(size.0.max(1) as f32, size.1.max(1) as f32);
+    let scale = (window.width() / image.x).min(window.height() / image.y);
+    Rect::from_center_size(window.center(), image * scale)
 }
 
 /// Draws the panel; returns the actions asked for.
@@ -278,4 +290,21 @@ fn counters(ui: &mut Ui, timings: &TimingHistory) {
             ui.monospace(format!("{name:<20} {v:.2}"));
         }
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_image_keeps_its_shape_in_a_resized_window() {
+        let window = Rect::from_min_size(pos2(0.0, 0.0), vec2(1000.0, 400.0));
+        // 16:9 in a wide window: full height, centred, bars left and right.
+        let r = fit(window, (320, 180));
+        assert!((r.height() - 400.0).abs() < 1e-3 && (r.width() - 400.0 * 16.0 / 9.0).abs() < 1e-3);
+        assert!((r.center().x - 500.0).abs() < 1e-3);
+        // A window of the image's own size shows it pixel for pixel.
+        let same = Rect::from_min_size(pos2(0.0, 0.0), vec2(320.0, 180.0));
+        assert_eq!(fit(same, (320, 180)), same);
+    }
 }
