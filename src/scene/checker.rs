@@ -28,20 +28,24 @@ pub fn object_tint(index: usize) -> Vec3 {
 /// `tint` and a darker `tint`, with thin grid lines every cell.
 pub fn uv_checker(name: &str, tint: Vec3, size: u32, cells: u32) -> Texture {
     let cell = (size / cells.max(1)).max(1);
+    // Three colours: encode each once, not per texel (sRGB encoding is a
+    // `powf`; per texel it dominated loading an OBJ without materials).
+    let [line, light, dark] = [0.35, 1.0, 0.7].map(|shade| {
+        let c = tint * shade;
+        [linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255]
+    });
     let mut rgba8 = Vec::with_capacity((size * size * 4) as usize);
     for y in 0..size {
         for x in 0..size {
             let (cx, cy) = (x / cell, y / cell);
-            let line = x % cell == 0 || y % cell == 0;
-            let shade = if line {
-                0.35
+            let texel = if x % cell == 0 || y % cell == 0 {
+                line
             } else if (cx + cy) % 2 == 0 {
-                1.0
+                light
             } else {
-                0.7
+                dark
             };
-            let c = tint * shade;
-            rgba8.extend_from_slice(&[linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255]);
+            rgba8.extend_from_slice(&texel);
         }
     }
     Texture { name: name.to_string(), width: size, height: size, rgba8 }
