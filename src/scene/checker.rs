@@ -34,19 +34,28 @@ pub fn uv_checker(name: &str, tint: Vec3, size: u32, cells: u32) -> Texture {
         let c = tint * shade;
         [linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255]
     });
+    // Three kinds of row: a grid line, and rows through cells starting
+    // light or dark; the texture is rows of these.
+    let row = |first: [u8; 4], second: [u8; 4]| -> Vec<u8> {
+        (0..size)
+            .flat_map(|x| match (x % cell == 0, (x / cell) % 2 == 0) {
+                (true, _) => line,
+                (false, true) => first,
+                (false, false) => second,
+            })
+            .collect()
+    };
+    let (line_row, even_row, odd_row) = (row(line, line), row(light, dark), row(dark, light));
     let mut rgba8 = Vec::with_capacity((size * size * 4) as usize);
     for y in 0..size {
-        for x in 0..size {
-            let (cx, cy) = (x / cell, y / cell);
-            let texel = if x % cell == 0 || y % cell == 0 {
-                line
-            } else if (cx + cy) % 2 == 0 {
-                light
-            } else {
-                dark
-            };
-            rgba8.extend_from_slice(&texel);
-        }
+        let r = if y % cell == 0 {
+            &line_row
+        } else if (y / cell) % 2 == 0 {
+            &even_row
+        } else {
+            &odd_row
+        };
+        rgba8.extend_from_slice(r);
     }
     Texture { name: name.to_string(), width: size, height: size, rgba8 }
 }
@@ -54,6 +63,29 @@ pub fn uv_checker(name: &str, tint: Vec3, size: u32, cells: u32) -> Texture {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rows_repeat_the_per_texel_pattern() {
+        let tint = Vec3::new(0.9, 0.5, 0.2);
+        let (size, cells) = (96, 6);
+        let t = uv_checker("t", tint, size, cells);
+        let cell = size / cells;
+        for y in 0..size {
+            for x in 0..size {
+                let shade = if x % cell == 0 || y % cell == 0 {
+                    0.35
+                } else if (x / cell + y / cell) % 2 == 0 {
+                    1.0
+                } else {
+                    0.7
+                };
+                let c = tint * shade;
+                let want = [linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255];
+                let i = ((y * size + x) * 4) as usize;
+                assert_eq!(t.rgba8[i..i + 4], want, "texel ({x}, {y})");
+            }
+        }
+    }
 
     #[test]
     fn checker_alternates_and_tints_differ() {
