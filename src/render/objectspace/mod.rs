@@ -450,7 +450,9 @@ impl ObjectSpace {
             max_pages,
         )?;
         if virtual_halvings > 0 {
-            tracing::info!("virtual textures halved {virtual_halvings} time(s) to fit the page table");
+            tracing::info!(
+                "virtual textures halved {virtual_halvings} time(s) to fit the page directory and request bits"
+            );
         }
         // Each view sees its own pixels: the default atlas holds all of them.
         let views = 1 + config.extra_views.count() as u64;

@@ -114,9 +114,10 @@ pub struct Resources {
 
 /// Chunks of the page table for a pool of `pages` physical pages: one per
 /// page, so that a requested block always finds one (a chunk in use holds
-/// at least one backed page). Sponza's pages fill their blocks about half
-/// (9 pages a block of 64 at pages of 8), so most chunks stay free: the
-/// price of never failing a request for want of a chunk.
+/// at least one backed page). Sponza's pages share blocks (about 5 pages
+/// a block of 16 at 1080p; at most 7,000 of 32,400 chunks in use along its
+/// path), so most chunks stay free: 76 bytes a page, the price of never
+/// failing a request for want of a chunk.
 pub fn table_chunks(pages: u32) -> u32 {
     pages
 }
