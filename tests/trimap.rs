@@ -137,6 +137,7 @@ fn every_texel_a_triangle_touches_is_covered() {
             covered += (*cpu != 0) as usize;
         }
     }
-    // Only the pages under the slivers are backed (the plane is nothing else).
-    assert!(compared >= 2048 && covered > 200, "only {compared} texels on backed pages, {covered} covered");
+    // Only the pages under the slivers are backed (the plane is nothing
+    // else): at the default pages of 8x8, 23 of them.
+    assert!(compared >= 1024 && covered > 200, "only {compared} texels on backed pages, {covered} covered");
 }
