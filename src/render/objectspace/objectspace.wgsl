@@ -106,7 +106,8 @@ struct ViewSlot {
 // page of the block is backed).
 @group(1) @binding(17) var<storage, read_write> page_directory: array<atomic<u32>>;
 
-// Mirrors nothing on the CPU: the GPU alone keeps it.
+// A chunk's state, kept by the GPU alone (tests read it back as
+// `debug::PageTableState::chunks`).
 struct TableChunk {
     // Backed pages whose table word is in the chunk (0: the chunk is free).
     pages: atomic<u32>,
