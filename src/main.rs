@@ -393,12 +393,14 @@ struct ObjectSpaceArgs {
     /// triangle's normals do not vary (0 = off; at most 16).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = variable_rate)]
     variable_rate: f32,
-    /// Physical atlas in Mi texels (12 bytes each with the triangle maps):
-    /// the pages that back the objects' virtual textures where visible tiles
-    /// need them. When a frame needs more, the mip bias rises until it fits
-    /// (the counters report `budget_bias`). Default: 1 texel per pixel at
-    /// 1920x1080 (2.1 Mi), growing as the square root of the pixels (4.1 Mi
-    /// at 3840x2160), at least 1 Mi.
+    /// Most texels of the physical atlas, in Mi (12 bytes each with the
+    /// triangle maps): the pages that back the objects' virtual textures
+    /// where visible tiles need them. The atlas starts at this size, then
+    /// follows the pages the frames need (in 32 steps, about 1.4 times
+    /// them); when a frame needs more than the budget, the mip bias rises
+    /// until it fits (the counters report `budget_bias` and `atlas_pages`).
+    /// Default: 1 texel per pixel at 1920x1080 (2.1 Mi), growing as the
+    /// square root of the pixels (4.1 Mi at 3840x2160), at least 1 Mi.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1 << 14))]
     atlas_budget: Option<u64>,
     /// Page side of the virtual textures in texels (a power of two, at most

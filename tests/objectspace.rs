@@ -289,3 +289,54 @@ fn the_page_table_follows_pages_evicted_along_a_path() {
     });
     assert!(reassigned, "no chunk was freed and given to another block");
 }
+
+/// The physical atlas follows the pages the frames need: from the whole
+/// budget it shrinks, after a run of frames needing little of it, to about
+/// what they need (pages beyond the new size evicted, the page table still
+/// consistent); when a view needs more it grows back within a few frames
+/// (until then the pages it cannot get are shaded forward), and the image is
+/// the one a renderer that never resized gives.
+#[test]
+fn the_atlas_shrinks_and_grows_with_the_pages_the_frames_need() {
+    use shadespace::render::objectspace::atlas::PagePool;
+    use shadespace::scene::Camera;
+    let ctx = common::gpu();
+    let (scene, near, lights) = common::floor_scene();
+    // The floor from high above: a few coarse pages.
+    let far =
+        Camera { position: glam::Vec3::new(0.0, 30.0, 0.0), forward: glam::Vec3::NEG_Y, up: glam::Vec3::NEG_Z, ..near };
+    let budget = 1 << 20;
+    let config =
+        ObjectSpaceConfig { texture_sizes: vec![Some(4096)], atlas_budget_texels: Some(budget), ..Default::default() };
+    let options = RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config) };
+    let layer = PagePool::new(8, budget, 16384).layer_page_count() as f64;
+    let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
+    let mut counters = Vec::new();
+    for frame in 0..48u64 {
+        let camera = if frame < 30 { &far } else { &near };
+        os.render(&ctx, camera, &lights, frame).unwrap();
+        let problems = os.pipeline::<ObjectSpace>().unwrap().read_page_table(&ctx).unwrap().inconsistencies();
+        assert!(problems.is_empty(), "frame {frame}: {problems:?}");
+        counters.extend(os.collect_counters(&ctx, true));
+    }
+    ctx.check_errors().unwrap();
+    let (atlas, in_use, failed) =
+        (counter(&counters, "atlas_pages"), counter(&counters, "pages_in_use"), counter(&counters, "pages_failed"));
+    eprintln!("atlas pages {atlas:?}\npages in use {in_use:?}\nfailed {failed:?}");
+    let full = atlas[0];
+    assert!(full * 64.0 >= budget as f64, "the atlas starts at the budget");
+    // Shrunk by the end of the far frames, to what they need (in whole layers).
+    assert!(atlas[29] < full / 4.0, "the atlas did not shrink: {} of {full} pages", atlas[29]);
+    assert!(atlas[29] <= 2.0 * in_use[29] + layer, "{} pages resident for {} in use", atlas[29], in_use[29]);
+    // The near view needs more than that: the atlas grows back.
+    assert!(in_use[47] > atlas[29], "the near view needs no more pages than the far one");
+    assert!(atlas[47] > in_use[47] && atlas[47] <= full, "{} pages resident for {} in use", atlas[47], in_use[47]);
+    assert_eq!(failed[40..], [0.0; 8], "pages still failing after the atlas grew");
+    let fresh = {
+        let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
+        r.render(&ctx, &near, &lights, 0).unwrap();
+        r.read_image(&ctx).unwrap()
+    };
+    let (err, _) = metrics::compare(&fresh, &os.read_image(&ctx).unwrap());
+    assert!(err.flip_mean < 0.002, "after resizes against a fresh renderer: {err:?}");
+}

@@ -239,9 +239,11 @@ impl AtlasLayout {
     }
 }
 
-/// The physical atlas: `pages` pages of `page_size` texels a side, laid out
-/// `layer_pages` x `layer_pages` per layer of a 2D array texture (one layer
-/// when they fit in the adapter's largest texture).
+/// The physical atlas: `pages` pages of `page_size` texels a side, in
+/// `layers` layers of `layer_pages` x `layer_pages` pages of a 2D array
+/// texture. The atlas grows and shrinks by whole layers
+/// ([`super::residency`]), so a page keeps its place when layers are added
+/// or the last ones taken away.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PagePool {
     pub page_size: u32,
@@ -250,15 +252,30 @@ pub struct PagePool {
     pub layers: u32,
 }
 
+/// Layers a pool of the full budget is cut into: the steps in which the
+/// atlas grows and shrinks (3 % of the budget each).
+pub const BUDGET_LAYERS: u64 = 32;
+
 impl PagePool {
-    /// A pool of at least `texels` texels (at least one page), in layers no
-    /// wider than `max_side`; every page of the last layer is used.
+    /// A pool of at least `texels` texels (at least one page), in about
+    /// [`BUDGET_LAYERS`] square layers no wider than `max_side`.
     pub fn new(page_size: u32, texels: u64, max_side: u32) -> Self {
         let wanted = texels.div_ceil(page_size as u64 * page_size as u64).max(1);
-        let layer_pages = ((wanted as f64).sqrt().ceil() as u32).clamp(1, (max_side / page_size).max(1));
+        let layer_pages =
+            ((wanted as f64 / BUDGET_LAYERS as f64).sqrt().ceil() as u32).clamp(1, (max_side / page_size).max(1));
         let per_layer = layer_pages as u64 * layer_pages as u64;
-        let layers = wanted.div_ceil(per_layer) as u32;
-        Self { page_size, pages: (per_layer * layers as u64).min(u32::MAX as u64) as u32, layer_pages, layers }
+        Self { page_size, pages: 0, layer_pages, layers: 0 }.with_layers(wanted.div_ceil(per_layer) as u32)
+    }
+
+    /// The same pool cut to `layers` layers (its pages keep their places).
+    pub fn with_layers(self, layers: u32) -> Self {
+        let pages = (self.layer_page_count() as u64 * layers as u64).min(u32::MAX as u64) as u32;
+        Self { pages, layers, ..self }
+    }
+
+    /// Pages per layer.
+    pub fn layer_page_count(&self) -> u32 {
+        self.layer_pages * self.layer_pages
     }
 
     pub fn texels(&self) -> u64 {
@@ -409,13 +426,24 @@ mod tests {
     }
 
     #[test]
-    fn pools_fill_square_layers() {
+    fn pools_are_cut_into_layers_that_keep_their_pages() {
+        // 10 pages in about 32 layers: layers of one page.
         let p = PagePool::new(64, 10 * 64 * 64, 8192);
-        assert_eq!((p.layer_pages, p.layers, p.pages), (4, 1, 16));
-        assert_eq!(p.origin(5), (64, 64, 0));
+        assert_eq!((p.layer_pages, p.layers, p.pages), (1, 10, 10));
+        assert_eq!(p.origin(5), (0, 0, 5));
+        // 3200 pages: 32 layers of 10x10.
+        let p = PagePool::new(8, 3200 * 64, 8192);
+        assert_eq!((p.layer_pages, p.layers, p.pages), (10, 32, 3200));
+        assert_eq!(p.origin(123), (3 * 8, 2 * 8, 1));
+        // Grown or shrunk by whole layers, a page stays where it was.
+        for layers in [1, 5, 40] {
+            let q = p.with_layers(layers);
+            assert_eq!((q.layer_pages, q.pages), (10, layers * 100));
+            assert_eq!(q.origin(57), p.origin(57));
+        }
         // A pool wider than the largest texture takes more layers.
-        let p = PagePool::new(64, 5 * 256 * 256, 256);
-        assert_eq!((p.layer_pages, p.layers, p.pages), (4, 5, 80));
+        let p = PagePool::new(64, 5000 * 64 * 64, 256);
+        assert_eq!((p.layer_pages, p.layers, p.pages), (4, 313, 313 * 16));
         assert_eq!(p.origin(17), (64, 0, 1));
         assert_eq!(PagePool::new(64, 0, 8192).pages, 1);
     }

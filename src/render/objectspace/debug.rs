@@ -100,7 +100,7 @@ impl ObjectSpace {
     pub fn read_page_table(&self, ctx: &GpuContext) -> Result<PageTableState, GpuError> {
         let res = &self.res;
         Ok(PageTableState {
-            owners: Self::words(ctx, &res.page_owner)?,
+            owners: Self::words(ctx, &res.physical.page_owner)?,
             directory: Self::words(ctx, &res.page_directory)?,
             table: Self::words(ctx, &res.page_table)?,
             chunks: Self::words(ctx, &res.table_chunks)?.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
@@ -133,8 +133,9 @@ impl ObjectSpace {
     pub fn read_mark_state(&self, ctx: &GpuContext) -> Result<MarkState, GpuError> {
         let res = &self.res;
         let page_owner: Vec<Option<u32>> =
-            Self::words(ctx, &res.page_owner)?.into_iter().map(|o| o.checked_sub(1)).collect();
-        let (visible, shaded) = (Self::words(ctx, &res.tile_visible)?, Self::words(ctx, &res.tile_shaded)?);
+            Self::words(ctx, &res.physical.page_owner)?.into_iter().map(|o| o.checked_sub(1)).collect();
+        let (visible, shaded) =
+            (Self::words(ctx, &res.physical.tile_visible)?, Self::words(ctx, &res.physical.tile_shaded)?);
         let tiles = self.layout.tile_count as usize;
         let (mut tile_visible, mut tile_shaded) = (vec![0; tiles], vec![0; tiles]);
         self.backed_tiles(&page_owner, |v, p| {
@@ -144,7 +145,8 @@ impl ObjectSpace {
         let c = Self::words(ctx, &res.counters)?;
         let queued =
             (c[super::TileCounter::Queued as usize] as usize).min(res.max_queue(self.layout.tile_size) as usize);
-        let queue = Self::words(ctx, &res.work_queue)?.chunks_exact(2).take(queued).map(|c| [c[0], c[1]]).collect();
+        let queue =
+            Self::words(ctx, &res.physical.work_queue)?.chunks_exact(2).take(queued).map(|c| [c[0], c[1]]).collect();
         let ids: Vec<u32> = bytemuck::pod_collect_to_vec(&readback::read_texture(ctx, &res.visibility.texture, 8)?);
         Ok(MarkState {
             stamp: self.frames,
@@ -179,7 +181,7 @@ impl ObjectSpace {
         let pool = self.res.pool;
         let side = (pool.layer_pages * pool.page_size) as usize;
         let mut out: Vec<u8> = fill.iter().copied().cycle().take(l.size as usize * l.size as usize * texel).collect();
-        let owners = Self::words(ctx, &self.res.page_owner)?;
+        let owners = Self::words(ctx, &self.res.physical.page_owner)?;
         for (physical, owner) in owners.iter().enumerate() {
             let Some((o, lv, origin)) = owner.checked_sub(1).and_then(|v| self.layout.page_origin(v)) else { continue };
             if (o, lv) != (object, level) {
@@ -202,7 +204,7 @@ impl ObjectSpace {
     /// physical page are magenta.
     pub fn read_atlas(&self, ctx: &GpuContext, object: usize, level: usize) -> Result<image::RgbaImage, GpuError> {
         let texel = ATLAS_FORMAT.block_copy_size(None).expect("uncompressed format");
-        let bytes = self.read_layers(ctx, &self.res.atlas, texel)?;
+        let bytes = self.read_layers(ctx, &self.res.physical.atlas, texel)?;
         let magenta = [half::f16::from_f32(4.0), half::f16::ZERO, half::f16::from_f32(4.0), half::f16::ONE];
         let (size, level_bytes) =
             self.gather_level(ctx, &bytes, texel as usize, object, level, bytemuck::cast_slice(&magenta))?;
@@ -222,7 +224,7 @@ impl ObjectSpace {
         level: usize,
     ) -> Result<(u32, Vec<Option<u32>>), GpuError> {
         let texel = TRIANGLE_MAP_FORMAT.block_copy_size(None).expect("uncompressed format");
-        let bytes = self.read_layers(ctx, &self.res.triangle_map, texel)?;
+        let bytes = self.read_layers(ctx, &self.res.physical.triangle_map, texel)?;
         // No page: a value no triangle map holds (triangle indices stay below it).
         let (size, level_bytes) = self.gather_level(ctx, &bytes, texel as usize, object, level, &[0xff; 4])?;
         let ids: Vec<u32> = bytemuck::pod_collect_to_vec(&level_bytes);

@@ -28,6 +28,7 @@ pub mod debug;
 pub mod gather;
 pub mod mark;
 pub mod paging;
+pub mod residency;
 pub mod resources;
 pub mod shade;
 pub mod trimap;
@@ -58,7 +59,8 @@ use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 use atlas::{AtlasError, AtlasLayout, PagePool};
 use gather::{GatherPass, gather};
 use mark::{MarkPass, mark_backed_pages, mark_tiles};
-use paging::{PagingPass, back_pages};
+use paging::{PagingPass, back_pages, evict_beyond};
+use residency::Residency;
 use resources::Resources;
 use shade::{ShadePass, shade_tiles};
 use trimap::{TrimapPass, build_triangle_maps};
@@ -323,8 +325,10 @@ pub struct ObjectSpaceConfig {
     /// Page side of the virtual textures (a power of two, at most four
     /// times the tile size; raised to the tile size).
     pub page_size: u32,
-    /// Texels of the physical atlas; `None`: [`default_atlas_texels`] per view. When a frame needs more pages than it holds, the
-    /// mip bias rises ([`budget`]).
+    /// Most texels of the physical atlas; `None`: [`default_atlas_texels`]
+    /// per view. The atlas starts there and follows the pages the frames
+    /// need ([`residency`]); when a frame needs more pages than the budget
+    /// holds, the mip bias rises ([`budget`]).
     pub atlas_budget_texels: Option<u64>,
     /// Lay down depth before the id pass, which then writes each pixel once
     /// (on the H100: 1.65 instead of 1.82 ms at 1920x1080 on Sponza).
@@ -386,6 +390,8 @@ pub enum ObjectSpaceError {
     ViewsNeedComputeVisibility,
     #[error("an atlas of {texels} texels needs {bytes} bytes of tile state, more than the adapter's largest buffer")]
     AtlasTooLarge { texels: u64, bytes: u64 },
+    #[error("an atlas of {texels} texels takes {layers} layers of {side}x{side}, more than the adapter's {max} layers")]
+    AtlasTooManyLayers { texels: u64, layers: u32, side: u32, max: u32 },
 }
 
 /// The passes that fill the visibility buffer.
@@ -409,10 +415,22 @@ pub struct ObjectSpace {
     /// Frames rendered so far; stamps are `frames + 1` so that 0 means never.
     frames: u32,
     budget: Budget,
+    /// The atlas at the whole budget; `res.pool` is what is resident now.
+    budget_pool: PagePool,
+    residency: Residency,
     virtual_halvings: u32,
     extra_views: Vec<ExtraView>,
-    /// The bias the budget added to each frame still in flight.
-    budget_bias: std::collections::BTreeMap<u64, f32>,
+    /// What each frame still in flight was rendered with.
+    in_flight: std::collections::BTreeMap<u64, InFlight>,
+}
+
+/// What a frame was rendered with, for its counts when they come back.
+#[derive(Clone, Copy, Debug)]
+struct InFlight {
+    /// The bias the budget added.
+    bias: f32,
+    /// Physical pages of the atlas.
+    pages: u32,
 }
 
 impl ObjectSpace {
@@ -459,6 +477,11 @@ impl ObjectSpace {
         let pixels = targets.width as u64 * targets.height as u64;
         let texels = config.atlas_budget_texels.unwrap_or_else(|| default_atlas_texels(pixels) * views);
         let pool = PagePool::new(page_size, texels, device.limits().max_texture_dimension_2d);
+        let max_layers = device.limits().max_texture_array_layers;
+        if pool.layers > max_layers {
+            let (side, layers) = (pool.layer_pages * page_size, pool.layers);
+            return Err(ObjectSpaceError::AtlasTooManyLayers { texels: pool.texels(), layers, side, max: max_layers });
+        }
         // The largest per-tile buffer is the shade queue: 8 bytes a tile.
         let queue_bytes = pool.texels() / (config.tile_size as u64).pow(2) * 8;
         if queue_bytes > device.limits().max_storage_buffer_binding_size {
@@ -518,8 +541,10 @@ impl ObjectSpace {
             readback: ReadbackRing::new("tile counters", TileCounter::SLOTS as u64 * 4),
             frames: 0,
             budget: Budget::default(),
+            residency: Residency::new(pool.layer_page_count(), pool.layers),
+            budget_pool: pool,
             virtual_halvings,
-            budget_bias: Default::default(),
+            in_flight: Default::default(),
         })
     }
 
@@ -555,6 +580,21 @@ impl ObjectSpace {
         self.extra_views.iter().map(|v| &v.hdr)
     }
 
+    /// Resizes the physical atlas to `layers` layers: when shrinking, the
+    /// pages beyond the new size are evicted first; the passes bind the new
+    /// atlas.
+    fn resize_atlas(&mut self, frame: &mut Frame, layers: u32) {
+        let pool = self.res.pool.with_layers(layers);
+        if pool.pages < self.res.pool.pages {
+            evict_beyond(frame, &self.paging, &self.res, pool.pages);
+        }
+        tracing::debug!("atlas resized from {} to {} pages", self.res.pool.pages, pool.pages);
+        self.res.resize(frame.device, frame.encoder, pool);
+        self.shade.rebind(frame.device, &self.res);
+        self.gather.rebind(frame.device, &self.res);
+        self.trimap.rebind(frame.device, &self.res);
+    }
+
     /// The world grid (its last build can be read back).
     pub fn light_grid(&self) -> &LightGrid {
         &self.grid.grid
@@ -581,8 +621,11 @@ impl Pipeline for ObjectSpace {
     fn encode(&mut self, frame: &mut Frame) {
         self.frames += 1;
         let stale = frame.lights_changed || self.frames == 1;
+        if let Some(layers) = self.residency.resize(self.res.pool.layers) {
+            self.resize_atlas(frame, layers);
+        }
         let added = self.budget.bias;
-        self.budget_bias.insert(frame.number, added);
+        self.in_flight.insert(frame.number, InFlight { bias: added, pages: self.res.pool.pages });
         // Screen shares only matter once the bias goes past its uniform part.
         let ranked = added > budget::UNIFORM_BIAS;
         let shares: Vec<Option<f32>> = (0..frame.scene.object_bounds.len())
@@ -635,7 +678,9 @@ impl Pipeline for ObjectSpace {
     /// (backing visible tiles this frame), `pages_backed` (newly),
     /// `pages_failed` (found no page: the atlas was full), `page_texels`
     /// (texels of the pages in use), `table_chunks` (page-table chunks in
-    /// use) and `budget_bias` (levels the budget added); with extra views, `shared_view_tiles` (tiles on pages
+    /// use), `atlas_pages` and `atlas_texels` (the physical atlas the frame
+    /// had: it follows the pages needed, [`residency`]) and `budget_bias`
+    /// (levels the budget added); with extra views, `shared_view_tiles` (tiles on pages
     /// backed before this frame, marked once for all views) and
     /// `view_tiles` (the same summed over the views: what independent views
     /// would mark); with `count_visibility`, the compute rasterizer's counts
@@ -647,7 +692,7 @@ impl Pipeline for ObjectSpace {
         };
         let tile_texels = (self.layout.tile_size * self.layout.tile_size) as f64;
         let page_texels = (self.res.pool.page_size as f64).powi(2);
-        let physical_pages = self.res.pool.pages as f64;
+        let budget_pages = self.budget_pool.pages as f64;
         let pixels = self.res.visibility.texture.width() as f64 * self.res.visibility.texture.height() as f64;
         self.readback
             .collect(device, wait)
@@ -660,9 +705,13 @@ impl Pipeline for ObjectSpace {
                 let backed = count(TileCounter::PagesBacked);
                 let in_use = count(TileCounter::PagesUsed) + backed;
                 let failed = count(TileCounter::PagesFailed);
-                let used = self.budget_bias.remove(&frame).unwrap_or_default();
-                // Demand: the pages this frame needed, against the share of the atlas it may fill.
-                let mut load = (in_use + failed) / (PAGE_FILL * physical_pages);
+                let rendered = self.in_flight.remove(&frame);
+                let (used, resident) = rendered.map_or((0.0, self.res.pool.pages), |r| (r.bias, r.pages));
+                // Demand: the pages this frame needed, against the share of
+                // the budget it may fill (the atlas grows up to it) ...
+                let mut load = (in_use + failed) / (PAGE_FILL * budget_pages);
+                // ... and against the atlas it had.
+                self.residency.observe(frame, in_use + failed, resident);
                 if let Some(budget) = self.config.shade_budget_texels {
                     load = load.max(shaded * tile_texels / budget as f64);
                 }
@@ -681,6 +730,8 @@ impl Pipeline for ObjectSpace {
                     ("pages_backed", backed),
                     ("pages_failed", failed),
                     ("page_texels", in_use * page_texels),
+                    ("atlas_pages", resident as f64),
+                    ("atlas_texels", resident as f64 * page_texels),
                     ("table_chunks", count(TileCounter::TableChunks)),
                     ("budget_bias", used as f64),
                     // Share of the atlas-shaded pixels whose level gives them
@@ -720,6 +771,7 @@ impl Pipeline for ObjectSpace {
             .memory("visibility", self.res.visibility.bytes())
             .memory("world_grid", self.grid.grid.bytes())
             .setup("physical_pages", pool.pages as u64)
+            .setup("budget_pages", self.budget_pool.pages as u64)
             .setup("page_size", pool.page_size as u64)
             .setup("virtual_pages", self.layout.page_count as u64)
             .setup("virtual_texels", self.layout.virtual_texels())

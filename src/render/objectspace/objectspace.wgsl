@@ -50,7 +50,9 @@ struct Params {
     request_tile_base: u32,
     // Chunks of the page table.
     table_chunks: u32,
-    pad_b: u32,
+    // Slots of the page request list (the budget's pages, whatever the
+    // atlas's size now: a shrunk atlas still lists what the frame asks).
+    request_capacity: u32,
     pad_c: u32,
 }
 

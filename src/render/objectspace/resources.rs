@@ -39,7 +39,8 @@ gpu_struct! {
         pub request_tile_base: u32,
         /// Chunks of the page table ([`table_chunks`]).
         pub table_chunks: u32,
-        pub pad_b: u32,
+        /// Slots of the page request list (the budget's pages).
+        pub request_capacity: u32,
         pub pad_c: u32,
     }
 }
@@ -57,23 +58,13 @@ gpu_struct! {
 
 pub struct Resources {
     pub pool: PagePool,
-    pub atlas: wgpu::Texture,
-    /// The atlas as a 2D array (one layer per page).
-    pub atlas_array: wgpu::TextureView,
-    pub triangle_map: wgpu::Texture,
-    /// The triangle maps as a 2D array.
-    pub triangle_map_array: wgpu::TextureView,
+    /// What the atlas holds per physical page and tile (sized by `pool`).
+    pub physical: PhysicalPages,
     pub visibility: VisibilityBuffer,
     pub params: wgpu::Buffer,
     pub entries: wgpu::Buffer,
     /// CPU copy of the atlas table (its `valid_since` changes with the lights).
     pub entry_data: Vec<GpuAtlasEntry>,
-    /// Per physical tile: stamp of the last frame it was visible.
-    pub tile_visible: wgpu::Buffer,
-    /// Per physical tile: stamp of the last frame it was shaded.
-    pub tile_shaded: wgpu::Buffer,
-    /// This frame's tiles to shade: (virtual tile, object << 8 | level).
-    pub work_queue: wgpu::Buffer,
     /// Indexed by [`TileCounter`].
     pub counters: wgpu::Buffer,
     /// The page table's first level: per block of virtual pages, its chunk + 1.
@@ -83,33 +74,117 @@ pub struct Resources {
     /// Per chunk: its backed pages and block (GPU state only).
     pub table_chunks: wgpu::Buffer,
     pub free_chunks: wgpu::Buffer,
-    /// Per physical page: stamp of its last use.
-    pub page_used: wgpu::Buffer,
-    /// Per physical page: the virtual page it backs + 1 (0: free).
-    pub page_owner: wgpu::Buffer,
     /// Request bits: one per virtual page, then one per virtual tile.
     pub page_requests: wgpu::Buffer,
+    /// This frame's requested pages (a slot per page of the budget).
     pub request_list: wgpu::Buffer,
-    pub candidates: wgpu::Buffer,
-    /// Pages backed this frame.
-    pub backed: wgpu::Buffer,
     /// Indirect dispatch arguments (`dispatch.wgsl`): shade, allocate, backed pages.
     pub dispatch: wgpu::Buffer,
     /// `dispatch` as storage, for the passes that write it (group 2).
     pub dispatch_layout: wgpu::BindGroupLayout,
     pub dispatch_group: wgpu::BindGroup,
-    /// Per physical tile: the views that marked it this frame (one bit each),
-    /// cleared every frame when there are several views.
-    pub tile_views: wgpu::Buffer,
     /// The scene's chart islands per triangle (bound for the gather's filter).
     triangle_charts: wgpu::Buffer,
     pub layout: wgpu::BindGroupLayout,
     /// Group 1 per view (its visibility buffer and view slot; 0 is the main view).
     pub view_groups: Vec<wgpu::BindGroup>,
+    /// Per view: its visibility buffer and view slot, to bind group 1 again
+    /// when the atlas is resized.
+    views: Vec<(wgpu::TextureView, wgpu::Buffer)>,
     view_count: u32,
+    tile_size: u32,
     virtual_pages: u32,
     request_tile_base: u32,
     chunks: u32,
+    /// Slots of `request_list`.
+    request_capacity: u32,
+}
+
+/// What the atlas holds per physical page and per physical tile: the shades
+/// and triangle maps, page use and owners, tile stamps, and this frame's
+/// lists. Resized with the atlas ([`Resources::resize`]).
+pub struct PhysicalPages {
+    pub atlas: wgpu::Texture,
+    /// The atlas as a 2D array (one layer per page).
+    pub atlas_array: wgpu::TextureView,
+    pub triangle_map: wgpu::Texture,
+    /// The triangle maps as a 2D array.
+    pub triangle_map_array: wgpu::TextureView,
+    /// Per physical tile: stamp of the last frame it was visible.
+    pub tile_visible: wgpu::Buffer,
+    /// Per physical tile: stamp of the last frame it was shaded.
+    pub tile_shaded: wgpu::Buffer,
+    /// This frame's tiles to shade: (virtual tile, object << 8 | level).
+    pub work_queue: wgpu::Buffer,
+    /// Per physical page: stamp of its last use.
+    pub page_used: wgpu::Buffer,
+    /// Per physical page: the virtual page it backs + 1 (0: free).
+    pub page_owner: wgpu::Buffer,
+    pub candidates: wgpu::Buffer,
+    /// Pages backed this frame.
+    pub backed: wgpu::Buffer,
+    /// Per physical tile: the views that marked it this frame (one bit each),
+    /// cleared every frame when there are several views.
+    pub tile_views: wgpu::Buffer,
+}
+
+/// A zero-initialised storage buffer (0: never visible, never shaded, not
+/// backed, free); COPY_SRC for tests, debug views and resizes.
+fn storage(device: &wgpu::Device, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | extra,
+        mapped_at_creation: false,
+    })
+}
+
+impl PhysicalPages {
+    fn new(device: &wgpu::Device, pool: &PagePool, tile_size: u32) -> Self {
+        // COPY_SRC: debug and test read-backs, and resizes.
+        let usage = wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST;
+        let atlas = pool.texture(device, "shading atlas", ATLAS_FORMAT, usage);
+        let triangle_map = pool.texture(device, "triangle maps", TRIANGLE_MAP_FORMAT, usage);
+        let (none, copy) = (wgpu::BufferUsages::empty(), wgpu::BufferUsages::COPY_DST);
+        let tiles = pool.pages as u64 * (pool.page_size / tile_size).pow(2) as u64;
+        let pages = pool.pages as u64;
+        Self {
+            atlas_array: view_as(&atlas, wgpu::TextureViewDimension::D2Array),
+            atlas,
+            triangle_map_array: view_as(&triangle_map, wgpu::TextureViewDimension::D2Array),
+            triangle_map,
+            tile_visible: storage(device, "tile visible", tiles * 4, copy),
+            tile_shaded: storage(device, "tile shaded", tiles * 4, copy),
+            work_queue: storage(device, "shade queue", tiles * 8, none),
+            page_used: storage(device, "page used", pages * 4, copy),
+            page_owner: storage(device, "page owner", pages * 4, copy),
+            candidates: storage(device, "page candidates", pages * 4, none),
+            backed: storage(device, "backed pages", pages * 16, none),
+            tile_views: storage(device, "tile views", tiles * 4, copy),
+        }
+    }
+
+    /// Copies what `self` holds of the pages both have into `to`: shades,
+    /// triangle maps, page use and owners, tile stamps (this frame's lists
+    /// are rebuilt every frame).
+    fn copy_into(&self, to: &Self, encoder: &mut wgpu::CommandEncoder) {
+        for (from, into) in [(&self.atlas, &to.atlas), (&self.triangle_map, &to.triangle_map)] {
+            let layers = from.depth_or_array_layers().min(into.depth_or_array_layers());
+            let size = wgpu::Extent3d { depth_or_array_layers: layers, ..from.size() };
+            encoder.copy_texture_to_texture(from.as_image_copy(), into.as_image_copy(), size);
+        }
+        for (from, into) in [
+            (&self.tile_visible, &to.tile_visible),
+            (&self.tile_shaded, &to.tile_shaded),
+            (&self.page_used, &to.page_used),
+            (&self.page_owner, &to.page_owner),
+        ] {
+            encoder.copy_buffer_to_buffer(from, 0, into, 0, from.size().min(into.size()));
+        }
+    }
 }
 
 /// Chunks of the page table for a pool of `pages` physical pages: one per
@@ -136,33 +211,9 @@ impl Resources {
         targets: &Targets,
         view_count: u32,
     ) -> Self {
-        let atlas = pool.texture(
-            device,
-            "shading atlas",
-            ATLAS_FORMAT,
-            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
-        );
-        // COPY_SRC: debug and test read-backs.
-        let triangle_map = pool.texture(
-            device,
-            "triangle maps",
-            TRIANGLE_MAP_FORMAT,
-            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-        );
         let visibility = VisibilityBuffer::new(device, targets);
-        // Zero-initialised: 0 = never visible, never shaded, not backed, free.
-        // COPY_SRC: tests and debug views read them back.
-        let storage = |label, size: u64, extra| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(16),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | extra,
-                mapped_at_creation: false,
-            })
-        };
         let none = wgpu::BufferUsages::empty();
-        let page_tiles = (pool.page_size / atlas_layout.tile_size).pow(2) as u64;
-        let tiles = pool.pages as u64 * page_tiles;
+        let storage = |label, size, extra| storage(device, label, size, extra);
         let virtual_pages = atlas_layout.page_count as u64;
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("object-space params"),
@@ -176,10 +227,8 @@ impl Resources {
             contents: bytemuck::cast_slice(&entry_data),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         });
-        let tile_visible = storage("tile visible", tiles * 4, none);
-        let tile_shaded = storage("tile shaded", tiles * 4, none);
-        let work_queue = storage("shade queue", tiles * 8, none);
         let counters = storage("tile counters", TileCounter::SLOTS as u64 * 4, wgpu::BufferUsages::COPY_DST);
+        // Chunks for the whole budget: a resize leaves the table as it is.
         let chunks = table_chunks(pool.pages);
         let block_pages = super::atlas::BLOCK_PAGES as u64;
         let page_directory = storage("page directory", virtual_pages / block_pages * 4, none);
@@ -188,14 +237,9 @@ impl Resources {
         let free_chunks = storage("free page table chunks", chunks as u64 * 4, none);
         let request_tile_base = virtual_pages.div_ceil(32);
         let request_words = request_tile_base + (atlas_layout.tile_count as u64).div_ceil(32);
-        let page_used = storage("page used", pool.pages as u64 * 4, none);
-        let page_owner = storage("page owner", pool.pages as u64 * 4, none);
         let page_requests = storage("page requests", request_words * 4, none);
         let request_list = storage("page request list", pool.pages as u64 * 8, none);
-        let candidates = storage("page candidates", pool.pages as u64 * 4, none);
-        let backed = storage("backed pages", pool.pages as u64 * 16, none);
         let dispatch = storage("object-space dispatch", 48, wgpu::BufferUsages::INDIRECT);
-        let tile_views = storage("tile views", tiles * 4, wgpu::BufferUsages::COPY_DST);
         let dispatch_layout =
             bind_group_layout(device, "object-space dispatch", &[Binding::Storage { read_only: false }]);
         let dispatch_group =
@@ -231,32 +275,23 @@ impl Resources {
         );
         let mut res = Self {
             view_groups: Vec::new(),
+            views: Vec::new(),
             view_count,
-            tile_views,
+            tile_size: atlas_layout.tile_size,
             triangle_charts: triangle_charts.clone(),
+            physical: PhysicalPages::new(device, &pool, atlas_layout.tile_size),
             pool,
-            atlas_array: view_as(&atlas, wgpu::TextureViewDimension::D2Array),
-            atlas,
-            triangle_map_array: view_as(&triangle_map, wgpu::TextureViewDimension::D2Array),
-            triangle_map,
             visibility,
             params,
             entries,
             entry_data,
-            tile_visible,
-            tile_shaded,
-            work_queue,
             counters,
             page_directory,
             page_table,
             table_chunks: table_chunk_state,
             free_chunks,
-            page_used,
-            page_owner,
             page_requests,
             request_list,
-            candidates,
-            backed,
             dispatch,
             dispatch_layout,
             dispatch_group,
@@ -264,50 +299,79 @@ impl Resources {
             virtual_pages: virtual_pages as u32,
             request_tile_base: request_tile_base as u32,
             chunks,
+            request_capacity: pool.pages,
         };
         let main = res.visibility.view.clone();
         res.add_view(device, &main);
         res
     }
 
+    /// Resizes the atlas to `pool` (the same layers, more or fewer of them):
+    /// the pages both sizes have keep their shades, maps and state, and
+    /// group 1 of every view is bound again. When shrinking, the pages
+    /// beyond `pool` must have been evicted first (`paging::evict_beyond`).
+    pub fn resize(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, pool: PagePool) {
+        let physical = PhysicalPages::new(device, &pool, self.tile_size);
+        self.physical.copy_into(&physical, encoder);
+        (self.physical, self.pool) = (physical, pool);
+        self.view_groups =
+            self.views.iter().map(|(visibility, slot)| self.view_group(device, visibility, slot)).collect();
+    }
+
     /// Adds group 1 of the next view: these resources with the view's
     /// visibility buffer and its view slot.
     pub fn add_view(&mut self, device: &wgpu::Device, visibility: &wgpu::TextureView) {
-        let index = self.view_groups.len() as u32;
+        let index = self.views.len() as u32;
         let slot = GpuViewSlot { index, count: self.view_count, pad_a: 0, pad_b: 0 };
         let slot = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("view slot"),
             contents: bytemuck::bytes_of(&slot),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let group = bind_group(
+        self.view_groups.push(self.view_group(device, visibility, &slot));
+        self.views.push((visibility.clone(), slot));
+    }
+
+    fn view_group(
+        &self,
+        device: &wgpu::Device,
+        visibility: &wgpu::TextureView,
+        slot: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        let p = &self.physical;
+        bind_group(
             device,
             "object space",
             &self.layout,
             &[
                 self.params.as_entire_binding(),
                 self.entries.as_entire_binding(),
-                self.tile_visible.as_entire_binding(),
-                self.tile_shaded.as_entire_binding(),
-                self.work_queue.as_entire_binding(),
+                p.tile_visible.as_entire_binding(),
+                p.tile_shaded.as_entire_binding(),
+                p.work_queue.as_entire_binding(),
                 self.counters.as_entire_binding(),
                 wgpu::BindingResource::TextureView(visibility),
                 self.triangle_charts.as_entire_binding(),
                 self.page_table.as_entire_binding(),
-                self.page_used.as_entire_binding(),
-                self.page_owner.as_entire_binding(),
+                p.page_used.as_entire_binding(),
+                p.page_owner.as_entire_binding(),
                 self.page_requests.as_entire_binding(),
                 self.request_list.as_entire_binding(),
-                self.candidates.as_entire_binding(),
-                self.backed.as_entire_binding(),
+                p.candidates.as_entire_binding(),
+                p.backed.as_entire_binding(),
                 slot.as_entire_binding(),
-                self.tile_views.as_entire_binding(),
+                p.tile_views.as_entire_binding(),
                 self.page_directory.as_entire_binding(),
                 self.table_chunks.as_entire_binding(),
                 self.free_chunks.as_entire_binding(),
             ],
-        );
-        self.view_groups.push(group);
+        )
+    }
+
+    /// Chunks of the page table (for the budget's pages, whatever the
+    /// atlas's size now).
+    pub fn chunk_count(&self) -> u32 {
+        self.chunks
     }
 
     /// Shade queue capacity: every tile of the physical atlas.
@@ -324,7 +388,8 @@ impl Resources {
         let directory = self.virtual_pages as u64 / block_pages * 4;
         let chunks = self.chunks as u64 * (block_pages * 4 + 8 + 4);
         let request_bits = self.page_requests.size();
-        directory + chunks + request_bits + self.pool.pages as u64 * (4 + 4 + 8 + 4 + 16)
+        let request_list = self.request_capacity as u64 * 8;
+        directory + chunks + request_bits + request_list + self.pool.pages as u64 * (4 + 4 + 4 + 16)
     }
 
     /// Sets each object's mip bias (the budget's share per object), uploading
@@ -372,13 +437,13 @@ impl Resources {
             virtual_pages: self.virtual_pages,
             request_tile_base: self.request_tile_base,
             table_chunks: self.chunks,
-            pad_b: 0,
+            request_capacity: self.request_capacity,
             pad_c: 0,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(&self.counters, 0, None);
         if self.view_count > 1 {
-            encoder.clear_buffer(&self.tile_views, 0, None);
+            encoder.clear_buffer(&self.physical.tile_views, 0, None);
         }
     }
 

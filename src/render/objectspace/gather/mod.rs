@@ -18,6 +18,8 @@ pub struct GatherPass {
     io_layout: wgpu::BindGroupLayout,
     /// Per view: the atlas and triangle maps (read) and its HDR target (written).
     io: Vec<wgpu::BindGroup>,
+    /// Per view: its HDR target, to bind the atlas again after a resize.
+    outputs: Vec<wgpu::TextureView>,
 }
 
 impl GatherPass {
@@ -46,23 +48,33 @@ impl GatherPass {
         );
         let groups = [&scene.layout, &res.layout, &layout, &grid.layout];
         let pipeline = compute_pipeline(device, shaders, SHADER, "gather", &groups)?;
-        let mut pass = Self { pipeline, io_layout: layout, io: Vec::new() };
+        let mut pass = Self { pipeline, io_layout: layout, io: Vec::new(), outputs: Vec::new() };
         pass.add_view(device, res, &targets.hdr_view);
         Ok(pass)
     }
 
     /// Adds the output of the next view: its HDR target.
     pub fn add_view(&mut self, device: &wgpu::Device, res: &Resources, hdr: &wgpu::TextureView) {
-        self.io.push(bind_group(
+        self.io.push(self.io_group(device, res, hdr));
+        self.outputs.push(hdr.clone());
+    }
+
+    /// Binds the atlas again after a resize.
+    pub fn rebind(&mut self, device: &wgpu::Device, res: &Resources) {
+        self.io = self.outputs.iter().map(|hdr| self.io_group(device, res, hdr)).collect();
+    }
+
+    fn io_group(&self, device: &wgpu::Device, res: &Resources, hdr: &wgpu::TextureView) -> wgpu::BindGroup {
+        bind_group(
             device,
             "gather io",
             &self.io_layout,
             &[
-                wgpu::BindingResource::TextureView(&res.atlas_array),
+                wgpu::BindingResource::TextureView(&res.physical.atlas_array),
                 wgpu::BindingResource::TextureView(hdr),
-                wgpu::BindingResource::TextureView(&res.triangle_map_array),
+                wgpu::BindingResource::TextureView(&res.physical.triangle_map_array),
             ],
-        ));
+        )
     }
 }
 

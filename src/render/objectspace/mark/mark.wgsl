@@ -63,11 +63,13 @@ fn request_tile(page: u32, object: u32, level_index: u32, l: AtlasLevel, texel: 
         return;
     }
     let n = atomicAdd(&counters[COUNT_PAGES_REQUESTED], 1u);
-    if n < params.physical_pages {
+    if n < params.request_capacity {
         request_list[n] = vec2u(page, (object << 8u) | level_index);
     } else {
-        // More requests than physical pages: this one cannot be backed. Its
-        // pixels are shaded forward; clear bits let the next frame ask again.
+        // More requests than the budget's pages: this one cannot be backed.
+        // Its pixels are shaded forward; clear bits let the next frame ask
+        // again (and let this frame's other pixels of the page ask and fail
+        // again: past the budget, failures count pixels' requests, not pages).
         forget_request(l, page);
         atomicAdd(&counters[COUNT_PAGES_FAILED], 1u);
     }

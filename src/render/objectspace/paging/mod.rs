@@ -5,7 +5,7 @@
 //! each block of pages with backed pages, freed with its last page). The pages backed this frame are then built (`trimap`) and their
 //! requested tiles marked (`mark::mark_backed`).
 
-use super::resources::{ALLOCATE_ARGS, Resources, table_chunks};
+use super::resources::{ALLOCATE_ARGS, Resources};
 use crate::render::frame::Frame;
 use crate::render::passes::compute_pipeline;
 use crate::render::scene_gpu::SceneGpu;
@@ -22,6 +22,7 @@ pub struct PagingPass {
     claim_blocks: wgpu::ComputePipeline,
     bind_pages: wgpu::ComputePipeline,
     backed_args: wgpu::ComputePipeline,
+    evict_beyond: wgpu::ComputePipeline,
 }
 
 impl PagingPass {
@@ -42,6 +43,7 @@ impl PagingPass {
             claim_blocks: compute_pipeline(device, shaders, SHADER, "claim_blocks", &plain)?,
             bind_pages: compute_pipeline(device, shaders, SHADER, "bind_pages", &plain)?,
             backed_args: compute_pipeline(device, shaders, SHADER, "backed_args", &with_dispatch)?,
+            evict_beyond: compute_pipeline(device, shaders, SHADER, "evict_beyond", &plain)?,
         })
     }
 }
@@ -68,7 +70,7 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     cp.set_pipeline(&pass.allocate);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     cp.set_pipeline(&pass.release_chunks);
-    cp.dispatch_workgroups(table_chunks(res.pool.pages).div_ceil(64), 1, 1);
+    cp.dispatch_workgroups(res.chunk_count().div_ceil(64), 1, 1);
     cp.set_pipeline(&pass.claim_blocks);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     cp.set_pipeline(&pass.bind_pages);
@@ -79,4 +81,15 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     cp.set_bind_group(2, &res.dispatch_group, &[]);
     cp.set_pipeline(&pass.backed_args);
     cp.dispatch_workgroups(1, 1, 1);
+}
+
+/// Before the atlas shrinks to `pages` pages: evicts the pages beyond them
+/// (reads the frame's params, which name the new size; writes the page
+/// owners and the page table). `res` is still the larger atlas.
+pub fn evict_beyond(frame: &mut Frame, pass: &PagingPass, res: &Resources, pages: u32) {
+    let scene = frame.scene_group;
+    let mut cp = frame.compute_pass("atlas resize");
+    res.bind(&mut cp, scene);
+    cp.set_pipeline(&pass.evict_beyond);
+    cp.dispatch_workgroups(res.pool.pages.saturating_sub(pages).div_ceil(64), 1, 1);
 }

@@ -38,9 +38,9 @@ fn age_pages(@builtin(global_invocation_id) id: vec3u) {
     }
 }
 
-// This frame's listed requests (the list holds one per physical page).
+// This frame's listed requests.
 fn requests() -> u32 {
-    return min(atomicLoad(&counters[COUNT_PAGES_REQUESTED]), params.physical_pages);
+    return min(atomicLoad(&counters[COUNT_PAGES_REQUESTED]), params.request_capacity);
 }
 
 @compute @workgroup_size(1)
@@ -91,15 +91,34 @@ fn allocate(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: v
     }
     let physical = candidates[i];
     // The evicted page was not used this frame, so no request names it.
-    let evicted = page_owner[physical];
-    if evicted != 0u {
-        let page = evicted - 1u;
-        let chunk = atomicLoad(&page_directory[page / BLOCK_PAGES]) - 1u;
-        page_table[chunk * BLOCK_PAGES + page % BLOCK_PAGES] = 0u;
-        atomicSub(&table_chunks[chunk].pages, 1u);
-    }
+    unbind(physical);
     page_owner[physical] = request_list[i].x + 1u;
     atomicStore(&page_used[physical], params.stamp);
+}
+
+// Takes physical page `physical` from the virtual page it backs, if any
+// (its chunk is freed by `release_chunks` when that was its last page).
+fn unbind(physical: u32) {
+    let owner = page_owner[physical];
+    if owner == 0u {
+        return;
+    }
+    let page = owner - 1u;
+    let chunk = atomicLoad(&page_directory[page / BLOCK_PAGES]) - 1u;
+    page_table[chunk * BLOCK_PAGES + page % BLOCK_PAGES] = 0u;
+    atomicSub(&table_chunks[chunk].pages, 1u);
+    page_owner[physical] = 0u;
+}
+
+// Before the atlas shrinks to `params.physical_pages` pages (at the start of
+// a frame, before marking): the pages beyond give up their virtual pages,
+// which this frame's marking then requests again.
+@compute @workgroup_size(64)
+fn evict_beyond(@builtin(global_invocation_id) id: vec3u) {
+    let physical = params.physical_pages + id.x;
+    if physical < arrayLength(&page_owner) {
+        unbind(physical);
+    }
 }
 
 // Per chunk: a chunk left with no page goes back (its block's directory

@@ -14,6 +14,7 @@ pub const SHADER: ShaderSource = ShaderSource::new("shade.wgsl", include_str!("s
 
 pub struct ShadePass {
     pipeline: wgpu::ComputePipeline,
+    io_layout: wgpu::BindGroupLayout,
     /// The atlas as a storage texture, the triangle maps to read.
     outputs: wgpu::BindGroup,
 }
@@ -35,18 +36,27 @@ impl ShadePass {
                 Binding::Texture { sample: wgpu::TextureSampleType::Uint, dimension },
             ],
         );
-        let outputs = bind_group(
-            device,
-            "shade io",
-            &layout,
-            &[
-                wgpu::BindingResource::TextureView(&res.atlas_array),
-                wgpu::BindingResource::TextureView(&res.triangle_map_array),
-            ],
-        );
         let groups = [&scene.layout, &res.layout, &layout, &grid.layout];
         let pipeline = compute_pipeline(device, shaders, SHADER, "shade", &groups)?;
-        Ok(Self { pipeline, outputs })
+        let outputs = Self::outputs(device, &layout, res);
+        Ok(Self { pipeline, io_layout: layout, outputs })
+    }
+
+    /// Binds the atlas again after a resize.
+    pub fn rebind(&mut self, device: &wgpu::Device, res: &Resources) {
+        self.outputs = Self::outputs(device, &self.io_layout, res);
+    }
+
+    fn outputs(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, res: &Resources) -> wgpu::BindGroup {
+        bind_group(
+            device,
+            "shade io",
+            layout,
+            &[
+                wgpu::BindingResource::TextureView(&res.physical.atlas_array),
+                wgpu::BindingResource::TextureView(&res.physical.triangle_map_array),
+            ],
+        )
     }
 }
 

@@ -31,6 +31,9 @@ gpu_struct! {
 
 pub struct TrimapPass {
     pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    /// The chart grids, their cells' first triangles and the triangles.
+    grids: [wgpu::Buffer; 3],
     group: wgpu::BindGroup,
     /// Bytes of the chart grids.
     pub grid_bytes: u64,
@@ -72,20 +75,35 @@ impl TrimapPass {
             "triangle map build",
             &[Binding::StorageTexture { format: TRIANGLE_MAP_FORMAT, dimension }, read, read, read],
         );
-        let group = bind_group(
-            device,
-            "triangle map build",
-            &layout,
-            &[
-                wgpu::BindingResource::TextureView(&crate::render::passes::view_as(&res.triangle_map, dimension)),
-                grid_buffer.as_entire_binding(),
-                start_buffer.as_entire_binding(),
-                triangle_buffer.as_entire_binding(),
-            ],
-        );
         let pipeline = compute_pipeline(device, shaders, SHADER, "build", &[&scene_gpu.layout, &res.layout, &layout])?;
         let grid_bytes = (grids.len() * 8 + cell_start.len() * 4 + triangles.len() * 4) as u64;
-        Ok(Self { pipeline, group, grid_bytes })
+        let grids = [grid_buffer, start_buffer, triangle_buffer];
+        let group = Self::group(device, &layout, &grids, res);
+        Ok(Self { pipeline, layout, grids, group, grid_bytes })
+    }
+
+    /// Binds the triangle maps again after the atlas was resized.
+    pub fn rebind(&mut self, device: &wgpu::Device, res: &Resources) {
+        self.group = Self::group(device, &self.layout, &self.grids, res);
+    }
+
+    fn group(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        grids: &[wgpu::Buffer; 3],
+        res: &Resources,
+    ) -> wgpu::BindGroup {
+        bind_group(
+            device,
+            "triangle map build",
+            layout,
+            &[
+                wgpu::BindingResource::TextureView(&res.physical.triangle_map_array),
+                grids[0].as_entire_binding(),
+                grids[1].as_entire_binding(),
+                grids[2].as_entire_binding(),
+            ],
+        )
     }
 }
 
