@@ -20,13 +20,14 @@
 //! factors are per object in this renderer, so one object index carries them
 //! exactly (emission in HDR) in 4 bytes, where storing them would take 8 or
 //! more and quantize shininess. The material textures vary per pixel, so
-//! their texels are stored (6 bytes, at the textures' own 8 bits), and the
-//! lighting passes combine them with the object's factors in
-//! `object_surface`, as every pipeline does; objects without those textures
-//! ignore (and do not load) them, so they light exactly as before. Half floats keep the encoded normal within 0.06
-//! degrees (tested); `Rg16Snorm` would be finer but needs an optional
-//! feature. The lighting passes read it through `gbuffer_read.wgsl`
-//! (`shadespace::gbuffer`, bind group 1).
+//! their texels are stored (6 bytes, at the textures' own 8 bits; the
+//! emissive texel in sRGB, as its texture), and the lighting passes combine
+//! them with the object's factors in `object_surface`, as every pipeline
+//! does. Every pixel writes them; objects without those textures light
+//! exactly as before (the lighting passes do not load their texels). Half
+//! floats keep the encoded normal within 0.06 degrees (tested); `Rg16Snorm`
+//! would be finer but needs an optional feature. The lighting passes read
+//! it through `gbuffer_read.wgsl` (`shadespace::gbuffer`, bind group 1).
 
 pub mod octahedral;
 
