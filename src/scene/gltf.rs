@@ -22,9 +22,10 @@
 //!   with TEXCOORD_0 (another set is a warning); `KHR_texture_transform` is
 //!   ignored (warned as an extension). Images become RGBA8 textures (grey
 //!   and grey+alpha images are expanded, 16-bit channels keep their high
-//!   byte, float images are encoded to sRGB). A material without a (loadable) base colour texture gets the
-//!   generated UV checker of each object that uses it, as OBJ objects do.
-//!   A missing or undecodable image is a warning.
+//!   byte, float images are encoded to sRGB). A material without a
+//!   (loadable) base colour texture gets the generated UV checker of each
+//!   object that uses it, as OBJ objects do. A missing or undecodable image
+//!   is a warning.
 //! - `KHR_lights_punctual`: point, spot and directional lights become
 //!   [`Light`]s at the node's world position, shining along the node's world
 //!   -Z; spot cones give `cos_inner`/`cos_outer`. `radius` is the light's
