@@ -73,7 +73,7 @@ impl Default for DeferredComputeConfig {
 
 /// Where the lighting pass reads its pixels from.
 enum Surfaces {
-    Gbuffer(GbufferStage),
+    Gbuffer(Box<GbufferStage>),
     Visibility { ids: VisibilityBuffer, pass: ComputeVisibility },
 }
 
@@ -97,7 +97,7 @@ impl DeferredCompute {
     ) -> Result<Self, RenderError> {
         let surfaces = match config.visibility {
             VisibilityMethod::Raster => {
-                Surfaces::Gbuffer(GbufferStage::new(device, shaders, scene, targets, config.depth_prepass)?)
+                Surfaces::Gbuffer(Box::new(GbufferStage::new(device, shaders, scene, targets, config.depth_prepass)?))
             }
             VisibilityMethod::Compute => {
                 let ids = VisibilityBuffer::new(device, targets);
