@@ -74,7 +74,7 @@ impl Default for DeferredComputeConfig {
 /// Where the lighting pass reads its pixels from.
 enum Surfaces {
     Gbuffer(Box<GbufferStage>),
-    Visibility { ids: VisibilityBuffer, pass: ComputeVisibility },
+    Visibility { ids: VisibilityBuffer, pass: Box<ComputeVisibility> },
 }
 
 /// The tiled deferred pipeline.
@@ -102,7 +102,7 @@ impl DeferredCompute {
             VisibilityMethod::Compute => {
                 let ids = VisibilityBuffer::new(device, targets);
                 let pass = ComputeVisibility::new(device, shaders, scene, targets, &ids, config.count_visibility)?;
-                Surfaces::Visibility { ids, pass }
+                Surfaces::Visibility { ids, pass: Box::new(pass) }
             }
         };
         let (layout, output) = hdr_output(device, targets, "tiled lighting output");
