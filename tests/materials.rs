@@ -338,6 +338,15 @@ fn render_floor(
 /// texture's half stays within a quarter of that texture's own effect of
 /// forward's image (so a pipeline that ignored a texture would fail even
 /// where the FLIP mean would not show it).
+///
+/// Measured on lavapipe (320x180), Phong / GGX: mean FLIP against forward
+/// 0.0055 / 0.0063 multi-pass, 0 / 0 clustered, 0.0080 / 0.0086 deferred,
+/// 0.0057 / 0.0056 tiled deferred on the G-buffer, 0.00001 / 0.00001 tiled
+/// deferred on compute visibility, 0.0036 / 0.0037 object space; each
+/// texture's effect in forward (mean absolute difference, 8-bit units, in
+/// its non-white half) emissive 52.7 / 66.7, metallic-roughness 13.9 / 20.9,
+/// occlusion 8.0 / 12.2, and 0.000 in the white halves; every pipeline
+/// within 0.09 of forward in each non-white half.
 fn check_material_textures(shading: ShadingModel) {
     use shadespace::render::VisibilityMethod;
     use textured_floor::{EMISSIVE_FACTOR, EMISSIVE_STRENGTH, OCCLUSION_STRENGTH, Slot, half_difference};
