@@ -44,16 +44,27 @@ gpu_struct! {
         /// GGX's metallic and perceptual roughness.
         pub metallic: f32,
         pub roughness: f32,
-        /// Layer of the normal-map array, or [`NO_NORMAL_MAP`].
+        /// Layer of the linear texture array holding the normal map, or [`NO_TEXTURE`].
         pub normal_layer: u32,
+        /// Layer of the colour (sRGB) array holding the emissive texture
+        /// (multiplying `emissive`), or [`NO_TEXTURE`].
+        pub emissive_layer: u32,
+        /// Layer of the linear array holding the metallic-roughness texture
+        /// (blue, green multiplying `metallic`, `roughness`), or [`NO_TEXTURE`].
+        pub metal_rough_layer: u32,
+        /// Layer of the linear array holding the occlusion texture (red), or [`NO_TEXTURE`].
+        pub occlusion_layer: u32,
+        /// Occlusion is `1 + occlusion_strength * (red - 1)`, on ambient light only.
+        pub occlusion_strength: f32,
         pub pad_a: u32,
         pub pad_b: u32,
         pub pad_c: u32,
     }
 }
 
-/// `Object.normal_layer` of an object without a normal map.
-pub const NO_NORMAL_MAP: u32 = u32::MAX;
+/// A texture layer of an object without that texture (`Object.normal_layer`
+/// and the other layers).
+pub const NO_TEXTURE: u32 = u32::MAX;
 
 gpu_struct! {
     pub struct GpuView as "View" {

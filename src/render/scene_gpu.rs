@@ -1,4 +1,4 @@
-//! The scene on the GPU: vertices, indices, objects, albedo textures, view,
+//! The scene on the GPU: vertices, indices, objects, material textures, view,
 //! lights and the shadow atlas, bound as group 0 by every pipeline.
 
 use glam::{Mat4, Vec4};
@@ -6,7 +6,7 @@ use image::imageops::FilterType;
 use wgpu::util::DeviceExt;
 
 use super::culling::LightLists;
-use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView, NO_NORMAL_MAP};
+use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView, NO_TEXTURE};
 use super::passes::shadows::{ShadowAtlas, ShadowPlan};
 use super::passes::{Binding, bind_group_layout_for};
 use crate::charts::islands::triangle_islands;
@@ -78,7 +78,7 @@ pub struct SceneGpu {
     lights: GrowableBuffer,
     light_indices: GrowableBuffer,
     albedo_view: wgpu::TextureView,
-    normal_maps_view: wgpu::TextureView,
+    linear_maps_view: wgpu::TextureView,
     sampler: wgpu::Sampler,
     pub layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
@@ -107,7 +107,8 @@ impl SceneGpu {
             }));
             indices.extend_from_slice(&mesh.indices);
         }
-        let (albedo, white_layer, normal_maps, normal_layers) = upload_textures(device, queue, scene);
+        let (albedo, white_layer, linear_maps, linear_layers) = upload_textures(device, queue, scene);
+        let linear_layer = |t: Option<usize>| t.and_then(|t| linear_layers[t]).unwrap_or(NO_TEXTURE);
         let draws: Vec<DrawRange> = scene.objects.iter().map(|o| mesh_ranges[o.mesh]).collect();
         let object_data: Vec<GpuObject> = scene
             .objects
@@ -129,7 +130,11 @@ impl SceneGpu {
                     shininess: m.shininess,
                     metallic: m.metallic,
                     roughness: m.roughness,
-                    normal_layer: m.normal_texture.and_then(|t| normal_layers[t]).unwrap_or(NO_NORMAL_MAP),
+                    normal_layer: linear_layer(m.normal_texture),
+                    emissive_layer: m.emissive_texture.map_or(NO_TEXTURE, |t| t as u32),
+                    metal_rough_layer: linear_layer(m.metallic_roughness_texture),
+                    occlusion_layer: linear_layer(m.occlusion_texture),
+                    occlusion_strength: m.occlusion_strength,
                     ..Default::default()
                 }
             })
@@ -167,7 +172,7 @@ impl SceneGpu {
             })
         };
         let albedo_view = array_view(&albedo);
-        let normal_maps_view = array_view(&normal_maps);
+        let linear_maps_view = array_view(&linear_maps);
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("albedo"),
             address_mode_u: wgpu::AddressMode::Repeat,
@@ -183,7 +188,7 @@ impl SceneGpu {
             device,
             &layout,
             [&view, &objects, &vertices_buf, &lights.buffer, &light_indices.buffer, &indices_buf],
-            [&albedo_view, &normal_maps_view],
+            [&albedo_view, &linear_maps_view],
             &sampler,
             &shadow_atlas,
         );
@@ -204,7 +209,7 @@ impl SceneGpu {
             lights,
             light_indices,
             albedo_view,
-            normal_maps_view,
+            linear_maps_view,
             sampler,
             layout,
             bind_group,
@@ -254,7 +259,7 @@ impl SceneGpu {
             device,
             &self.layout,
             [view, &self.objects, &self.vertices, &self.lights.buffer, &self.light_indices.buffer, &self.indices],
-            [&self.albedo_view, &self.normal_maps_view],
+            [&self.albedo_view, &self.linear_maps_view],
             &self.sampler,
             &self.shadow_atlas,
         )
@@ -265,7 +270,7 @@ impl SceneGpu {
             device,
             &self.layout,
             [&self.view, &self.objects, &self.vertices, &self.lights.buffer, &self.light_indices.buffer, &self.indices],
-            [&self.albedo_view, &self.normal_maps_view],
+            [&self.albedo_view, &self.linear_maps_view],
             &self.sampler,
             &self.shadow_atlas,
         );
@@ -306,14 +311,14 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let depth = Binding::Texture { sample: wgpu::TextureSampleType::Depth, dimension: array };
     // Bindings 0-7: view, objects, vertices, lights, light indices, albedo,
     // its sampler, indices; 8-11: shadow atlas, comparison sampler, shadow
-    // faces, sun cascades; 12: normal maps.
+    // faces, sun cascades; 12: linear maps (normal, metallic-roughness, occlusion).
     let bindings = [Binding::Uniform, read, read, read, read, albedo, Binding::Sampler, read];
     let shadows = [depth, Binding::ComparisonSampler, read, depth];
     bind_group_layout_for(device, "scene", stages, &[bindings.as_slice(), &shadows, &[albedo]].concat())
 }
 
 /// Buffers in binding order 0, 1, 2, 3, 4, 7; the shadow maps are 8-11;
-/// textures: albedo (5) and normal maps (12).
+/// textures: albedo (5) and linear maps (12).
 fn make_bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
@@ -323,7 +328,7 @@ fn make_bind_group(
     shadows: &ShadowAtlas,
 ) -> wgpu::BindGroup {
     let [view, objects, vertices, lights, light_indices, indices] = buffers;
-    let [albedo, normal_maps] = textures;
+    let [albedo, linear_maps] = textures;
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("scene"),
         layout,
@@ -340,18 +345,21 @@ fn make_bind_group(
             wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::Sampler(&shadows.sampler) },
             wgpu::BindGroupEntry { binding: 10, resource: shadows.faces_buffer().as_entire_binding() },
             wgpu::BindGroupEntry { binding: 11, resource: wgpu::BindingResource::TextureView(shadows.cascades_view()) },
-            wgpu::BindGroupEntry { binding: 12, resource: wgpu::BindingResource::TextureView(normal_maps) },
+            wgpu::BindGroupEntry { binding: 12, resource: wgpu::BindingResource::TextureView(linear_maps) },
         ],
     })
 }
 
 /// Uploads the scene's textures as two 2D arrays of one size with full mip
 /// chains (mips filtered on the CPU): colour (sRGB: every texture, plus a
-/// white layer for untextured materials) and normal maps (linear: the
-/// textures materials use as normal maps). One size lets a pass sample both
-/// at one mip level; one array each keeps the binding count constant in the
-/// number of objects, which lavapipe (no binding arrays) requires.
-/// Returns the colour array, its white layer, the normal-map array and each
+/// white layer for untextured materials; base colour and emissive textures
+/// are sampled from it at their texture's index) and linear maps (the
+/// textures materials use as normal, metallic-roughness or occlusion maps,
+/// once each even when a material packs occlusion, roughness and metallic
+/// into one image). One size lets a pass sample all of them at one mip
+/// level; one array each keeps the binding count constant in the number of
+/// objects, which lavapipe (no binding arrays) requires.
+/// Returns the colour array, its white layer, the linear array and each
 /// texture's layer in it.
 fn upload_textures(
     device: &wgpu::Device,
@@ -370,17 +378,19 @@ fn upload_textures(
     let colour: Vec<&crate::scene::Texture> = scene.textures.iter().collect();
     let albedo =
         upload_array(device, queue, "albedo array", wgpu::TextureFormat::Rgba8UnormSrgb, size, &colour, &white);
-    let mut normal_layers = vec![None; scene.textures.len()];
-    let mut normal: Vec<&crate::scene::Texture> = Vec::new();
-    for t in scene.materials.iter().filter_map(|m| m.normal_texture) {
-        if t < normal_layers.len() && normal_layers[t].is_none() {
-            normal_layers[t] = Some(normal.len() as u32);
-            normal.push(&scene.textures[t]);
+    let mut linear_layers = vec![None; scene.textures.len()];
+    let mut linear: Vec<&crate::scene::Texture> = Vec::new();
+    let used =
+        scene.materials.iter().flat_map(|m| [m.normal_texture, m.metallic_roughness_texture, m.occlusion_texture]);
+    for t in used.flatten() {
+        if t < linear_layers.len() && linear_layers[t].is_none() {
+            linear_layers[t] = Some(linear.len() as u32);
+            linear.push(&scene.textures[t]);
         }
     }
     let flat = image::RgbaImage::from_pixel(size, size, image::Rgba([128, 128, 255, 255]));
-    let normal_maps = upload_array(device, queue, "normal maps", wgpu::TextureFormat::Rgba8Unorm, size, &normal, &flat);
-    (albedo, scene.textures.len() as u32, normal_maps, normal_layers)
+    let linear_maps = upload_array(device, queue, "linear maps", wgpu::TextureFormat::Rgba8Unorm, size, &linear, &flat);
+    (albedo, scene.textures.len() as u32, linear_maps, linear_layers)
 }
 
 /// One layer per texture (resized to `size`), then `last`.

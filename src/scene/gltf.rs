@@ -11,13 +11,21 @@
 //!   TEXCOORD_1 -> `uv1`; indices, or `0..n` when there are none. Missing
 //!   normals, UVs and tangents are generated ([`Mesh::generate_missing_attributes`];
 //!   tangents from the file are kept only when normals are too).
-//! - Materials: base colour factor and texture, normal texture, metallic,
-//!   roughness (`shininess = Material::shininess_from_roughness(roughness)`),
-//!   emissive. Images become RGBA8 textures (grey and grey+alpha images are
-//!   expanded, 16-bit channels keep their high byte, float images are encoded
-//!   to sRGB). A material without a (loadable) base colour texture gets the
-//!   generated UV checker of each object that uses it, as OBJ objects do.
-//!   A missing or undecodable image is a warning.
+//! - Materials (glTF 2.0 metallic-roughness): base colour factor and
+//!   texture, normal texture, metallic and roughness factors
+//!   (`shininess = Material::shininess_from_roughness(roughness)`) and
+//!   texture (linear: blue = metallic, green = roughness, multiplying the
+//!   factors), emissive factor (times `KHR_materials_emissive_strength`) and
+//!   texture (sRGB, multiplying the factor), occlusion texture (red, with its
+//!   `strength`; applied to ambient light only). A texture whose factor is
+//!   zero is not loaded (it would change nothing). Every texture is sampled
+//!   with TEXCOORD_0 (another set is a warning); `KHR_texture_transform` is
+//!   ignored (warned as an extension). Images become RGBA8 textures (grey
+//!   and grey+alpha images are expanded, 16-bit channels keep their high
+//!   byte, float images are encoded to sRGB). A material without a
+//!   (loadable) base colour texture gets the generated UV checker of each
+//!   object that uses it, as OBJ objects do. A missing or undecodable image
+//!   is a warning.
 //! - `KHR_lights_punctual`: point, spot and directional lights become
 //!   [`Light`]s at the node's world position, shining along the node's world
 //!   -Z; spot cones give `cos_inner`/`cos_outer`. `radius` is the light's
@@ -32,9 +40,10 @@
 //!   every byte range, count and index checked (the `gltf` crate's readers
 //!   can panic or read garbage on malformed files), and the GLB header, URIs
 //!   and buffer views are checked before the `gltf` crate uses them.
-//! - Extensions other than `KHR_lights_punctual`, skins, morph targets and
-//!   animations are ignored with a warning (`extensionsRequired` of any
-//!   other extension is an error).
+//! - Extensions other than `KHR_lights_punctual` and
+//!   `KHR_materials_emissive_strength`, skins, morph targets and animations
+//!   are ignored with a warning (`extensionsRequired` of any other extension
+//!   is an error).
 
 use std::collections::HashMap;
 use std::fs;
@@ -53,13 +62,16 @@ use crate::color::linear_to_srgb8;
 /// and a corrupt count must not allocate gigabytes.
 const MAX_ACCESSOR_BYTES: usize = 1 << 30;
 
+/// The extensions the loader reads.
+const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+
 /// Warns about what the file uses and the renderer ignores: extensions
-/// besides `KHR_lights_punctual` (`extensionsRequired` ones are already
+/// besides [`SUPPORTED_EXTENSIONS`] (`extensionsRequired` ones are already
 /// refused by the parser), skins, morph targets and animations (meshes are
 /// drawn in their bind pose, without morphs).
 fn warn_ignored(document: &Document, path: &Path) {
     let path = path.display();
-    let extensions: Vec<&str> = document.extensions_used().filter(|e| *e != "KHR_lights_punctual").collect();
+    let extensions: Vec<&str> = document.extensions_used().filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
     if !extensions.is_empty() {
         tracing::warn!("{path}: extensions ignored: {}", extensions.join(", "));
     }
@@ -538,6 +550,7 @@ impl Builder<'_> {
             || material.index().map_or_else(|| "default".to_string(), |i| format!("material{i}")),
             str::to_string,
         );
+        let emissive_strength = material.emissive_strength().unwrap_or(1.0);
         let mut m = Material {
             name: name.clone(),
             base_color: Vec4::from(pbr.base_color_factor()),
@@ -545,25 +558,56 @@ impl Builder<'_> {
             normal_texture: None,
             metallic: pbr.metallic_factor().clamp(0.0, 1.0),
             roughness,
-            emissive: Vec3::from(material.emissive_factor()),
+            emissive: Vec3::from(material.emissive_factor()) * emissive_strength,
             shininess: Material::shininess_from_roughness(roughness),
             ..Default::default()
         };
-        if let Some(info) = pbr.base_color_texture() {
-            if info.tex_coord() != 0 {
-                tracing::warn!(
-                    "{}: material '{name}': base colour texture uses TEXCOORD_{}; sampled with TEXCOORD_0",
-                    self.path.display(),
-                    info.tex_coord()
-                );
-            }
-            m.base_color_texture = self.image(info.texture().source());
+        if !m.emissive.is_finite() || m.emissive.min_element() < 0.0 {
+            tracing::warn!(
+                "{}: material '{name}': emission {} (factor times strength) is not finite and non-negative; none used",
+                self.path.display(),
+                m.emissive
+            );
+            m.emissive = Vec3::ZERO;
+        }
+        fn slot(i: ::gltf::texture::Info<'_>) -> (u32, ::gltf::Texture<'_>) {
+            (i.tex_coord(), i.texture())
+        }
+        let base = pbr.base_color_texture().map(slot);
+        m.base_color_texture = base.and_then(|(uv, t)| self.texture(&name, "base colour", uv, t));
+        // Textures that multiply a zero factor change nothing: not loaded.
+        if m.metallic > 0.0 || m.roughness > 0.0 {
+            let metal_rough = pbr.metallic_roughness_texture().map(slot);
+            m.metallic_roughness_texture =
+                metal_rough.and_then(|(uv, t)| self.texture(&name, "metallic-roughness", uv, t));
+        }
+        if m.emissive != Vec3::ZERO {
+            let emissive = material.emissive_texture().map(slot);
+            m.emissive_texture = emissive.and_then(|(uv, t)| self.texture(&name, "emissive", uv, t));
         }
         if let Some(normal) = material.normal_texture() {
-            m.normal_texture = self.image(normal.texture().source());
+            m.normal_texture = self.texture(&name, "normal", normal.tex_coord(), normal.texture());
+        }
+        if let Some(occlusion) = material.occlusion_texture()
+            && occlusion.strength() > 0.0
+        {
+            m.occlusion_texture = self.texture(&name, "occlusion", occlusion.tex_coord(), occlusion.texture());
+            m.occlusion_strength = occlusion.strength().min(1.0);
         }
         let textured = m.base_color_texture.is_some();
         MaterialTemplate { material: m, shared: None, textured }
+    }
+
+    /// The scene texture of a material's texture slot (`what`), warning
+    /// when it uses another UV set than TEXCOORD_0 (it is sampled with that).
+    fn texture(&mut self, material: &str, what: &str, tex_coord: u32, texture: ::gltf::Texture) -> Option<usize> {
+        if tex_coord != 0 {
+            tracing::warn!(
+                "{}: material '{material}': {what} texture uses TEXCOORD_{tex_coord}; sampled with TEXCOORD_0",
+                self.path.display(),
+            );
+        }
+        self.image(texture.source())
     }
 
     /// Decodes an image once into an RGBA8 texture; `None` (warned) when it
@@ -1021,6 +1065,59 @@ mod tests {
         assert_eq!(plain[0].name, "plain");
         assert_eq!(plain[0].shininess, Material::shininess_from_roughness(1.0));
         assert_ne!(plain[0].base_color_texture, plain[1].base_color_texture);
+    }
+
+    /// Emissive (with `KHR_materials_emissive_strength`), metallic-roughness
+    /// and occlusion textures are read, each to its own image's pixels; a
+    /// material packing occlusion into its metallic-roughness image shares
+    /// it; glTF's defaults hold where the file says nothing.
+    #[test]
+    fn material_textures() {
+        let png = |pixel: [u8; 4]| {
+            let mut bytes = Vec::new();
+            image::RgbaImage::from_pixel(2, 2, image::Rgba(pixel))
+                .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+                .unwrap();
+            json!({ "uri": format!("data:image/png;base64,{}", base64(&bytes)) })
+        };
+        let mut doc = document(data_uri(&triangle_buffer([0, 1, 2])));
+        doc["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_materials_emissive_strength"]);
+        doc["images"] = json!([png([10, 20, 30, 255]), png([255, 128, 64, 255]), png([200, 0, 0, 255])]);
+        doc["textures"] = json!([{ "source": 0 }, { "source": 1 }, { "source": 2 }]);
+        doc["materials"] = json!([
+            { "name": "glowing",
+              "pbrMetallicRoughness": { "metallicFactor": 0.5, "roughnessFactor": 0.25,
+                                        "metallicRoughnessTexture": { "index": 1 } },
+              "emissiveFactor": [1.0, 0.5, 0.25], "emissiveTexture": { "index": 0 },
+              "occlusionTexture": { "index": 1, "strength": 0.75 },
+              "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 4.0 } } },
+            { "name": "occluded", "occlusionTexture": { "index": 2 }, "emissiveTexture": { "index": 0 } }
+        ]);
+        doc["meshes"][0]["primitives"] = json!([
+            { "attributes": { "POSITION": 0 }, "indices": 1, "material": 0 },
+            { "attributes": { "POSITION": 0 }, "indices": 1, "material": 1 },
+            { "attributes": { "POSITION": 0 }, "indices": 1 }
+        ]);
+        let dir = tempfile::tempdir().unwrap();
+        let scene = load(&write(dir.path(), "t.gltf", serde_json::to_vec(&doc).unwrap())).unwrap();
+        let [glowing, occluded, plain] = [0, 1, 2].map(|o| &scene.materials[scene.objects[o].material]);
+        let pixel = |t: Option<usize>| scene.textures[t.expect("a texture")].rgba8[..4].to_vec();
+        assert_eq!(glowing.name, "glowing");
+        assert_eq!(glowing.emissive, Vec3::new(4.0, 2.0, 1.0), "factor times strength");
+        assert_eq!(pixel(glowing.emissive_texture), [10, 20, 30, 255]);
+        assert_eq!((glowing.metallic, glowing.roughness), (0.5, 0.25));
+        assert_eq!(pixel(glowing.metallic_roughness_texture), [255, 128, 64, 255]);
+        assert_eq!(glowing.occlusion_texture, glowing.metallic_roughness_texture, "one packed image, loaded once");
+        assert_eq!(glowing.occlusion_strength, 0.75);
+        assert_eq!(occluded.name, "occluded");
+        assert_eq!(pixel(occluded.occlusion_texture), [200, 0, 0, 255]);
+        assert_eq!(occluded.occlusion_strength, 1.0, "glTF's default strength");
+        assert_eq!(occluded.emissive, Vec3::ZERO, "glTF's default emissive factor");
+        assert_eq!(occluded.emissive_texture, None, "a texture multiplying zero is not loaded");
+        assert_eq!(occluded.metallic_roughness_texture, None);
+        let none = (plain.emissive_texture, plain.metallic_roughness_texture, plain.occlusion_texture);
+        assert_eq!(none, (None, None, None));
+        assert_eq!(plain.emissive, Vec3::ZERO);
     }
 
     #[test]

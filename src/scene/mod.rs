@@ -187,9 +187,11 @@ pub struct Texture {
     pub rgba8: Vec<u8>,
 }
 
-/// A Phong material (the shared lighting model of `shaders/shared/lighting.wgsl`).
-/// glTF's metallic/roughness and emissive are kept for later pipelines; the
-/// Phong exponent is derived from roughness where a file gives one.
+/// A material of the shared lighting models (`shaders/shared/lighting.wgsl`):
+/// Phong's specular strength and exponent, glTF 2.0's metallic-roughness
+/// factors and textures, emission, a normal map and an occlusion map. The
+/// Phong exponent is derived from roughness where a file gives one (and per
+/// texel from a metallic-roughness texture's roughness).
 #[derive(Clone, Debug)]
 pub struct Material {
     pub name: String,
@@ -201,8 +203,18 @@ pub struct Material {
     pub normal_texture: Option<usize>,
     pub metallic: f32,
     pub roughness: f32,
-    /// Linear emitted radiance.
+    /// Index into [`Scene::textures`] (linear): glTF's metallic-roughness
+    /// texture, blue = metallic, green = roughness, each multiplying its factor.
+    pub metallic_roughness_texture: Option<usize>,
+    /// Linear emitted radiance (glTF: `emissiveFactor` times
+    /// `KHR_materials_emissive_strength`).
     pub emissive: Vec3,
+    /// Index into [`Scene::textures`] (sRGB colour, multiplying `emissive`).
+    pub emissive_texture: Option<usize>,
+    /// Index into [`Scene::textures`] (linear): ambient occlusion in red,
+    /// applied to ambient light only, as `1 + occlusion_strength * (red - 1)`.
+    pub occlusion_texture: Option<usize>,
+    pub occlusion_strength: f32,
     /// Strength of the specular term.
     pub specular: f32,
     /// Phong exponent p in `max(R·V, 0)^p`.
@@ -218,7 +230,11 @@ impl Default for Material {
             normal_texture: None,
             metallic: 0.0,
             roughness: 0.6,
+            metallic_roughness_texture: None,
             emissive: Vec3::ZERO,
+            emissive_texture: None,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
             specular: 0.25,
             shininess: 32.0,
         }
@@ -226,6 +242,17 @@ impl Default for Material {
 }
 
 impl Material {
+    /// Every texture slot: base colour, normal, metallic-roughness, emissive, occlusion.
+    pub fn textures(&self) -> [Option<usize>; 5] {
+        [
+            self.base_color_texture,
+            self.normal_texture,
+            self.metallic_roughness_texture,
+            self.emissive_texture,
+            self.occlusion_texture,
+        ]
+    }
+
     /// Phong exponent equivalent to a GGX roughness (the Blinn-Phong mapping
     /// 2/alpha^2 - 2, halved for the reflection-vector form).
     pub fn shininess_from_roughness(roughness: f32) -> f32 {
@@ -360,7 +387,7 @@ impl Scene {
             }
         }
         for m in &self.materials {
-            for t in [m.base_color_texture, m.normal_texture].into_iter().flatten() {
+            for t in m.textures().into_iter().flatten() {
                 if t >= self.textures.len() {
                     return Err(format!("material '{}' refers to missing texture {}", m.name, t));
                 }

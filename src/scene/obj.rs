@@ -13,7 +13,8 @@
 //! - A missing or unreadable `.mtl` file is a warning, never an error. From an
 //!   `.mtl`: `Kd` -> `base_color` (`d` -> alpha), `Ks` -> `specular` (mean),
 //!   `Ns` -> `shininess` (at least 1; `roughness` is derived from it), `Ke` ->
-//!   `emissive`, `map_Kd` -> an RGBA8 texture loaded relative to the OBJ's folder.
+//!   `emissive`, `map_Kd` -> an RGBA8 texture loaded relative to the OBJ's folder,
+//!   `map_Ke` -> the emissive texture (multiplying `Ke`, 1 when there is no `Ke`).
 //!   A texture that is missing or cannot be decoded is a warning.
 //! - Objects without a texture get a generated UV checker tinted by their
 //!   index in the whole scene (`checker_texture`).
@@ -236,7 +237,14 @@ impl Loader {
                 material.emissive = Vec3::from(ke);
             }
             if let Some(tex) = &m.diffuse_texture {
-                material.base_color_texture = self.image(scene, obj, dir, tex);
+                material.base_color_texture = self.image(scene, obj, dir, tex, "using a generated checker");
+            }
+            // `tobj` keeps `map_Ke` among the parameters it does not know.
+            if let Some(tex) = m.unknown_param.get("map_Ke") {
+                material.emissive_texture = self.image(scene, obj, dir, tex, "no emission texture");
+                if material.emissive_texture.is_some() && m.emissive.is_none() {
+                    material.emissive = Vec3::ONE;
+                }
             }
         }
         if material.base_color_texture.is_none() {
@@ -245,9 +253,9 @@ impl Loader {
         material
     }
 
-    /// Loads a `map_Kd` image once per scene; `None` (with a warning) when it
-    /// is missing or cannot be decoded.
-    fn image(&mut self, scene: &mut Scene, obj: &Path, dir: &Path, spec: &str) -> Option<usize> {
+    /// Loads a `map_Kd` or `map_Ke` image once per scene; `None` (with a
+    /// warning ending in `instead`) when it is missing or cannot be decoded.
+    fn image(&mut self, scene: &mut Scene, obj: &Path, dir: &Path, spec: &str, instead: &str) -> Option<usize> {
         let file = dir.join(texture_file_name(spec));
         if let Some(&known) = self.images.get(&file) {
             return known;
@@ -264,11 +272,7 @@ impl Loader {
                 Some(scene.textures.len() - 1)
             }
             Err(e) => {
-                tracing::warn!(
-                    "{}: texture {} cannot be loaded ({e}); using a generated checker",
-                    obj.display(),
-                    file.display()
-                );
+                tracing::warn!("{}: texture {} cannot be loaded ({e}); {instead}", obj.display(), file.display());
                 None
             }
         };
@@ -360,7 +364,7 @@ fn roughness_from_shininess(shininess: f32) -> f32 {
     (1.0 / (2.0 * shininess + 1.0)).powf(0.25).clamp(0.0, 1.0)
 }
 
-/// The file named by a `map_Kd` value: options (`-bm 1 file.png`) are
+/// The file named by a `map_Kd` or `map_Ke` value: options (`-bm 1 file.png`) are
 /// skipped, Windows separators become `/`.
 fn texture_file_name(spec: &str) -> String {
     let spec = spec.trim();
@@ -730,6 +734,32 @@ f 5 6 7
         assert_eq!(grey.base_color, Vec4::new(0.5, 0.5, 0.5, 1.0));
         assert_eq!(grey.specular, Material::default().specular);
         assert_eq!(scene.textures[grey.base_color_texture.unwrap()].width, CHECKER_SIZE);
+    }
+
+    /// `map_Ke` (kept by `tobj` among unknown parameters) becomes the
+    /// emissive texture, multiplying `Ke` (1 without one).
+    #[test]
+    fn mtl_emissive_textures() {
+        let dir = tempfile::tempdir().unwrap();
+        image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 100, 0, 255])).save(dir.path().join("glow.png")).unwrap();
+        write(
+            dir.path(),
+            "e.mtl",
+            "newmtl lamp\nKe 0.5 0.25 2\nmap_Ke -bm 1 glow.png\n\
+             newmtl bare\nmap_Ke glow.png\n\
+             newmtl lost\nKe 1 1 1\nmap_Ke missing.png\n",
+        );
+        let obj = "mtllib e.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n\
+                   o a\nusemtl lamp\nf 1 2 3\no b\nusemtl bare\nf 1 2 3\no c\nusemtl lost\nf 1 2 3\n";
+        let scene = load_file(&write(dir.path(), "e.obj", obj)).unwrap();
+        let [lamp, bare, lost] = [0, 1, 2].map(|o| &scene.materials[scene.objects[o].material]);
+        assert_eq!(lamp.emissive, Vec3::new(0.5, 0.25, 2.0));
+        let tex = &scene.textures[lamp.emissive_texture.expect("map_Ke is loaded")];
+        assert_eq!((tex.width, &tex.rgba8[..4]), (2, &[200, 100, 0, 255][..]));
+        assert_eq!(bare.emissive_texture, lamp.emissive_texture, "one image, loaded once");
+        assert_eq!(bare.emissive, Vec3::ONE, "no Ke: the texture alone");
+        assert_eq!((lost.emissive_texture, lost.emissive), (None, Vec3::ONE), "a missing map_Ke is a warning");
+        assert_ne!(lamp.base_color_texture, lamp.emissive_texture, "the albedo stays the checker");
     }
 
     #[test]

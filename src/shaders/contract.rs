@@ -7,7 +7,7 @@ use std::fmt::Write;
 
 use crate::render::deferred::volumes::VolumeList;
 use crate::render::deferred_compute;
-use crate::render::gpu_types::{GpuLightKind, NO_NORMAL_MAP, ShadingModel};
+use crate::render::gpu_types::{GpuLightKind, NO_TEXTURE, ShadingModel};
 use crate::render::objectspace::atlas::{BLOCK_SIDE, MAX_LEVELS};
 use crate::render::objectspace::{DebugView, TileCounter};
 
@@ -17,7 +17,7 @@ pub fn constants() -> Vec<(&'static str, u32)> {
     c.push(("PAIR_EMISSION", crate::render::forward_multipass::EMISSION));
     c.extend(GpuLightKind::ALL.iter().map(|k| (k.wgsl_name(), *k as u32)));
     c.extend(ShadingModel::ALL.iter().map(|m| (m.wgsl_name(), *m as u32)));
-    c.push(("NO_NORMAL_MAP", NO_NORMAL_MAP));
+    c.push(("NO_TEXTURE", NO_TEXTURE));
     c.extend(DebugView::ALL.iter().map(|v| (v.wgsl_name(), *v as u32)));
     c.extend(TileCounter::ALL.iter().map(|t| (t.wgsl_name(), *t as u32)));
     c.push(("AGE_BUCKET_BASE", TileCounter::AGE_BUCKET_BASE as u32));

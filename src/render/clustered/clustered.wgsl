@@ -1,7 +1,8 @@
 // Clustered forward shading: every visible object drawn once after the depth
 // pre-pass; each fragment finds its cluster (screen tile, depth slice) and
 // loops over the global lights and the cluster's lights.
-#import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, fragment_surface}
+#import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, sample_material,
+    fragment_surface}
 #import shadespace::scene_bindings::objects
 #import shadespace::light_grid::{cluster_of, light_surface_in_cell}
 
@@ -13,6 +14,6 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4f {
     let o = objects[in.tag];
-    let s = fragment_surface(o, in, sample_albedo(o, in), sample_normal_map(o, in));
+    let s = fragment_surface(o, in, sample_albedo(o, in), sample_normal_map(o, in), sample_material(o, in));
     return vec4f(light_surface_in_cell(o, s, cluster_of(in.clip.xy, in.world)), 1.0);
 }

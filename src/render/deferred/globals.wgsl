@@ -17,7 +17,7 @@ fn lights_globals(@builtin(global_invocation_id) id: vec3u) {
     var color = vec3f(0.0);
     if depth > 0.0 {
         let t = gbuffer_texel(id.xy, depth);
-        color = t.emissive + light_globals(t.surface, t.to_eye);
+        color = t.surface.emission + light_globals(t.surface, t.to_eye);
     }
     textureStore(hdr, id.xy, vec4f(color, 1.0));
 }

@@ -73,8 +73,8 @@ impl Default for DeferredComputeConfig {
 
 /// Where the lighting pass reads its pixels from.
 enum Surfaces {
-    Gbuffer(GbufferStage),
-    Visibility { ids: VisibilityBuffer, pass: ComputeVisibility },
+    Gbuffer(Box<GbufferStage>),
+    Visibility { ids: VisibilityBuffer, pass: Box<ComputeVisibility> },
 }
 
 /// The tiled deferred pipeline.
@@ -97,12 +97,12 @@ impl DeferredCompute {
     ) -> Result<Self, RenderError> {
         let surfaces = match config.visibility {
             VisibilityMethod::Raster => {
-                Surfaces::Gbuffer(GbufferStage::new(device, shaders, scene, targets, config.depth_prepass)?)
+                Surfaces::Gbuffer(Box::new(GbufferStage::new(device, shaders, scene, targets, config.depth_prepass)?))
             }
             VisibilityMethod::Compute => {
                 let ids = VisibilityBuffer::new(device, targets);
                 let pass = ComputeVisibility::new(device, shaders, scene, targets, &ids, config.count_visibility)?;
-                Surfaces::Visibility { ids, pass }
+                Surfaces::Visibility { ids, pass: Box::new(pass) }
             }
         };
         let (layout, output) = hdr_output(device, targets, "tiled lighting output");

@@ -130,7 +130,7 @@ fn tiled_lighting(
     var color = vec3f(0.0);
     if lit {
         texel = gbuffer_texel(id.xy, depth);
-        color = texel.emissive + light_globals(texel.surface, texel.to_eye);
+        color = texel.surface.emission + light_globals(texel.surface, texel.to_eye);
     }
     let word = thread / 32u;
     let bit = 1u << (thread % 32u);

@@ -1,6 +1,7 @@
 // Single-pass forward shading: every object drawn once, its fragments loop
 // over the lights that CPU culling found for the object.
-#import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, fragment_surface}
+#import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, sample_material,
+    fragment_surface}
 #import shadespace::scene_bindings::objects
 #import shadespace::surface::light_surface
 
@@ -14,5 +15,6 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4f {
     let o = objects[in.tag];
-    return vec4f(light_surface(o, fragment_surface(o, in, sample_albedo(o, in), sample_normal_map(o, in))), 1.0);
+    let s = fragment_surface(o, in, sample_albedo(o, in), sample_normal_map(o, in), sample_material(o, in));
+    return vec4f(light_surface(o, s), 1.0);
 }

@@ -3,7 +3,8 @@
 // instance index is its pair's index (its `first_instance`).
 #import shadespace::contract::PAIR_EMISSION
 #import shadespace::lighting::light_radiance
-#import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, fragment_surface}
+#import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, sample_material,
+    fragment_surface}
 #import shadespace::scene_bindings::{view, objects, lights}
 
 // Mirrors `render::forward_multipass::LightPair`.
@@ -27,10 +28,11 @@ fn fs_main(in: VertexOut) -> @location(0) vec4f {
     // Sampled before the branch: implicit derivatives need uniform control flow.
     let texel = sample_albedo(o, in);
     let normal_texel = sample_normal_map(o, in);
+    let material = sample_material(o, in);
+    let s = fragment_surface(o, in, texel, normal_texel, material);
     if pair.light == PAIR_EMISSION {
-        return vec4f(o.emissive, 1.0);
+        return vec4f(s.emission, 1.0);
     }
-    let s = fragment_surface(o, in, texel, normal_texel);
     let to_eye = normalize(view.camera_position.xyz - s.position);
     return vec4f(light_radiance(lights[pair.light], s, to_eye), 1.0);
 }

@@ -6,7 +6,8 @@
 // GGX metallic-roughness (glTF 2.0's BRDF): Cook-Torrance with the GGX
 // distribution, height-correlated Smith visibility and Schlick Fresnel;
 // diffuse Lambert on the non-metallic part.
-// Both: point/spot attenuation 1 / (1 + d^2) cut off at the light's radius,
+// Both: ambient light scaled by the surface's occlusion; point/spot
+// attenuation 1 / (1 + d^2) cut off at the light's radius,
 // spot factor (cos(theta) - cos_outer) / (cos_inner - cos_outer) clamped,
 // times the shadow factor of lights that cast shadows (`shadows.wgsl`).
 // Light radiance is in units where a white Lambert surface facing the light
@@ -49,6 +50,10 @@ struct Surface {
     roughness: f32,
     // SHADING_PHONG or SHADING_PBR.
     model: u32,
+    // Emitted radiance, added once whatever the lights (`surface.wgsl`).
+    emission: vec3f,
+    // Ambient occlusion, 1 for none: scales ambient light only.
+    occlusion: f32,
 }
 
 const PI: f32 = 3.14159265;
@@ -105,7 +110,7 @@ fn attenuation(d: f32, radius: f32) -> f32 {
 // Radiance reflected towards `to_eye` (unit vector from the point to the eye).
 fn light_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
     if light.kind == LIGHT_AMBIENT {
-        return light.radiance * ambient_reflectance(s);
+        return light.radiance * ambient_reflectance(s) * s.occlusion;
     }
     var to_light: vec3f;
     var falloff = 1.0;

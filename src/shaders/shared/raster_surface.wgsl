@@ -4,8 +4,8 @@
 #define_import_path shadespace::raster_surface
 #import shadespace::lighting::Surface
 #import shadespace::scene::{Object, vertex_uv0}
-#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, normal_maps, object_clip_position}
-#import shadespace::surface::object_surface
+#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, linear_maps, object_clip_position}
+#import shadespace::surface::{MaterialTexels, object_surface, material_texels_grad}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
 
 struct VertexOut {
@@ -44,13 +44,20 @@ fn sample_albedo(o: Object, in: VertexOut) -> vec3f {
 // The object's normal-map texel at the fragment (uniform control flow, as
 // `sample_albedo`; meaningless for objects without a map).
 fn sample_normal_map(o: Object, in: VertexOut) -> vec3f {
-    return textureSample(normal_maps, albedo_sampler, in.uv, sample_layer(o.normal_layer)).rgb;
+    return textureSample(linear_maps, albedo_sampler, in.uv, sample_layer(o.normal_layer)).rgb;
 }
 
-// The surface of object `o` at a fragment whose albedo texel is `texel` and
-// normal-map texel `normal_texel`.
-fn fragment_surface(o: Object, in: VertexOut, texel: vec3f, normal_texel: vec3f) -> Surface {
-    var s = object_surface(o);
+// The object's emissive, metallic-roughness and occlusion texels at the
+// fragment (call it in uniform control flow: it takes UV derivatives; only
+// the textures the object has are sampled).
+fn sample_material(o: Object, in: VertexOut) -> MaterialTexels {
+    return material_texels_grad(o, in.uv, dpdx(in.uv), dpdy(in.uv));
+}
+
+// The surface of object `o` at a fragment whose albedo texel is `texel`,
+// normal-map texel `normal_texel` and material texels `material`.
+fn fragment_surface(o: Object, in: VertexOut, texel: vec3f, normal_texel: vec3f, material: MaterialTexels) -> Surface {
+    var s = object_surface(o, material);
     s.position = in.world;
     s.normal = mapped_normal(in.normal, in.tangent, normal_texel, o.normal_layer);
     s.albedo = texel * o.base_color.rgb;

@@ -33,8 +33,15 @@ struct Object {
     shininess: f32,
     metallic: f32,
     roughness: f32,
-    // Layer of the normal-map array, or NO_NORMAL_MAP.
+    // Layers of the material's textures, or NO_TEXTURE: the normal map, the
+    // metallic-roughness and the occlusion map in the linear array
+    // (`linear_maps`), the emissive texture in the colour array (`albedo`).
     normal_layer: u32,
+    emissive_layer: u32,
+    metal_rough_layer: u32,
+    occlusion_layer: u32,
+    // Occlusion is 1 + occlusion_strength * (red - 1), on ambient light only.
+    occlusion_strength: f32,
     pad_a: u32,
     pad_b: u32,
     pad_c: u32,

@@ -15,9 +15,10 @@
 @group(0) @binding(7) var<storage, read> indices: array<u32>;
 // Bindings 8-11 (the shadow maps) are declared in `shadows.wgsl`, which the
 // lighting model imports.
-// Tangent-space normal maps, one per layer (linear RGB; `normal_map.wgsl`),
-// sampled with `albedo_sampler`.
-@group(0) @binding(12) var normal_maps: texture_2d_array<f32>;
+// Linear maps, one per layer, sampled with `albedo_sampler`: tangent-space
+// normal maps (`normal_map.wgsl`), metallic-roughness maps (blue, green) and
+// occlusion maps (red); one layer when a material packs them into one image.
+@group(0) @binding(12) var linear_maps: texture_2d_array<f32>;
 
 // The three (global) vertex indices of an object's triangle.
 fn triangle_vertices(o: Object, triangle: u32) -> vec3u {

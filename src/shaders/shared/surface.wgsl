@@ -1,15 +1,106 @@
 // Evaluating the shared lighting model at a point of an object's triangle,
 // given barycentrics: used by object-space shading (per texel) and by the
-// object-space gather for objects shaded forward (per pixel).
+// object-space gather for objects shaded forward (per pixel). Also the one
+// place where an object's material becomes a Surface (`object_surface`), for
+// every pipeline.
 #define_import_path shadespace::surface
+#import shadespace::contract::NO_TEXTURE
 #import shadespace::lighting::{Surface, light_radiance}
 #import shadespace::scene::{Object, vertex_uv0}
-#import shadespace::scene_bindings::{view, vertices, lights, light_indices, albedo, albedo_sampler, normal_maps}
+#import shadespace::scene_bindings::{view, vertices, lights, light_indices, albedo, albedo_sampler, linear_maps}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
 
+// The texels of an object's emissive, metallic-roughness and occlusion
+// textures at a point; each is ignored when the object has no such texture
+// (`object_surface` keeps the factor alone, exactly).
+struct MaterialTexels {
+    // The emissive texture's RGB (decoded from sRGB).
+    emissive: vec3f,
+    // The metallic-roughness texture's blue (metallic) and green (roughness).
+    metal_rough: vec2f,
+    // The occlusion texture's red.
+    occlusion: f32,
+}
+
+// Texels for an object without material textures.
+fn no_material_texels() -> MaterialTexels {
+    return MaterialTexels(vec3f(1.0), vec2f(1.0), 1.0);
+}
+
+// The material texels at `uv` (UV0), sampled at mip `lod` (no derivatives:
+// valid in compute and in non-uniform control flow). Objects without a
+// texture skip its sample.
+fn material_texels_level(o: Object, uv: vec2f, lod: f32) -> MaterialTexels {
+    var t = no_material_texels();
+    if o.emissive_layer != NO_TEXTURE {
+        t.emissive = textureSampleLevel(albedo, albedo_sampler, uv, o.emissive_layer, lod).rgb;
+    }
+    if o.metal_rough_layer != NO_TEXTURE {
+        t.metal_rough = textureSampleLevel(linear_maps, albedo_sampler, uv, o.metal_rough_layer, lod).bg;
+    }
+    if o.occlusion_layer != NO_TEXTURE {
+        t.occlusion = textureSampleLevel(linear_maps, albedo_sampler, uv, o.occlusion_layer, lod).r;
+    }
+    return t;
+}
+
+// As `material_texels_level`, with UV0's screen derivatives `ddx`, `ddy`
+// (for fragments: `dpdx(uv)` and `dpdy(uv)` taken in uniform control flow,
+// so that these samples, like implicit ones, filter the pixel's footprint).
+fn material_texels_grad(o: Object, uv: vec2f, ddx: vec2f, ddy: vec2f) -> MaterialTexels {
+    var t = no_material_texels();
+    if o.emissive_layer != NO_TEXTURE {
+        t.emissive = textureSampleGrad(albedo, albedo_sampler, uv, o.emissive_layer, ddx, ddy).rgb;
+    }
+    if o.metal_rough_layer != NO_TEXTURE {
+        t.metal_rough = textureSampleGrad(linear_maps, albedo_sampler, uv, o.metal_rough_layer, ddx, ddy).bg;
+    }
+    if o.occlusion_layer != NO_TEXTURE {
+        t.occlusion = textureSampleGrad(linear_maps, albedo_sampler, uv, o.occlusion_layer, ddx, ddy).r;
+    }
+    return t;
+}
+
+// The Phong exponent equivalent to a GGX roughness (the Blinn-Phong mapping
+// 2/alpha^2 - 2, halved for the reflection-vector form): the twin of
+// `Material::shininess_from_roughness`.
+fn shininess_from_roughness(roughness: f32) -> f32 {
+    let alpha = max(roughness * roughness, 1e-3);
+    return clamp((2.0 / (alpha * alpha) - 2.0) * 0.25, 1.0, 512.0);
+}
+
+// A surface with object `o`'s material, its textures' texels `t` and the
+// view's lighting model (the caller fills in position, normal and albedo).
+// glTF 2.0's rules: emission = emissive factor x emissive texel; metallic and
+// roughness = factors x the texture's blue and green (Phong's exponent then
+// follows the textured roughness); occlusion = 1 + strength x (red - 1).
+// Without a texture each is its factor alone, as before textures.
+fn object_surface(o: Object, t: MaterialTexels) -> Surface {
+    var s: Surface;
+    s.specular = o.specular;
+    s.shininess = o.shininess;
+    s.metallic = o.metallic;
+    s.roughness = o.roughness;
+    s.model = view.shading;
+    s.emission = o.emissive;
+    s.occlusion = 1.0;
+    if o.emissive_layer != NO_TEXTURE {
+        s.emission = o.emissive * t.emissive;
+    }
+    if o.metal_rough_layer != NO_TEXTURE {
+        s.metallic = o.metallic * t.metal_rough.x;
+        s.roughness = o.roughness * t.metal_rough.y;
+        s.shininess = shininess_from_roughness(s.roughness);
+    }
+    if o.occlusion_layer != NO_TEXTURE {
+        s.occlusion = 1.0 + o.occlusion_strength * (t.occlusion - 1.0);
+    }
+    return s;
+}
+
 // The surface at barycentrics `b` of the triangle with vertices `tri`
-// (world position and normal, albedo and normal map sampled at mip
-// `texture_lod`).
+// (world position and normal; albedo, normal map and material textures
+// sampled at mip `texture_lod`).
 fn surface_point(o: Object, tri: vec3u, b: vec3f, texture_lod: f32) -> Surface {
     let v0 = vertices[tri.x];
     let v1 = vertices[tri.y];
@@ -19,31 +110,19 @@ fn surface_point(o: Object, tri: vec3u, b: vec3f, texture_lod: f32) -> Surface {
     let t = v0.tangent * b.x + v1.tangent * b.y + v2.tangent * b.z;
     let uv0 = vertex_uv0(v0) * b.x + vertex_uv0(v1) * b.y + vertex_uv0(v2) * b.z;
     let world = (o.model * vec4f(local, 1.0)).xyz;
-    let texel = textureSampleLevel(normal_maps, albedo_sampler, uv0, sample_layer(o.normal_layer), texture_lod).rgb;
+    let texel = textureSampleLevel(linear_maps, albedo_sampler, uv0, sample_layer(o.normal_layer), texture_lod).rgb;
     let world_t = vec4f((o.model * vec4f(t.xyz, 0.0)).xyz, v0.tangent.w);
-    var s = object_surface(o);
+    var s = object_surface(o, material_texels_level(o, uv0, texture_lod));
     s.position = world;
     s.normal = mapped_normal((o.normal_model * vec4f(n, 0.0)).xyz, world_t, texel, o.normal_layer);
     s.albedo = textureSampleLevel(albedo, albedo_sampler, uv0, o.albedo_layer, texture_lod).rgb * o.base_color.rgb;
     return s;
 }
 
-// A surface with object `o`'s material and the view's lighting model (the
-// caller fills in position, normal and albedo).
-fn object_surface(o: Object) -> Surface {
-    var s: Surface;
-    s.specular = o.specular;
-    s.shininess = o.shininess;
-    s.metallic = o.metallic;
-    s.roughness = o.roughness;
-    s.model = view.shading;
-    return s;
-}
-
 // Emission plus every light the object's list holds, seen from the camera.
 fn light_surface(o: Object, s: Surface) -> vec3f {
     let to_eye = normalize(view.camera_position.xyz - s.position);
-    var color = o.emissive;
+    var color = s.emission;
     for (var i = 0u; i < o.light_count; i++) {
         color += light_radiance(lights[light_indices[o.light_offset + i]], s, to_eye);
     }

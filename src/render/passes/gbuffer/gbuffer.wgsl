@@ -1,12 +1,16 @@
 // G-buffer pass: rasterize the scene and store, per pixel, what lighting
 // needs besides depth: the octahedral-encoded unit normal (normal-mapped),
-// the albedo, and the object (its specular, shininess, metallic, roughness
-// and emission are per object, so the index carries them exactly). Positions come back from depth. Its clip position is
+// the albedo, the object (its specular, shininess, metallic, roughness,
+// emission and occlusion strength are per object, so the index carries them
+// exactly) and the texels of its emissive, metallic-roughness and occlusion
+// textures (which `object_surface` combines with the object's factors, as
+// every pipeline does). Positions come back from depth. Its clip position is
 // `object_clip_position`, so after a depth pre-pass the `Equal` test passes.
 #import shadespace::octahedral::oct_encode
 #import shadespace::scene::vertex_uv0
-#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, normal_maps, object_clip_position}
+#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, linear_maps, object_clip_position}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
+#import shadespace::surface::material_texels_grad
 
 struct VertexOut {
     @builtin(position) @invariant clip: vec4f,
@@ -21,6 +25,10 @@ struct GbufferOut {
     @location(0) normal: vec2f,
     @location(1) albedo_color: vec4f,
     @location(2) object: u32,
+    // The emissive texel (sRGB target) and the occlusion texel (alpha, linear).
+    @location(3) emission_occlusion: vec4f,
+    // The metallic and roughness texels.
+    @location(4) metal_rough: vec2f,
 }
 
 @vertex
@@ -39,9 +47,12 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
 fn fs_main(in: VertexOut) -> GbufferOut {
     let o = objects[in.object];
     var out: GbufferOut;
-    let normal_texel = textureSample(normal_maps, albedo_sampler, in.uv0, sample_layer(o.normal_layer)).rgb;
+    let normal_texel = textureSample(linear_maps, albedo_sampler, in.uv0, sample_layer(o.normal_layer)).rgb;
+    let material = material_texels_grad(o, in.uv0, dpdx(in.uv0), dpdy(in.uv0));
     out.normal = oct_encode(mapped_normal(in.normal, in.tangent, normal_texel, o.normal_layer));
     out.albedo_color = vec4f(textureSample(albedo, albedo_sampler, in.uv0, o.albedo_layer).rgb * o.base_color.rgb, 1.0);
     out.object = in.object;
+    out.emission_occlusion = vec4f(material.emissive, material.occlusion);
+    out.metal_rough = material.metal_rough;
     return out;
 }

@@ -5,7 +5,8 @@
 #import shadespace::lighting::Surface
 #import shadespace::octahedral::oct_decode
 #import shadespace::scene_bindings::{view, objects}
-#import shadespace::surface::object_surface
+#import shadespace::contract::NO_TEXTURE
+#import shadespace::surface::{MaterialTexels, object_surface, no_material_texels}
 
 // Mirrors `render::passes::gbuffer::GpuUnproject`.
 struct Unproject {
@@ -17,11 +18,13 @@ struct Unproject {
 @group(1) @binding(2) var gbuffer_albedo: texture_2d<f32>;
 @group(1) @binding(3) var gbuffer_object: texture_2d<u32>;
 @group(1) @binding(4) var<uniform> unproject: Unproject;
+// Material texels: emissive RGB and occlusion (alpha); metallic, roughness.
+@group(1) @binding(5) var gbuffer_emission_occlusion: texture_2d<f32>;
+@group(1) @binding(6) var gbuffer_metal_rough: texture_2d<f32>;
 
 // A lit pixel of the G-buffer.
 struct GbufferTexel {
     surface: Surface,
-    emissive: vec3f,
     // Unit vector from the surface to the eye.
     to_eye: vec3f,
 }
@@ -44,11 +47,16 @@ fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
     let object = textureLoad(gbuffer_object, pixel, 0).x;
     let o = objects[object];
     var t: GbufferTexel;
-    t.surface = object_surface(o);
+    var material = no_material_texels();
+    if o.emissive_layer != NO_TEXTURE || o.metal_rough_layer != NO_TEXTURE || o.occlusion_layer != NO_TEXTURE {
+        // Objects without material textures skip the loads.
+        let e = textureLoad(gbuffer_emission_occlusion, pixel, 0);
+        material = MaterialTexels(e.rgb, textureLoad(gbuffer_metal_rough, pixel, 0).xy, e.a);
+    }
+    t.surface = object_surface(o, material);
     t.surface.position = world_position(pixel, depth);
     t.surface.normal = oct_decode(textureLoad(gbuffer_normal, pixel, 0).xy);
     t.surface.albedo = textureLoad(gbuffer_albedo, pixel, 0).rgb;
-    t.emissive = o.emissive;
     t.to_eye = normalize(view.camera_position.xyz - t.surface.position);
     return t;
 }

@@ -1,26 +1,33 @@
 //! G-buffer pass, shared by the deferred pipelines: rasterizes the visible
 //! objects (after an optional depth pre-pass, testing `Equal`) into a slim
-//! G-buffer, 16 bytes per pixel with the frame's depth:
+//! G-buffer, 22 bytes per pixel with the frame's depth:
 //!
 //! | target | format | holds |
 //! | --- | --- | --- |
 //! | `targets.depth` | `Depth32Float` | reversed-Z depth (positions are rebuilt from it) |
 //! | normal | `Rg16Float` | the unit normal, octahedral-encoded ([`octahedral`]) |
 //! | albedo | `Rgb10a2Unorm` | albedo (texture times base colour), linear; alpha unused |
-//! | object | `R32Uint` | the object, whose table entry holds specular, shininess and emission |
+//! | object | `R32Uint` | the object, whose table entry holds specular, shininess, the metallic, roughness, emission and occlusion factors |
+//! | emission, occlusion | `Rgba8UnormSrgb` | the emissive texture's texel (sRGB, as stored) and the occlusion texture's (alpha, linear) |
+//! | metallic, roughness | `Rg8Unorm` | the metallic-roughness texture's blue and green |
 //!
 //! Why these: 10-bit linear albedo costs the 4 bytes of `Rgba8Unorm` and is
 //! finer than 8-bit sRGB above a linear albedo of about 0.02 (up to 9x at
 //! white) and than 8-bit linear everywhere. Against forward at 320x180 (mean
 //! FLIP, atrium / voxels; `tests/agreement.rs`): 8-bit sRGB 0.0072 / 0.0013,
 //! 8-bit linear 0.0043 / 0.0095, 10-bit linear 0.0022 / 0.0033, half floats
-//! (8 bytes) 0.0017 / 0.0009. Specular, shininess and emission are per
-//! object in this renderer, so one object index carries all three exactly
-//! (emission in HDR) in 4 bytes, where storing them would take 8 or more
-//! and quantize shininess. Half floats keep the encoded normal within 0.06
-//! degrees (tested); `Rg16Snorm` would be finer but needs an optional
-//! feature. The lighting passes read it through `gbuffer_read.wgsl`
-//! (`shadespace::gbuffer`, bind group 1).
+//! (8 bytes) 0.0017 / 0.0009. Specular, shininess and the material
+//! factors are per object in this renderer, so one object index carries them
+//! exactly (emission in HDR) in 4 bytes, where storing them would take 8 or
+//! more and quantize shininess. The material textures vary per pixel, so
+//! their texels are stored (6 bytes, at the textures' own 8 bits; the
+//! emissive texel in sRGB, as its texture), and the lighting passes combine
+//! them with the object's factors in `object_surface`, as every pipeline
+//! does. Every pixel writes them; objects without those textures light
+//! exactly as before (the lighting passes do not load their texels). Half
+//! floats keep the encoded normal within 0.06 degrees (tested); `Rg16Snorm`
+//! would be finer but needs an optional feature. The lighting passes read
+//! it through `gbuffer_read.wgsl` (`shadespace::gbuffer`, bind group 1).
 
 pub mod octahedral;
 
@@ -47,8 +54,16 @@ pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
 /// The object index (its material is in the object table).
 pub const OBJECT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
-/// Bytes per pixel of the G-buffer's own targets (normal, albedo, object).
-pub const BYTES_PER_PIXEL: u64 = 12;
+/// The emissive texel (sRGB) and the occlusion texel (alpha).
+pub const EMISSION_OCCLUSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// The metallic and roughness texels.
+pub const METAL_ROUGH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unorm;
+/// The G-buffer's own targets, in the order the G-buffer pass writes them.
+const FORMATS: [wgpu::TextureFormat; 5] =
+    [NORMAL_FORMAT, ALBEDO_FORMAT, OBJECT_FORMAT, EMISSION_OCCLUSION_FORMAT, METAL_ROUGH_FORMAT];
+/// Bytes per pixel of the G-buffer's own targets (normal, albedo, object,
+/// emission and occlusion, metallic and roughness).
+pub const BYTES_PER_PIXEL: u64 = 18;
 /// Bytes per pixel including the frame's depth target, which it shares.
 pub const BYTES_PER_PIXEL_WITH_DEPTH: u64 = BYTES_PER_PIXEL + 4;
 
@@ -84,12 +99,16 @@ pub struct GBuffer {
     pub albedo: wgpu::Texture,
     /// [`OBJECT_FORMAT`].
     pub object: wgpu::Texture,
-    normal_view: wgpu::TextureView,
-    albedo_view: wgpu::TextureView,
-    object_view: wgpu::TextureView,
+    /// [`EMISSION_OCCLUSION_FORMAT`].
+    pub emission_occlusion: wgpu::Texture,
+    /// [`METAL_ROUGH_FORMAT`].
+    pub metal_rough: wgpu::Texture,
+    /// Views of the five targets, in [`FORMATS`] order.
+    views: [wgpu::TextureView; 5],
     unproject: wgpu::Buffer,
     /// Group 1 of the lighting passes (`gbuffer_read.wgsl`): depth, normal,
-    /// albedo, object, unproject; visible to fragment and compute stages.
+    /// albedo, object, unproject, emission and occlusion, metallic and
+    /// roughness; visible to fragment and compute stages.
     pub read_layout: wgpu::BindGroupLayout,
     pub read_group: wgpu::BindGroup,
 }
@@ -114,8 +133,10 @@ impl GBuffer {
             make("gbuffer albedo", ALBEDO_FORMAT),
             make("gbuffer object", OBJECT_FORMAT),
         );
-        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let (normal_view, albedo_view, object_view) = (view(&normal), view(&albedo), view(&object));
+        let emission_occlusion = make("gbuffer emission occlusion", EMISSION_OCCLUSION_FORMAT);
+        let metal_rough = make("gbuffer metal rough", METAL_ROUGH_FORMAT);
+        let views = [&normal, &albedo, &object, &emission_occlusion, &metal_rough]
+            .map(|t: &wgpu::Texture| t.create_view(&Default::default()));
         let unproject = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("gbuffer unproject"),
             size: size_of::<GpuUnproject>() as u64,
@@ -134,6 +155,8 @@ impl GBuffer {
                 Binding::Texture { sample: float, dimension: d2 },
                 Binding::Texture { sample: wgpu::TextureSampleType::Uint, dimension: d2 },
                 Binding::Uniform,
+                Binding::Texture { sample: float, dimension: d2 },
+                Binding::Texture { sample: float, dimension: d2 },
             ],
         );
         let read_group = bind_group(
@@ -142,13 +165,15 @@ impl GBuffer {
             &read_layout,
             &[
                 wgpu::BindingResource::TextureView(&targets.depth_view),
-                wgpu::BindingResource::TextureView(&normal_view),
-                wgpu::BindingResource::TextureView(&albedo_view),
-                wgpu::BindingResource::TextureView(&object_view),
+                wgpu::BindingResource::TextureView(&views[0]),
+                wgpu::BindingResource::TextureView(&views[1]),
+                wgpu::BindingResource::TextureView(&views[2]),
                 unproject.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&views[3]),
+                wgpu::BindingResource::TextureView(&views[4]),
             ],
         );
-        Self { normal, albedo, object, normal_view, albedo_view, object_view, unproject, read_layout, read_group }
+        Self { normal, albedo, object, emission_occlusion, metal_rough, views, unproject, read_layout, read_group }
     }
 
     /// GPU memory of the G-buffer's own targets (depth belongs to the frame).
@@ -173,12 +198,11 @@ impl GbufferPass {
         scene: &SceneGpu,
         after_prepass: bool,
     ) -> Result<Self, ShaderError> {
-        let formats = [NORMAL_FORMAT, ALBEDO_FORMAT, OBJECT_FORMAT];
         let depth = DepthMode::after(after_prepass);
         let raster = SceneRaster {
             shader: SHADER,
             vertex_entry: "vs_main",
-            fragment: Some(("fs_main", &formats)),
+            fragment: Some(("fs_main", &FORMATS)),
             depth,
             groups: &[],
             blend: None,
@@ -194,11 +218,7 @@ impl GbufferPass {
 pub fn gbuffer(frame: &mut Frame, pass: &GbufferPass, out: &GBuffer) {
     frame.queue.write_buffer(&out.unproject, 0, bytemuck::bytes_of(&GpuUnproject::new(frame.view)));
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
-    let color = [
-        color_attachment(&out.normal_view, wgpu::Color::TRANSPARENT),
-        color_attachment(&out.albedo_view, wgpu::Color::TRANSPARENT),
-        color_attachment(&out.object_view, wgpu::Color::TRANSPARENT),
-    ];
+    let color = out.views.each_ref().map(|view| color_attachment(view, wgpu::Color::TRANSPARENT));
     let mut rp = frame.render_pass("gbuffer", &color, Some(depth_attachment(targets, !pass.after_prepass)));
     draw_objects(&mut rp, scene, visible, &pass.pipeline);
 }

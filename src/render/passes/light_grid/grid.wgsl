@@ -83,5 +83,5 @@ fn cell_radiance(cell: u32, s: Surface, to_eye: vec3f) -> vec3f {
 // (what `surface::light_surface` computes from an object's CPU list).
 fn light_surface_in_cell(o: Object, s: Surface, cell: u32) -> vec3f {
     let to_eye = normalize(view.camera_position.xyz - s.position);
-    return o.emissive + light_globals(s, to_eye) + cell_radiance(cell, s, to_eye);
+    return s.emission + light_globals(s, to_eye) + cell_radiance(cell, s, to_eye);
 }

@@ -5,7 +5,7 @@
 // rasterizer's 64-bit buffer (the depth target is not written).
 #define_import_path shadespace::visibility_read
 #import shadespace::lighting::Surface
-#import shadespace::scene_bindings::{view, objects}
+#import shadespace::scene_bindings::view
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface}
 
 // (object + 1, triangle) per pixel; 0 = background.
@@ -16,7 +16,6 @@
 // A lit pixel (as `shadespace::gbuffer::GbufferTexel`).
 struct GbufferTexel {
     surface: Surface,
-    emissive: vec3f,
     // Unit vector from the surface to the eye.
     to_eye: vec3f,
 }
@@ -32,7 +31,6 @@ fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
     let p = sample_pixel(pixel, textureLoad(visibility_ids, pixel, 0).xy);
     var t: GbufferTexel;
     t.surface = pixel_surface(p);
-    t.emissive = objects[p.object].emissive;
     t.to_eye = normalize(view.camera_position.xyz - t.surface.position);
     return t;
 }
