@@ -57,7 +57,8 @@ pub struct ViewArgs {
     /// start, after the first frame and at the end) here as JSON.
     #[arg(help_heading = "Viewer", long)]
     report: Option<PathBuf>,
-    /// The bookmark file the panel saves to and loads from.
+    /// The bookmark file the panel saves to and loads from (JSON; `render`
+    /// and `bench` read a view from it with `--camera bookmark:FILE:NAME`).
     #[arg(help_heading = "Viewer", long, default_value = "shadespace-bookmarks.json")]
     bookmarks: PathBuf,
 }
