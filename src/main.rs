@@ -16,11 +16,15 @@ use shadespace::experiments::timing::{Sweep, TimingGrid};
 use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::atlas::MAX_TEXTURE_SIZE;
-use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, DebugView, ExtraViews, MAX_DENSITY_SIZE, ObjectSpace};
+use shadespace::render::objectspace::atlas_view::AtlasPages;
+use shadespace::render::objectspace::{
+    DEFAULT_PAGE_SIZE, DebugView, ExtraViews, MAX_ATLAS_BUDGET_MI, MAX_DENSITY_SIZE, ObjectSpace,
+};
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, Exposure, ForwardConfig, ForwardMultipassConfig,
     ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, ShadingModel, ShadowRefresh, VisibilityMethod,
 };
+use shadespace::scene::bookmarks::BookmarkRef;
 use shadespace::scene::free_camera::{self, LookAt, OrbitSpec};
 use shadespace::scene::path::SceneCameras;
 use shadespace::scene::{self, Aabb, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
@@ -238,8 +242,9 @@ struct SceneArgs {
     /// `path`: the scene's camera path (from cameras.json beside a shared
     /// scene; an orbit for atrium and voxels; for other scenes the file's
     /// first camera, or else a turntable framing the whole scene), `fixed:K`
-    /// (fixed camera K, from 0; framed views for other scenes) or `gltf:K`
-    /// (camera K of the glTF file).
+    /// (fixed camera K, from 0; framed views for other scenes), `gltf:K`
+    /// (camera K of the glTF file) or `bookmark:FILE:NAME` (the view saved as
+    /// NAME, the text after the last colon, in the viewer's bookmark file FILE).
     #[arg(long, default_value = "path")]
     camera: String,
     /// Lights besides the ambient and directional light that every set has:
@@ -401,7 +406,7 @@ struct ObjectSpaceArgs {
     /// until it fits (the counters report `budget_bias` and `atlas_pages`).
     /// Default: 1 texel per pixel at 1920x1080 (2.1 Mi), growing as the
     /// square root of the pixels (4.1 Mi at 3840x2160), at least 1 Mi.
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1 << 14))]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=MAX_ATLAS_BUDGET_MI))]
     atlas_budget: Option<u64>,
     /// Page side of the virtual textures in texels (a power of two, at most
     /// four times the tile size; raised to the tile size). Larger pages
@@ -443,15 +448,23 @@ struct RenderArgs {
     history: u32,
     /// Object space: write a debug view instead of the shaded image: `shade`,
     /// `chart-uv`, `mip-level`, `tile-mask` (red: shaded this frame, green:
-    /// reused), `cache-age`.
+    /// reused), `cache-age`, `atlas-pages` (level --atlas-level of object
+    /// --atlas-object's shading texture, found through the page table as
+    /// the frame left it: backed pages show their shades, the others a dark
+    /// checker; a square frame of the level's size shows a texel per pixel).
     #[arg(help_heading = "Frame and output", long, default_value = "shade", value_parser = DebugView::from_str)]
     view: DebugView,
-    /// Object space: also write mip 0 of one object's shading texture here.
+    /// Object space: also write one mip level (--atlas-level) of one object's
+    /// shading texture here (pages with no physical page magenta).
     #[arg(help_heading = "Frame and output", long)]
     atlas_out: Option<PathBuf>,
-    /// Object space: the object (index, see `shadespace charts`) for --atlas-out.
+    /// Object space: the object (index, see `shadespace charts`) for
+    /// --atlas-out and --view atlas-pages.
     #[arg(help_heading = "Frame and output", long, default_value_t = 0)]
     atlas_object: usize,
+    /// Object space: the mip level (0 the finest) for --atlas-out and --view atlas-pages.
+    #[arg(help_heading = "Frame and output", long, default_value_t = 0)]
+    atlas_level: usize,
     /// Also write the frame's GPU pass times as a Chrome trace (open in
     /// chrome://tracing or ui.perfetto.dev).
     #[arg(help_heading = "Frame and output", long)]
@@ -794,6 +807,11 @@ fn camera_path(a: &SceneArgs, cameras: &SceneCameras, bounds: &Aabb) -> Result<(
         let label = format!("orbit {},{},{} target {} fov {fov}", o.radius, o.height, o.frames, xyz(turntable.target));
         return Ok((CameraPath::Turntable(turntable), label));
     }
+    if let Some(mark) = input(BookmarkRef::from_camera_arg(&a.camera).context("--camera"))? {
+        let look = input(mark.find().context("--camera"))?;
+        let camera = input(look.camera(bounds).with_context(|| format!("--camera {mark}")))?;
+        return Ok((CameraPath::Fixed(camera), a.camera.clone()));
+    }
     let choice: path::CameraChoice = input(a.camera.parse().context("--camera"))?;
     Ok((input(cameras.select(choice).context("--camera"))?, a.camera.clone()))
 }
@@ -891,8 +909,11 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
     let (w, h) = a.scene.size;
     let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s, a.view, ctx.device.features()))?;
     configure(&mut renderer, &a.scene, &s);
-    if a.atlas_out.is_some() && renderer.pipeline::<ObjectSpace>().is_none() {
-        return input(Err(anyhow::anyhow!("--atlas-out needs --pipeline objectspace")));
+    if a.atlas_out.is_some() || a.view == DebugView::AtlasPages {
+        let Some(os) = renderer.pipeline_mut::<ObjectSpace>() else {
+            return input(Err(anyhow::anyhow!("--atlas-out and --view atlas-pages need --pipeline objectspace")));
+        };
+        input(os.set_atlas_pages(AtlasPages { object: a.atlas_object, level: a.atlas_level }))?;
     }
     // The history frames are the warm-up of a one-frame run.
     let history = a.history.min(a.frame);
@@ -909,7 +930,7 @@ fn render(a: RenderArgs) -> Result<(), Failure> {
         }
     }
     if let (Some(path), Some(os)) = (&a.atlas_out, renderer.pipeline::<ObjectSpace>()) {
-        save_png(&input(os.read_atlas(&ctx, a.atlas_object, 0))?, path)?;
+        save_png(&input(os.read_atlas(&ctx, a.atlas_object, a.atlas_level))?, path)?;
     }
     if let Some(path) = &a.trace {
         write_trace(&renderer, path)?;

@@ -8,7 +8,8 @@ use std::str::FromStr;
 
 use clap::{Args, ValueEnum};
 use shadespace::gpu::{GpuContext, GpuOptions};
-use shadespace::render::objectspace::DebugView;
+use shadespace::render::objectspace::atlas_view::AtlasPages;
+use shadespace::render::objectspace::{DebugView, MAX_ATLAS_BUDGET_MI};
 use shadespace::render::{Exposure, Renderer};
 use shadespace::scene::{Aabb, CameraPath, Light, path};
 use shadespace::viewer::camera::look_at_args;
@@ -18,7 +19,7 @@ use shadespace::viewer::{self, Session, ViewCamera, ViewerOptions};
 
 use super::{
     Failure, InputError, PipelineName, SceneArgs, Setup, configure, input, light_set, mip_bias, on_off,
-    parse_tile_size, render_options, setup, shade_budget, shell_quote, texel_density,
+    parse_tile_size, render_options, setup, shade_budget, shell_quote, texel_density, variable_rate,
 };
 
 #[derive(Args)]
@@ -26,9 +27,16 @@ pub struct ViewArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// Object space: the debug view shown first (`shade`, `chart-uv`,
-    /// `mip-level`, `tile-mask`, `cache-age`; the panel switches it).
+    /// `mip-level`, `tile-mask`, `cache-age`, `atlas-pages`; the panel switches it).
     #[arg(help_heading = "Viewer", long, default_value = "shade", value_parser = DebugView::from_str)]
     view: DebugView,
+    /// Object space, `--view atlas-pages`: the object shown first (index, see
+    /// `shadespace charts`; the panel switches it).
+    #[arg(help_heading = "Viewer", long, default_value_t = 0)]
+    atlas_object: usize,
+    /// Object space, `--view atlas-pages`: the mip level shown first.
+    #[arg(help_heading = "Viewer", long, default_value_t = 0)]
+    atlas_level: usize,
     /// `on`: wait for the display's refresh; `off`: present at once.
     #[arg(help_heading = "Viewer", long, default_value = "on", value_parser = on_off, action = clap::ArgAction::Set)]
     vsync: bool,
@@ -49,7 +57,8 @@ pub struct ViewArgs {
     /// start, after the first frame and at the end) here as JSON.
     #[arg(help_heading = "Viewer", long)]
     report: Option<PathBuf>,
-    /// The bookmark file the panel saves to and loads from.
+    /// The bookmark file the panel saves to and loads from (JSON; `render`
+    /// and `bench` read a view from it with `--camera bookmark:FILE:NAME`).
     #[arg(help_heading = "Viewer", long, default_value = "shadespace-bookmarks.json")]
     bookmarks: PathBuf,
 }
@@ -59,7 +68,7 @@ pub struct ViewArgs {
 const VIEWER_FLAGS: [&str; 7] =
     ["--view", "--vsync", "--script", "--frames", "--screenshot", "--report", "--bookmarks"];
 /// Flags the viewer's settings replace in the `render` command.
-const SETTING_FLAGS: [&str; 10] = [
+const SETTING_FLAGS: [&str; 14] = [
     "--pipeline",
     "--lights",
     "--seed",
@@ -67,9 +76,13 @@ const SETTING_FLAGS: [&str; 10] = [
     "--tile-size",
     "--reuse",
     "--mip-bias",
+    "--variable-rate",
     "--texel-density",
     "--shade-budget",
+    "--atlas-budget",
     "--texture-size",
+    "--atlas-object",
+    "--atlas-level",
 ];
 /// The camera flags a free camera replaces.
 const CAMERA_FLAGS: [&str; 5] = ["--camera", "--eye", "--target", "--orbit", "--fov"];
@@ -78,7 +91,10 @@ const RATE_FLAGS: [&str; 2] = ["--shade-hz", "--frame-hz"];
 
 pub fn view(a: ViewArgs) -> Result<(), Failure> {
     let session = ViewSession::new(&a.scene)?;
-    let settings = session.initial_settings(a.view);
+    let settings = Settings {
+        atlas_pages: AtlasPages { object: a.atlas_object, level: a.atlas_level },
+        ..session.initial_settings(a.view)
+    };
     let script = a.script.as_deref().map(Script::load).transpose().map_err(|e| Failure::Input(InputError(e)))?;
     let options = ViewerOptions {
         settings,
@@ -114,6 +130,7 @@ struct ViewSession {
     bounds: Aabb,
     light_region: Aabb,
     pipelines: Vec<&'static str>,
+    object_names: Vec<String>,
     /// `--exposure`, or its default for how the scene is seen (as `render`).
     exposure: Exposure,
 }
@@ -139,6 +156,7 @@ impl ViewSession {
             bounds,
             light_region: cameras.light_region(&bounds),
             pipelines: PipelineName::value_variants().iter().map(|p| p.name()).collect(),
+            object_names: s.scene.objects.iter().map(|o| o.name.clone()).collect(),
             exposure: s.exposure,
         };
         session.keep(a, s);
@@ -154,12 +172,15 @@ impl ViewSession {
             seed: a.seed,
             exposure: self.exposure,
             view,
+            atlas_pages: AtlasPages::default(),
             objectspace: ObjectSpaceSettings {
                 tile_size: os.tile_size,
                 reuse: os.shade_hz.map_or(os.reuse, |hz| (os.frame_hz / hz).round().max(1.0) as u32),
                 mip_bias: os.mip_bias,
+                variable_rate: os.variable_rate,
                 texel_density: os.texel_density,
                 shade_budget: os.shade_budget,
+                atlas_budget: os.atlas_budget,
             },
         }
     }
@@ -180,6 +201,14 @@ impl ViewSession {
             (os.reuse, os.shade_hz) = (wanted.reuse, None);
         }
         os.mip_bias = checked(mip_bias(&wanted.mip_bias.to_string()))?;
+        os.variable_rate = checked(variable_rate(&wanted.variable_rate.to_string()))?;
+        if let Some(m) = wanted.atlas_budget {
+            anyhow::ensure!(
+                (1..=MAX_ATLAS_BUDGET_MI).contains(&m),
+                "atlas budget {m} Mi texels is not from 1 to 16384"
+            );
+        }
+        os.atlas_budget = wanted.atlas_budget;
         os.texel_density = checked(texel_density(&wanted.texel_density.to_string()))?;
         os.shade_budget = wanted.shade_budget.map(|m| checked(shade_budget(&m.to_string()))).transpose()?;
         if os.texel_density != self.base.objectspace.texel_density {
@@ -220,6 +249,10 @@ impl Session for ViewSession {
         &self.pipelines
     }
 
+    fn object_names(&self) -> &[String] {
+        &self.object_names
+    }
+
     fn renderer(&mut self, ctx: &GpuContext, settings: &Settings) -> anyhow::Result<Renderer> {
         let a = self.args_for(settings)?;
         let s = self.setup_for(&a).map_err(anyhow_of)?;
@@ -244,7 +277,7 @@ impl Session for ViewSession {
     }
 
     fn render_command(&self, settings: &Settings, camera: &ViewCamera) -> String {
-        let free = matches!(camera, ViewCamera::Free(_));
+        let free = !matches!(camera, ViewCamera::PathFrame(_));
         let initial = self.initial_settings(settings.view);
         let reuse_changed = settings.objectspace.reuse != initial.objectspace.reuse;
         let density_changed = settings.objectspace.texel_density != initial.objectspace.texel_density;
@@ -268,6 +301,7 @@ impl Session for ViewSession {
             add("--reuse", os.reuse.to_string());
         }
         add("--mip-bias", os.mip_bias.to_string());
+        add("--variable-rate", os.variable_rate.to_string());
         match self.base.objectspace.texture_size {
             Some(size) if !density_changed => add("--texture-size", size.to_string()),
             _ => add("--texel-density", os.texel_density.to_string()),
@@ -275,12 +309,20 @@ impl Session for ViewSession {
         if let Some(m) = os.shade_budget {
             add("--shade-budget", m.to_string());
         }
+        if let Some(m) = os.atlas_budget {
+            add("--atlas-budget", m.to_string());
+        }
         if settings.view != DebugView::Shade {
             add("--view", settings.view.name().to_string());
+        }
+        if settings.view == DebugView::AtlasPages {
+            add("--atlas-object", settings.atlas_pages.object.to_string());
+            add("--atlas-level", settings.atlas_pages.level.to_string());
         }
         match camera {
             ViewCamera::PathFrame(k) => add("--frame", k.to_string()),
             ViewCamera::Free(look) => words.extend(look_at_args(look)),
+            ViewCamera::Bookmark(mark) => add("--camera", mark.to_string()),
         }
         words.iter().map(|w| shell_quote(w)).collect::<Vec<_>>().join(" ")
     }

@@ -242,7 +242,60 @@ fn bad_camera_flags_name_the_flag() {
     }
     let help = Command::new(env!("CARGO_BIN_EXE_shadespace")).args(["render", "--help"]).output().unwrap();
     let help = String::from_utf8_lossy(&help.stdout);
-    for flag in ["--eye <X,Y,Z>", "--target <X,Y,Z>", "--orbit <RADIUS,HEIGHT,PERIOD>", "--fov <DEG>", "gltf:K"] {
+    for flag in [
+        "--eye <X,Y,Z>",
+        "--target <X,Y,Z>",
+        "--orbit <RADIUS,HEIGHT,PERIOD>",
+        "--fov <DEG>",
+        "gltf:K",
+        "bookmark:FILE:NAME",
+    ] {
         assert!(help.contains(flag), "render --help lacks {flag}");
+    }
+}
+
+/// `--camera bookmark:FILE:NAME` renders the view the viewer saved under
+/// NAME exactly as `--eye --target --fov` of its numbers does, `bench` takes
+/// it too, and a missing file, a file that is not a bookmark list or an
+/// unknown name exit with status 2 naming the file and the problem.
+#[test]
+fn bookmarks_are_cameras_for_render_and_bench() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("views.json");
+    let marks = r#"[{"name": "view-1", "eye": [2, 3, 9], "target": [0, 1, 0], "fov": 50},
+                    {"name": "low", "eye": [-4, 0.5, 3], "target": [0, 1, 0], "fov": 70}]"#;
+    std::fs::write(&file, marks).unwrap();
+    let camera = |name: &str| format!("bookmark:{}:{name}", file.display());
+    let base = ["--scene", "atrium", "--size", "64x36"];
+    let (code, err, marked) =
+        render(&dir.path().join("marked.png"), &[&base[..], &["--camera", &camera("low")]].concat());
+    assert_eq!(code, 0, "{err}");
+    let by_hand = ["--eye", "-4,0.5,3", "--target", "0,1,0", "--fov", "70"];
+    let (code, err, free) = render(&dir.path().join("free.png"), &[&base[..], &by_hand].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(marked.unwrap() == free.unwrap(), "the bookmark renders another view than its numbers");
+
+    let stats = dir.path().join("bench.json");
+    let bench = Command::new(env!("CARGO_BIN_EXE_shadespace"))
+        .args(["bench", "--quiet", "--frames", "1", "--warmup", "0", "--out", stats.to_str().unwrap()])
+        .args([&base[..], &["--camera", &camera("view-1")]].concat())
+        .output()
+        .unwrap();
+    assert!(bench.status.success(), "{}", String::from_utf8_lossy(&bench.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(report["camera"], camera("view-1"));
+
+    let broken = dir.path().join("broken.json");
+    std::fs::write(&broken, r#"{"view-1": [2, 3, 9]}"#).unwrap();
+    let cases = [
+        (format!("bookmark:{}:view-1", dir.path().join("none.json").display()), "none.json", "cannot read"),
+        (format!("bookmark:{}:view-1", broken.display()), "broken.json", "not a bookmark file"),
+        (camera("view-2"), "views.json", "no bookmark named 'view-2' (the file has: view-1, low)"),
+        ("bookmark:views.json".to_string(), "bookmark:FILE:NAME", "expected"),
+    ];
+    for (value, file, problem) in cases {
+        let (code, err, _) = render(&dir.path().join("x.png"), &[&base[..], &["--camera", &value]].concat());
+        assert_eq!(code, 2, "--camera {value} was accepted:\n{err}");
+        assert!(err.contains("--camera") && err.contains(file) && err.contains(problem), "{value}: {err}");
     }
 }

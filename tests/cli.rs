@@ -175,3 +175,25 @@ fn stereo_views_write_both_eyes() {
     assert_eq!(code, 0, "{err}");
     assert!(out.is_file() && dir.path().join("frame-view1.png").is_file());
 }
+
+/// `--view atlas-pages` and `--atlas-out` name an object and level that
+/// exist, with object space; otherwise status 2 says what the scene has.
+#[test]
+fn atlas_pages_need_an_object_and_level_that_exist() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("frame.png");
+    let base = ["render", "--size", "32x18", "--out", out.to_str().unwrap(), "--view", "atlas-pages"];
+    let cases: [(&[&str], &str); 3] = [
+        (&["--pipeline", "forward"], "need --pipeline objectspace"),
+        (&["--pipeline", "objectspace", "--atlas-object", "999"], "--atlas-object 999: the scene has"),
+        (&["--pipeline", "objectspace", "--atlas-level", "40"], "--atlas-level 40: object 0's shading texture has"),
+    ];
+    for (flags, expected) in cases {
+        let (code, err) = run(&[&base[..], flags].concat());
+        assert_eq!(code, 2, "{flags:?} was accepted:\n{err}");
+        assert!(err.contains(expected), "{flags:?}: {err}");
+    }
+    let (code, err) = run(&[&base[..], &["--pipeline", "objectspace", "--atlas-level", "1"]].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(out.is_file());
+}

@@ -1,8 +1,12 @@
 //! Object-space pipeline against forward on a tiny scene.
 mod common;
 
+use std::collections::HashSet;
+
+use shadespace::color::reinhard_srgb8;
 use shadespace::metrics;
-use shadespace::render::objectspace::{ExtraViews, ObjectSpace};
+use shadespace::render::objectspace::atlas_view::{AtlasPages, AtlasPagesError};
+use shadespace::render::objectspace::{DebugView, ExtraViews, ObjectSpace};
 use shadespace::render::passes::visibility::VisibilityMethod;
 use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 
@@ -339,4 +343,61 @@ fn the_atlas_shrinks_and_grows_with_the_pages_the_frames_need() {
     };
     let (err, _) = metrics::compare(&fresh, &os.read_image(&ctx).unwrap());
     assert!(err.flip_mean < 0.002, "after resizes against a fresh renderer: {err:?}");
+}
+
+/// The atlas page view (`--view atlas-pages`) draws one level of one
+/// object's virtual texture through the two-level page table. Against the
+/// page owners read back (which the view does not use) and the shades
+/// `--atlas-out` reads from the physical atlas: at every level, each pixel
+/// of a backed page shows its texel's shade (one texel per pixel at the
+/// level of the frame's size, magnified at coarser ones) and each pixel of
+/// an unbacked page one of the checker's two greys; some level has both.
+#[test]
+fn atlas_page_view_shows_the_page_tables_backed_pages() {
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let side = 256;
+    let config =
+        ObjectSpaceConfig { texture_sizes: vec![Some(512)], view: DebugView::AtlasPages, ..Default::default() };
+    let options = RenderOptions { width: side, height: side, pipeline: PipelineConfig::ObjectSpace(config) };
+    let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
+    let levels = r.pipeline::<ObjectSpace>().unwrap().layout.objects[0].as_ref().unwrap().levels.clone();
+    let checker = [reinhard_srgb8(0.04), reinhard_srgb8(0.125)];
+    let mut mixed = false;
+    for (level, l) in levels.iter().enumerate() {
+        let os = r.pipeline_mut::<ObjectSpace>().unwrap();
+        os.set_atlas_pages(AtlasPages { object: 0, level }).unwrap();
+        r.render(&ctx, &camera, &lights, level as u64).unwrap();
+        let image = r.read_image(&ctx).unwrap();
+        let os = r.pipeline::<ObjectSpace>().unwrap();
+        let shades = os.read_atlas(&ctx, 0, level).unwrap();
+        let page = os.layout.page_size;
+        let backed: HashSet<[u32; 2]> = (os.read_page_table(&ctx).unwrap().owners.iter())
+            .filter_map(|o| os.layout.page_origin(o.checked_sub(1)?))
+            .filter(|&(object, lv, _)| (object, lv) == (0, level))
+            .map(|(_, _, origin)| [origin[0] / page, origin[1] / page])
+            .collect();
+        let pages = l.size.div_ceil(page).pow(2) as usize;
+        eprintln!("level {level} ({} texels): {} of {pages} pages backed", l.size, backed.len());
+        mixed |= !backed.is_empty() && backed.len() < pages;
+        for (x, y, p) in image.enumerate_pixels() {
+            let texel = [x * l.size / side, y * l.size / side];
+            if backed.contains(&[texel[0] / page, texel[1] / page]) {
+                let want = shades.get_pixel(texel[0], texel[1]);
+                let close = p.0.iter().zip(want.0).all(|(a, b)| a.abs_diff(b) <= 1);
+                assert!(close, "level {level}, pixel ({x}, {y}): {:?}, the texel's shade is {:?}", p.0, want.0);
+            } else {
+                let grey = p.0[0] == p.0[1] && p.0[1] == p.0[2] && checker.iter().any(|c| c.abs_diff(p.0[0]) <= 1);
+                assert!(grey, "level {level}, pixel ({x}, {y}) on an unbacked page: {:?}, not the checker", p.0);
+            }
+        }
+    }
+    assert!(mixed, "no level with both backed and unbacked pages: the test shows nothing");
+    let os = r.pipeline_mut::<ObjectSpace>().unwrap();
+    let wrong = os.set_atlas_pages(AtlasPages { object: 0, level: levels.len() });
+    assert_eq!(wrong, Err(AtlasPagesError::NoLevel { object: 0, level: levels.len(), levels: levels.len() }));
+    assert_eq!(
+        os.set_atlas_pages(AtlasPages { object: 1, level: 0 }),
+        Err(AtlasPagesError::NoObject { object: 1, count: 1 })
+    );
 }

@@ -13,12 +13,12 @@ use shadespace::metrics;
 
 /// Mean FLIP error allowed between the viewer's frame and `render`'s.
 const VIEWER_FLIP: f32 = 0.02;
-/// Pipeline and option switches of the switching test (14 per script
+/// Pipeline and option switches of the switching test (18 per script
 /// round, 5 of them renderer builds); `SHADESPACE_VIEWER_SWITCHES=1000`
 /// runs more by hand.
 const SWITCHES: u32 = 200;
 /// Setting changes per round of the switching script.
-const SWITCHES_PER_ROUND: u32 = 14;
+const SWITCHES_PER_ROUND: u32 = 18;
 /// Host memory the switching run's floor may rise: the lowest RSS of its
 /// last third of rounds against the lowest of rounds 2 and 3 (by then every
 /// kind of renderer was built twice: the driver's and the allocator's
@@ -177,13 +177,16 @@ fn switching_pipelines_and_options_keeps_memory_flat() {
     let switches: u32 =
         std::env::var("SHADESPACE_VIEWER_SWITCHES").ok().and_then(|v| v.parse().ok()).unwrap_or(SWITCHES);
     let dir = tempfile::tempdir().unwrap();
-    // Every pipeline, object space with other options, lights, seeds, exposure.
+    // Every pipeline, object space with other options (the atlas budget
+    // sizes its atlas), lights, seeds, exposure.
     let rounds = switches.div_ceil(SWITCHES_PER_ROUND);
     let script = serde_json::json!({ "repeat": rounds, "steps": [
         {"pipeline": "deferred"}, {"lights": "small:64"}, {"frames": 1},
-        {"pipeline": "objectspace"}, {"tile_size": 16}, {"view": "tile-mask"}, {"frames": 1},
+        {"pipeline": "objectspace"}, {"tile_size": 16}, {"view": "tile-mask"}, {"variable_rate": 1.0},
+        {"atlas_budget": 2}, {"frames": 1},
         {"pipeline": "clustered"}, {"seed": 2}, {"frames": 1},
-        {"pipeline": "deferred-compute"}, {"lights": "small:32"}, {"tile_size": 8}, {"view": "shade"}, {"frames": 1},
+        {"pipeline": "deferred-compute"}, {"lights": "small:32"}, {"tile_size": 8}, {"view": "shade"},
+        {"variable_rate": 0.0}, {"atlas_budget": null}, {"frames": 1},
         {"pipeline": "forward"}, {"seed": 1}, {"exposure": 1.25}, {"frames": 1},
     ]});
     let (script_path, report_path) = (dir.path().join("switch.json"), dir.path().join("report.json"));

@@ -252,6 +252,12 @@ impl Renderer {
         (self.pipeline.as_ref() as &dyn Any).downcast_ref::<T>()
     }
 
+    /// The pipeline as its concrete type, to change its live settings (for
+    /// example [`objectspace::ObjectSpace::set_atlas_pages`]).
+    pub fn pipeline_mut<T: Pipeline>(&mut self) -> Option<&mut T> {
+        (self.pipeline.as_mut() as &mut dyn Any).downcast_mut::<T>()
+    }
+
     /// Culls, uploads and records one frame, and submits it. Does not wait
     /// for the GPU.
     pub fn render(

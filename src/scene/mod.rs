@@ -4,6 +4,7 @@
 //! A [`Scene`] is plain CPU data. `render::SceneGpu` uploads it once; pipelines
 //! never look at files.
 
+pub mod bookmarks;
 pub mod camera;
 pub mod checker;
 pub mod detail;

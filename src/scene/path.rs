@@ -365,8 +365,9 @@ impl fmt::Display for CameraChoice {
 /// Why a `--camera` value is not usable.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum CameraChoiceError {
-    /// Not `path`, `fixed:K` or `gltf:K`.
-    #[error("\"{0}\": expected 'path', 'fixed:K' or 'gltf:K' (K = 0, 1, ...)")]
+    /// Not `path`, `fixed:K` or `gltf:K` (nor `bookmark:FILE:NAME`, which
+    /// the command line resolves with [`super::bookmarks::BookmarkRef`]).
+    #[error("\"{0}\": expected 'path', 'fixed:K' or 'gltf:K' (K = 0, 1, ...), or 'bookmark:FILE:NAME'")]
     Syntax(String),
     /// The scene has fewer fixed cameras.
     #[error("camera fixed:{index} does not exist: the scene has {count} fixed cameras (fixed:0 to fixed:{})", count.saturating_sub(1))]

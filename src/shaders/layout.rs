@@ -55,6 +55,7 @@ mod tests {
     use crate::render::forward_multipass::LightPair;
     use crate::render::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
     use crate::render::objectspace::atlas::{GpuAtlasEntry, GpuAtlasLevel};
+    use crate::render::objectspace::atlas_view::GpuAtlasPages;
     use crate::render::objectspace::resources::GpuParams;
     use crate::render::objectspace::trimap::GpuChartGrid;
     use crate::render::passes::gbuffer::GpuUnproject;
@@ -104,6 +105,7 @@ mod tests {
         check::<GpuAtlasLevel>(&modules);
         check::<GpuAtlasEntry>(&modules);
         check::<GpuParams>(&modules);
+        check::<GpuAtlasPages>(&modules);
         check::<GpuChartGrid>(&modules);
         check::<LightPair>(&modules);
         check::<GpuLightGridParams>(&modules);

@@ -2,12 +2,10 @@
 //! a fly camera (WASD and mouse look) and an orbit camera. The free cameras
 //! always end as a [`LookAt`] (eye, target, field of view), which is what
 //! `render --eye --target --fov` takes: a view found by hand renders the
-//! same from the command line, and bookmarks are stored in that form.
-
-use std::path::Path;
+//! same from the command line, and bookmarks
+//! ([`crate::scene::bookmarks`]) are stored in that form.
 
 use glam::Vec3;
-use serde::{Deserialize, Serialize};
 
 use crate::scene::free_camera::LookAt;
 use crate::scene::{Aabb, Camera, CameraPath};
@@ -154,45 +152,11 @@ impl CameraMode {
     }
 }
 
-/// A saved view: the eye, the point looked at and the vertical field of
-/// view in degrees, as `render --eye X,Y,Z --target X,Y,Z --fov DEG` takes them.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Bookmark {
-    pub name: String,
-    pub eye: [f32; 3],
-    pub target: [f32; 3],
-    pub fov: f32,
-}
-
-impl Bookmark {
-    pub fn new(name: String, l: &LookAt) -> Self {
-        Self { name, eye: l.eye.to_array(), target: l.target.to_array(), fov: l.fov_deg }
-    }
-
-    pub fn look_at(&self) -> LookAt {
-        LookAt { eye: Vec3::from(self.eye), target: Vec3::from(self.target), fov_deg: self.fov }
-    }
-}
-
 /// The `render` flags of a look-at: `--eye X,Y,Z --target X,Y,Z --fov DEG`
 /// (numbers printed so that they parse back to the same floats).
 pub fn look_at_args(l: &LookAt) -> Vec<String> {
     let xyz = |v: Vec3| format!("{},{},{}", v.x, v.y, v.z);
     ["--eye".into(), xyz(l.eye), "--target".into(), xyz(l.target), "--fov".into(), l.fov_deg.to_string()].into()
-}
-
-/// Reads a bookmark file (a JSON array of [`Bookmark`]).
-pub fn load_bookmarks(path: &Path) -> anyhow::Result<Vec<Bookmark>> {
-    use anyhow::Context;
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{}: not a bookmark list", path.display()))
-}
-
-/// Writes a bookmark file.
-pub fn save_bookmarks(path: &Path, bookmarks: &[Bookmark]) -> anyhow::Result<()> {
-    use anyhow::Context;
-    let text = serde_json::to_string_pretty(bookmarks)?;
-    std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
 }
 
 #[cfg(test)]

@@ -33,9 +33,11 @@ use winit::window::{Window, WindowId};
 
 use crate::gpu::{GpuContext, GpuOptions};
 use crate::render::Renderer;
+use crate::render::objectspace::{DebugView, ObjectSpace};
+use crate::scene::bookmarks::{self, Bookmark, BookmarkRef};
 use crate::scene::free_camera::LookAt;
 use crate::scene::{Aabb, CameraPath, Light};
-use camera::{Bookmark, CameraMode, FlyCamera, OrbitCamera};
+use camera::{CameraMode, FlyCamera, OrbitCamera};
 use present::{EguiFrame, Presenter};
 use screenshot::{ShotCamera, Sidecar};
 use script::{Player, Script, Step};
@@ -49,6 +51,8 @@ pub enum ViewCamera {
     PathFrame(u32),
     /// A free camera (`render --eye --target --fov`).
     Free(LookAt),
+    /// A bookmark saved in a bookmark file (`render --camera bookmark:FILE:NAME`).
+    Bookmark(BookmarkRef),
 }
 
 /// What the viewer needs from the command line: renderers and lights built
@@ -57,6 +61,8 @@ pub enum ViewCamera {
 pub trait Session {
     /// The `--pipeline` names.
     fn pipelines(&self) -> &[&'static str];
+    /// The scene's object names, by object index.
+    fn object_names(&self) -> &[String];
     /// A renderer for `settings`, configured as `render` configures it.
     fn renderer(&mut self, ctx: &GpuContext, settings: &Settings) -> anyhow::Result<Renderer>;
     /// The light set of `settings`.
@@ -268,7 +274,12 @@ impl Viewer {
             after: o.frames.unwrap_or(0),
             screenshot: o.screenshot,
         });
-        let bookmarks = camera::load_bookmarks(&o.bookmarks).unwrap_or_default();
+        // No bookmark file yet is the usual start; a broken one is reported.
+        let (bookmarks, status) = match bookmarks::load(&o.bookmarks) {
+            Ok(b) => (b, String::new()),
+            Err(bookmarks::BookmarkError::Read { .. }) => (Vec::new(), String::new()),
+            Err(e) => (Vec::new(), e.to_string()),
+        };
         Ok(Self {
             window,
             ctx,
@@ -293,7 +304,7 @@ impl Viewer {
             f12_shots: 0,
             bookmarks,
             bookmark_file: o.bookmarks,
-            status: String::new(),
+            status,
             device_line,
         })
     }
@@ -369,13 +380,17 @@ impl Viewer {
         Ok(None)
     }
 
-    /// Builds what the wanted settings change: the renderer, the lights.
+    /// Builds what the wanted settings change (the renderer, the lights),
+    /// then sets what the renderer changes live.
     fn apply_settings(&mut self, report: &mut RunReport) -> anyhow::Result<()> {
-        self.renderer.exposure = self.wanted.exposure;
-        if self.wanted.same_renderer(&self.built) {
-            self.built.exposure = self.wanted.exposure;
-            return Ok(());
+        if !self.wanted.same_renderer(&self.built) {
+            self.rebuild(report)?;
         }
+        self.apply_live()
+    }
+
+    /// Builds a renderer or lights for the wanted settings.
+    fn rebuild(&mut self, report: &mut RunReport) -> anyhow::Result<()> {
         let lights_changed = (&self.wanted.lights, self.wanted.seed) != (&self.built.lights, self.built.seed);
         let renderer_changed =
             !Settings { lights: self.built.lights.clone(), seed: self.built.seed, ..self.wanted.clone() }
@@ -390,8 +405,7 @@ impl Viewer {
                 if let Some(l) = lights {
                     self.lights = l;
                 }
-                if let Some(mut r) = renderer {
-                    r.exposure = self.wanted.exposure;
+                if let Some(r) = renderer {
                     self.renderer = r;
                     self.frame = 0;
                     self.timings.clear();
@@ -411,6 +425,31 @@ impl Viewer {
         }
     }
 
+    /// Sets what the renderer changes without a rebuild: the exposure, and
+    /// the object and level of the atlas page view.
+    fn apply_live(&mut self) -> anyhow::Result<()> {
+        self.renderer.exposure = self.wanted.exposure;
+        self.built.exposure = self.wanted.exposure;
+        if self.wanted.view != DebugView::AtlasPages {
+            return Ok(());
+        }
+        let Some(os) = self.renderer.pipeline_mut::<ObjectSpace>() else { return Ok(()) };
+        match os.set_atlas_pages(self.wanted.atlas_pages) {
+            Ok(()) => self.built.atlas_pages = self.wanted.atlas_pages,
+            // A scripted run stops at a bad choice; by hand, the panel says why.
+            Err(e) if self.script.is_some() => return Err(e.into()),
+            Err(e) => self.status = e.to_string(),
+        }
+        Ok(())
+    }
+
+    /// Shading-texture levels per scene object (0: shaded forward, or no
+    /// object-space pipeline), for the atlas page view's sliders.
+    fn atlas_levels(&self) -> Vec<usize> {
+        let Some(os) = self.renderer.pipeline::<ObjectSpace>() else { return Vec::new() };
+        os.layout.objects.iter().map(|o| o.as_ref().map_or(0, |a| a.levels.len())).collect()
+    }
+
     /// Runs egui for this frame: the image under the panel (unless hidden).
     fn draw_ui(&mut self) -> (EguiFrame, Vec<ui::Action>) {
         let input = self.egui_input.take_egui_input(&self.window);
@@ -418,6 +457,7 @@ impl Viewer {
         let command = self.session.render_command(&self.wanted, &view_camera);
         let path_frames = self.session.path().frame_count();
         let (image, image_size) = (self.presenter.image_id(), self.presenter.image_size());
+        let atlas_levels = self.atlas_levels();
         let mut actions = Vec::new();
         let egui = self.egui.clone();
         let output = egui.run_ui(input, |ui| {
@@ -432,6 +472,8 @@ impl Viewer {
                         bookmarks: &mut self.bookmarks,
                         timings: &self.timings,
                         pipelines: self.session.pipelines(),
+                        object_names: self.session.object_names(),
+                        atlas_levels: &atlas_levels,
                         status: &self.status,
                         render_command: &command,
                         device: &self.device_line,
@@ -612,8 +654,9 @@ impl Viewer {
             }
             ui::Action::AddBookmark => {
                 let look = self.camera.look_at(self.session.path());
-                let name = format!("view {}", self.bookmarks.len() + 1);
-                // The same view from the command line (render has no camera-file option).
+                // Names without spaces or colons: `--camera bookmark:FILE:NAME` needs no quotes.
+                let taken = |n: &str| self.bookmarks.iter().any(|b| b.name == n);
+                let name = (1..).map(|k| format!("view-{k}")).find(|n| !taken(n)).expect("a free name");
                 println!("{name}: {}", self.session.render_command(&self.built, &ViewCamera::Free(look)));
                 self.bookmarks.push(Bookmark::new(name, &look));
             }
@@ -623,13 +666,21 @@ impl Viewer {
                     self.camera = CameraMode::Fly(FlyCamera::from_look_at(&b.look_at(), speed));
                 }
             }
-            ui::Action::SaveBookmarks => match camera::save_bookmarks(&self.bookmark_file, &self.bookmarks) {
-                Ok(()) => self.status = format!("bookmarks saved to {}", self.bookmark_file.display()),
-                Err(e) => self.status = format!("{e:#}"),
+            ui::Action::SaveBookmarks => match bookmarks::save(&self.bookmark_file, &self.bookmarks) {
+                Ok(()) => {
+                    self.status = format!("bookmarks saved to {}", self.bookmark_file.display());
+                    // What renders and benchmarks each saved view.
+                    for b in &self.bookmarks {
+                        let mark = BookmarkRef { file: self.bookmark_file.clone(), name: b.name.clone() };
+                        let camera = ViewCamera::Bookmark(mark);
+                        println!("{}: {}", b.name, self.session.render_command(&self.built, &camera));
+                    }
+                }
+                Err(e) => self.status = e.to_string(),
             },
-            ui::Action::LoadBookmarks => match camera::load_bookmarks(&self.bookmark_file) {
+            ui::Action::LoadBookmarks => match bookmarks::load(&self.bookmark_file) {
                 Ok(b) => self.bookmarks = b,
-                Err(e) => self.status = format!("{e:#}"),
+                Err(e) => self.status = e.to_string(),
             },
         }
     }
@@ -671,8 +722,12 @@ fn apply_step(step: &Step, t: &mut StepTarget, ui_shown: &mut bool) -> anyhow::R
         Step::TileSize(t) => os.tile_size = *t,
         Step::Reuse(r) => os.reuse = *r,
         Step::MipBias(b) => os.mip_bias = *b,
+        Step::VariableRate(v) => os.variable_rate = *v,
         Step::TexelDensity(d) => os.texel_density = *d,
         Step::ShadeBudget(b) => os.shade_budget = *b,
+        Step::AtlasBudget(m) => os.atlas_budget = *m,
+        Step::AtlasObject(k) => wanted.atlas_pages.object = *k,
+        Step::AtlasLevel(l) => wanted.atlas_pages.level = *l,
         Step::Camera { eye, target, fov } => {
             let look = LookAt { eye: (*eye).into(), target: (*target).into(), fov_deg: *fov };
             *camera = CameraMode::Fly(FlyCamera::from_look_at(&look, 1.0));

@@ -7,7 +7,9 @@
 //!              {"camera": {"eye": [0, 2, 8], "target": [0, 1, 0], "fov": 60}},
 //!              {"move": [0.5, 0, 1]}, {"turn": [10, -5]}, {"path_frame": 120},
 //!              {"lights": "small:500"}, {"seed": 3}, {"exposure": 1.5},
-//!              {"view": "tile-mask"}, {"ui": true}, {"screenshot": "shot.png"} ] }
+//!              {"view": "atlas-pages"}, {"atlas_object": 3}, {"atlas_level": 1},
+//!              {"variable_rate": 1.5}, {"atlas_budget": 4}, {"ui": true},
+//!              {"screenshot": "shot.png"} ] }
 //! ```
 //!
 //! `steps` run `repeat` times (default once). Changes take effect at the
@@ -52,9 +54,17 @@ pub enum Step {
     TileSize(u32),
     Reuse(u32),
     MipBias(f32),
+    /// Levels coarser where triangles are flat (`--variable-rate`).
+    VariableRate(f32),
     TexelDensity(f32),
     /// Millions of texels per frame; `null` for no limit.
     ShadeBudget(Option<f64>),
+    /// The physical atlas in Mi texels (`--atlas-budget`); `null` for the default.
+    AtlasBudget(Option<u64>),
+    /// `--view atlas-pages`: the object shown.
+    AtlasObject(usize),
+    /// `--view atlas-pages`: the mip level shown.
+    AtlasLevel(usize),
     /// A free camera (`render --eye --target --fov`).
     Camera {
         eye: [f32; 3],
@@ -124,12 +134,14 @@ mod tests {
         let text = r#"{"repeat": 2, "steps": [
             {"frames": 2}, {"pipeline": "deferred"}, {"lights": "big:3"}, {"seed": 4}, {"exposure": 1.5},
             {"view": "tile-mask"}, {"tile_size": 16}, {"reuse": 2}, {"mip_bias": 0.5}, {"texel_density": 128},
-            {"shade_budget": null}, {"shade_budget": 2.5},
+            {"shade_budget": null}, {"shade_budget": 2.5}, {"variable_rate": 1.5}, {"atlas_budget": 4},
+            {"atlas_budget": null}, {"atlas_object": 2}, {"atlas_level": 1},
             {"camera": {"eye": [0, 1, 2], "target": [0, 0, 0], "fov": 60}},
             {"move": [1, 0, 0]}, {"turn": [10, -5]}, {"path_frame": 7}, {"ui": false}, {"screenshot": "a.png"}]}"#;
         let s: Script = serde_json::from_str(text).unwrap();
         assert_eq!(s.repeat, 2);
-        assert_eq!(s.steps.len(), 18);
+        assert_eq!(s.steps.len(), 23);
+        assert_eq!(s.steps[13], Step::AtlasBudget(Some(4)));
         assert_eq!(s.steps[11], Step::ShadeBudget(Some(2.5)));
         assert!(serde_json::from_str::<Script>(r#"{"steps": [{"fly": 1}]}"#).is_err());
     }

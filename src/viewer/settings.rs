@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use crate::render::Exposure;
 use crate::render::objectspace::DebugView;
+use crate::render::objectspace::atlas_view::AtlasPages;
 
 /// The most lights the panel offers (the light-count slider's end).
 pub const MAX_LIGHTS: u32 = 10_000;
@@ -25,6 +26,9 @@ pub struct Settings {
     /// Object space: the image shown (`--view`).
     #[serde(serialize_with = "view_name")]
     pub view: DebugView,
+    /// Object space, `--view atlas-pages`: the object and mip level shown
+    /// (`--atlas-object`, `--atlas-level`; changed without a rebuild).
+    pub atlas_pages: AtlasPages,
     pub objectspace: ObjectSpaceSettings,
 }
 
@@ -34,17 +38,22 @@ pub struct ObjectSpaceSettings {
     pub tile_size: u32,
     pub reuse: u32,
     pub mip_bias: f32,
+    /// Up to this many levels coarser where triangles are flat (0: off).
+    pub variable_rate: f32,
     /// Texels per metre (changing it charts the scene again).
     pub texel_density: f32,
     /// Most texels shaded per frame, in millions; `None`: no limit.
     pub shade_budget: Option<f64>,
+    /// The physical atlas in Mi texels; `None`: the default for the image size.
+    pub atlas_budget: Option<u64>,
 }
 
 impl Settings {
-    /// Whether a renderer built for `self` also serves `other` (only the
-    /// exposure, a renderer field, differs).
+    /// Whether a renderer built for `self` also serves `other` (only what a
+    /// renderer changes live differs: the exposure, the atlas page view's
+    /// object and level).
     pub fn same_renderer(&self, other: &Settings) -> bool {
-        Settings { exposure: other.exposure, ..self.clone() } == *other
+        Settings { exposure: other.exposure, atlas_pages: other.atlas_pages, ..self.clone() } == *other
     }
 }
 

@@ -4,11 +4,12 @@
 
 use egui::{Color32, Rect, Sense, Stroke, Ui, pos2, vec2};
 
-use super::camera::{Bookmark, CameraMode};
+use super::camera::CameraMode;
 use super::settings::{LightKind, MAX_LIGHTS, Settings};
 use super::timings::{TimingHistory, top_level};
 use crate::render::Exposure;
-use crate::render::objectspace::DebugView;
+use crate::render::objectspace::{DebugView, MAX_ATLAS_BUDGET_MI};
+use crate::scene::bookmarks::Bookmark;
 
 /// Width of the panel, points.
 const PANEL_WIDTH: f32 = 280.0;
@@ -26,6 +27,11 @@ pub struct PanelState<'a> {
     pub timings: &'a TimingHistory,
     /// The `--pipeline` names.
     pub pipelines: &'a [&'static str],
+    /// The scene's object names, by object index.
+    pub object_names: &'a [String],
+    /// Shading-texture levels per object (0: shaded forward; empty without
+    /// the object-space pipeline).
+    pub atlas_levels: &'a [usize],
     /// The last error or notice, shown at the top.
     pub status: &'a str,
     /// The `shadespace render` command of the current view.
@@ -77,10 +83,14 @@ pub fn panel(ui: &mut Ui, s: PanelState) -> Vec<Action> {
             }
             pipeline(ui, s.settings, s.pipelines);
             timing_graph(ui, s.timings);
+            tile_counters(ui, s.timings);
             counters(ui, s.timings);
             lights(ui, s.settings);
             if s.settings.pipeline == "objectspace" {
                 objectspace(ui, s.settings);
+                if s.settings.view == DebugView::AtlasPages {
+                    atlas_pages(ui, s.settings, s.object_names, s.atlas_levels);
+                }
             }
             exposure(ui, &mut s.settings.exposure);
             camera(ui, s.camera, s.path_frames, &mut actions);
@@ -139,6 +149,7 @@ fn objectspace(ui: &mut Ui, settings: &mut Settings) {
         });
         ui.add(egui::Slider::new(&mut os.reuse, 1..=8).text("reuse (frames)"));
         ui.add(egui::Slider::new(&mut os.mip_bias, -4.0..=4.0).step_by(0.25).text("mip bias"));
+        ui.add(egui::Slider::new(&mut os.variable_rate, 0.0..=4.0).step_by(0.25).text("variable rate"));
         ui.add(egui::Slider::new(&mut os.texel_density, 16.0..=2048.0).logarithmic(true).text("texels/m"));
         let mut limited = os.shade_budget.is_some();
         ui.checkbox(&mut limited, "shade budget");
@@ -149,11 +160,53 @@ fn objectspace(ui: &mut Ui, settings: &mut Settings) {
         } else {
             os.shade_budget = None;
         }
+        // Off: the default atlas for the image size. A change builds a new renderer.
+        let mut sized = os.atlas_budget.is_some();
+        ui.checkbox(&mut sized, "atlas budget");
+        if sized {
+            let mut m = os.atlas_budget.unwrap_or(4);
+            ui.add(egui::Slider::new(&mut m, 1..=MAX_ATLAS_BUDGET_MI).logarithmic(true).text("Mi texels"));
+            os.atlas_budget = Some(m);
+        } else {
+            os.atlas_budget = None;
+        }
         egui::ComboBox::from_label("view").selected_text(settings.view.name()).show_ui(ui, |ui| {
             for v in DebugView::ALL {
                 ui.selectable_value(&mut settings.view, v, v.name());
             }
         });
+    });
+}
+
+/// The atlas page view's object (by index, with its name) and level; only
+/// objects with a shading texture, only the levels it has.
+fn atlas_pages(ui: &mut Ui, settings: &mut Settings, names: &[String], levels: &[usize]) {
+    egui::CollapsingHeader::new("atlas pages").default_open(true).show(ui, |ui| {
+        let Some(last) = levels.len().checked_sub(1) else { return };
+        let pages = &mut settings.atlas_pages;
+        let before = pages.object;
+        ui.add(egui::Slider::new(&mut pages.object, 0..=last).text("object"));
+        // Step over objects shaded forward, in the direction the slider moved.
+        let up = pages.object >= before;
+        while levels.get(pages.object) == Some(&0) {
+            match (up, pages.object) {
+                (true, k) if k < last => pages.object += 1,
+                (false, k) if k > 0 => pages.object -= 1,
+                _ => break,
+            }
+        }
+        let name = names.get(pages.object).map_or("", String::as_str);
+        ui.label(format!("object {}: {name}", pages.object));
+        match levels.get(pages.object).copied().unwrap_or(0) {
+            0 => {
+                ui.label("shaded forward: no shading texture");
+            }
+            n => {
+                pages.level = pages.level.min(n - 1);
+                ui.add(egui::Slider::new(&mut pages.level, 0..=n - 1).text("level"));
+            }
+        }
+        ui.label("dark checker: pages with no physical page");
     });
 }
 
@@ -278,6 +331,26 @@ fn timing_graph(ui: &mut Ui, timings: &TimingHistory) {
             ui.colored_label(pass_colour(k), format!("{name:<16} {ms:7.3} ms"));
         }
     }
+}
+
+/// Object space's tile counters: visible, shaded, reused and new tiles, and
+/// overshading (visible tile texels per screen pixel, the study's measure;
+/// after reuse, the shaded ones per pixel), as `bench` reports them.
+fn tile_counters(ui: &mut Ui, timings: &TimingHistory) {
+    let c = timings.counters();
+    let get = |name: &str| c.get(name).copied();
+    let (Some(visible), Some(shaded), Some(reused), Some(new), Some(overshading), Some(shaded_per_pixel)) = (
+        get("visible_tiles"),
+        get("shaded_tiles"),
+        get("reused_tiles"),
+        get("new_tiles"),
+        get("overshading"),
+        get("shaded_texels_per_pixel"),
+    ) else {
+        return;
+    };
+    ui.monospace(format!("tiles {visible:.0} visible, {shaded:.0} shaded, {reused:.0} reused, {new:.0} new"));
+    ui.monospace(format!("overshading {overshading:.2} texels/pixel ({shaded_per_pixel:.2} shaded)"));
 }
 
 fn counters(ui: &mut Ui, timings: &TimingHistory) {

@@ -22,6 +22,7 @@
 //! frames later.
 
 pub mod atlas;
+pub mod atlas_view;
 pub mod budget;
 pub mod cpu;
 pub mod debug;
@@ -57,6 +58,7 @@ use crate::gpu::readback::ReadbackRing;
 use crate::scene::{Camera, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 use atlas::{AtlasError, AtlasLayout, PagePool};
+use atlas_view::{AtlasPages, AtlasPagesError, AtlasViewPass, draw_atlas_pages};
 use gather::{GatherPass, gather};
 use mark::{MarkPass, mark_backed_pages, mark_tiles};
 use paging::{PagingPass, back_pages, evict_beyond};
@@ -74,7 +76,7 @@ pub const SHARED_WGSL: [ShaderSource; 2] = [
 
 /// The object-space pass shaders, for the test that validates every shader.
 pub const PASS_SHADERS: &[ShaderSource] =
-    &[mark::SHADER, paging::SHADER, trimap::SHADER, shade::SHADER, gather::SHADER];
+    &[mark::SHADER, paging::SHADER, trimap::SHADER, shade::SHADER, gather::SHADER, atlas_view::SHADER];
 
 /// Texture sides that texel densities clamp to (`--texture-size` may go to
 /// [`atlas::MAX_TEXTURE_SIZE`]).
@@ -109,6 +111,10 @@ pub fn default_atlas_texels(pixels: u64) -> u64 {
     (texels as u64).max(MIN_DEFAULT_ATLAS_TEXELS)
 }
 
+/// The largest physical atlas `--atlas-budget` takes, Mi texels (192 GiB
+/// with the triangle maps: past any adapter's memory).
+pub const MAX_ATLAS_BUDGET_MI: u64 = 1 << 14;
+
 /// Most virtual page numbers: a page directory of 32 MiB (a word per 16
 /// pages) and 16 MiB of page request bits; 8 G virtual texels at pages of 8.
 const MAX_VIRTUAL_PAGES: u64 = 1 << 27;
@@ -133,10 +139,15 @@ pub enum DebugView {
     TileMask = 3,
     /// Cache age of the tile: black = shaded this frame, white = `reuse` frames old.
     CacheAge = 4,
+    /// One object's virtual shading texture at one mip level, through the
+    /// page table: backed pages show their shades, the others a dark
+    /// checker ([`atlas_view`]).
+    AtlasPages = 5,
 }
 
 impl DebugView {
-    pub const ALL: [Self; 5] = [Self::Shade, Self::ChartUv, Self::MipLevel, Self::TileMask, Self::CacheAge];
+    pub const ALL: [Self; 6] =
+        [Self::Shade, Self::ChartUv, Self::MipLevel, Self::TileMask, Self::CacheAge, Self::AtlasPages];
 
     /// The name `--view` takes.
     pub fn name(self) -> &'static str {
@@ -146,6 +157,7 @@ impl DebugView {
             Self::MipLevel => "mip-level",
             Self::TileMask => "tile-mask",
             Self::CacheAge => "cache-age",
+            Self::AtlasPages => "atlas-pages",
         }
     }
 
@@ -156,6 +168,7 @@ impl DebugView {
             Self::MipLevel => "VIEW_MIP_LEVEL",
             Self::TileMask => "VIEW_TILE_MASK",
             Self::CacheAge => "VIEW_CACHE_AGE",
+            Self::AtlasPages => "VIEW_ATLAS_PAGES",
         }
     }
 }
@@ -410,6 +423,9 @@ pub struct ObjectSpace {
     trimap: TrimapPass,
     shade: ShadePass,
     gather: GatherPass,
+    /// With `--view atlas-pages`: the pass drawing `atlas_pages` over the frame.
+    atlas_view: Option<AtlasViewPass>,
+    atlas_pages: AtlasPages,
     grid: WorldGrid,
     readback: ReadbackRing<u64>,
     /// Frames rendered so far; stamps are `frames + 1` so that 0 means never.
@@ -534,6 +550,10 @@ impl ObjectSpace {
             trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather,
+            atlas_view: (config.view == DebugView::AtlasPages)
+                .then(|| AtlasViewPass::new(device, shaders, scene, &res, targets))
+                .transpose()?,
+            atlas_pages: AtlasPages::default(),
             grid,
             res,
             layout,
@@ -550,6 +570,14 @@ impl ObjectSpace {
 
     pub fn config(&self) -> &ObjectSpaceConfig {
         &self.config
+    }
+
+    /// The object and mip level `--view atlas-pages` shows from the next
+    /// frame on (checked against the atlas layout).
+    pub fn set_atlas_pages(&mut self, pages: AtlasPages) -> Result<(), AtlasPagesError> {
+        pages.check(&self.layout)?;
+        self.atlas_pages = pages;
+        Ok(())
     }
 
     /// Renders the extra views' visibility and marks their tiles; returns
@@ -593,6 +621,9 @@ impl ObjectSpace {
         self.shade.rebind(frame.device, &self.res);
         self.gather.rebind(frame.device, &self.res);
         self.trimap.rebind(frame.device, &self.res);
+        if let Some(view) = &mut self.atlas_view {
+            view.rebind(frame.device, &self.res);
+        }
     }
 
     /// The world grid (its last build can be read back).
@@ -653,6 +684,9 @@ impl Pipeline for ObjectSpace {
         for (k, group) in views.iter().enumerate() {
             let mut view = frame.with_scene_group(group);
             gather(&mut view, &self.gather, &self.res, &self.grid.grid, k + 1);
+        }
+        if let Some(pass) = &self.atlas_view {
+            draw_atlas_pages(frame, pass, &self.res, self.atlas_pages);
         }
         let counter_bytes = TileCounter::SLOTS as u64 * 4;
         self.readback.copy(frame.device, frame.encoder, &self.res.counters, counter_bytes, frame.number);
