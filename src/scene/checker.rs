@@ -38,7 +38,7 @@ pub fn uv_checker(name: &str, tint: Vec3, size: u32, cells: u32) -> Texture {
     // light or dark; the texture is rows of these.
     let row = |first: [u8; 4], second: [u8; 4]| -> Vec<u8> {
         (0..size)
-            .flat_map(|x| match (x % cell == 0, (x / cell) % 2 == 0) {
+            .flat_map(|x| match (x % cell == 0, (x / cell).is_multiple_of(2)) {
                 (true, _) => line,
                 (false, true) => first,
                 (false, false) => second,
@@ -50,7 +50,7 @@ pub fn uv_checker(name: &str, tint: Vec3, size: u32, cells: u32) -> Texture {
     for y in 0..size {
         let r = if y % cell == 0 {
             &line_row
-        } else if (y / cell) % 2 == 0 {
+        } else if (y / cell).is_multiple_of(2) {
             &even_row
         } else {
             &odd_row
