@@ -17,12 +17,21 @@ fn main() {
     for path in ["src", "Cargo.toml", "build.rs"] {
         println!("cargo:rerun-if-changed={path}");
     }
+    // What moves HEAD's commit: HEAD itself, the branch it names (not every
+    // branch: other worktrees commit to theirs) and packed refs. Only paths
+    // that exist: cargo reruns the script on every build while a watched
+    // path is missing (a repository often has no `packed-refs`).
+    let mut watched = Vec::new();
     if let Some(dir) = git(&["rev-parse", "--git-dir"]) {
-        println!("cargo:rerun-if-changed={dir}/HEAD");
-        println!("cargo:rerun-if-changed={dir}/index");
+        watched.extend([format!("{dir}/HEAD"), format!("{dir}/index")]);
     }
     if let Some(dir) = git(&["rev-parse", "--git-common-dir"]) {
-        println!("cargo:rerun-if-changed={dir}/refs/heads");
-        println!("cargo:rerun-if-changed={dir}/packed-refs");
+        if let Some(branch) = git(&["symbolic-ref", "-q", "HEAD"]) {
+            watched.push(format!("{dir}/{branch}"));
+        }
+        watched.push(format!("{dir}/packed-refs"));
+    }
+    for path in watched.iter().filter(|p| std::path::Path::new(p).exists()) {
+        println!("cargo:rerun-if-changed={path}");
     }
 }

@@ -39,7 +39,9 @@
 //! - Errors carry the file's path. Accessors are read by this module with
 //!   every byte range, count and index checked (the `gltf` crate's readers
 //!   can panic or read garbage on malformed files), and the GLB header, URIs
-//!   and buffer views are checked before the `gltf` crate uses them.
+//!   and buffer views are checked before the `gltf` crate uses them. An
+//!   accessor without a buffer view (sparse values over zeros) may have at
+//!   most 2^20 elements, since the file's bytes do not bound its size.
 //! - Extensions other than `KHR_lights_punctual` and
 //!   `KHR_materials_emissive_strength`, skins, morph targets and animations
 //!   are ignored with a warning (`extensionsRequired` of any other extension
@@ -64,6 +66,12 @@ const MAX_ACCESSOR_BYTES: usize = 1 << 30;
 
 /// The extensions the loader reads.
 const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+
+/// Accessors without a buffer view (zeros, but for their sparse values) with
+/// more elements than this are refused: their size is not backed by bytes of
+/// the file, so a 537-byte file declaring 60 million sparse positions took
+/// 4 GB and over 10 s (the fuzzer's timeout) before this limit.
+const MAX_UNBACKED_ACCESSOR_ELEMENTS: usize = 1 << 20;
 
 /// Warns about what the file uses and the renderer ignores: extensions
 /// besides [`SUPPORTED_EXTENSIONS`] (`extensionsRequired` ones are already
@@ -203,9 +211,9 @@ fn check_uris_and_views(document: &Document) -> Result<(), String> {
             ::gltf::buffer::Source::Uri(uri) => Some(uri),
             ::gltf::buffer::Source::Bin => None,
         })
-        .chain(document.images().filter_map(|i| match i.source() {
-            ::gltf::image::Source::Uri { uri, .. } => Some(uri),
-            ::gltf::image::Source::View { .. } => None,
+        .chain(document.images().filter_map(|i| match image_source(document, &i) {
+            Ok(::gltf::image::Source::Uri { uri, .. }) => Some(uri),
+            _ => None,
         }));
     for uri in uris {
         if !uri.contains(':') && percent_decode(uri).is_none() {
@@ -226,6 +234,18 @@ fn check_uris_and_views(document: &Document) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// `image.source()`, which the `gltf` crate unwraps unchecked (its validation
+/// checks neither): an image needs a `uri` or a `bufferView`, and a
+/// `bufferView` needs a `mimeType`.
+fn image_source<'a>(document: &Document, image: &::gltf::Image<'a>) -> Result<::gltf::image::Source<'a>, String> {
+    let json = &document.as_json().images[image.index()];
+    match (&json.uri, &json.buffer_view, &json.mime_type) {
+        (_, Some(_), None) => Err("it has a bufferView but no mimeType".into()),
+        (None, None, _) => Err("it has neither a uri nor a bufferView".into()),
+        _ => Ok(image.source()),
+    }
 }
 
 /// Reads every buffer (data URI, external file or GLB chunk). A missing
@@ -616,13 +636,16 @@ impl Builder<'_> {
         if let Some(&known) = self.images.get(&image.index()) {
             return known;
         }
-        let name = match image.source() {
-            ::gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => uri.to_string(),
+        let source = image_source(self.document, &image);
+        let name = match source {
+            Ok(::gltf::image::Source::Uri { uri, .. }) if !uri.starts_with("data:") => uri.to_string(),
             _ => image.name().map_or_else(|| format!("image{}", image.index()), str::to_string),
         };
-        let decoded = ::gltf::image::Data::from_source(image.source(), Some(self.base), self.buffers)
-            .map_err(|e| e.to_string())
-            .and_then(|data| to_rgba8(&data));
+        let decoded = source.and_then(|source| {
+            ::gltf::image::Data::from_source(source, Some(self.base), self.buffers)
+                .map_err(|e| e.to_string())
+                .and_then(|data| to_rgba8(&data))
+        });
         let texture = match decoded {
             Ok(rgba8) => {
                 let (width, height) = rgba8.1;
@@ -751,6 +774,14 @@ fn accessor_bytes(accessor: &Accessor, buffers: &[::gltf::buffer::Data]) -> Resu
             gather(view_bytes(&view, buffers)?, accessor.offset(), stride, element, count).ok_or_else(|| {
                 format!("accessor {index}: {count} elements do not fit in buffer view {}", view.index())
             })?
+        }
+        // Zeros but for the sparse values: not backed by the file's bytes,
+        // so its size is the file's word alone.
+        None if count > MAX_UNBACKED_ACCESSOR_ELEMENTS => {
+            return Err(format!(
+                "accessor {index}: {count} elements without a buffer view (zeros but for the sparse values); \
+                 at most {MAX_UNBACKED_ACCESSOR_ELEMENTS} are accepted"
+            ));
         }
         None => vec![0; element * count],
     };
