@@ -74,3 +74,27 @@ fn gltf_huge_sparse_accessor_without_buffer_view() {
     assert!(message.contains("without a buffer view") && message.contains("60000000"), "{message}");
     assert!(start.elapsed().as_secs_f64() < 1.0, "refused in {:?}", start.elapsed());
 }
+
+/// Not found by the fuzzer (its inputs name no files), found reading the
+/// loader after it: a buffer or image URI naming a device or a folder was
+/// read to its end by the `gltf` crate (`file:///dev/zero` never ends). Such
+/// URIs are now refused, naming the URI.
+#[test]
+fn gltf_uris_naming_devices_or_folders_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().display().to_string();
+    for (what, file) in [
+        (
+            "buffer",
+            r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 36, "uri": "file:///dev/zero"}]}"#.to_string(),
+        ),
+        ("image", textured_triangle(r#"{"uri": "file:///dev/zero"}"#)),
+        ("image folder", textured_triangle(&format!(r#"{{"uri": "file://{folder}"}}"#))),
+    ] {
+        let start = std::time::Instant::now();
+        let err = gltf::load(&write(dir.path(), "device.gltf", file)).expect_err(what);
+        let message = err.to_string();
+        assert!(message.contains("not a regular file"), "{what}: {message}");
+        assert!(start.elapsed().as_secs_f64() < 1.0, "{what}: refused in {:?}", start.elapsed());
+    }
+}

@@ -108,6 +108,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     };
     let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
     check_uris_and_views(&document).map_err(|m| parse_error(path, m))?;
+    check_external_files(&document, &base).map_err(|m| parse_error(path, m))?;
     warn_ignored(&document, path);
     let buffers = load_buffers(&document, &base, blob, path)?;
 
@@ -231,6 +232,27 @@ fn check_uris_and_views(document: &Document) -> Result<(), String> {
                 view.buffer().index(),
                 view.buffer().length()
             ));
+        }
+    }
+    Ok(())
+}
+
+/// Every external buffer and image the file names is a regular file (or
+/// missing: that is reported where it is read). The `gltf` crate reads a
+/// URI's file to its end, so `file:///dev/zero` would never finish.
+fn check_external_files(document: &Document, base: &Path) -> Result<(), String> {
+    let buffers = document.buffers().filter_map(|b| match b.source() {
+        ::gltf::buffer::Source::Uri(uri) => Some(uri),
+        ::gltf::buffer::Source::Bin => None,
+    });
+    let images = document.images().filter_map(|i| match image_source(document, &i) {
+        Ok(::gltf::image::Source::Uri { uri, .. }) => Some(uri),
+        _ => None,
+    });
+    for uri in buffers.chain(images).filter(|uri| !uri.starts_with("data:")) {
+        let file = uri_path(base, uri);
+        if fs::metadata(&file).is_ok_and(|m| !m.is_file()) {
+            return Err(format!("URI '{uri}' names {}, which is not a regular file", file.display()));
         }
     }
     Ok(())
