@@ -197,6 +197,9 @@ impl Renderer {
         }
         let mut shaders = ShaderLibrary::new()?;
         let scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
+        if scene_gpu.material_textures {
+            shaders.define(crate::shaders::MATERIAL_TEXTURES);
+        }
         let targets = Targets::new(&ctx.device, width, height);
         let (device, queue) = (&ctx.device, &ctx.queue);
         let pipeline: Box<dyn Pipeline> = match &options.pipeline {

@@ -73,6 +73,9 @@ pub struct SceneGpu {
     pub triangle_charts: wgpu::Buffer,
     /// The scene's [`Scene::cull_back_faces`].
     pub cull_back_faces: bool,
+    /// Some object has an emissive, metallic-roughness or occlusion texture
+    /// (the shaders are composed with [`crate::shaders::MATERIAL_TEXTURES`]).
+    pub material_textures: bool,
     /// Shadow maps of the shadowed lights (bindings 8-11).
     pub shadow_atlas: ShadowAtlas,
     lights: GrowableBuffer,
@@ -139,6 +142,9 @@ impl SceneGpu {
                 }
             })
             .collect();
+        let material_textures = object_data
+            .iter()
+            .any(|o| [o.emissive_layer, o.metal_rough_layer, o.occlusion_layer].iter().any(|&l| l != NO_TEXTURE));
         let storage = |label, contents: &[u8], extra| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -204,6 +210,7 @@ impl SceneGpu {
             object_data,
             triangle_count: scene.triangle_count() as u64,
             cull_back_faces: scene.cull_back_faces,
+            material_textures,
             triangle_charts,
             shadow_atlas,
             lights,

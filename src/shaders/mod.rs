@@ -82,9 +82,19 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     all
 }
 
+/// Defined when some object of the scene has an emissive, metallic-roughness
+/// or occlusion texture ([`ShaderLibrary::define`]): the shaders then sample
+/// them and the raster G-buffer stores their texels. Without it that code is
+/// not compiled at all, so scenes without such textures do not pay for it
+/// (measured on the H100: 3-7 % in every pipeline, 20 % in the two that
+/// write the raster G-buffer).
+pub const MATERIAL_TEXTURES: &str = "MATERIAL_TEXTURES";
+
 /// Composes pass shaders with the shared modules.
 pub struct ShaderLibrary {
     composer: Composer,
+    /// Defined for every shader this library composes.
+    defs: Vec<&'static str>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -110,12 +120,21 @@ impl ShaderLibrary {
                 return Err(error(&composer, file, e));
             }
         }
-        Ok(Self { composer })
+        Ok(Self { composer, defs: Vec::new() })
+    }
+
+    /// Defines `def` for every shader composed from now on (for example
+    /// [`MATERIAL_TEXTURES`] for the scene a renderer draws).
+    pub fn define(&mut self, def: &'static str) {
+        if !self.defs.contains(&def) {
+            self.defs.push(def);
+        }
     }
 
     /// The composed, validated naga module of a pass shader.
     pub fn compose(&mut self, shader: ShaderSource) -> Result<wgpu::naga::Module, ShaderError> {
-        let shader_defs = shader.defs.iter().map(|d| (d.to_string(), ShaderDefValue::Bool(true))).collect();
+        let defs = shader.defs.iter().chain(&self.defs);
+        let shader_defs = defs.map(|d| (d.to_string(), ShaderDefValue::Bool(true))).collect();
         let module = self.composer.make_naga_module(NagaModuleDescriptor {
             source: shader.source,
             file_path: shader.file,
@@ -154,18 +173,24 @@ fn error(composer: &Composer, file: &str, e: ComposerError) -> ShaderError {
 mod tests {
     use super::*;
 
-    /// Every pass shader composes and passes naga's validation, without a GPU.
+    /// Every pass shader composes and passes naga's validation, without a GPU,
+    /// with and without the material textures.
     #[test]
     fn all_shaders_compose_and_validate() {
-        let mut lib = ShaderLibrary::new().expect("shared modules compose");
-        for shader in pass_shaders() {
-            let module = lib.compose(shader).unwrap_or_else(|e| panic!("{e}"));
-            wgpu::naga::valid::Validator::new(
-                wgpu::naga::valid::ValidationFlags::all(),
-                wgpu::naga::valid::Capabilities::all(),
-            )
-            .validate(&module)
-            .unwrap_or_else(|e| panic!("{}: {e:?}", shader.file));
+        for materials in [false, true] {
+            let mut lib = ShaderLibrary::new().expect("shared modules compose");
+            if materials {
+                lib.define(MATERIAL_TEXTURES);
+            }
+            for shader in pass_shaders() {
+                let module = lib.compose(shader).unwrap_or_else(|e| panic!("{e}"));
+                wgpu::naga::valid::Validator::new(
+                    wgpu::naga::valid::ValidationFlags::all(),
+                    wgpu::naga::valid::Capabilities::all(),
+                )
+                .validate(&module)
+                .unwrap_or_else(|e| panic!("{} (material textures: {materials}): {e:?}", shader.file));
+            }
         }
     }
 }

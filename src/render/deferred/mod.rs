@@ -117,7 +117,10 @@ impl Pipeline for Deferred {
         PipelineReport::new(PipelineConfig::Deferred(self.config))
             .memory("gbuffer", self.geometry.gbuffer.bytes())
             .memory("light_volumes", self.volumes.bytes())
-            .setup("gbuffer_bytes_per_pixel", gbuffer::BYTES_PER_PIXEL_WITH_DEPTH)
+            .setup(
+                "gbuffer_bytes_per_pixel",
+                gbuffer::bytes_per_pixel_with_depth(self.geometry.gbuffer.material_textures),
+            )
             .setup("sphere_triangles", sphere)
             .setup("cone_triangles", cone)
     }

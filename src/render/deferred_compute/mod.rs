@@ -157,7 +157,7 @@ impl Pipeline for DeferredCompute {
         let report = match &self.surfaces {
             Surfaces::Gbuffer(stage) => report
                 .memory("gbuffer", stage.gbuffer.bytes())
-                .setup("gbuffer_bytes_per_pixel", gbuffer::BYTES_PER_PIXEL_WITH_DEPTH),
+                .setup("gbuffer_bytes_per_pixel", gbuffer::bytes_per_pixel_with_depth(stage.gbuffer.material_textures)),
             Surfaces::Visibility { ids, pass } => {
                 report.memory("visibility", ids.bytes()).memory("visibility_raster", pass.bytes())
             }

@@ -29,9 +29,11 @@ fn no_material_texels() -> MaterialTexels {
 
 // The material texels at `uv` (UV0), sampled at mip `lod` (no derivatives:
 // valid in compute and in non-uniform control flow). Objects without a
-// texture skip its sample.
+// texture skip its sample; without MATERIAL_TEXTURES (no object of the scene
+// has any) none is sampled or even compiled.
 fn material_texels_level(o: Object, uv: vec2f, lod: f32) -> MaterialTexels {
     var t = no_material_texels();
+#ifdef MATERIAL_TEXTURES
     if o.emissive_layer != NO_TEXTURE {
         t.emissive = textureSampleLevel(albedo, albedo_sampler, uv, o.emissive_layer, lod).rgb;
     }
@@ -41,6 +43,7 @@ fn material_texels_level(o: Object, uv: vec2f, lod: f32) -> MaterialTexels {
     if o.occlusion_layer != NO_TEXTURE {
         t.occlusion = textureSampleLevel(linear_maps, albedo_sampler, uv, o.occlusion_layer, lod).r;
     }
+#endif
     return t;
 }
 
@@ -49,6 +52,7 @@ fn material_texels_level(o: Object, uv: vec2f, lod: f32) -> MaterialTexels {
 // so that these samples, like implicit ones, filter the pixel's footprint).
 fn material_texels_grad(o: Object, uv: vec2f, ddx: vec2f, ddy: vec2f) -> MaterialTexels {
     var t = no_material_texels();
+#ifdef MATERIAL_TEXTURES
     if o.emissive_layer != NO_TEXTURE {
         t.emissive = textureSampleGrad(albedo, albedo_sampler, uv, o.emissive_layer, ddx, ddy).rgb;
     }
@@ -58,6 +62,7 @@ fn material_texels_grad(o: Object, uv: vec2f, ddx: vec2f, ddy: vec2f) -> Materia
     if o.occlusion_layer != NO_TEXTURE {
         t.occlusion = textureSampleGrad(linear_maps, albedo_sampler, uv, o.occlusion_layer, ddx, ddy).r;
     }
+#endif
     return t;
 }
 
@@ -84,6 +89,7 @@ fn object_surface(o: Object, t: MaterialTexels) -> Surface {
     s.model = view.shading;
     s.emission = o.emissive;
     s.occlusion = 1.0;
+#ifdef MATERIAL_TEXTURES
     if o.emissive_layer != NO_TEXTURE {
         s.emission = o.emissive * t.emissive;
     }
@@ -95,6 +101,7 @@ fn object_surface(o: Object, t: MaterialTexels) -> Surface {
     if o.occlusion_layer != NO_TEXTURE {
         s.occlusion = 1.0 + o.occlusion_strength * (t.occlusion - 1.0);
     }
+#endif
     return s;
 }
 

@@ -25,10 +25,12 @@ struct GbufferOut {
     @location(0) normal: vec2f,
     @location(1) albedo_color: vec4f,
     @location(2) object: u32,
+#ifdef MATERIAL_TEXTURES
     // The emissive texel (sRGB target) and the occlusion texel (alpha, linear).
     @location(3) emission_occlusion: vec4f,
     // The metallic and roughness texels.
     @location(4) metal_rough: vec2f,
+#endif
 }
 
 @vertex
@@ -48,11 +50,13 @@ fn fs_main(in: VertexOut) -> GbufferOut {
     let o = objects[in.object];
     var out: GbufferOut;
     let normal_texel = textureSample(linear_maps, albedo_sampler, in.uv0, sample_layer(o.normal_layer)).rgb;
-    let material = material_texels_grad(o, in.uv0, dpdx(in.uv0), dpdy(in.uv0));
     out.normal = oct_encode(mapped_normal(in.normal, in.tangent, normal_texel, o.normal_layer));
     out.albedo_color = vec4f(textureSample(albedo, albedo_sampler, in.uv0, o.albedo_layer).rgb * o.base_color.rgb, 1.0);
     out.object = in.object;
+#ifdef MATERIAL_TEXTURES
+    let material = material_texels_grad(o, in.uv0, dpdx(in.uv0), dpdy(in.uv0));
     out.emission_occlusion = vec4f(material.emissive, material.occlusion);
     out.metal_rough = material.metal_rough;
+#endif
     return out;
 }

@@ -48,11 +48,13 @@ fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
     let o = objects[object];
     var t: GbufferTexel;
     var material = no_material_texels();
+#ifdef MATERIAL_TEXTURES
     if o.emissive_layer != NO_TEXTURE || o.metal_rough_layer != NO_TEXTURE || o.occlusion_layer != NO_TEXTURE {
         // Objects without material textures skip the loads.
         let e = textureLoad(gbuffer_emission_occlusion, pixel, 0);
         material = MaterialTexels(e.rgb, textureLoad(gbuffer_metal_rough, pixel, 0).xy, e.a);
     }
+#endif
     t.surface = object_surface(o, material);
     t.surface.position = world_position(pixel, depth);
     t.surface.normal = oct_decode(textureLoad(gbuffer_normal, pixel, 0).xy);

@@ -61,11 +61,22 @@ pub const METAL_ROUGH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unor
 /// The G-buffer's own targets, in the order the G-buffer pass writes them.
 const FORMATS: [wgpu::TextureFormat; 5] =
     [NORMAL_FORMAT, ALBEDO_FORMAT, OBJECT_FORMAT, EMISSION_OCCLUSION_FORMAT, METAL_ROUGH_FORMAT];
-/// Bytes per pixel of the G-buffer's own targets (normal, albedo, object,
-/// emission and occlusion, metallic and roughness).
-pub const BYTES_PER_PIXEL: u64 = 18;
+/// Bytes per pixel of the G-buffer's own targets: normal, albedo, object,
+/// and with material textures ([`crate::shaders::MATERIAL_TEXTURES`])
+/// emission and occlusion, metallic and roughness.
+pub const fn bytes_per_pixel(material_textures: bool) -> u64 {
+    if material_textures { 18 } else { 12 }
+}
 /// Bytes per pixel including the frame's depth target, which it shares.
-pub const BYTES_PER_PIXEL_WITH_DEPTH: u64 = BYTES_PER_PIXEL + 4;
+pub const fn bytes_per_pixel_with_depth(material_textures: bool) -> u64 {
+    bytes_per_pixel(material_textures) + 4
+}
+
+/// The targets the G-buffer pass writes: the material ones only for scenes
+/// with material textures.
+fn formats(material_textures: bool) -> &'static [wgpu::TextureFormat] {
+    &FORMATS[..if material_textures { 5 } else { 3 }]
+}
 
 gpu_struct! {
     /// What the lighting passes need to rebuild positions from depth
@@ -111,15 +122,19 @@ pub struct GBuffer {
     /// roughness; visible to fragment and compute stages.
     pub read_layout: wgpu::BindGroupLayout,
     pub read_group: wgpu::BindGroup,
+    /// The material targets are written (the scene has material textures).
+    pub material_textures: bool,
 }
 
 impl GBuffer {
-    /// Targets of the size of `targets`, read together with its depth.
-    pub fn new(device: &wgpu::Device, targets: &Targets) -> Self {
-        let make = |label, format| {
+    /// Targets of the size of `targets`, read together with its depth. The
+    /// material targets are 1x1 placeholders (bound, never read) for scenes
+    /// without material textures.
+    pub fn new(device: &wgpu::Device, targets: &Targets, material_textures: bool) -> Self {
+        let make_sized = |label, format, (width, height)| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
-                size: wgpu::Extent3d { width: targets.width, height: targets.height, depth_or_array_layers: 1 },
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
@@ -128,13 +143,15 @@ impl GBuffer {
                 view_formats: &[],
             })
         };
+        let make = |label, format| make_sized(label, format, (targets.width, targets.height));
+        let material_size = if material_textures { (targets.width, targets.height) } else { (1, 1) };
         let (normal, albedo, object) = (
             make("gbuffer normal", NORMAL_FORMAT),
             make("gbuffer albedo", ALBEDO_FORMAT),
             make("gbuffer object", OBJECT_FORMAT),
         );
-        let emission_occlusion = make("gbuffer emission occlusion", EMISSION_OCCLUSION_FORMAT);
-        let metal_rough = make("gbuffer metal rough", METAL_ROUGH_FORMAT);
+        let emission_occlusion = make_sized("gbuffer emission occlusion", EMISSION_OCCLUSION_FORMAT, material_size);
+        let metal_rough = make_sized("gbuffer metal rough", METAL_ROUGH_FORMAT, material_size);
         let views = [&normal, &albedo, &object, &emission_occlusion, &metal_rough]
             .map(|t: &wgpu::Texture| t.create_view(&Default::default()));
         let unproject = device.create_buffer(&wgpu::BufferDescriptor {
@@ -173,12 +190,23 @@ impl GBuffer {
                 wgpu::BindingResource::TextureView(&views[4]),
             ],
         );
-        Self { normal, albedo, object, emission_occlusion, metal_rough, views, unproject, read_layout, read_group }
+        Self {
+            normal,
+            albedo,
+            object,
+            emission_occlusion,
+            metal_rough,
+            views,
+            unproject,
+            read_layout,
+            read_group,
+            material_textures,
+        }
     }
 
     /// GPU memory of the G-buffer's own targets (depth belongs to the frame).
     pub fn bytes(&self) -> u64 {
-        self.normal.width() as u64 * self.normal.height() as u64 * BYTES_PER_PIXEL
+        self.normal.width() as u64 * self.normal.height() as u64 * bytes_per_pixel(self.material_textures)
     }
 }
 
@@ -202,7 +230,7 @@ impl GbufferPass {
         let raster = SceneRaster {
             shader: SHADER,
             vertex_entry: "vs_main",
-            fragment: Some(("fs_main", &FORMATS)),
+            fragment: Some(("fs_main", formats(scene.material_textures))),
             depth,
             groups: &[],
             blend: None,
@@ -218,7 +246,9 @@ impl GbufferPass {
 pub fn gbuffer(frame: &mut Frame, pass: &GbufferPass, out: &GBuffer) {
     frame.queue.write_buffer(&out.unproject, 0, bytemuck::bytes_of(&GpuUnproject::new(frame.view)));
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
-    let color = out.views.each_ref().map(|view| color_attachment(view, wgpu::Color::TRANSPARENT));
+    let written = formats(out.material_textures).len();
+    let color: Vec<_> =
+        out.views[..written].iter().map(|view| color_attachment(view, wgpu::Color::TRANSPARENT)).collect();
     let mut rp = frame.render_pass("gbuffer", &color, Some(depth_attachment(targets, !pass.after_prepass)));
     draw_objects(&mut rp, scene, visible, &pass.pipeline);
 }
@@ -243,7 +273,7 @@ impl GbufferStage {
     ) -> Result<Self, ShaderError> {
         let prepass = depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
         let pass = GbufferPass::new(device, shaders, scene, depth_prepass)?;
-        Ok(Self { prepass, pass, gbuffer: GBuffer::new(device, targets) })
+        Ok(Self { prepass, pass, gbuffer: GBuffer::new(device, targets, scene.material_textures) })
     }
 }
 
