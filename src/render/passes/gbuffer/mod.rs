@@ -1,6 +1,7 @@
 //! G-buffer pass, shared by the deferred pipelines: rasterizes the visible
 //! objects (after an optional depth pre-pass, testing `Equal`) into a slim
-//! G-buffer, 22 bytes per pixel with the frame's depth:
+//! G-buffer, 16 bytes per pixel with the frame's depth, 22 in scenes with
+//! material textures (the last two targets):
 //!
 //! | target | format | holds |
 //! | --- | --- | --- |
@@ -23,8 +24,10 @@
 //! their texels are stored (6 bytes, at the textures' own 8 bits; the
 //! emissive texel in sRGB, as its texture), and the lighting passes combine
 //! them with the object's factors in `object_surface`, as every pipeline
-//! does. Every pixel writes them; objects without those textures light
-//! exactly as before (the lighting passes do not load their texels). Half
+//! does. Only scenes with such textures have these targets
+//! ([`crate::shaders::MATERIAL_TEXTURES`]): there every pixel writes them,
+//! and objects without those textures light exactly as before (the lighting
+//! passes do not load their texels). Half
 //! floats keep the encoded normal within 0.06 degrees (tested); `Rg16Snorm`
 //! would be finer but needs an optional feature. The lighting passes read
 //! it through `gbuffer_read.wgsl` (`shadespace::gbuffer`, bind group 1).
