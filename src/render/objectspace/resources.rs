@@ -95,9 +95,9 @@ pub struct Resources {
     tile_size: u32,
     virtual_pages: u32,
     request_tile_base: u32,
-    chunks: u32,
-    /// Slots of `request_list`.
-    request_capacity: u32,
+    /// Physical pages at the whole budget: the page table's chunks and the
+    /// request list are sized for them, so a resize leaves them as they are.
+    budget_pages: u32,
 }
 
 /// What the atlas holds per physical page and per physical tile: the shades
@@ -298,8 +298,7 @@ impl Resources {
             layout,
             virtual_pages: virtual_pages as u32,
             request_tile_base: request_tile_base as u32,
-            chunks,
-            request_capacity: pool.pages,
+            budget_pages: pool.pages,
         };
         let main = res.visibility.view.clone();
         res.add_view(device, &main);
@@ -371,7 +370,7 @@ impl Resources {
     /// Chunks of the page table (for the budget's pages, whatever the
     /// atlas's size now).
     pub fn chunk_count(&self) -> u32 {
-        self.chunks
+        table_chunks(self.budget_pages)
     }
 
     /// Shade queue capacity: every tile of the physical atlas.
@@ -386,9 +385,9 @@ impl Resources {
     pub fn page_table_bytes(&self) -> u64 {
         let block_pages = super::atlas::BLOCK_PAGES as u64;
         let directory = self.virtual_pages as u64 / block_pages * 4;
-        let chunks = self.chunks as u64 * (block_pages * 4 + 8 + 4);
+        let chunks = self.chunk_count() as u64 * (block_pages * 4 + 8 + 4);
         let request_bits = self.page_requests.size();
-        let request_list = self.request_capacity as u64 * 8;
+        let request_list = self.budget_pages as u64 * 8;
         directory + chunks + request_bits + request_list + self.pool.pages as u64 * (4 + 4 + 4 + 16)
     }
 
@@ -436,8 +435,8 @@ impl Resources {
             layer_pages: self.pool.layer_pages,
             virtual_pages: self.virtual_pages,
             request_tile_base: self.request_tile_base,
-            table_chunks: self.chunks,
-            request_capacity: self.request_capacity,
+            table_chunks: self.chunk_count(),
+            request_capacity: self.budget_pages,
             pad_c: 0,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
