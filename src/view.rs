@@ -50,6 +50,12 @@ pub struct ViewArgs {
     /// Start with the control panel hidden (F1 shows it).
     #[arg(help_heading = "Viewer", long)]
     hide_ui: bool,
+    /// No window: run the same frame loop, painting the panel into an
+    /// offscreen texture of `--size` (needs `--frames` or `--script`). For
+    /// machines without a display, e.g. to compare the viewer's GPU times
+    /// with `bench` there (`--report`).
+    #[arg(help_heading = "Viewer", long)]
+    headless: bool,
     /// Save the last frame here (PNG, and a JSON sidecar beside it) and exit.
     #[arg(help_heading = "Viewer", long)]
     screenshot: Option<PathBuf>,
@@ -67,6 +73,8 @@ pub struct ViewArgs {
 /// equivalent `render` command.
 const VIEWER_FLAGS: [&str; 7] =
     ["--view", "--vsync", "--script", "--frames", "--screenshot", "--report", "--bookmarks"];
+/// The viewer's flags without a value, left out of the `render` command too.
+const VIEWER_SWITCHES: [&str; 2] = ["--hide-ui", "--headless"];
 /// Flags the viewer's settings replace in the `render` command.
 const SETTING_FLAGS: [&str; 14] = [
     "--pipeline",
@@ -90,6 +98,10 @@ const CAMERA_FLAGS: [&str; 5] = ["--camera", "--eye", "--target", "--orbit", "--
 const RATE_FLAGS: [&str; 2] = ["--shade-hz", "--frame-hz"];
 
 pub fn view(a: ViewArgs) -> Result<(), Failure> {
+    if a.headless && a.script.is_none() && a.frames.is_none() {
+        let why = "--headless needs --frames or --script: without a window nothing else ends the run";
+        return Err(Failure::Input(InputError(anyhow::anyhow!(why))));
+    }
     let session = ViewSession::new(&a.scene)?;
     let settings = Settings {
         atlas_pages: AtlasPages { object: a.atlas_object, level: a.atlas_level },
@@ -103,6 +115,7 @@ pub fn view(a: ViewArgs) -> Result<(), Failure> {
         script,
         frames: a.frames,
         hide_ui: a.hide_ui,
+        headless: a.headless,
         screenshot: a.screenshot,
         report: a.report,
         bookmarks: a.bookmarks,
@@ -334,7 +347,7 @@ fn checked<T>(r: Result<T, String>) -> anyhow::Result<T> {
 }
 
 /// `words` without the flags in `drop` and their values (`--flag value`
-/// or `--flag=value`); `--hide-ui` (no value) goes too.
+/// or `--flag=value`); `--hide-ui` and `--headless` (no value) go too.
 fn without_flags(words: &[String], drop: &[&str]) -> Vec<String> {
     let mut out = Vec::new();
     let mut skip_value = false;
@@ -342,7 +355,9 @@ fn without_flags(words: &[String], drop: &[&str]) -> Vec<String> {
         if std::mem::take(&mut skip_value) {
             continue;
         }
-        if w == "--hide-ui" || drop.iter().any(|f| w.strip_prefix(f).is_some_and(|rest| rest.starts_with('='))) {
+        if VIEWER_SWITCHES.contains(&w.as_str())
+            || drop.iter().any(|f| w.strip_prefix(f).is_some_and(|rest| rest.starts_with('=')))
+        {
             continue;
         }
         if drop.contains(&w.as_str()) {
@@ -375,7 +390,7 @@ mod tests {
     #[test]
     fn drops_flags_and_their_values() {
         let words: Vec<String> =
-            ["--scene", "voxels", "--pipeline=forward", "--seed", "3", "--hide-ui", "--size", "320x240"]
+            ["--scene", "voxels", "--pipeline=forward", "--seed", "3", "--hide-ui", "--size", "320x240", "--headless"]
                 .map(String::from)
                 .into();
         assert_eq!(without_flags(&words, &["--pipeline", "--seed"]), ["--scene", "voxels", "--size", "320x240"]);

@@ -2,7 +2,8 @@
 //! present (lavapipe in CI): a scripted run's screenshot matches `render`
 //! with the command its sidecar names, the panel is drawn when shown, and
 //! many pipeline and option switches neither crash nor grow host memory.
-//! Without Xvfb these tests print `skipped: Xvfb not installed` and pass.
+//! Without Xvfb these tests print `skipped: Xvfb not installed` and pass;
+//! the headless viewer's (`--headless`, no display at all) runs anyway.
 #![cfg(feature = "viewer")]
 
 use std::path::{Path, PathBuf};
@@ -66,10 +67,15 @@ fn xvfb(number: u32) -> Option<Xvfb> {
     Some(Xvfb { child, display })
 }
 
-/// Runs `shadespace ARGS` on `display`; panics with its output unless it exits 0.
-fn shadespace(display: &str, args: &[&str]) -> String {
+/// Runs `shadespace ARGS` on `display` (none: with no display in its
+/// environment); panics with its output unless it exits 0.
+fn shadespace(display: Option<&str>, args: &[&str]) -> String {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_shadespace"));
-    cmd.args(args).env("DISPLAY", display);
+    cmd.args(args);
+    match display {
+        Some(d) => cmd.env("DISPLAY", d),
+        None => cmd.env_remove("DISPLAY").env_remove("WAYLAND_DISPLAY"),
+    };
     // lavapipe's window-system code needs a runtime folder.
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
@@ -85,7 +91,7 @@ fn load(path: &Path) -> image::RgbaImage {
 }
 
 /// The `render` command a screenshot's sidecar names, run with `--out`.
-fn render_like(display: &str, shot: &Path, out: &Path) {
+fn render_like(shot: &Path, out: &Path) {
     let sidecar: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(shot.with_extension("json")).unwrap()).unwrap();
     let command = sidecar["render_command"].as_str().expect("sidecar has render_command");
@@ -94,13 +100,13 @@ fn render_like(display: &str, shot: &Path, out: &Path) {
     assert!(!command.contains('\''), "the test splits on spaces only: {command}");
     let mut args = words[1..].to_vec();
     args.extend(["--out", out.to_str().unwrap()]);
-    shadespace(display, &args);
+    shadespace(None, &args);
 }
 
-/// A scripted view: moves and turns away from the path's first camera,
-/// then a screenshot without the panel and one with it.
-fn check_screenshot_matches_render(display_number: u32, pipeline: &str) {
-    let Some(x) = xvfb(display_number) else { return };
+/// A scripted view in a window on `display` (none: headless): moves and
+/// turns away from the path's first camera, then a screenshot without the
+/// panel and one with it.
+fn check_screenshot_matches_render(display: Option<&str>, pipeline: &str) {
     let dir = tempfile::tempdir().unwrap();
     let (hidden, shown) = (dir.path().join("hidden.png"), dir.path().join("shown.png"));
     let script = serde_json::json!({ "steps": [
@@ -116,24 +122,19 @@ fn check_screenshot_matches_render(display_number: u32, pipeline: &str) {
     ]});
     let script_path = dir.path().join("script.json");
     std::fs::write(&script_path, script.to_string()).unwrap();
-    shadespace(
-        &x.display,
-        &[
-            "view",
-            "--scene",
-            "atrium",
-            "--pipeline",
-            pipeline,
-            "--size",
-            SIZE,
-            "--vsync",
-            "off",
-            "--script",
-            script_path.to_str().unwrap(),
-        ],
-    );
+    let report_path = dir.path().join("report.json");
+    let mut args = vec!["view", "--scene", "atrium", "--pipeline", pipeline, "--size", SIZE];
+    args.extend(["--script", script_path.to_str().unwrap(), "--report", report_path.to_str().unwrap()]);
+    args.extend(if display.is_some() { ["--vsync", "off"].as_slice() } else { ["--headless"].as_slice() });
+    shadespace(display, &args);
+    // The per-pass medians `scripts/viewer-vs-bench` sets beside bench's.
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report_path).unwrap()).unwrap();
+    let passes = report["gpu_pass_ms"].as_array().unwrap_or_else(|| panic!("report has gpu_pass_ms: {report}"));
+    assert!(passes.len() >= 2, "{pipeline}: too few passes timed: {report}");
+    assert!(passes.iter().all(|p| p[1].as_f64().is_some_and(|ms| ms >= 0.0)), "{report}");
+    assert!(passes.iter().any(|p| p[1].as_f64().is_some_and(|ms| ms > 0.0)), "{report}");
     let reference = dir.path().join("render.png");
-    render_like(&x.display, &hidden, &reference);
+    render_like(&hidden, &reference);
     let (viewer, render, with_ui) = (load(&hidden), load(&reference), load(&shown));
     let (err, map) = metrics::compare(&render, &viewer);
     eprintln!("{pipeline}: viewer against render: FLIP mean {:.5}, PSNR {:.2} dB", err.flip_mean, err.psnr_db);
@@ -163,12 +164,21 @@ fn check_screenshot_matches_render(display_number: u32, pipeline: &str) {
 
 #[test]
 fn viewer_screenshot_matches_render_forward() {
-    check_screenshot_matches_render(0, "forward");
+    let Some(x) = xvfb(0) else { return };
+    check_screenshot_matches_render(Some(&x.display), "forward");
 }
 
 #[test]
 fn viewer_screenshot_matches_render_objectspace() {
-    check_screenshot_matches_render(1, "objectspace");
+    let Some(x) = xvfb(1) else { return };
+    check_screenshot_matches_render(Some(&x.display), "objectspace");
+}
+
+/// With no display at all: the same frames, the panel painted offscreen,
+/// and the per-pass GPU medians reported as in a window.
+#[test]
+fn headless_viewer_screenshot_matches_render() {
+    check_screenshot_matches_render(None, "deferred-compute");
 }
 
 #[test]
@@ -193,7 +203,7 @@ fn switching_pipelines_and_options_keeps_memory_flat() {
     std::fs::write(&script_path, script.to_string()).unwrap();
     let started = Instant::now();
     let stdout = shadespace(
-        &x.display,
+        Some(&x.display),
         &[
             "view",
             "--scene",

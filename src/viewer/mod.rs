@@ -3,7 +3,9 @@
 //! fly, orbit or path camera, an egui panel that switches pipelines and
 //! options without a restart, a live per-pass GPU timing graph, screenshots
 //! with a sidecar that names the equivalent `render` command, and scripted
-//! runs for tests.
+//! runs for tests. Scripted runs can also go headless (`--headless`): no
+//! window and no window system, the same frame loop painting its panel into
+//! an offscreen texture, for machines without a display.
 //!
 //! The command line owns how options become a scene, lights and a renderer;
 //! the viewer asks it through [`Session`], so that a frame in the viewer and
@@ -94,6 +96,9 @@ pub struct ViewerOptions {
     pub report: Option<PathBuf>,
     /// The bookmark file the panel saves to and loads from.
     pub bookmarks: PathBuf,
+    /// No window: frames are painted into an offscreen texture of `size`
+    /// (needs `script` or `frames`, which end the run).
+    pub headless: bool,
     pub gpu: GpuOptions,
 }
 
@@ -120,20 +125,39 @@ pub struct RunReport {
 /// Opens the window and runs until it is closed or, for a scripted run,
 /// until the script and `frames` are done.
 pub fn run(session: Box<dyn Session>, options: ViewerOptions) -> anyhow::Result<RunReport> {
-    let event_loop = EventLoop::new().context("cannot open a window (is DISPLAY set?)")?;
-    event_loop.set_control_flow(ControlFlow::Poll);
     let report = RunReport { rss_kib_start: memory::resident_kib().unwrap_or(0), ..Default::default() };
     let report_path = options.report.clone();
-    let mut app = App { session: Some(session), options: Some(options), viewer: None, error: None, report };
-    event_loop.run_app(&mut app)?;
-    if let Some(e) = app.error {
-        return Err(e);
-    }
+    let report = if options.headless {
+        run_headless(session, options, report)?
+    } else {
+        let event_loop = EventLoop::new().context("cannot open a window (is DISPLAY set? --headless needs none)")?;
+        event_loop.set_control_flow(ControlFlow::Poll);
+        let mut app = App { session: Some(session), options: Some(options), viewer: None, error: None, report };
+        event_loop.run_app(&mut app)?;
+        if let Some(e) = app.error {
+            return Err(e);
+        }
+        app.report
+    };
     if let Some(path) = report_path {
-        std::fs::write(&path, serde_json::to_string_pretty(&app.report)?)
+        std::fs::write(&path, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
-    Ok(app.report)
+    Ok(report)
+}
+
+/// The frame loop without a window: frames until the script and `frames`
+/// are done, each painted with its panel into the offscreen target.
+fn run_headless(session: Box<dyn Session>, options: ViewerOptions, mut report: RunReport) -> anyhow::Result<RunReport> {
+    anyhow::ensure!(
+        options.script.is_some() || options.frames.is_some(),
+        "--headless needs --frames or --script: without a window nothing else ends the run"
+    );
+    let mut viewer = Viewer::new(None, session, options)?;
+    report.renderer_builds = 1;
+    while let Flow::Continue = viewer.frame(&mut report)? {}
+    viewer.finish(&mut report);
+    Ok(report)
 }
 
 struct App {
@@ -147,7 +171,7 @@ struct App {
 impl ApplicationHandler for App {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
         let (Some(session), Some(options)) = (self.session.take(), self.options.take()) else { return };
-        match Viewer::new(event_loop, session, options) {
+        match Viewer::new(Some(event_loop), session, options) {
             Ok(v) => {
                 self.report.renderer_builds = 1;
                 self.viewer = Some(v);
@@ -172,9 +196,7 @@ impl ApplicationHandler for App {
         match result {
             Ok(Flow::Continue) => {}
             Ok(Flow::Exit) => {
-                // Measured with the viewer still open: its memory is what is checked.
-                self.report.rss_kib_end = memory::resident_kib().unwrap_or(0);
-                self.report.gpu_pass_ms = v.timings.median_pass_ms();
+                v.finish(&mut self.report);
                 event_loop.exit();
             }
             Err(e) => {
@@ -185,8 +207,8 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, _: &ActiveEventLoop) {
-        if let Some(v) = &self.viewer {
-            v.window.request_redraw();
+        if let Some(window) = self.viewer.as_ref().and_then(|v| v.window.as_ref()) {
+            window.window.request_redraw();
         }
     }
 }
@@ -199,11 +221,11 @@ enum Flow {
 
 /// The open window and everything drawn in it.
 struct Viewer {
-    window: Arc<Window>,
+    /// `None` when headless.
+    window: Option<ViewerWindow>,
     ctx: GpuContext,
     presenter: Presenter,
     egui: egui::Context,
-    egui_input: egui_winit::State,
     session: Box<dyn Session>,
     renderer: Renderer,
     /// The settings `renderer` and `lights` were built with.
@@ -219,6 +241,8 @@ struct Viewer {
     /// Cursor position while the right button turns the camera.
     drag: Option<(f64, f64)>,
     last_frame: Instant,
+    /// When the viewer started (egui's clock when headless).
+    started: Instant,
     ui_shown: bool,
     script: Option<ScriptRun>,
     /// Screenshots to take of the next frame.
@@ -233,6 +257,12 @@ struct Viewer {
     device_line: String,
 }
 
+/// The window and egui's view of its events.
+struct ViewerWindow {
+    window: Arc<Window>,
+    egui_input: egui_winit::State,
+}
+
 /// A non-interactive run: the script, then `frames`, then the screenshot.
 struct ScriptRun {
     player: Option<Player>,
@@ -244,29 +274,47 @@ struct ScriptRun {
 }
 
 impl Viewer {
-    fn new(event_loop: &ActiveEventLoop, mut session: Box<dyn Session>, o: ViewerOptions) -> anyhow::Result<Self> {
-        let attributes = Window::default_attributes()
-            .with_title("shadespace")
-            .with_inner_size(winit::dpi::PhysicalSize::new(o.size.0, o.size.1));
-        let window = Arc::new(event_loop.create_window(attributes).context("cannot open a window")?);
+    /// Opens a window on `event_loop`, or with none, a headless viewer.
+    fn new(
+        event_loop: Option<&ActiveEventLoop>,
+        mut session: Box<dyn Session>,
+        o: ViewerOptions,
+    ) -> anyhow::Result<Self> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let surface = instance.create_surface(window.clone()).context("cannot draw in the window")?;
-        let ctx = GpuContext::with_instance(instance, &o.gpu, Some(&surface))?;
-        let inner = window.inner_size();
-        let presenter = Presenter::new(&ctx, surface, (inner.width, inner.height), o.vsync, o.size)?;
         let egui = egui::Context::default();
-        let max_side = ctx.limits.max_texture_dimension_2d as usize;
-        let egui_input = egui_winit::State::new(
-            egui.clone(),
-            egui::ViewportId::ROOT,
-            &window,
-            Some(window.scale_factor() as f32),
-            None,
-            Some(max_side),
-        );
+        let (window, ctx, presenter) = match event_loop {
+            Some(event_loop) => {
+                let attributes = Window::default_attributes()
+                    .with_title("shadespace")
+                    .with_inner_size(winit::dpi::PhysicalSize::new(o.size.0, o.size.1));
+                let window = Arc::new(event_loop.create_window(attributes).context("cannot open a window")?);
+                let surface = instance.create_surface(window.clone()).context("cannot draw in the window")?;
+                let ctx = GpuContext::with_instance(instance, &o.gpu, Some(&surface))?;
+                let inner = window.inner_size();
+                let presenter = Presenter::new(&ctx, surface, (inner.width, inner.height), o.vsync, o.size)?;
+                let max_side = ctx.limits.max_texture_dimension_2d as usize;
+                let egui_input = egui_winit::State::new(
+                    egui.clone(),
+                    egui::ViewportId::ROOT,
+                    &window,
+                    Some(window.scale_factor() as f32),
+                    None,
+                    Some(max_side),
+                );
+                (Some(ViewerWindow { window, egui_input }), ctx, presenter)
+            }
+            None => {
+                let ctx = GpuContext::with_instance(instance, &o.gpu, None)?;
+                let presenter = Presenter::offscreen(&ctx, o.size, o.size);
+                (None, ctx, presenter)
+            }
+        };
         let renderer = session.renderer(&ctx, &o.settings)?;
         let lights = session.lights(&o.settings)?;
-        let device_line = format!("{} ({:?})", ctx.info.name, presenter.present_mode());
+        let device_line = match presenter.present_mode() {
+            Some(mode) => format!("{} ({mode:?})", ctx.info.name),
+            None => format!("{} (headless)", ctx.info.name),
+        };
         let scripted = o.script.is_some() || o.frames.is_some() || o.screenshot.is_some();
         let script = scripted.then(|| ScriptRun {
             player: o.script.map(Player::new),
@@ -285,7 +333,6 @@ impl Viewer {
             ctx,
             presenter,
             egui,
-            egui_input,
             session,
             renderer,
             built: o.settings.clone(),
@@ -297,6 +344,7 @@ impl Viewer {
             keys: HashSet::new(),
             drag: None,
             last_frame: Instant::now(),
+            started: Instant::now(),
             ui_shown: !o.hide_ui,
             script,
             shots: Vec::new(),
@@ -345,6 +393,13 @@ impl Viewer {
             report.rss_kib_first_frame = memory::resident_kib().unwrap_or(0);
         }
         Ok(Flow::Continue)
+    }
+
+    /// Ends the run: the report's memory (the viewer still open: its memory
+    /// is what is checked) and per-pass medians.
+    fn finish(&self, report: &mut RunReport) {
+        report.rss_kib_end = memory::resident_kib().unwrap_or(0);
+        report.gpu_pass_ms = self.timings.median_pass_ms();
     }
 
     /// Plays script steps up to the next frame to render; `Some(Exit)` once
@@ -452,7 +507,10 @@ impl Viewer {
 
     /// Runs egui for this frame: the image under the panel (unless hidden).
     fn draw_ui(&mut self) -> (EguiFrame, Vec<ui::Action>) {
-        let input = self.egui_input.take_egui_input(&self.window);
+        let input = match &mut self.window {
+            Some(w) => w.egui_input.take_egui_input(&w.window),
+            None => self.headless_input(),
+        };
         let view_camera = self.view_camera();
         let command = self.session.render_command(&self.wanted, &view_camera);
         let path_frames = self.session.path().frame_count();
@@ -481,10 +539,23 @@ impl Viewer {
                 );
             }
         });
-        self.egui_input.handle_platform_output(&self.window, output.platform_output);
+        if let Some(w) = &mut self.window {
+            w.egui_input.handle_platform_output(&w.window, output.platform_output);
+        }
         let primitives = egui.tessellate(output.shapes, output.pixels_per_point);
         self.presenter.update_textures(&self.ctx, output.textures_delta);
         (EguiFrame { primitives, pixels_per_point: output.pixels_per_point }, actions)
+    }
+
+    /// egui's input without a window: no events, a screen of the offscreen
+    /// target's size at one pixel per point (as Xvfb's), the time since start.
+    fn headless_input(&self) -> egui::RawInput {
+        let (width, height) = self.presenter.size();
+        egui::RawInput {
+            screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(width as f32, height as f32))),
+            time: Some(self.started.elapsed().as_secs_f64()),
+            ..Default::default()
+        }
     }
 
     /// The current camera as `render` takes it.
@@ -532,7 +603,8 @@ impl Viewer {
 
     /// A window event: egui first, then the camera keys and mouse.
     fn input(&mut self, event: &WindowEvent) {
-        let egui_took = self.egui_input.on_window_event(&self.window, event).consumed;
+        let Some(w) = &mut self.window else { return };
+        let egui_took = w.egui_input.on_window_event(&w.window, event).consumed;
         match event {
             WindowEvent::Resized(size) => self.presenter.resize(&self.ctx, size.width, size.height),
             WindowEvent::KeyboardInput { event, .. } if !egui_took => {

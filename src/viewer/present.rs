@@ -1,17 +1,22 @@
 //! Putting frames on the window: the renderer's tone-mapped image is copied
 //! into a texture egui samples, egui paints it under its panels onto the
 //! window's surface, and the same painting can go to an offscreen texture
-//! for a screenshot with the panels.
+//! for a screenshot with the panels. A headless viewer paints every frame
+//! into an offscreen texture of the window's size instead of a surface:
+//! the same GPU work between frames, with nothing presented.
 
 use anyhow::Context;
 
 use crate::gpu::{GpuContext, readback};
 use crate::render::targets::LDR_FORMAT;
 
-/// The window's surface, egui's painter and the image they show.
+/// The window's surface (or the headless viewer's offscreen target), egui's
+/// painter and the image they show.
 pub struct Presenter {
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
+    output: Output,
+    /// The painted texture's format and size (physical pixels).
+    format: wgpu::TextureFormat,
+    size: (u32, u32),
     egui: egui_wgpu::Renderer,
     /// A copy of the renderer's `ldr` image that egui can sample.
     image: wgpu::Texture,
@@ -19,6 +24,19 @@ pub struct Presenter {
     /// egui textures to free once the frame that dropped them is painted.
     to_free: Vec<egui::TextureId>,
 }
+
+/// Where painted frames go.
+enum Output {
+    Surface {
+        surface: wgpu::Surface<'static>,
+        config: wgpu::SurfaceConfiguration,
+    },
+    /// Headless: a texture standing in for the window.
+    Offscreen(wgpu::Texture),
+}
+
+/// The headless viewer's window format: non-sRGB, as the surface's is chosen.
+const OFFSCREEN_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// One frame of egui's output, tessellated (its texture changes already
 /// handed to [`Presenter::update_textures`]).
@@ -63,6 +81,24 @@ impl Presenter {
         config.format = format;
         config.present_mode = present_mode;
         surface.configure(&ctx.device, &config);
+        let size = (config.width, config.height);
+        Ok(Self::with_output(ctx, Output::Surface { surface, config }, format, size, image_size))
+    }
+
+    /// A headless presenter: frames are painted into a texture of `size`.
+    pub fn offscreen(ctx: &GpuContext, size: (u32, u32), image_size: (u32, u32)) -> Self {
+        let size = (size.0.max(1), size.1.max(1));
+        let target = offscreen_texture(ctx, size, OFFSCREEN_FORMAT, "viewer offscreen window");
+        Self::with_output(ctx, Output::Offscreen(target), OFFSCREEN_FORMAT, size, image_size)
+    }
+
+    fn with_output(
+        ctx: &GpuContext,
+        output: Output,
+        format: wgpu::TextureFormat,
+        size: (u32, u32),
+        image_size: (u32, u32),
+    ) -> Self {
         let mut egui = egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
         let image = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("viewer image"),
@@ -80,7 +116,7 @@ impl Presenter {
             ..Default::default()
         });
         let image_id = egui.register_native_texture(&ctx.device, &view, wgpu::FilterMode::Nearest);
-        Ok(Self { surface, config, egui, image, image_id, to_free: Vec::new() })
+        Self { output, format, size, egui, image, image_id, to_free: Vec::new() }
     }
 
     /// The rendered image's size in pixels.
@@ -93,16 +129,27 @@ impl Presenter {
         self.image_id
     }
 
-    pub fn present_mode(&self) -> wgpu::PresentMode {
-        self.config.present_mode
+    /// The surface's present mode; `None` when headless.
+    pub fn present_mode(&self) -> Option<wgpu::PresentMode> {
+        match &self.output {
+            Output::Surface { config, .. } => Some(config.present_mode),
+            Output::Offscreen(_) => None,
+        }
+    }
+
+    /// The window's size in physical pixels.
+    pub fn size(&self) -> (u32, u32) {
+        self.size
     }
 
     /// Follows a window resize.
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
-        if width > 0 && height > 0 && (width, height) != (self.config.width, self.config.height) {
-            self.config.width = width;
-            self.config.height = height;
-            self.surface.configure(&ctx.device, &self.config);
+        let Output::Surface { surface, config } = &mut self.output else { return };
+        if width > 0 && height > 0 && (width, height) != self.size {
+            config.width = width;
+            config.height = height;
+            surface.configure(&ctx.device, config);
+            self.size = (width, height);
         }
     }
 
@@ -114,45 +161,46 @@ impl Presenter {
         ctx.queue.submit([encoder.finish()]);
     }
 
-    /// Paints `frame` onto the window. A surface that is out of date is
-    /// configured again and the frame skipped.
+    /// Paints `frame` onto the window (headless: into its offscreen
+    /// texture). A surface that is out of date is configured again and the
+    /// frame skipped.
     pub fn present(&mut self, ctx: &GpuContext, frame: &EguiFrame) {
-        let texture = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                self.surface.configure(&ctx.device, &self.config);
-                self.free();
-                return;
+        let size = self.size;
+        match &self.output {
+            Output::Surface { surface, config } => {
+                let texture = match surface.get_current_texture() {
+                    wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+                    wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                        surface.configure(&ctx.device, config);
+                        self.free();
+                        return;
+                    }
+                    other => {
+                        tracing::debug!("viewer: frame skipped: {other:?}");
+                        self.free();
+                        return;
+                    }
+                };
+                let view = texture.texture.create_view(&Default::default());
+                self.paint(ctx, frame, &view, size);
+                ctx.queue.present(texture);
             }
-            other => {
-                tracing::debug!("viewer: frame skipped: {other:?}");
-                self.free();
-                return;
+            Output::Offscreen(target) => {
+                let view = target.create_view(&Default::default());
+                self.paint(ctx, frame, &view, size);
             }
-        };
-        let view = texture.texture.create_view(&Default::default());
-        self.paint(ctx, frame, &view, (self.config.width, self.config.height));
-        ctx.queue.present(texture);
+        }
         self.free();
     }
 
     /// Paints `frame` into an offscreen texture of the window's size and
     /// reads it back (blocks): the window as the user sees it.
     pub fn capture(&mut self, ctx: &GpuContext, frame: &EguiFrame) -> anyhow::Result<image::RgbaImage> {
-        let (width, height) = (self.config.width, self.config.height);
-        let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("viewer capture"),
-            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: self.config.format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let (width, height) = self.size;
+        let target = offscreen_texture(ctx, self.size, self.format, "viewer capture");
         self.paint(ctx, frame, &target.create_view(&Default::default()), (width, height));
         let mut bytes = readback::read_texture_rgba8(ctx, &target)?;
-        if self.config.format == wgpu::TextureFormat::Bgra8Unorm {
+        if self.format == wgpu::TextureFormat::Bgra8Unorm {
             bytes.chunks_exact_mut(4).for_each(|p| p.swap(0, 2));
         }
         image::RgbaImage::from_raw(width, height, bytes).context("capture has the window's size")
@@ -199,4 +247,18 @@ impl Presenter {
         }
         ctx.queue.submit(extra.into_iter().chain([encoder.finish()]));
     }
+}
+
+/// A texture egui can paint into and a read-back can copy from.
+fn offscreen_texture(ctx: &GpuContext, size: (u32, u32), format: wgpu::TextureFormat, label: &str) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width: size.0, height: size.1, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
 }
