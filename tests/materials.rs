@@ -168,8 +168,31 @@ mod textured_floor {
             let (roughness, metallic) = if y < half { (64, 0) } else { (255, 255) };
             Rgba([occlusion, roughness, metallic, 255])
         });
-        emissive.save(dir.join("emissive.png")).unwrap();
-        orm.save(dir.join("orm.png")).unwrap();
+        let material = json!({
+            "name": "floor",
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [0.7, 0.7, 0.7, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.9,
+                "metallicRoughnessTexture": { "index": 1 } },
+            "emissiveFactor": EMISSIVE_FACTOR.to_array(),
+            "emissiveTexture": { "index": 0 },
+            "occlusionTexture": { "index": 1, "strength": OCCLUSION_STRENGTH },
+            "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": EMISSIVE_STRENGTH } }
+        });
+        write_with(dir, &[("emissive.png", emissive), ("orm.png", orm)], material, "KHR_materials_emissive_strength")
+    }
+
+    /// Writes the floor (UV0 from (0, 0) at its -x, -z corner to (1, 1)) as
+    /// `dir/floor.gltf` with textures `images` (texture K is image K) and
+    /// `material`, and returns the path.
+    pub fn write_with(
+        dir: &Path,
+        images: &[(&str, RgbaImage)],
+        material: serde_json::Value,
+        extension: &str,
+    ) -> PathBuf {
+        for (name, image) in images {
+            image.save(dir.join(name)).unwrap();
+        }
         let h = SIDE / 2.0;
         let corners = [Vec2::new(-h, -h), Vec2::new(h, -h), Vec2::new(h, h), Vec2::new(-h, h)];
         let mut bin: Vec<u8> = Vec::new();
@@ -181,7 +204,7 @@ mod textured_floor {
         std::fs::write(dir.join("floor.bin"), &bin).unwrap();
         let doc = json!({
             "asset": { "version": "2.0" },
-            "extensionsUsed": ["KHR_materials_emissive_strength"],
+            "extensionsUsed": [extension],
             "buffers": [{ "byteLength": bin.len(), "uri": "floor.bin" }],
             "bufferViews": [
                 { "buffer": 0, "byteOffset": 0, "byteLength": 48 },
@@ -196,18 +219,9 @@ mod textured_floor {
                 { "bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2" },
                 { "bufferView": 3, "componentType": 5125, "count": 6, "type": "SCALAR" }
             ],
-            "images": [{ "uri": "emissive.png" }, { "uri": "orm.png" }],
-            "textures": [{ "source": 0 }, { "source": 1 }],
-            "materials": [{
-                "name": "floor",
-                "pbrMetallicRoughness": {
-                    "baseColorFactor": [0.7, 0.7, 0.7, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.9,
-                    "metallicRoughnessTexture": { "index": 1 } },
-                "emissiveFactor": EMISSIVE_FACTOR.to_array(),
-                "emissiveTexture": { "index": 0 },
-                "occlusionTexture": { "index": 1, "strength": OCCLUSION_STRENGTH },
-                "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": EMISSIVE_STRENGTH } }
-            }],
+            "images": images.iter().map(|(name, _)| json!({ "uri": name })).collect::<Vec<_>>(),
+            "textures": (0..images.len()).map(|k| json!({ "source": k })).collect::<Vec<_>>(),
+            "materials": [material],
             "meshes": [{ "name": "floor", "primitives": [{
                 "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2 }, "indices": 3, "material": 0 }] }],
             "nodes": [{ "name": "floor", "mesh": 0 }],
@@ -418,4 +432,68 @@ fn material_textures_phong() {
 #[test]
 fn material_textures_pbr() {
     check_material_textures(ShadingModel::Pbr);
+}
+
+/// `KHR_texture_transform` in every pipeline: the floor's base colour is
+/// red where u < 0.5 and green elsewhere; with offset (0.5, 0) and scale
+/// (0.5, 1) the whole floor samples the green half, so each pipeline's
+/// image must be green where, without the transform, the floor is red.
+#[test]
+fn texture_transform_moves_the_texture_in_every_pipeline() {
+    use shadespace::render::VisibilityMethod;
+    use textured_floor::uv_at;
+    let dir = tempfile::tempdir().unwrap();
+    let red_green = image::RgbaImage::from_fn(64, 64, |x, _| {
+        image::Rgba(if x < 32 { [230, 20, 20, 255] } else { [20, 230, 20, 255] })
+    });
+    let material = |transform: serde_json::Value| {
+        serde_json::json!({ "name": "floor", "pbrMetallicRoughness": {
+            "baseColorTexture": { "index": 0, "extensions": { "KHR_texture_transform": transform } },
+            "metallicFactor": 0.0, "roughnessFactor": 0.8 } })
+    };
+    let images = [("red-green.png", red_green)];
+    let load = |name: &str, transform| {
+        let sub = dir.path().join(name);
+        std::fs::create_dir_all(&sub).unwrap();
+        let path = textured_floor::write_with(&sub, &images, material(transform), "KHR_texture_transform");
+        shadespace::scene::load(path.to_str().unwrap()).unwrap()
+    };
+    let plain = load("identity", serde_json::json!({}));
+    let moved = load("moved", serde_json::json!({ "offset": [0.5, 0.0], "scale": [0.5, 1.0] }));
+    // Mean red minus green over the pixels whose UV0 has u < 0.45 (the red half, clear of the seam).
+    let red_minus_green = |image: &image::RgbaImage| {
+        let (mut sum, mut n) = (0.0, 0u32);
+        for (x, y, p) in image.enumerate_pixels() {
+            let uv = uv_at(x, y);
+            if uv.x < 0.45 && uv.min_element() > 0.0 && uv.y < 1.0 {
+                sum += p[0] as f64 - p[1] as f64;
+                n += 1;
+            }
+        }
+        assert!(n > 1000, "only {n} pixels in the red half");
+        sum / n as f64
+    };
+    let ctx = common::gpu();
+    let forward = || PipelineConfig::Forward(ForwardConfig::default());
+    let before = red_minus_green(&render_floor(&ctx, &plain, ShadingModel::Pbr, forward()));
+    assert!(before > 40.0, "without the transform the half is red: red - green {before:.1}");
+    let (charted, sizes) = common::charted(&moved);
+    let pipelines = [
+        forward(),
+        PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
+        PipelineConfig::Clustered(ClusteredConfig::default()),
+        PipelineConfig::Deferred(DeferredConfig::default()),
+        PipelineConfig::DeferredCompute(DeferredComputeConfig {
+            visibility: VisibilityMethod::Compute,
+            ..Default::default()
+        }),
+        PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes: sizes, ..Default::default() }),
+    ];
+    for pipeline in pipelines {
+        let name = pipeline.name();
+        let scene = if matches!(pipeline, PipelineConfig::ObjectSpace(_)) { &charted } else { &moved };
+        let after = red_minus_green(&render_floor(&ctx, scene, ShadingModel::Pbr, pipeline));
+        eprintln!("{name}: red - green in the red half: {before:.1} without the transform, {after:.1} with it");
+        assert!(after < -40.0, "{name}: the transform did not move the texture: red - green {after:.1}");
+    }
 }

@@ -19,8 +19,15 @@
 //!   texture (sRGB, multiplying the factor), occlusion texture (red, with its
 //!   `strength`; applied to ambient light only). A texture whose factor is
 //!   zero is not loaded (it would change nothing). Every texture is sampled
-//!   with TEXCOORD_0 (another set is a warning); `KHR_texture_transform` is
-//!   ignored (warned as an extension). Images become RGBA8 textures (grey
+//!   with TEXCOORD_0 (another set is a warning). `KHR_texture_transform`
+//!   (offset, rotation, scale) is baked into the primitive's UV0, so every
+//!   pipeline samples the transformed coordinates with no shader of its own;
+//!   the untransformed UV0 becomes UV1 when the file has none, so that the
+//!   object-space charts are those of the file's layout, as without the
+//!   extension. Simplified: one transform per material (the first loaded
+//!   texture's, in the order base colour, metallic-roughness, emissive,
+//!   normal, occlusion; a texture with another one is a warning), and
+//!   tangents from the file are kept as they are. Images become RGBA8 textures (grey
 //!   and grey+alpha images are expanded, 16-bit channels keep their high
 //!   byte, float images are encoded to sRGB). A material without a
 //!   (loadable) base colour texture gets the generated UV checker of each
@@ -65,7 +72,8 @@ use crate::color::linear_to_srgb8;
 const MAX_ACCESSOR_BYTES: usize = 1 << 30;
 
 /// The extensions the loader reads.
-const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+const SUPPORTED_EXTENSIONS: [&str; 3] =
+    ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_texture_transform"];
 
 /// Accessors without a buffer view (zeros, but for their sparse values) with
 /// more elements than this are refused: their size is not backed by bytes of
@@ -320,6 +328,66 @@ struct MaterialTemplate {
     /// Index in `scene.materials` when shared (textured) and already pushed.
     shared: Option<usize>,
     textured: bool,
+    /// The `KHR_texture_transform` its textures are sampled with (baked into
+    /// the UV0 of the primitives that use it); `None` for the identity.
+    uv_transform: Option<UvTransform>,
+}
+
+/// `KHR_texture_transform`: `uv' = offset + rotation * (scale * uv)`, the
+/// extension's `translation * rotation * scale`, with its rotation (radians)
+/// turning UV +u towards -v: the ratified text's example (offset (0, 1),
+/// rotation pi/2, scale 0.5 takes the image's lower-left quarter) holds
+/// with this sign.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct UvTransform {
+    offset: Vec2,
+    rotation: f32,
+    scale: Vec2,
+}
+
+impl UvTransform {
+    const IDENTITY: Self = Self { offset: Vec2::ZERO, rotation: 0.0, scale: Vec2::ONE };
+
+    /// Reads the extension's JSON object; also returns its `texCoord`.
+    fn parse(json: &serde_json::Value) -> Result<(Self, Option<u32>), String> {
+        let pair = |key: &str, default: Vec2| match json.get(key) {
+            None => Ok(default),
+            Some(v) => match v.as_array().map(|a| a.iter().map(serde_json::Value::as_f64).collect::<Vec<_>>()) {
+                Some(a) if a.len() == 2 && a.iter().all(Option::is_some) => {
+                    Ok(Vec2::new(a[0].unwrap_or_default() as f32, a[1].unwrap_or_default() as f32))
+                }
+                _ => Err(format!("'{key}' is not two numbers")),
+            },
+        };
+        let rotation = match json.get("rotation") {
+            None => 0.0,
+            Some(v) => v.as_f64().ok_or("'rotation' is not a number")? as f32,
+        };
+        let tex_coord = match json.get("texCoord") {
+            None => None,
+            Some(v) => Some(v.as_u64().and_then(|k| u32::try_from(k).ok()).ok_or("'texCoord' is not a set index")?),
+        };
+        let t = Self { offset: pair("offset", Vec2::ZERO)?, rotation, scale: pair("scale", Vec2::ONE)? };
+        if !(t.offset.is_finite() && t.rotation.is_finite() && t.scale.is_finite()) {
+            return Err("it is not finite".into());
+        }
+        Ok((t, tex_coord))
+    }
+
+    /// The transformed texture coordinate.
+    fn apply(&self, uv: Vec2) -> Vec2 {
+        let s = uv * self.scale;
+        let (sin, cos) = self.rotation.sin_cos();
+        self.offset + Vec2::new(cos * s.x + sin * s.y, cos * s.y - sin * s.x)
+    }
+}
+
+/// A material's texture reference as the file gives it.
+struct TextureSlot<'t> {
+    texture: ::gltf::Texture<'t>,
+    tex_coord: u32,
+    /// Its `KHR_texture_transform` object, unparsed.
+    transform: Option<serde_json::Value>,
 }
 
 struct Builder<'a> {
@@ -385,7 +453,8 @@ impl Builder<'_> {
         if let Some(mesh) = node.mesh() {
             let primitives = mesh.primitives().len();
             for primitive in mesh.primitives() {
-                let Some(mesh_index) = self.mesh(&mesh, &primitive)? else { continue };
+                let uv_transform = self.template(&primitive.material()).uv_transform;
+                let Some(mesh_index) = self.mesh(&mesh, &primitive, uv_transform)? else { continue };
                 let name =
                     if primitives > 1 { format!("{node_name}/{}", primitive.index()) } else { node_name.clone() };
                 let object_index = self.scene.objects.len();
@@ -460,9 +529,15 @@ impl Builder<'_> {
         Ok(())
     }
 
-    /// The scene mesh of a primitive, built on first use; `None` when the
-    /// primitive is skipped (not triangles, no positions).
-    fn mesh(&mut self, mesh: &::gltf::Mesh, primitive: &::gltf::Primitive) -> Result<Option<usize>, SceneError> {
+    /// The scene mesh of a primitive, built on first use (its UV0 through
+    /// its material's `uv_transform`); `None` when the primitive is skipped
+    /// (not triangles, no positions).
+    fn mesh(
+        &mut self,
+        mesh: &::gltf::Mesh,
+        primitive: &::gltf::Primitive,
+        uv_transform: Option<UvTransform>,
+    ) -> Result<Option<usize>, SceneError> {
         let key = (mesh.index(), primitive.index());
         if let Some(&known) = self.meshes.get(&key) {
             return Ok(known);
@@ -471,7 +546,7 @@ impl Builder<'_> {
         if mesh.primitives().len() > 1 {
             name = format!("{name}/{}", primitive.index());
         }
-        let built = self.read_primitive(&name, primitive)?;
+        let built = self.read_primitive(&name, primitive, uv_transform)?;
         let index = built.map(|m| {
             self.scene.meshes.push(m);
             self.scene.meshes.len() - 1
@@ -480,7 +555,12 @@ impl Builder<'_> {
         Ok(index)
     }
 
-    fn read_primitive(&self, name: &str, primitive: &::gltf::Primitive) -> Result<Option<Mesh>, SceneError> {
+    fn read_primitive(
+        &self,
+        name: &str,
+        primitive: &::gltf::Primitive,
+        uv_transform: Option<UvTransform>,
+    ) -> Result<Option<Mesh>, SceneError> {
         let mode = primitive.mode();
         if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
             tracing::warn!("{}: mesh '{name}': {mode:?} primitive skipped (not triangles)", self.path.display());
@@ -532,6 +612,13 @@ impl Builder<'_> {
             indices,
         };
         check_indices(&mesh).map_err(|problem| self.invalid(problem))?;
+        if let Some(t) = uv_transform
+            && !mesh.uv0.is_empty()
+        {
+            // The file's layout stays the chart module's first choice.
+            mesh.uv1.get_or_insert_with(|| mesh.uv0.clone());
+            mesh.uv0.iter_mut().for_each(|uv| *uv = t.apply(*uv));
+        }
         if let Some(k) = mesh.uv0.iter().chain(mesh.uv1.iter().flatten()).position(|uv| !uv.is_finite()) {
             return Err(self.invalid(format!("mesh '{name}': texture coordinate {k} is not finite")));
         }
@@ -560,14 +647,7 @@ impl Builder<'_> {
     /// per object (with its checker) otherwise.
     fn material(&mut self, material: ::gltf::Material, object_index: usize, object_name: &str) -> usize {
         let key = material.index();
-        let template = match self.materials.get(&key) {
-            Some(t) => t.clone(),
-            None => {
-                let t = self.material_template(&material);
-                self.materials.insert(key, t.clone());
-                t
-            }
-        };
+        let template = self.template(&material);
         if template.textured {
             if let Some(shared) = template.shared {
                 return shared;
@@ -583,6 +663,16 @@ impl Builder<'_> {
         m.base_color_texture = Some(checker_texture(&mut self.scene, &mut self.checkers, object_index, object_name));
         self.scene.materials.push(m);
         self.scene.materials.len() - 1
+    }
+
+    /// The template of a glTF material, read on first use.
+    fn template(&mut self, material: &::gltf::Material) -> MaterialTemplate {
+        if let Some(t) = self.materials.get(&material.index()) {
+            return t.clone();
+        }
+        let t = self.material_template(material);
+        self.materials.insert(material.index(), t.clone());
+        t
     }
 
     fn material_template(&mut self, material: &::gltf::Material) -> MaterialTemplate {
@@ -612,44 +702,80 @@ impl Builder<'_> {
             );
             m.emissive = Vec3::ZERO;
         }
-        fn slot(i: ::gltf::texture::Info<'_>) -> (u32, ::gltf::Texture<'_>) {
-            (i.tex_coord(), i.texture())
+        const TRANSFORM: &str = "KHR_texture_transform";
+        fn slot<'t>(i: ::gltf::texture::Info<'t>) -> TextureSlot<'t> {
+            let transform = i.extension_value(TRANSFORM).cloned();
+            TextureSlot { texture: i.texture(), tex_coord: i.tex_coord(), transform }
         }
+        // The loaded textures' transforms, in the order the first one wins.
+        let mut transforms = Vec::new();
         let base = pbr.base_color_texture().map(slot);
-        m.base_color_texture = base.and_then(|(uv, t)| self.texture(&name, "base colour", uv, t));
+        m.base_color_texture = base.and_then(|s| self.texture(&name, "base colour", s, &mut transforms));
         // Textures that multiply a zero factor change nothing: not loaded.
         if m.metallic > 0.0 || m.roughness > 0.0 {
             let metal_rough = pbr.metallic_roughness_texture().map(slot);
             m.metallic_roughness_texture =
-                metal_rough.and_then(|(uv, t)| self.texture(&name, "metallic-roughness", uv, t));
+                metal_rough.and_then(|s| self.texture(&name, "metallic-roughness", s, &mut transforms));
         }
         if m.emissive != Vec3::ZERO {
             let emissive = material.emissive_texture().map(slot);
-            m.emissive_texture = emissive.and_then(|(uv, t)| self.texture(&name, "emissive", uv, t));
+            m.emissive_texture = emissive.and_then(|s| self.texture(&name, "emissive", s, &mut transforms));
         }
         if let Some(normal) = material.normal_texture() {
-            m.normal_texture = self.texture(&name, "normal", normal.tex_coord(), normal.texture());
+            let transform = normal.extension_value(TRANSFORM).cloned();
+            let s = TextureSlot { texture: normal.texture(), tex_coord: normal.tex_coord(), transform };
+            m.normal_texture = self.texture(&name, "normal", s, &mut transforms);
         }
         if let Some(occlusion) = material.occlusion_texture()
             && occlusion.strength() > 0.0
         {
-            m.occlusion_texture = self.texture(&name, "occlusion", occlusion.tex_coord(), occlusion.texture());
+            let transform = occlusion.extension_value(TRANSFORM).cloned();
+            let s = TextureSlot { texture: occlusion.texture(), tex_coord: occlusion.tex_coord(), transform };
+            m.occlusion_texture = self.texture(&name, "occlusion", s, &mut transforms);
             m.occlusion_strength = occlusion.strength().min(1.0);
         }
-        let textured = m.base_color_texture.is_some();
-        MaterialTemplate { material: m, shared: None, textured }
-    }
-
-    /// The scene texture of a material's texture slot (`what`), warning
-    /// when it uses another UV set than TEXCOORD_0 (it is sampled with that).
-    fn texture(&mut self, material: &str, what: &str, tex_coord: u32, texture: ::gltf::Texture) -> Option<usize> {
-        if tex_coord != 0 {
+        let uv_transform = transforms.first().map(|&(_, t)| t);
+        let differing = transforms.iter().find(|(_, t)| Some(*t) != uv_transform);
+        if let (Some(&(first, _)), Some(&(other, _))) = (transforms.first(), differing) {
             tracing::warn!(
-                "{}: material '{material}': {what} texture uses TEXCOORD_{tex_coord}; sampled with TEXCOORD_0",
+                "{}: material '{name}': the {other} texture's KHR_texture_transform differs from the {first} \
+                 texture's; every texture of the material is sampled with the {first} texture's",
                 self.path.display(),
             );
         }
-        self.image(texture.source())
+        let textured = m.base_color_texture.is_some();
+        let uv_transform = uv_transform.filter(|t| *t != UvTransform::IDENTITY);
+        MaterialTemplate { material: m, shared: None, textured, uv_transform }
+    }
+
+    /// The scene texture of a material's texture slot (`what`), warning
+    /// when it uses another UV set than TEXCOORD_0 (it is sampled with that)
+    /// or a malformed transform (ignored); a loaded texture's transform
+    /// (the identity without one) joins `transforms`.
+    fn texture(
+        &mut self,
+        material: &str,
+        what: &'static str,
+        slot: TextureSlot,
+        transforms: &mut Vec<(&'static str, UvTransform)>,
+    ) -> Option<usize> {
+        let path = self.path.display();
+        let (transform, tex_coord) = match slot.transform.as_ref().map(UvTransform::parse) {
+            None => (UvTransform::IDENTITY, slot.tex_coord),
+            Some(Ok((t, tex_coord))) => (t, tex_coord.unwrap_or(slot.tex_coord)),
+            Some(Err(e)) => {
+                tracing::warn!("{path}: material '{material}': {what} texture's KHR_texture_transform ignored: {e}");
+                (UvTransform::IDENTITY, slot.tex_coord)
+            }
+        };
+        if tex_coord != 0 {
+            tracing::warn!(
+                "{path}: material '{material}': {what} texture uses TEXCOORD_{tex_coord}; sampled with TEXCOORD_0"
+            );
+        }
+        let texture = self.image(slot.texture.source())?;
+        transforms.push((what, transform));
+        Some(texture)
     }
 
     /// Decodes an image once into an RGBA8 texture; `None` (warned) when it
@@ -1171,6 +1297,50 @@ mod tests {
         let none = (plain.emissive_texture, plain.metallic_roughness_texture, plain.occlusion_texture);
         assert_eq!(none, (None, None, None));
         assert_eq!(plain.emissive, Vec3::ZERO);
+    }
+
+    /// `KHR_texture_transform` is baked into UV0, the file's UV0 kept as
+    /// UV1: the extension's own example (offset (0, 1), rotation pi/2, scale
+    /// 0.5) maps the unit square onto the image's lower-left quarter. A
+    /// material whose textures disagree takes its first texture's (here the
+    /// base colour's, over the normal map's); a malformed transform is
+    /// ignored, and so is one on a later texture when the first has none.
+    #[test]
+    fn texture_transform_is_baked_into_uv0() {
+        let mut png = Vec::new();
+        image::RgbaImage::from_pixel(2, 2, image::Rgba([90, 90, 90, 255]))
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let mut doc = document(data_uri(&triangle_buffer([0, 1, 2])));
+        // UV0: the positions' x and y.
+        doc["bufferViews"][0]["byteStride"] = json!(12);
+        let uv = json!({ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2" });
+        doc["accessors"].as_array_mut().unwrap().push(uv);
+        doc["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_texture_transform"]);
+        doc["images"] = json!([{ "uri": format!("data:image/png;base64,{}", base64(&png)) }]);
+        doc["textures"] = json!([{ "source": 0 }]);
+        let t = |v: Value| json!({ "index": 0, "extensions": { "KHR_texture_transform": v } });
+        let example = json!({ "offset": [0.0, 1.0], "rotation": std::f32::consts::FRAC_PI_2, "scale": [0.5, 0.5] });
+        doc["materials"] = json!([
+            { "pbrMetallicRoughness": { "baseColorTexture": t(example) }, "normalTexture": t(json!({ "scale": [2, 2] })) },
+            { "pbrMetallicRoughness": { "baseColorTexture": t(json!({ "offset": "up" })) } },
+            { "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } },
+              "emissiveFactor": [1.0, 1.0, 1.0], "emissiveTexture": t(json!({ "offset": [0.25, 0.0] })) }
+        ]);
+        doc["meshes"][0]["primitives"] = json!([0, 1, 2].map(|material| json!({
+            "attributes": { "POSITION": 0, "TEXCOORD_0": 2 }, "indices": 1, "material": material })));
+        let dir = tempfile::tempdir().unwrap();
+        let scene = load(&write(dir.path(), "t.gltf", serde_json::to_vec(&doc).unwrap())).unwrap();
+        let file_uv = [Vec2::ZERO, Vec2::X, Vec2::Y];
+        let mesh = |o: usize| &scene.meshes[scene.objects[o].mesh];
+        let baked = &mesh(0).uv0;
+        let expected = [Vec2::new(0.0, 1.0), Vec2::new(0.0, 0.5), Vec2::new(0.5, 1.0)];
+        assert!(baked.iter().zip(expected).all(|(a, b)| a.abs_diff_eq(b, 1e-6)), "{baked:?}");
+        assert_eq!(mesh(0).uv1.as_deref(), Some(&file_uv[..]), "the file's layout for the charts");
+        for o in [1, 2] {
+            assert_eq!(mesh(o).uv0, file_uv, "object {o}");
+            assert_eq!(mesh(o).uv1, None, "object {o}");
+        }
     }
 
     #[test]

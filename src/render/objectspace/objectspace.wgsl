@@ -278,6 +278,14 @@ fn select_level(e: AtlasEntry, p: PixelSample, f: ChartFootprint) -> u32 {
     return u32(clamp(round(lod), 0.0, f32(e.level_count - 1u)));
 }
 
+// Level `level` of object `object`'s atlas entry, read through the storage
+// buffer: a copy of the entry indexed by a runtime level would go through
+// the whole levels array (naga spills a dynamically indexed value array to
+// function memory).
+fn entry_level(object: u32, level: u32) -> AtlasLevel {
+    return atlas_entries[object].levels[level];
+}
+
 // The bilinear footprint at a level: top-left texel (level-local, clamped so
 // that both taps lie in the level) and the weight of the right/lower taps.
 struct Bilinear {

@@ -2,7 +2,7 @@
 // virtual shading texture over the whole frame, each texel found through
 // the two-level page table as the gather finds it. Texels of backed pages
 // show their shades; pages with no physical page show a dark checker.
-#import shadespace::objectspace::{params, atlas_entries, physical_page, virtual_page, atlas_texel, NOT_BACKED}
+#import shadespace::objectspace::{params, atlas_entries, entry_level, physical_page, virtual_page, atlas_texel, NOT_BACKED}
 
 // Mirrors `objectspace::atlas_view::GpuAtlasPages`.
 struct AtlasPages {
@@ -28,9 +28,10 @@ fn atlas_view(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     var out = vec4f(0.0, 0.0, 0.0, 1.0);
-    let e = atlas_entries[min(shown.object, arrayLength(&atlas_entries) - 1u)];
+    let object = min(shown.object, arrayLength(&atlas_entries) - 1u);
+    let e = atlas_entries[object];
     if shown.object < arrayLength(&atlas_entries) && e.size != 0u && shown.level < e.level_count {
-        let l = e.levels[shown.level];
+        let l = entry_level(object, shown.level);
         // The level's square, as large as the frame holds it, centred; a
         // frame of the level's size shows one texel per pixel.
         let side = min(size.x, size.y);

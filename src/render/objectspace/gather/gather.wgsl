@@ -8,7 +8,7 @@
 #import shadespace::scene_bindings::objects
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
-#import shadespace::objectspace::{params, atlas_entries, tile_shaded, visibility, chart_footprint, select_level,
+#import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_level,
     bilinear, AtlasTexel, triangle_charts, locate, physical_page, virtual_page, physical_tile,
     NOT_BACKED}
 
@@ -72,7 +72,7 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
     }
     let f = chart_footprint(p);
     let level_index = select_level(e, p, f);
-    let l = e.levels[level_index];
+    let l = entry_level(p.object, level_index);
     let b = bilinear(l, f.uv);
     var out: vec4f;
     switch params.view_mode {

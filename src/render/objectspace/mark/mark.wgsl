@@ -11,7 +11,7 @@
     COUNT_PAGES_BACKED, COUNT_VIEW_TILES, COUNT_BACKED_TILES, COUNT_ATLAS_PIXELS, COUNT_UNDER_SHADED_PIXELS}
 #import shadespace::pixel_surface::sample_pixel
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
-#import shadespace::objectspace::{params, atlas_entries, tile_visible, tile_shaded, queue, counters, visibility,
+#import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_level, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
     page_request_bit, tile_request_bit, page_tile_origin, forget_request}
@@ -156,7 +156,7 @@ fn mark_pixel(pixel: vec2u) -> u32 {
     let f = chart_footprint(p);
     let level_index = select_level(e, p, f);
     let kind = select(PIXEL_SHADED, PIXEL_UNDER_SHADED, f32(level_index) > footprint_level(e, f));
-    let l = e.levels[level_index];
+    let l = entry_level(p.object, level_index);
     let b = bilinear(l, f.uv);
     mark_tile(p.object, level_index, l, e.valid_since, b.texel);
     // The other taps only add a tile when they cross a tile edge.
@@ -189,7 +189,7 @@ fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups
     let object = b.y >> 8u;
     let level_index = b.y & 0xffu;
     let e = atlas_entries[object];
-    let l = e.levels[level_index];
+    let l = entry_level(object, level_index);
     let per_row = params.page_size / params.tile_size;
     let t = lid;
     if t < per_row * per_row {

@@ -8,7 +8,7 @@
 #import shadespace::surface::{surface_point, albedo_lod}
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::contract::COUNT_QUEUED
-#import shadespace::objectspace::{params, atlas_entries, queue, counters, virtual_page, physical_page,
+#import shadespace::objectspace::{params, entry_level, queue, counters, virtual_page, physical_page,
     atlas_texel}
 
 @group(2) @binding(0) var atlas: texture_storage_2d_array<rgba16float, write>;
@@ -40,8 +40,7 @@ fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     let object = item.y >> 8u;
     let level_index = item.y & 0xffu;
     let o = objects[object];
-    let e = atlas_entries[object];
-    let l = e.levels[level_index];
+    let l = entry_level(object, level_index);
     let tiles_per_row = l.size / params.tile_size;
     let local_tile = item.x - l.tile_base;
     let tile_origin = vec2u(local_tile % tiles_per_row, local_tile / tiles_per_row) * params.tile_size;

@@ -10,7 +10,7 @@
 #import shadespace::contract::COUNT_PAGES_BACKED
 #import shadespace::scene_bindings::{vertices, objects, triangle_vertices}
 #import shadespace::scene::Object
-#import shadespace::objectspace::{params, atlas_entries, counters, backed, atlas_texel, page_origin}
+#import shadespace::objectspace::{params, entry_level, counters, backed, atlas_texel, page_origin}
 
 // Mirrors `trimap::GpuChartGrid`.
 struct ChartGrid {
@@ -122,7 +122,7 @@ fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     }
     let b = backed[index];
     let object = b.y >> 8u;
-    let l = atlas_entries[object].levels[b.y & 0xffu];
+    let l = entry_level(object, b.y & 0xffu);
     let o = objects[object];
     let g = grids[object];
     let origin = page_origin(l, b.x);
