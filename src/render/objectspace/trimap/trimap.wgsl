@@ -31,26 +31,28 @@ fn cross2(a: vec2f, b: vec2f) -> f32 {
     return a.x * b.y - a.y * b.x;
 }
 
+// Whether edge a -> b of a triangle of signed area `area` has the square
+// [lo, hi] wholly outside it.
+fn edge_separates(a: vec2f, b: vec2f, area: f32, lo: vec2f, hi: vec2f) -> bool {
+    let e = b - a;
+    // Outward normal of the edge.
+    let n = vec2f(e.y, -e.x) * sign(area);
+    // The square's corner farthest inside.
+    let corner = select(hi, lo, n > vec2f(0.0));
+    return dot(n, corner - a) > 0.0;
+}
+
 // Whether triangle p and the square [lo, hi] overlap (separating axes: the
 // square's and the triangle's edge normals; a degenerate triangle keeps
-// only its bounding box test).
+// only its bounding box test). Edges by constant index: a loop indexing `p`
+// by its counter would make naga copy the array to function memory.
 fn overlaps(p: array<vec2f, 3>, lo: vec2f, hi: vec2f) -> bool {
     if any(max(max(p[0], p[1]), p[2]) < lo) || any(min(min(p[0], p[1]), p[2]) > hi) {
         return false;
     }
     let area = cross2(p[1] - p[0], p[2] - p[0]);
-    for (var i = 0u; i < 3u; i++) {
-        let a = p[i];
-        let e = p[(i + 1u) % 3u] - a;
-        // Outward normal of edge a -> a + e.
-        let n = vec2f(e.y, -e.x) * sign(area);
-        // The square's corner farthest inside.
-        let corner = select(hi, lo, n > vec2f(0.0));
-        if dot(n, corner - a) > 0.0 {
-            return false;
-        }
-    }
-    return true;
+    return !(edge_separates(p[0], p[1], area, lo, hi) || edge_separates(p[1], p[2], area, lo, hi)
+        || edge_separates(p[2], p[0], area, lo, hi));
 }
 
 fn segment_distance(q: vec2f, a: vec2f, b: vec2f) -> f32 {
