@@ -73,11 +73,22 @@ fn light_sets(scene: &Scene, camera: &Camera) -> Vec<(&'static str, Vec<Light>)>
         ..inside[2]
     };
     inside.extend([at_eye(LightKind::Point, 0.5), at_eye(LightKind::Point, 8.0), at_eye(LightKind::Spot, 6.0)]);
+    // Lights reaching every cell among small ones: each is dealt to many
+    // work items of the build (`light_grid::CELLS_PER_ITEM`), a slice apiece.
+    let mut whole = generated("small:64", scene, camera);
+    let bounds = scene.bounds();
+    let everywhere = |offset: f32| Light {
+        position: bounds.center() + Vec3::splat(offset),
+        radius: bounds.extent().length(),
+        ..whole[2]
+    };
+    whole.extend([everywhere(0.0), everywhere(0.5)]);
     vec![
         ("small:64", generated("small:64", scene, camera)),
         ("big:12", generated("big:12", scene, camera)),
         ("spots", spots),
         ("camera inside lights", inside),
+        ("lights over the whole scene", whole),
         ("small:10000", generated("small:10000", scene, camera)),
         // More entries than the first list holds (clusters): overflow, fall back, grow.
         ("big:6000", generated("big:6000", scene, camera)),

@@ -2,8 +2,9 @@
 // group 0 is the scene, whose light buffer they read), the conservative
 // light-versus-cell test, and how a (light, cell) hit is counted or listed.
 //
-// A build: `count` (one 32-lane group of threads per light, over the cells its
-// bounds cover: counts[cell] += 1) -> `scan_blocks`, `scan_sums`, `scan_add`
+// A build: `count` (one 32-lane group of threads per work item: a light, or
+// a slice of a light with many cells, over the cells its bounds cover:
+// counts[cell] += 1) -> `scan_blocks`, `scan_sums`, `scan_add`
 // (exclusive prefix sum of the counts: each cell's first entry) -> `fill`
 // (the same loop: list[first + --counts[cell]] = light) -> `finish` (the
 // cell's range is the entries fill wrote; counts back to zero for the next
@@ -22,16 +23,37 @@
 @group(1) @binding(4) var<storage, read_write> block_sums: array<u32>;
 // [0]: entries of all cells (saturated), read back to grow the list.
 @group(1) @binding(5) var<storage, read_write> status: array<u32>;
+// Per work item: (light among the grid's lights, slice | slices << 16). A
+// light's cells are dealt to its slices LANES at a time, so that one light
+// covering the whole grid is walked by many groups, not one.
+@group(1) @binding(6) var<storage, read> work: array<vec2u>;
 
-// Threads per light in `count` and `fill`: they share the light's cells.
+// Threads per work item in `count` and `fill`: they share its cells.
 const LANES: u32 = 32u;
-// Lights per 64-thread workgroup.
-const LIGHTS_PER_GROUP: u32 = 2u;
+// Work items per 64-thread workgroup.
+const ITEMS_PER_GROUP: u32 = 2u;
 
-// The light handled by this invocation (past `view.light_count` when none):
-// workgroups may be laid out in 2D when there are more than 65535.
-fn light_of(wg: vec3u, groups: vec3u, lid: u32, first: u32) -> u32 {
-    return first + (wg.y * groups.x + wg.x) * LIGHTS_PER_GROUP + lid / LANES;
+// What an invocation walks: the light (an index into `lights`) and its
+// first cell and step in the light's cell order.
+struct Work {
+    light: u32,
+    first: u32,
+    step: u32,
+}
+
+// The work of this invocation; `None` (a light past `view.light_count`)
+// when the dispatch has more threads than items. Workgroups may be laid out
+// in 2D when there are more than 65535.
+fn work_of(wg: vec3u, groups: vec3u, lid: u32, first_light: u32) -> Work {
+    let item = (wg.y * groups.x + wg.x) * ITEMS_PER_GROUP + lid / LANES;
+    let lane = lid % LANES;
+    if item >= params.work_count {
+        return Work(0xffffffffu, 0u, 0u);
+    }
+    let w = work[item];
+    let slice = w.y & 0xffffu;
+    let slices = w.y >> 16u;
+    return Work(first_light + w.x, slice * LANES + lane, slices * LANES);
 }
 
 // The radius a light is binned with: a 1/1024 margin (and 0.1 mm) so that

@@ -89,7 +89,8 @@ impl Clusters {
 pub fn build_clusters(frame: &mut Frame, clusters: &mut Clusters) {
     let aspect = frame.targets.width as f32 / frame.targets.height as f32;
     let params = clusters.geometry(frame.camera, aspect);
-    clusters.grid.build(frame, params);
+    // Clusters are view space and few per light: one work item each.
+    clusters.grid.build(frame, params, |_| 1);
 }
 
 /// View depth of slice boundary `k` (0: near; `slices`: far). Mirrors

@@ -4,7 +4,7 @@
 // slice by slice, the tiles whose boxes its sphere's box overlaps; `count`
 // counts the hits, `fill` lists them (see build.wgsl).
 #import shadespace::scene_bindings::{view, lights}
-#import shadespace::light_grid_build::{params, LANES, light_of, binning_radius, light_touches_box, record}
+#import shadespace::light_grid_build::{params, Work, work_of, binning_radius, light_touches_box, record}
 
 // View depth of slice boundary k (0: near, dims.z: far).
 fn slice_depth(k: u32) -> f32 {
@@ -52,7 +52,8 @@ fn ndc_range(lo: f32, hi: f32, th: f32, d0: f32, d1: f32) -> vec2f {
     return vec2f(lowest, highest);
 }
 
-fn bin(light: u32, lane: u32, fill: bool) {
+fn bin(w: Work, fill: bool) {
+    let light = w.light;
     let l = lights[light];
     let r = binning_radius(l.radius);
     let c = (params.to_grid * vec4f(l.position, 1.0)).xyz;
@@ -83,7 +84,7 @@ fn bin(light: u32, lane: u32, fill: bool) {
         }
         let size = last - first + 1u;
         let n = size.x * size.y;
-        for (var i = lane; i < n; i += LANES) {
+        for (var i = w.first; i < n; i += w.step) {
             let t = first + vec2u(i % size.x, i / size.x);
             let b = cluster_box(t, d0, d1);
             if light_touches_box(l.kind, c, dir, r, l.cos_outer, b.lo, b.hi) {
@@ -96,17 +97,17 @@ fn bin(light: u32, lane: u32, fill: bool) {
 @compute @workgroup_size(64)
 fn count(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
          @builtin(local_invocation_index) lid: u32) {
-    let light = light_of(wg, groups, lid, view.global_light_count);
-    if light < view.light_count {
-        bin(light, lid % LANES, false);
+    let w = work_of(wg, groups, lid, view.global_light_count);
+    if w.light < view.light_count {
+        bin(w, false);
     }
 }
 
 @compute @workgroup_size(64)
 fn fill(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
         @builtin(local_invocation_index) lid: u32) {
-    let light = light_of(wg, groups, lid, view.global_light_count);
-    if light < view.light_count {
-        bin(light, lid % LANES, true);
+    let w = work_of(wg, groups, lid, view.global_light_count);
+    if w.light < view.light_count {
+        bin(w, true);
     }
 }

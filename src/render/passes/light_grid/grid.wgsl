@@ -31,7 +31,8 @@ struct LightGridParams {
     // Entries the index list holds; a cell whose range passes it was not
     // (fully) written, and its points loop over every light instead.
     capacity: u32,
-    pad_a: u32,
+    // Work items of the build's `count` and `fill` (`work` in build.wgsl).
+    work_count: u32,
     pad_b: u32,
 }
 

@@ -11,7 +11,8 @@
 //!
 //! A build ([`LightGrid::build`]), timed as `<grid>: count`, `<grid>: scan`
 //! and `<grid>: fill`:
-//! 1. *count*: one group of 32 threads per light walks the cells its bounds
+//! 1. *count*: one group of 32 threads per light (per slice of a light whose
+//!    bounds hold many cells: [`CELLS_PER_ITEM`]) walks the cells its bounds
 //!    cover and counts the hits (atomics); the per-cell test is conservative
 //!    (sphere against the cell's box, and for spots the cone against the box's
 //!    bounding sphere), so no light that reaches a point of a cell is missed;
@@ -63,8 +64,15 @@ pub const READ_GROUP: u32 = 3;
 const SCAN_BLOCK: u32 = 1024;
 /// Threads per workgroup of the per-cell passes.
 const CELL_THREADS: u32 = 256;
-/// Lights per workgroup of `count` and `fill` (`LIGHTS_PER_GROUP` in `build.wgsl`).
-const LIGHTS_PER_GROUP: u32 = 2;
+/// Work items per workgroup of `count` and `fill` (`ITEMS_PER_GROUP` in `build.wgsl`).
+const ITEMS_PER_GROUP: u32 = 2;
+/// Most cells one work item of `count` and `fill` walks (16 per thread): a
+/// light whose bounds hold more is dealt to several items, so that a light
+/// covering the whole grid does not leave 32 threads walking it alone (on
+/// the H100, four such lights took 0.36 ms of the world grid's build).
+pub const CELLS_PER_ITEM: u64 = 512;
+/// Work items the work buffer holds at first.
+const MIN_WORK_ITEMS: u64 = 1024;
 /// Smallest index list, in entries (4 MiB).
 const MIN_CAPACITY: u64 = 1 << 20;
 
@@ -90,7 +98,8 @@ gpu_struct! {
         pub slices_per_log: f32,
         /// Entries the index list holds.
         pub capacity: u32,
-        pub pad_a: u32,
+        /// Work items of `count` and `fill` ([`LightGrid::build`]).
+        pub work_count: u32,
         pub pad_b: u32,
     }
 }
@@ -106,6 +115,12 @@ pub struct LightGrid {
     list: wgpu::Buffer,
     block_sums: wgpu::Buffer,
     status: wgpu::Buffer,
+    /// Per work item of `count` and `fill`: (light among the grid's lights,
+    /// slice | slices << 16).
+    work: wgpu::Buffer,
+    work_capacity: u64,
+    /// Work items for the current lights; `None` before the first build.
+    work_count: Option<u32>,
     capacity: u64,
     max_capacity: u64,
     build_layout: wgpu::BindGroupLayout,
@@ -178,6 +193,7 @@ impl LightGrid {
         let cells = storage("cells", cells_n * 8, wgpu::BufferUsages::COPY_SRC);
         let block_sums = storage("block sums", cells_n.div_ceil(SCAN_BLOCK as u64) * 4, wgpu::BufferUsages::empty());
         let status = storage("status", 16, wgpu::BufferUsages::COPY_SRC);
+        let work = Self::work_buffer(device, label, MIN_WORK_ITEMS);
         let capacity = MIN_CAPACITY.min(max_capacity);
         let list = Self::list_buffer(device, label, capacity);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
@@ -187,9 +203,9 @@ impl LightGrid {
             mapped_at_creation: false,
         });
         let rw = Binding::Storage { read_only: false };
-        let build_layout =
-            bind_group_layout(device, &format!("{label} build"), &[Binding::Uniform, rw, rw, rw, rw, rw]);
         let read = Binding::Storage { read_only: true };
+        let build_layout =
+            bind_group_layout(device, &format!("{label} build"), &[Binding::Uniform, rw, rw, rw, rw, rw, read]);
         let stages = wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT;
         let layout = bind_group_layout_for(device, label, stages, &[Binding::Uniform, read, read]);
         let groups = [&scene.layout, &build_layout];
@@ -203,7 +219,7 @@ impl LightGrid {
             device,
             label,
             (&build_layout, &layout),
-            [&params, &counts, &cells, &list, &block_sums, &status],
+            [&params, &counts, &cells, &list, &block_sums, &status, &work],
         );
         Ok(Self {
             label,
@@ -214,6 +230,9 @@ impl LightGrid {
             list,
             block_sums,
             status,
+            work,
+            work_capacity: MIN_WORK_ITEMS,
+            work_count: None,
             capacity,
             max_capacity,
             build_layout,
@@ -241,13 +260,22 @@ impl LightGrid {
         })
     }
 
-    /// Build group (params, counts, cells, list, block sums, status) and read
-    /// group (params, cells, list).
+    fn work_buffer(device: &wgpu::Device, label: &str, items: u64) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(&format!("{label} work")),
+            size: items.max(1) * 8,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Build group (params, counts, cells, list, block sums, status, work)
+    /// and read group (params, cells, list).
     fn bind_groups(
         device: &wgpu::Device,
         label: &str,
         (build, read): (&wgpu::BindGroupLayout, &wgpu::BindGroupLayout),
-        buffers: [&wgpu::Buffer; 6],
+        buffers: [&wgpu::Buffer; 7],
     ) -> (wgpu::BindGroup, wgpu::BindGroup) {
         let all = buffers.map(|b| b.as_entire_binding());
         let build_group = bind_group(device, &format!("{label} build"), build, &all);
@@ -272,7 +300,7 @@ impl LightGrid {
 
     /// Bytes of GPU memory the grid holds.
     pub fn bytes(&self) -> u64 {
-        [&self.counts, &self.cells, &self.list, &self.block_sums, &self.status, &self.params]
+        [&self.counts, &self.cells, &self.list, &self.block_sums, &self.status, &self.params, &self.work]
             .iter()
             .map(|b| b.size())
             .sum()
@@ -288,18 +316,42 @@ impl LightGrid {
         tracing::debug!("{}: index list grows from {} to {wanted} entries", self.label, self.capacity);
         self.capacity = wanted;
         self.list = Self::list_buffer(device, self.label, wanted);
+        self.rebind(device);
+    }
+
+    fn rebind(&mut self, device: &wgpu::Device) {
         (self.build_group, self.read_group) = Self::bind_groups(
             device,
             self.label,
             (&self.build_layout, &self.layout),
-            [&self.params, &self.counts, &self.cells, &self.list, &self.block_sums, &self.status],
+            [&self.params, &self.counts, &self.cells, &self.list, &self.block_sums, &self.status, &self.work],
         );
     }
 
-    /// Records this frame's build over `params` (its geometry; the capacity is
-    /// filled in here). Reads: the scene's view and lights. Writes: the
-    /// grid's cells and list, and its total for the read-back.
-    pub fn build(&mut self, frame: &mut Frame, mut params: GpuLightGridParams) {
+    /// Deals the grid's lights (the point and spot lights of `lights`, in
+    /// their order) to the work items of `count` and `fill`: light `l` gets
+    /// one item per [`CELLS_PER_ITEM`] of its `cells(l)` cells (at least one).
+    fn set_work(&mut self, frame: &Frame, cells: impl Fn(&Light) -> u64) {
+        let mut items: Vec<[u32; 2]> = Vec::new();
+        for (k, light) in frame.lights.iter().filter(|l| !is_global(l)).enumerate() {
+            let slices = cells(light).div_ceil(CELLS_PER_ITEM).clamp(1, 0xffff) as u32;
+            items.extend((0..slices).map(|s| [k as u32, s | slices << 16]));
+        }
+        if items.len() as u64 > self.work_capacity {
+            self.work_capacity = (items.len() as u64).next_power_of_two();
+            self.work = Self::work_buffer(frame.device, self.label, self.work_capacity);
+            self.rebind(frame.device);
+        }
+        frame.queue.write_buffer(&self.work, 0, bytemuck::cast_slice(&items));
+        self.work_count = Some(items.len() as u32);
+    }
+
+    /// Records this frame's build over `params` (its geometry; the capacity
+    /// and work are filled in here); `cells(light)` bounds the cells a light's
+    /// walk covers (how its work is split; 1 keeps one item per light).
+    /// Reads: the scene's view and lights. Writes: the grid's cells and list,
+    /// and its total for the read-back.
+    pub fn build(&mut self, frame: &mut Frame, mut params: GpuLightGridParams, cells: impl Fn(&Light) -> u64) {
         assert!(
             params.cell_count <= self.max_cells,
             "{}: {} cells > {}",
@@ -317,12 +369,15 @@ impl LightGrid {
             self.peak_entries = self.peak_entries.max(peak);
             self.reserve(frame.device, peak);
         }
+        if frame.lights_changed || self.work_count.is_none() {
+            self.set_work(frame, cells);
+        }
+        let items = self.work_count.unwrap_or(0);
         params.capacity = self.capacity as u32;
+        params.work_count = items;
         self.last = params;
         frame.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let global = |l: &&Light| matches!(l.kind, LightKind::Ambient | LightKind::Directional);
-        let lights = (frame.lights.len() - frame.lights.iter().filter(global).count()) as u32;
-        let light_groups = split(lights.div_ceil(LIGHTS_PER_GROUP));
+        let light_groups = split(items.div_ceil(ITEMS_PER_GROUP));
         let cell_groups = split(params.cell_count.div_ceil(CELL_THREADS));
         let blocks = params.cell_count.div_ceil(SCAN_BLOCK);
         let scene = frame.scene_group;
@@ -363,6 +418,11 @@ impl LightGrid {
         let status: Vec<u32> = bytemuck::pod_collect_to_vec(&readback::read_whole_buffer(ctx, &self.status)?);
         Ok(GridContents { params: self.last, cells: cells[..n].to_vec(), list, total: status[0] })
     }
+}
+
+/// Whether a light reaches everywhere (applied by `light_globals`, in no grid).
+fn is_global(l: &Light) -> bool {
+    matches!(l.kind, LightKind::Ambient | LightKind::Directional)
 }
 
 /// Workgroups `n` as (x, y) within the 65535-per-dimension limit; the

@@ -99,7 +99,7 @@ pub fn build_world_grid(frame: &mut Frame, world: &mut WorldGrid) {
     }
     let (params, bound) = world.current.expect("set above");
     world.grid.reserve(frame.device, bound);
-    world.grid.build(frame, params);
+    world.grid.build(frame, params, |l| box_cells(&params, l.position, l.radius));
 }
 
 /// The smallest cell side: the longest side over [`MAX_CELLS_PER_AXIS`] (a
