@@ -174,6 +174,20 @@ fn viewer_screenshot_matches_render_objectspace() {
     check_screenshot_matches_render(Some(&x.display), "objectspace");
 }
 
+/// `--headless` with nothing to end the run is refused before any work,
+/// with status 2 and the reason.
+#[test]
+fn headless_without_frames_or_script_is_refused() {
+    let out = Command::new(env!("CARGO_BIN_EXE_shadespace"))
+        .args(["view", "--scene", "atrium", "--headless"])
+        .env_remove("DISPLAY")
+        .output()
+        .expect("run shadespace");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--headless needs --frames or --script"), "{stderr}");
+}
+
 /// With no display at all: the same frames, the panel painted offscreen,
 /// and the per-pass GPU medians reported as in a window.
 #[test]
