@@ -6,9 +6,10 @@
 //! the headless viewer's (`--headless`, no display at all) runs anyway.
 #![cfg(feature = "viewer")]
 
-use std::path::{Path, PathBuf};
+use std::io::{BufRead, BufReader};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use shadespace::metrics;
 
@@ -36,35 +37,37 @@ struct Xvfb {
 
 impl Drop for Xvfb {
     fn drop(&mut self) {
-        let _ = self.child.kill();
+        // SIGTERM, so that it removes its socket and lock file (killed, it
+        // leaves them behind).
+        let terminated = Command::new("kill").arg(self.child.id().to_string()).status();
+        if !terminated.is_ok_and(|s| s.success()) {
+            let _ = self.child.kill();
+        }
         let _ = self.child.wait();
     }
 }
 
-/// Starts Xvfb on display `:number`, or says why the test is skipped.
-fn xvfb(number: u32) -> Option<Xvfb> {
+/// Starts Xvfb on a free display, or says why the test is skipped. With
+/// `-displayfd` Xvfb picks the display itself and writes its number once it
+/// accepts connections: waiting for a display's socket file instead was
+/// fooled by stale files of servers killed earlier on the same machine.
+fn xvfb() -> Option<Xvfb> {
     let found = std::env::var_os("PATH")
         .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join("Xvfb").is_file()));
     if !found {
         eprintln!("skipped: Xvfb not installed");
         return None;
     }
-    // A display number of this process's own, so that parallel runs do not meet.
-    let number = 100 + (std::process::id() % 400) * 2 + number;
-    let display = format!(":{number}");
-    let child = Command::new("Xvfb")
-        .args([&display, "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
-        .stdout(Stdio::null())
+    let mut child = Command::new("Xvfb")
+        .args(["-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+        .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
         .expect("start Xvfb");
-    let socket = PathBuf::from(format!("/tmp/.X11-unix/X{number}"));
-    let start = Instant::now();
-    while !socket.exists() {
-        assert!(start.elapsed() < Duration::from_secs(20), "Xvfb {display} did not start");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    Some(Xvfb { child, display })
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().expect("piped")).read_line(&mut line).expect("read Xvfb's display");
+    let number: u32 = line.trim().parse().unwrap_or_else(|_| panic!("Xvfb did not start (it wrote {line:?})"));
+    Some(Xvfb { child, display: format!(":{number}") })
 }
 
 /// Runs `shadespace ARGS` on `display` (none: with no display in its
@@ -164,13 +167,13 @@ fn check_screenshot_matches_render(display: Option<&str>, pipeline: &str) {
 
 #[test]
 fn viewer_screenshot_matches_render_forward() {
-    let Some(x) = xvfb(0) else { return };
+    let Some(x) = xvfb() else { return };
     check_screenshot_matches_render(Some(&x.display), "forward");
 }
 
 #[test]
 fn viewer_screenshot_matches_render_objectspace() {
-    let Some(x) = xvfb(1) else { return };
+    let Some(x) = xvfb() else { return };
     check_screenshot_matches_render(Some(&x.display), "objectspace");
 }
 
@@ -197,7 +200,7 @@ fn headless_viewer_screenshot_matches_render() {
 
 #[test]
 fn switching_pipelines_and_options_keeps_memory_flat() {
-    let Some(x) = xvfb(2) else { return };
+    let Some(x) = xvfb() else { return };
     let switches: u32 =
         std::env::var("SHADESPACE_VIEWER_SWITCHES").ok().and_then(|v| v.parse().ok()).unwrap_or(SWITCHES);
     let dir = tempfile::tempdir().unwrap();
