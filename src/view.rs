@@ -126,6 +126,16 @@ pub fn view(a: ViewArgs) -> Result<(), Failure> {
         "{} frames, {} renderer builds; host memory (RSS): {} KiB at the start, {} KiB after the first frame, {} KiB at the end",
         report.frames, report.renderer_builds, report.rss_kib_start, report.rss_kib_first_frame, report.rss_kib_end
     );
+    if !report.gpu_pass_ms.is_empty() {
+        let total: f64 = report.gpu_pass_ms.iter().map(|(_, ms)| ms).sum();
+        let passes: Vec<String> = report.gpu_pass_ms.iter().map(|(name, ms)| format!("{name} {ms:.3}")).collect();
+        // Over the frames whose timings came back (read without waiting).
+        println!(
+            "GPU medians of the last {} frames at most: {total:.3} ms in passes ({})",
+            viewer::timings::HISTORY_FRAMES,
+            passes.join(", ")
+        );
+    }
     Ok(())
 }
 

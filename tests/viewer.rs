@@ -129,7 +129,8 @@ fn check_screenshot_matches_render(display: Option<&str>, pipeline: &str) {
     let mut args = vec!["view", "--scene", "atrium", "--pipeline", pipeline, "--size", SIZE];
     args.extend(["--script", script_path.to_str().unwrap(), "--report", report_path.to_str().unwrap()]);
     args.extend(if display.is_some() { ["--vsync", "off"].as_slice() } else { ["--headless"].as_slice() });
-    shadespace(display, &args);
+    let stdout = shadespace(display, &args);
+    assert!(stdout.contains("GPU medians of the last"), "{stdout}");
     // The per-pass medians `scripts/viewer-vs-bench` sets beside bench's.
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report_path).unwrap()).unwrap();
     let passes = report["gpu_pass_ms"].as_array().unwrap_or_else(|| panic!("report has gpu_pass_ms: {report}"));
