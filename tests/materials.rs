@@ -440,7 +440,6 @@ fn material_textures_pbr() {
 /// image must be green where, without the transform, the floor is red.
 #[test]
 fn texture_transform_moves_the_texture_in_every_pipeline() {
-    use shadespace::render::VisibilityMethod;
     use textured_floor::uv_at;
     let dir = tempfile::tempdir().unwrap();
     let red_green = image::RgbaImage::from_fn(64, 64, |x, _| {
@@ -478,18 +477,7 @@ fn texture_transform_moves_the_texture_in_every_pipeline() {
     let before = red_minus_green(&render_floor(&ctx, &plain, ShadingModel::Pbr, forward()));
     assert!(before > 40.0, "without the transform the half is red: red - green {before:.1}");
     let (charted, sizes) = common::charted(&moved);
-    let pipelines = [
-        forward(),
-        PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
-        PipelineConfig::Clustered(ClusteredConfig::default()),
-        PipelineConfig::Deferred(DeferredConfig::default()),
-        PipelineConfig::DeferredCompute(DeferredComputeConfig {
-            visibility: VisibilityMethod::Compute,
-            ..Default::default()
-        }),
-        PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes: sizes, ..Default::default() }),
-    ];
-    for pipeline in pipelines {
+    for pipeline in std::iter::once(forward()).chain(pipelines(sizes)) {
         let name = pipeline.name();
         let scene = if matches!(pipeline, PipelineConfig::ObjectSpace(_)) { &charted } else { &moved };
         let after = red_minus_green(&render_floor(&ctx, scene, ShadingModel::Pbr, pipeline));

@@ -386,7 +386,9 @@ impl UvTransform {
 struct TextureSlot<'t> {
     texture: ::gltf::Texture<'t>,
     tex_coord: u32,
-    /// Its `KHR_texture_transform` object, unparsed.
+    /// Its `KHR_texture_transform` object, unparsed: the `gltf` crate reads
+    /// the extension on three of the five slots only (not on the normal and
+    /// occlusion textures), so all five go through [`UvTransform::parse`].
     transform: Option<serde_json::Value>,
 }
 
