@@ -27,7 +27,8 @@ const SWITCHES_PER_ROUND: u32 = 18;
 /// caches are warm). Floors, because single rounds spike (by up to 130 MiB
 /// on lavapipe) while the memory is given back.
 const RSS_GROWTH_KIB: u64 = 64 * 1024;
-const SIZE: &str = "320x240";
+/// Wide enough that the frame shows beside the panel (about 330 pixels).
+const SIZE: &str = "480x240";
 
 /// A private X server, stopped on drop.
 struct Xvfb {
@@ -164,6 +165,17 @@ fn check_screenshot_matches_render(display: Option<&str>, pipeline: &str) {
     let share = changed as f64 / (panel_width * viewer.height()) as f64;
     eprintln!("{pipeline}: the panel changed {:.1}% of the left third", share * 100.0);
     assert!(share > 0.2, "the panel is not drawn: only {:.1}% of the left third changed", share * 100.0);
+    // Beside the panel the window shows the frame itself, pixel for pixel
+    // (the window has the image's size): egui must neither decode nor
+    // encode its sRGB values again.
+    let beside = (viewer.width() - 16..viewer.width()).flat_map(|x| (0..viewer.height()).map(move |y| (x, y)));
+    let (sum, n) = beside.fold((0u64, 0u64), |(sum, n), (x, y)| {
+        let (a, b) = (render.get_pixel(x, y).0, with_ui.get_pixel(x, y).0);
+        (sum + (0..3).map(|c| a[c].abs_diff(b[c]) as u64).sum::<u64>(), n + 3)
+    });
+    let mean = sum as f64 / n as f64;
+    eprintln!("{pipeline}: beside the panel, the window differs from render by {mean:.2} on average (8-bit)");
+    assert!(mean < 2.0, "{pipeline}: the window shows the frame {mean:.2} off (8-bit mean) beside the panel");
 }
 
 #[test]

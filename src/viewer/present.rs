@@ -108,13 +108,13 @@ impl Presenter {
             dimension: wgpu::TextureDimension::D2,
             format: LDR_FORMAT,
             usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[LDR_FORMAT.add_srgb_suffix()],
+            view_formats: &[],
         });
-        // Sampled through an sRGB view: egui gets linear colour, as from its own textures.
-        let view = image.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(LDR_FORMAT.add_srgb_suffix()),
-            ..Default::default()
-        });
+        // Sampled as stored: egui (0.37) takes texels as sRGB-encoded, as its
+        // own textures are, and writes them to the non-sRGB target unchanged.
+        // (Through an sRGB view it got them decoded, and the window showed
+        // the frame about four times too dark in its mid-tones.)
+        let view = image.create_view(&Default::default());
         let image_id = egui.register_native_texture(&ctx.device, &view, wgpu::FilterMode::Nearest);
         Self { output, format, size, egui, image, image_id, to_free: Vec::new() }
     }
