@@ -56,7 +56,9 @@ gpu_struct! {
         pub occlusion_layer: u32,
         /// Occlusion is `1 + occlusion_strength * (red - 1)`, on ambient light only.
         pub occlusion_strength: f32,
-        pub pad_a: u32,
+        /// Fragments whose alpha (base colour factor times texture) is below
+        /// this are cut away (alpha masking); 0 for opaque objects.
+        pub alpha_cutoff: f32,
         pub pad_b: u32,
         pub pad_c: u32,
     }

@@ -73,6 +73,9 @@ pub struct SceneGpu {
     pub triangle_charts: wgpu::Buffer,
     /// The scene's [`Scene::cull_back_faces`].
     pub cull_back_faces: bool,
+    /// Per object: whether its material is alpha-masked
+    /// ([`crate::scene::Material::alpha_cutoff`]).
+    pub masked: Vec<bool>,
     /// Some object has an emissive, metallic-roughness or occlusion texture
     /// (the shaders are composed with [`crate::shaders::MATERIAL_TEXTURES`]).
     pub material_textures: bool,
@@ -80,9 +83,11 @@ pub struct SceneGpu {
     pub shadow_atlas: ShadowAtlas,
     lights: GrowableBuffer,
     light_indices: GrowableBuffer,
-    albedo_view: wgpu::TextureView,
+    /// The colour textures as one array (binding 5), and the sampler of
+    /// every scene texture (binding 6).
+    pub albedo_view: wgpu::TextureView,
     linear_maps_view: wgpu::TextureView,
-    sampler: wgpu::Sampler,
+    pub sampler: wgpu::Sampler,
     pub layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
 }
@@ -138,6 +143,7 @@ impl SceneGpu {
                     metal_rough_layer: linear_layer(m.metallic_roughness_texture),
                     occlusion_layer: linear_layer(m.occlusion_texture),
                     occlusion_strength: m.occlusion_strength,
+                    alpha_cutoff: m.alpha_cutoff.unwrap_or(0.0),
                     ..Default::default()
                 }
             })
@@ -210,6 +216,7 @@ impl SceneGpu {
             object_data,
             triangle_count: scene.triangle_count() as u64,
             cull_back_faces: scene.cull_back_faces,
+            masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),
             material_textures,
             triangle_charts,
             shadow_atlas,
@@ -221,6 +228,11 @@ impl SceneGpu {
             layout,
             bind_group,
         }
+    }
+
+    /// Whether some object is alpha-masked.
+    pub fn has_alpha_masks(&self) -> bool {
+        self.masked.contains(&true)
     }
 
     pub fn bind_group(&self) -> &wgpu::BindGroup {

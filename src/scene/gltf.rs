@@ -17,7 +17,9 @@
 //!   texture (linear: blue = metallic, green = roughness, multiplying the
 //!   factors), emissive factor (times `KHR_materials_emissive_strength`) and
 //!   texture (sRGB, multiplying the factor), occlusion texture (red, with its
-//!   `strength`; applied to ambient light only). A texture whose factor is
+//!   `strength`; applied to ambient light only), alpha mode and cutoff
+//!   (`MASK`; `BLEND` is drawn as `MASK` with cutoff 0.5, with a warning,
+//!   since no pipeline here blends). A texture whose factor is
 //!   zero is not loaded (it would change nothing). Every texture is sampled
 //!   with TEXCOORD_0 (another set is a warning). `KHR_texture_transform`
 //!   (offset, rotation, scale) is baked into the primitive's UV0, so every
@@ -59,6 +61,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use ::gltf::accessor::{DataType, Dimensions};
+use ::gltf::material::AlphaMode;
 use ::gltf::mesh::Mode;
 use ::gltf::{Accessor, Document, Semantic};
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -704,6 +707,19 @@ impl Builder<'_> {
             );
             m.emissive = Vec3::ZERO;
         }
+        m.alpha_cutoff = match material.alpha_mode() {
+            AlphaMode::Opaque => None,
+            AlphaMode::Mask => Some(material.alpha_cutoff().unwrap_or(0.5)),
+            AlphaMode::Blend => {
+                tracing::warn!(
+                    "{}: material '{name}': alphaMode BLEND is drawn as MASK with cutoff 0.5 (no pipeline here blends)",
+                    self.path.display(),
+                );
+                Some(0.5)
+            }
+        }
+        // A cutoff of 0 or less cuts nothing: the material is opaque.
+        .filter(|&c| c > 0.0);
         const TRANSFORM: &str = "KHR_texture_transform";
         fn slot<'t>(i: ::gltf::texture::Info<'t>) -> TextureSlot<'t> {
             let transform = i.extension_value(TRANSFORM).cloned();
@@ -1246,6 +1262,34 @@ mod tests {
         assert_eq!(plain[0].name, "plain");
         assert_eq!(plain[0].shininess, Material::shininess_from_roughness(1.0));
         assert_ne!(plain[0].base_color_texture, plain[1].base_color_texture);
+    }
+
+    /// Alpha modes: `MASK` keeps its cutoff (0.5 where the file gives none),
+    /// `BLEND` becomes a mask at 0.5, `OPAQUE` and a cutoff of 0 mask nothing;
+    /// a mode glTF does not define is an error naming the file.
+    #[test]
+    fn alpha_modes() {
+        let mut doc = document(data_uri(&triangle_buffer([0, 1, 2])));
+        doc["materials"] = json!([
+            { "alphaMode": "MASK", "alphaCutoff": 0.3 },
+            { "alphaMode": "MASK" },
+            { "alphaMode": "BLEND" },
+            { "alphaMode": "OPAQUE", "alphaCutoff": 0.3 },
+            { "alphaMode": "MASK", "alphaCutoff": 0.0 }
+        ]);
+        let primitive = |m: usize| json!({ "attributes": { "POSITION": 0 }, "indices": 1, "material": m });
+        doc["meshes"][0]["primitives"] = json!((0..5).map(primitive).collect::<Vec<_>>());
+        let dir = tempfile::tempdir().unwrap();
+        let scene = load(&write(dir.path(), "t.gltf", serde_json::to_vec(&doc).unwrap())).unwrap();
+        let cutoffs: Vec<Option<f32>> =
+            (0..5).map(|o| scene.materials[scene.objects[o].material].alpha_cutoff).collect();
+        assert_eq!(cutoffs, [Some(0.3), Some(0.5), Some(0.5), None, None]);
+        assert!(scene.has_alpha_masks());
+
+        doc["materials"][0]["alphaMode"] = json!("DITHER");
+        let path = write(dir.path(), "bad.gltf", serde_json::to_vec(&doc).unwrap());
+        let message = load(&path).expect_err("an undefined alpha mode").to_string();
+        assert!(message.contains("bad.gltf"), "{message}");
     }
 
     /// Emissive (with `KHR_materials_emissive_strength`), metallic-roughness

@@ -220,6 +220,10 @@ pub struct Material {
     pub specular: f32,
     /// Phong exponent p in `max(R·V, 0)^p`.
     pub shininess: f32,
+    /// Alpha masking (glTF `MASK`): where the alpha of `base_color` times
+    /// the base colour texture's is below this, the surface is not there
+    /// (not drawn, casts no shadow). `None`: opaque, alpha ignored.
+    pub alpha_cutoff: Option<f32>,
 }
 
 impl Default for Material {
@@ -238,6 +242,7 @@ impl Default for Material {
             occlusion_strength: 1.0,
             specular: 0.25,
             shininess: 32.0,
+            alpha_cutoff: None,
         }
     }
 }
@@ -360,6 +365,11 @@ impl Scene {
     /// World-space bounds of the whole scene.
     pub fn bounds(&self) -> Aabb {
         (0..self.objects.len()).fold(Aabb::EMPTY, |b, i| b.union(&self.object_bounds(i)))
+    }
+
+    /// Whether some object's material is alpha-masked.
+    pub fn has_alpha_masks(&self) -> bool {
+        self.objects.iter().any(|o| self.materials[o.material].alpha_cutoff.is_some())
     }
 
     /// Every object's vertices in world space (for framing the scene).

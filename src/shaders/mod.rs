@@ -48,6 +48,7 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/lighting.wgsl", include_str!("shared/lighting.wgsl")),
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
+    ShaderSource::new("shared/alpha_mask.wgsl", include_str!("shared/alpha_mask.wgsl")),
     ShaderSource::new("shared/normal_map.wgsl", include_str!("shared/normal_map.wgsl")),
     ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
     ShaderSource::new("shared/pixel_surface.wgsl", include_str!("shared/pixel_surface.wgsl")),
@@ -89,6 +90,12 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
 /// (measured on the H100: 3-7 % in every pipeline, 20 % in the two that
 /// write the raster G-buffer).
 pub const MATERIAL_TEXTURES: &str = "MATERIAL_TEXTURES";
+
+/// Defined in the variant of a scene raster pass that draws the alpha-masked
+/// objects ([`crate::render::passes::ScenePipeline`]): its fragment stage
+/// discards their cut-away fragments (`shared/alpha_mask.wgsl`); a depth-only
+/// pass gains the fragment entry point `fs_alpha_mask` for it.
+pub const ALPHA_MASK: &str = "ALPHA_MASK";
 
 /// Composes pass shaders with the shared modules.
 pub struct ShaderLibrary {
@@ -133,7 +140,13 @@ impl ShaderLibrary {
 
     /// The composed, validated naga module of a pass shader.
     pub fn compose(&mut self, shader: ShaderSource) -> Result<wgpu::naga::Module, ShaderError> {
-        let defs = shader.defs.iter().chain(&self.defs);
+        self.compose_with(shader, &[])
+    }
+
+    /// [`Self::compose`] with `extra` defined too (a variant of a shader
+    /// that may itself have definitions).
+    pub fn compose_with(&mut self, shader: ShaderSource, extra: &[&str]) -> Result<wgpu::naga::Module, ShaderError> {
+        let defs = shader.defs.iter().chain(&self.defs).chain(extra);
         let shader_defs = defs.map(|d| (d.to_string(), ShaderDefValue::Bool(true))).collect();
         let module = self.composer.make_naga_module(NagaModuleDescriptor {
             source: shader.source,
@@ -147,7 +160,17 @@ impl ShaderLibrary {
 
     /// A device shader module for a pass shader.
     pub fn module(&mut self, device: &wgpu::Device, shader: ShaderSource) -> Result<wgpu::ShaderModule, ShaderError> {
-        let module = self.compose(shader)?;
+        self.module_with(device, shader, &[])
+    }
+
+    /// [`Self::module`] with `extra` defined too.
+    pub fn module_with(
+        &mut self,
+        device: &wgpu::Device,
+        shader: ShaderSource,
+        extra: &[&str],
+    ) -> Result<wgpu::ShaderModule, ShaderError> {
+        let module = self.compose_with(shader, extra)?;
         Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(shader.file),
             source: wgpu::ShaderSource::Naga(Cow::Owned(module)),
@@ -174,22 +197,26 @@ mod tests {
     use super::*;
 
     /// Every pass shader composes and passes naga's validation, without a GPU,
-    /// with and without the material textures.
+    /// with and without the material textures, and the scene raster passes'
+    /// alpha-mask variants too.
     #[test]
     fn all_shaders_compose_and_validate() {
+        let masked = crate::render::passes::alpha_masked_shaders();
         for materials in [false, true] {
             let mut lib = ShaderLibrary::new().expect("shared modules compose");
             if materials {
                 lib.define(MATERIAL_TEXTURES);
             }
-            for shader in pass_shaders() {
-                let module = lib.compose(shader).unwrap_or_else(|e| panic!("{e}"));
+            let variants =
+                pass_shaders().into_iter().map(|s| (s, &[][..])).chain(masked.iter().map(|s| (*s, &[ALPHA_MASK][..])));
+            for (shader, extra) in variants {
+                let module = lib.compose_with(shader, extra).unwrap_or_else(|e| panic!("{e}"));
                 wgpu::naga::valid::Validator::new(
                     wgpu::naga::valid::ValidationFlags::all(),
                     wgpu::naga::valid::Capabilities::all(),
                 )
                 .validate(&module)
-                .unwrap_or_else(|e| panic!("{} (material textures: {materials}): {e:?}", shader.file));
+                .unwrap_or_else(|e| panic!("{} {extra:?} (material textures: {materials}): {e:?}", shader.file));
             }
         }
     }

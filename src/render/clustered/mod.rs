@@ -10,7 +10,7 @@ use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::light_grid::clusters::{ClusterDims, Clusters, build_clusters};
 use super::passes::light_grid::{LightGrid, READ_GROUP};
 use super::passes::{
-    DepthMode, SceneRaster, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline_from,
+    DepthMode, ScenePipeline, SceneRaster, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline_from,
 };
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
@@ -30,7 +30,7 @@ pub struct Clustered {
     config: ClusteredConfig,
     prepass: DepthPrepass,
     clusters: Clusters,
-    shade: wgpu::RenderPipeline,
+    shade: ScenePipeline,
 }
 
 impl Clustered {
@@ -89,7 +89,7 @@ impl Pipeline for Clustered {
 
 /// Reads: the scene, its lights, the clusters and the depth target. Writes:
 /// `targets.hdr` (cleared first).
-fn clustered_shade(frame: &mut Frame, pipeline: &wgpu::RenderPipeline, grid: &LightGrid) {
+fn clustered_shade(frame: &mut Frame, pipeline: &ScenePipeline, grid: &LightGrid) {
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
     let color = [color_attachment(&targets.hdr_view, wgpu::Color::BLACK)];
     let mut rp = frame.render_pass("clustered shade", &color, Some(depth_attachment(targets, false)));

@@ -4,6 +4,9 @@
     fragment_surface}
 #import shadespace::scene_bindings::objects
 #import shadespace::surface::light_surface
+#ifdef ALPHA_MASK
+#import shadespace::alpha_mask::masked_out
+#endif
 
 // The index buffer holds mesh-local indices; `vertex_index` includes the
 // draw's base vertex. `instance_index` is the object.
@@ -14,6 +17,11 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4f {
+#ifdef ALPHA_MASK
+    if masked_out(in.tag, in.uv) {
+        discard;
+    }
+#endif
     let o = objects[in.tag];
     let s = fragment_surface(o, in, sample_albedo(o, in), sample_normal_map(o, in), sample_material(o, in));
     return vec4f(light_surface(o, s), 1.0);

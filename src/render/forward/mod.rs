@@ -6,7 +6,9 @@ use serde::Serialize;
 
 use super::frame::Frame;
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
-use super::passes::{DepthMode, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline};
+use super::passes::{
+    DepthMode, ScenePipeline, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline,
+};
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
 use super::targets::HDR_FORMAT;
@@ -32,7 +34,7 @@ impl Default for ForwardConfig {
 pub struct Forward {
     config: ForwardConfig,
     prepass: Option<DepthPrepass>,
-    shade: wgpu::RenderPipeline,
+    shade: ScenePipeline,
 }
 
 impl Forward {
@@ -65,7 +67,7 @@ impl Pipeline for Forward {
 
 /// Reads: the scene, its lights and per-object light lists, and the depth
 /// target unless `clear_depth`. Writes: `targets.hdr` (cleared first) and depth.
-fn forward_shade(frame: &mut Frame, pipeline: &wgpu::RenderPipeline, clear_depth: bool) {
+fn forward_shade(frame: &mut Frame, pipeline: &ScenePipeline, clear_depth: bool) {
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
     let color = [color_attachment(&targets.hdr_view, wgpu::Color::BLACK)];
     let mut rp = frame.render_pass("forward shade", &color, Some(depth_attachment(targets, clear_depth)));

@@ -14,7 +14,7 @@ pub mod visibility;
 
 use super::targets::{self, Targets};
 use crate::render::scene_gpu::SceneGpu;
-use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
+use crate::shaders::{ALPHA_MASK, ShaderError, ShaderLibrary, ShaderSource};
 
 /// Depth state of a scene raster pass (reversed Z: nearer is greater).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,6 +31,34 @@ impl DepthMode {
     }
 }
 
+/// A scene raster pass's pipelines: one for the opaque objects and, when the
+/// scene has alpha-masked ones and the pass writes depth, the pass shader's
+/// [`ALPHA_MASK`] variant for those, which discards their cut-away
+/// fragments. Two pipelines, so that opaque objects are drawn by a fragment
+/// stage that never discards and keep their early depth test. A pass testing
+/// `Equal` after a depth pre-pass needs no variant: the pre-pass cut the
+/// masked objects' depth already.
+pub struct ScenePipeline {
+    opaque: wgpu::RenderPipeline,
+    masked: Option<wgpu::RenderPipeline>,
+}
+
+impl ScenePipeline {
+    /// The one pipeline of a pass that tests `Equal` after a depth pre-pass
+    /// (it has no masked variant), for a pass with a draw loop of its own.
+    pub fn into_single(self) -> wgpu::RenderPipeline {
+        debug_assert!(self.masked.is_none());
+        self.opaque
+    }
+}
+
+/// The pass shaders drawn through [`ScenePipeline`]s, whose [`ALPHA_MASK`]
+/// variants must compose too (checked in `shaders`' tests).
+pub fn alpha_masked_shaders() -> Vec<ShaderSource> {
+    // Clustered and multi-pass forward always test `Equal` after a pre-pass.
+    vec![depth_prepass::SHADER, visibility::SHADER, gbuffer::SHADER, crate::render::forward::SHADER, shadows::SHADER]
+}
+
 /// A raster pipeline over the scene bind group (group 0): vertices pulled
 /// from storage (no vertex buffers), no face culling, a reversed-Z depth
 /// test, and a fragment stage writing `color` when given (none: depth only).
@@ -42,7 +70,7 @@ pub fn scene_raster_pipeline(
     vertex_entry: &str,
     fragment: Option<(&str, wgpu::TextureFormat)>,
     depth: DepthMode,
-) -> Result<wgpu::RenderPipeline, ShaderError> {
+) -> Result<ScenePipeline, ShaderError> {
     let fragment = fragment.as_ref().map(|(entry, format)| (*entry, std::slice::from_ref(format)));
     let raster = SceneRaster { shader, vertex_entry, fragment, depth, groups: &[], blend: None };
     scene_raster_pipeline_from(device, shaders, scene, &raster)
@@ -65,15 +93,36 @@ pub struct SceneRaster<'a> {
     pub blend: Option<wgpu::BlendState>,
 }
 
-/// The raster pipeline `raster` describes (see [`scene_raster_pipeline`]).
+/// The raster pipelines `raster` describes (see [`scene_raster_pipeline`]).
 pub fn scene_raster_pipeline_from(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,
     scene: &SceneGpu,
     raster: &SceneRaster,
+) -> Result<ScenePipeline, ShaderError> {
+    let opaque = raster_pipeline(device, shaders, scene, raster, false)?;
+    let masked = if scene.has_alpha_masks() && raster.depth == DepthMode::Write {
+        // A depth-only pass discards in a fragment stage of its own.
+        let fragment = raster.fragment.or(Some(("fs_alpha_mask", &[])));
+        Some(raster_pipeline(device, shaders, scene, &SceneRaster { fragment, ..*raster }, true)?)
+    } else {
+        None
+    };
+    Ok(ScenePipeline { opaque, masked })
+}
+
+/// One pipeline of [`scene_raster_pipeline_from`]: the shader's
+/// [`ALPHA_MASK`] variant when `alpha_mask`.
+fn raster_pipeline(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    scene: &SceneGpu,
+    raster: &SceneRaster,
+    alpha_mask: bool,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
     let shader = raster.shader;
-    let module = shaders.module(device, shader)?;
+    let defs: &[&str] = if alpha_mask { &[ALPHA_MASK] } else { &[] };
+    let module = shaders.module_with(device, shader, defs)?;
     let groups: Vec<Option<&wgpu::BindGroupLayout>> =
         std::iter::once(Some(&scene.layout)).chain(raster.groups.iter().copied()).collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -123,12 +172,24 @@ pub fn scene_raster_pipeline_from(
 }
 
 /// Draws every visible object with `pipeline`: one instanced draw per object,
-/// the instance index being the object (the shaders read its table entry).
-pub fn draw_objects(pass: &mut wgpu::RenderPass, scene: &SceneGpu, visible: &[bool], pipeline: &wgpu::RenderPipeline) {
-    pass.set_pipeline(pipeline);
+/// the instance index being the object (the shaders read its table entry);
+/// the opaque objects first, then the alpha-masked ones with the masked
+/// variant where the pipeline has one.
+pub fn draw_objects(pass: &mut wgpu::RenderPass, scene: &SceneGpu, visible: &[bool], pipeline: &ScenePipeline) {
     pass.set_bind_group(0, scene.bind_group(), &[]);
     pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-    for (i, d) in scene.draws.iter().enumerate().filter(|(i, _)| visible[*i]) {
+    let masked = pipeline.masked.as_ref();
+    pass.set_pipeline(&pipeline.opaque);
+    draw_visible(pass, scene, |i| visible[i] && (masked.is_none() || !scene.masked[i]));
+    if let Some(masked) = masked {
+        pass.set_pipeline(masked);
+        draw_visible(pass, scene, |i| visible[i] && scene.masked[i]);
+    }
+}
+
+/// One draw per object `i` for which `draw(i)`, with the bound pipeline.
+fn draw_visible(pass: &mut wgpu::RenderPass, scene: &SceneGpu, draw: impl Fn(usize) -> bool) {
+    for (i, d) in scene.draws.iter().enumerate().filter(|(i, _)| draw(*i)) {
         let i = i as u32;
         pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, i..i + 1);
     }

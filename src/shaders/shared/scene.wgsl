@@ -42,7 +42,9 @@ struct Object {
     occlusion_layer: u32,
     // Occlusion is 1 + occlusion_strength * (red - 1), on ambient light only.
     occlusion_strength: f32,
-    pad_a: u32,
+    // Fragments whose alpha (base colour factor times texture) is below this
+    // are cut away (alpha masking, `alpha_mask.wgsl`); 0 for opaque objects.
+    alpha_cutoff: f32,
     pad_b: u32,
     pad_c: u32,
 }
@@ -60,6 +62,12 @@ struct View {
     // SHADING_PHONG or SHADING_PBR.
     shading: u32,
     pad_b: u32,
+}
+
+// Whether the surface of `o` is cut away where its base colour texel's alpha
+// is `texel_alpha` (never for opaque objects, whose cutoff is 0).
+fn alpha_cut(o: Object, texel_alpha: f32) -> bool {
+    return o.base_color.a * texel_alpha < o.alpha_cutoff;
 }
 
 fn vertex_uv0(v: Vertex) -> vec2f {

@@ -4,7 +4,32 @@
 // depths compare equal bit for bit.
 #import shadespace::scene_bindings::object_clip_position
 
+#ifdef ALPHA_MASK
+#import shadespace::alpha_mask::masked_out
+#import shadespace::scene::vertex_uv0
+#import shadespace::scene_bindings::vertices
+
+// The alpha-masked objects' variant: a fragment stage cuts their depth.
+struct VertexOut {
+    @builtin(position) @invariant clip: vec4f,
+    @location(0) uv0: vec2f,
+    @location(1) @interpolate(flat) object: u32,
+}
+
+@vertex
+fn vs_depth(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
+    return VertexOut(object_clip_position(object, vi), vertex_uv0(vertices[vi]), object);
+}
+
+@fragment
+fn fs_alpha_mask(in: VertexOut) {
+    if masked_out(in.object, in.uv0) {
+        discard;
+    }
+}
+#else
 @vertex
 fn vs_depth(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> @builtin(position) @invariant vec4f {
     return object_clip_position(object, vi);
 }
+#endif

@@ -2,7 +2,7 @@
 //! (forward shading, the visibility ids) tests `Equal` and runs one fragment
 //! per pixel.
 
-use super::{DepthMode, depth_attachment, draw_objects, scene_raster_pipeline};
+use super::{DepthMode, ScenePipeline, depth_attachment, draw_objects, scene_raster_pipeline};
 use crate::render::frame::Frame;
 use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
@@ -10,7 +10,7 @@ use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 pub const SHADER: ShaderSource = ShaderSource::new("depth.wgsl", include_str!("depth.wgsl"));
 
 pub struct DepthPrepass {
-    pipeline: wgpu::RenderPipeline,
+    pipeline: ScenePipeline,
 }
 
 impl DepthPrepass {

@@ -11,6 +11,9 @@
 #import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, linear_maps, object_clip_position}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
 #import shadespace::surface::material_texels_grad
+#ifdef ALPHA_MASK
+#import shadespace::alpha_mask::masked_out
+#endif
 
 struct VertexOut {
     @builtin(position) @invariant clip: vec4f,
@@ -47,6 +50,11 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
 
 @fragment
 fn fs_main(in: VertexOut) -> GbufferOut {
+#ifdef ALPHA_MASK
+    if masked_out(in.object, in.uv0) {
+        discard;
+    }
+#endif
     let o = objects[in.object];
     var out: GbufferOut;
     let normal_texel = textureSample(linear_maps, albedo_sampler, in.uv0, sample_layer(o.normal_layer)).rgb;

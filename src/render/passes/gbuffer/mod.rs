@@ -38,8 +38,8 @@ use glam::{DVec4, Mat4};
 
 use super::depth_prepass::{DepthPrepass, depth_prepass};
 use super::{
-    Binding, DepthMode, SceneRaster, bind_group, bind_group_layout_for, color_attachment, depth_attachment,
-    draw_objects, scene_raster_pipeline_from,
+    Binding, DepthMode, ScenePipeline, SceneRaster, bind_group, bind_group_layout_for, color_attachment,
+    depth_attachment, draw_objects, scene_raster_pipeline_from,
 };
 use crate::render::frame::Frame;
 use crate::render::gpu_types::GpuView;
@@ -215,7 +215,7 @@ impl GBuffer {
 
 /// The G-buffer raster pipeline.
 pub struct GbufferPass {
-    pipeline: wgpu::RenderPipeline,
+    pipeline: ScenePipeline,
     after_prepass: bool,
 }
 

@@ -22,7 +22,7 @@ use glam::{Mat4, Vec3};
 use crate::render::frame::Frame;
 use crate::render::scene_gpu::{GrowableBuffer, SceneGpu};
 use crate::scene::{Aabb, Camera, Light, LightKind};
-use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
+use crate::shaders::{ALPHA_MASK, ShaderError, ShaderLibrary, ShaderSource};
 use cascades::{CASCADE_SIZE, CASCADES, cascade_view_projections};
 
 use super::{Binding, bind_group, bind_group_layout_for};
@@ -316,6 +316,8 @@ impl ShadowAtlas {
 /// uniforms, and each face's casters.
 pub struct ShadowMaps {
     pipeline: wgpu::RenderPipeline,
+    /// For the alpha-masked casters, when the scene has some.
+    masked_pipeline: Option<wgpu::RenderPipeline>,
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
     uniforms: wgpu::Buffer,
@@ -332,47 +334,29 @@ impl ShadowMaps {
     /// The pass's pipeline and bind group (over the scene's objects and
     /// vertices); no faces until [`ShadowMaps::set_plan`].
     pub fn new(device: &wgpu::Device, shaders: &mut ShaderLibrary, scene: &SceneGpu) -> Result<Self, ShaderError> {
-        let stages = wgpu::ShaderStages::VERTEX;
+        let stages = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
         let bindings = [
             Binding::Storage { read_only: true },
             Binding::Storage { read_only: true },
             Binding::DynamicUniform { size: size_of::<Mat4>() as u64 },
+            // The base colour textures, for alpha-masked casters.
+            Binding::Texture {
+                sample: wgpu::TextureSampleType::Float { filterable: true },
+                dimension: wgpu::TextureViewDimension::D2Array,
+            },
+            Binding::Sampler,
         ];
         let layout = bind_group_layout_for(device, "shadow maps", stages, &bindings);
-        let module = shaders.module(device, SHADER)?;
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("shadow maps"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shadow maps"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_shadow"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            fragment: None,
-            // Both sides cast: scenes hold open meshes and single quads.
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Greater),
-                stencil: Default::default(),
-                // The lighting model biases its lookups (shadows.wgsl).
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = shadow_pipeline(device, shaders, &layout, false)?;
+        // Alpha-masked casters get a fragment stage that cuts their depth
+        // (kept apart: opaque casters draw with no fragment stage at all).
+        let masked_pipeline =
+            if scene.has_alpha_masks() { Some(shadow_pipeline(device, shaders, &layout, true)?) } else { None };
         let uniforms = Self::uniforms(device, 1);
         let group = Self::group(device, &layout, scene, &uniforms);
         Ok(Self {
             pipeline,
+            masked_pipeline,
             layout,
             group,
             uniforms,
@@ -407,6 +391,8 @@ impl ShadowMaps {
                 scene.objects.as_entire_binding(),
                 scene.vertices.as_entire_binding(),
                 wgpu::BindingResource::Buffer(face),
+                wgpu::BindingResource::TextureView(&scene.albedo_view),
+                wgpu::BindingResource::Sampler(&scene.sampler),
             ],
         )
     }
@@ -467,6 +453,61 @@ fn casters(face: &Face, light: &Light, bounds: &[Aabb]) -> Vec<u32> {
     bounds.iter().enumerate().filter(|(_, b)| touches(b)).map(|(i, _)| i as u32).collect()
 }
 
+/// One draw per caster, with the bound pipeline.
+fn draw_casters<'a>(rp: &mut wgpu::RenderPass, scene: &SceneGpu, casters: impl Iterator<Item = &'a u32>) {
+    for &object in casters {
+        let d = scene.draws[object as usize];
+        rp.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, object..object + 1);
+    }
+}
+
+/// The shadow-map pipeline over `layout`: depth only, or with the
+/// [`ALPHA_MASK`] fragment stage that cuts alpha-masked casters.
+fn shadow_pipeline(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    layout: &wgpu::BindGroupLayout,
+    alpha_mask: bool,
+) -> Result<wgpu::RenderPipeline, ShaderError> {
+    let defs: &[&str] = if alpha_mask { &[ALPHA_MASK] } else { &[] };
+    let module = shaders.module_with(device, SHADER, defs)?;
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("shadow maps"),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    let fragment = alpha_mask.then(|| wgpu::FragmentState {
+        module: &module,
+        entry_point: Some("fs_alpha_mask"),
+        compilation_options: Default::default(),
+        targets: &[],
+    });
+    Ok(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(if alpha_mask { "shadow maps (alpha mask)" } else { "shadow maps" }),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_shadow"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment,
+        // Both sides cast: scenes hold open meshes and single quads.
+        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Greater),
+            stencil: Default::default(),
+            // The lighting model biases its lookups (shadows.wgsl).
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        multiview_mask: None,
+        cache: None,
+    }))
+}
+
 /// Reads: the casters' vertices and transforms. Writes: the layers of the
 /// stale faces (all faces with `every_frame`), cleared to the far plane
 /// first. Timed as `shadow maps`, each face as `shadow maps/face N` (N: its
@@ -491,12 +532,15 @@ pub fn shadow_maps(frame: &mut Frame, maps: &mut ShadowMaps, every_frame: bool) 
             FaceTarget::Cascade(k) => format!("cascade {k}"),
         };
         let mut rp = scope.scoped_render_pass(label, descriptor);
-        rp.set_pipeline(&maps.pipeline);
         rp.set_bind_group(0, &maps.group, &[(i as u64 * FACE_UNIFORM_STRIDE) as u32]);
         rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for &object in &maps.casters[i] {
-            let d = scene.draws[object as usize];
-            rp.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, object..object + 1);
+        let casters = &maps.casters[i];
+        let masked = maps.masked_pipeline.as_ref();
+        rp.set_pipeline(&maps.pipeline);
+        draw_casters(&mut rp, scene, casters.iter().filter(|&&o| masked.is_none() || !scene.masked[o as usize]));
+        if let Some(masked) = masked {
+            rp.set_pipeline(masked);
+            draw_casters(&mut rp, scene, casters.iter().filter(|&&o| scene.masked[o as usize]));
         }
     }
     for i in faces {

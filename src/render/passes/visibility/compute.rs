@@ -151,6 +151,11 @@ pub enum ComputeVisibilityError {
         "compute visibility needs 64-bit atomics (SHADER_INT64, SHADER_INT64_ATOMIC_MIN_MAX), which this adapter lacks"
     )]
     NoInt64Atomics,
+    #[error(
+        "the compute rasterizer does not alpha-test, and this scene has alpha-masked materials: \
+         use --visibility raster (the default for such scenes)"
+    )]
+    AlphaMasks,
 }
 
 /// The compute rasterizer's pipelines, buffers and bind groups, for one
@@ -194,6 +199,11 @@ impl ComputeVisibility {
     ) -> Result<Self, ComputeVisibilityError> {
         if !device.features().contains(FEATURES) {
             return Err(ComputeVisibilityError::NoInt64Atomics);
+        }
+        // Simplified: testing alpha per covered pixel would take the
+        // triangle's UVs and a texture lookup into the rasterizer's inner loop.
+        if scene.has_alpha_masks() {
+            return Err(ComputeVisibilityError::AlphaMasks);
         }
         let (width, height) = (targets.width, targets.height);
         let buffer = |label, size: u64, usage| {

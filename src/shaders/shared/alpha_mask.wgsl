@@ -1,0 +1,14 @@
+// Alpha masking (glTF `MASK`) in the raster passes over the scene bind group.
+// Only their ALPHA_MASK variants call it, and only for the masked objects
+// (`passes::ScenePipeline`): a fragment shader that may discard costs opaque
+// objects their early depth test.
+#define_import_path shadespace::alpha_mask
+#import shadespace::scene::alpha_cut
+#import shadespace::scene_bindings::{objects, albedo, albedo_sampler}
+
+// Whether the fragment of `object` at `uv0` is cut away (implicit
+// derivatives: call it in uniform control flow).
+fn masked_out(object: u32, uv0: vec2f) -> bool {
+    let o = objects[object];
+    return alpha_cut(o, textureSample(albedo, albedo_sampler, uv0, o.albedo_layer).a);
+}
