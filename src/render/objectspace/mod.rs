@@ -61,7 +61,8 @@ use atlas::{AtlasError, AtlasLayout, PagePool};
 use atlas_view::{AtlasPages, AtlasPagesError, AtlasViewPass, draw_atlas_pages};
 use gather::{GatherPass, gather};
 use mark::{MarkPass, mark_backed_pages, mark_tiles};
-use paging::{PagingPass, back_pages, evict_beyond};
+use paging::compact::{CompactPass, compact_pages, copy_moved_pages};
+use paging::{PagingPass, back_pages};
 use residency::Residency;
 use resources::Resources;
 use shade::{ShadePass, shade_tiles};
@@ -75,8 +76,15 @@ pub const SHARED_WGSL: [ShaderSource; 2] = [
 ];
 
 /// The object-space pass shaders, for the test that validates every shader.
-pub const PASS_SHADERS: &[ShaderSource] =
-    &[mark::SHADER, paging::SHADER, trimap::SHADER, shade::SHADER, gather::SHADER, atlas_view::SHADER];
+pub const PASS_SHADERS: &[ShaderSource] = &[
+    mark::SHADER,
+    paging::SHADER,
+    paging::compact::SHADER,
+    trimap::SHADER,
+    shade::SHADER,
+    gather::SHADER,
+    atlas_view::SHADER,
+];
 
 /// Texture sides that texel densities clamp to (`--texture-size` may go to
 /// [`atlas::MAX_TEXTURE_SIZE`]).
@@ -420,6 +428,7 @@ pub struct ObjectSpace {
     visibility: Visibility,
     mark: MarkPass,
     paging: PagingPass,
+    compact: CompactPass,
     trimap: TrimapPass,
     shade: ShadePass,
     gather: GatherPass,
@@ -547,6 +556,7 @@ impl ObjectSpace {
             visibility,
             mark: MarkPass::new(device, shaders, scene, &res)?,
             paging: PagingPass::new(device, shaders, scene, &res)?,
+            compact: CompactPass::new(device, shaders, scene, &res)?,
             trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather,
@@ -609,15 +619,17 @@ impl ObjectSpace {
     }
 
     /// Resizes the physical atlas to `layers` layers: when shrinking, the
-    /// pages beyond the new size are evicted first; the passes bind the new
-    /// atlas.
+    /// pages beyond the new size move below it first (or are evicted); the
+    /// passes bind the new atlas.
     fn resize_atlas(&mut self, frame: &mut Frame, layers: u32) {
         let pool = self.res.pool.with_layers(layers);
-        if pool.pages < self.res.pool.pages {
-            evict_beyond(frame, &self.paging, &self.res, pool.pages);
-        }
+        let moves = (pool.pages < self.res.pool.pages)
+            .then(|| compact_pages(frame, &self.compact, &self.paging, &self.res, pool.pages));
         tracing::debug!("atlas resized from {} to {} pages", self.res.pool.pages, pool.pages);
-        self.res.resize(frame.device, frame.encoder, pool);
+        let old = self.res.resize(frame.device, frame.encoder, pool);
+        if let Some(moves) = moves {
+            copy_moved_pages(frame, &self.compact, &self.res, &old, &moves);
+        }
         self.shade.rebind(frame.device, &self.res);
         self.gather.rebind(frame.device, &self.res);
         self.trimap.rebind(frame.device, &self.res);

@@ -2,7 +2,7 @@
 // visibility buffer, and the per-pixel mip selection that tile marking and
 // gathering must compute identically.
 #define_import_path shadespace::objectspace
-#import shadespace::contract::{MAX_LEVELS, TILE_COUNTER_SLOTS, BLOCK_SIDE}
+#import shadespace::contract::{MAX_LEVELS, TILE_COUNTER_SLOTS, BLOCK_SIDE, AGE_BUCKETS}
 #import shadespace::scene_bindings::vertices
 #import shadespace::pixel_surface::{PixelSample, interpolate2}
 
@@ -122,6 +122,33 @@ struct TableChunk {
 @group(1) @binding(19) var<storage, read_write> free_chunks: array<u32>;
 
 const BLOCK_PAGES: u32 = BLOCK_SIDE * BLOCK_SIDE;
+
+// Bucket 0: free pages; 1: unused for 128 frames or more; ...; 8: used last frame.
+fn age_bucket(page: u32) -> u32 {
+    if page_owner[page] == 0u {
+        return 0u;
+    }
+    let age = params.stamp - atomicLoad(&page_used[page]);
+    return AGE_BUCKETS - 1u - min(firstLeadingBit(age), AGE_BUCKETS - 2u);
+}
+
+// The table word of virtual page `page`, which is backed (its block has a chunk).
+fn table_word(page: u32) -> u32 {
+    return (atomicLoad(&page_directory[page / BLOCK_PAGES]) - 1u) * BLOCK_PAGES + page % BLOCK_PAGES;
+}
+
+// Takes physical page `physical` from the virtual page it backs, if any
+// (its chunk is freed by paging's `release_chunks` when that was its last page).
+fn unbind_page(physical: u32) {
+    let owner = page_owner[physical];
+    if owner == 0u {
+        return;
+    }
+    let word = table_word(owner - 1u);
+    page_table[word] = 0u;
+    atomicSub(&table_chunks[word / BLOCK_PAGES].pages, 1u);
+    page_owner[physical] = 0u;
+}
 
 const NOT_BACKED: u32 = 0xffffffffu;
 

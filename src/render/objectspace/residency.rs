@@ -10,9 +10,11 @@
 //! get are shaded forward until then), and shrinks only after a run of
 //! frames that each needed little of it, to the most any of them needed, so
 //! that a passing dip does not cost a resize. Both leave the atlas about
-//! [`FILL`] full. Shrinking evicts the pages beyond the new size (their
-//! tiles are shaded again the next time they are seen), growing copies
-//! nothing but what is there.
+//! [`FILL`] full. Shrinking first moves the pages in use beyond the new
+//! size below it, onto free or less recently used pages, with their shades
+//! (`paging::compact`; pages that find none are evicted, and their tiles
+//! shaded again the next time they are seen); growing copies nothing but
+//! what is there.
 
 // Chosen by replaying the pages Sponza's path needs at 1920x1080 and
 // 3840x2160 (H100 runs, with the read-back's lag of 3 frames): every frame

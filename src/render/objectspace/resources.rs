@@ -308,13 +308,22 @@ impl Resources {
     /// Resizes the atlas to `pool` (the same layers, more or fewer of them):
     /// the pages both sizes have keep their shades, maps and state, and
     /// group 1 of every view is bound again. When shrinking, the pages
-    /// beyond `pool` must have been evicted first (`paging::evict_beyond`).
-    pub fn resize(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, pool: PagePool) {
+    /// beyond `pool` must have been moved below it or evicted first
+    /// (`paging::compact`). Returns the larger atlas's pages, which the
+    /// moved pages' texels are then copied from.
+    pub fn resize(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        pool: PagePool,
+    ) -> PhysicalPages {
         let physical = PhysicalPages::new(device, &pool, self.tile_size);
         self.physical.copy_into(&physical, encoder);
-        (self.physical, self.pool) = (physical, pool);
+        self.pool = pool;
+        let old = std::mem::replace(&mut self.physical, physical);
         self.view_groups =
             self.views.iter().map(|(visibility, slot)| self.view_group(device, visibility, slot)).collect();
+        old
     }
 
     /// Adds group 1 of the next view: these resources with the view's

@@ -3,7 +3,10 @@
 //! recently used first (free pages, then by age bucket), with no CPU round
 //! trip, and the two-level page table follows (a chunk of table words for
 //! each block of pages with backed pages, freed with its last page). The pages backed this frame are then built (`trimap`) and their
-//! requested tiles marked (`mark::mark_backed`).
+//! requested tiles marked (`mark::mark_backed`). Before the atlas shrinks,
+//! [`compact`] moves the pages beyond its new size below it.
+
+pub mod compact;
 
 use super::resources::{ALLOCATE_ARGS, Resources};
 use crate::render::frame::Frame;
@@ -22,7 +25,6 @@ pub struct PagingPass {
     claim_blocks: wgpu::ComputePipeline,
     bind_pages: wgpu::ComputePipeline,
     backed_args: wgpu::ComputePipeline,
-    evict_beyond: wgpu::ComputePipeline,
 }
 
 impl PagingPass {
@@ -43,7 +45,6 @@ impl PagingPass {
             claim_blocks: compute_pipeline(device, shaders, SHADER, "claim_blocks", &plain)?,
             bind_pages: compute_pipeline(device, shaders, SHADER, "bind_pages", &plain)?,
             backed_args: compute_pipeline(device, shaders, SHADER, "backed_args", &with_dispatch)?,
-            evict_beyond: compute_pipeline(device, shaders, SHADER, "evict_beyond", &plain)?,
         })
     }
 }
@@ -53,16 +54,9 @@ impl PagingPass {
 /// the counters, the dispatches of allocation and of the backed pages' passes.
 pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     let scene = frame.scene_group;
-    let pages = res.pool.pages.div_ceil(64);
     let mut cp = frame.compute_pass("paging");
     res.bind(&mut cp, scene);
-    cp.set_bind_group(2, &res.dispatch_group, &[]);
-    cp.set_pipeline(&pass.age_pages);
-    cp.dispatch_workgroups(pages, 1, 1);
-    cp.set_pipeline(&pass.page_offsets);
-    cp.dispatch_workgroups(1, 1, 1);
-    cp.set_pipeline(&pass.list_candidates);
-    cp.dispatch_workgroups(pages, 1, 1);
+    rank_candidates(&mut cp, pass, res);
     drop(cp);
     // A pass of its own: it reads the dispatch buffer as INDIRECT.
     let mut cp = frame.compute_pass("allocate");
@@ -83,13 +77,17 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     cp.dispatch_workgroups(1, 1, 1);
 }
 
-/// Before the atlas shrinks to `pages` pages: evicts the pages beyond them
-/// (reads the frame's params, which name the new size; writes the page
-/// owners and the page table). `res` is still the larger atlas.
-pub fn evict_beyond(frame: &mut Frame, pass: &PagingPass, res: &Resources, pages: u32) {
-    let scene = frame.scene_group;
-    let mut cp = frame.compute_pass("atlas resize");
-    res.bind(&mut cp, scene);
-    cp.set_pipeline(&pass.evict_beyond);
-    cp.dispatch_workgroups(res.pool.pages.saturating_sub(pages).div_ceil(64), 1, 1);
+/// Lists the physical pages below `params.physical_pages` not used this
+/// frame as `candidates`, free first, then least recently used (counts in
+/// the counters' age buckets and `COUNT_CANDIDATES`), on a compute pass with
+/// `res` bound as group 1. Rebinds group 2.
+pub(super) fn rank_candidates(cp: &mut wgpu::ComputePass, pass: &PagingPass, res: &Resources) {
+    let pages = res.pool.pages.div_ceil(64);
+    cp.set_bind_group(2, &res.dispatch_group, &[]);
+    cp.set_pipeline(&pass.age_pages);
+    cp.dispatch_workgroups(pages, 1, 1);
+    cp.set_pipeline(&pass.page_offsets);
+    cp.dispatch_workgroups(1, 1, 1);
+    cp.set_pipeline(&pass.list_candidates);
+    cp.dispatch_workgroups(pages, 1, 1);
 }

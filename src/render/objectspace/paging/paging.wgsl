@@ -15,17 +15,8 @@
 #import shadespace::contract::{COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
     COUNT_FREE_CHUNKS, COUNT_CHUNKS_TAKEN, COUNT_TABLE_CHUNKS, AGE_BUCKET_BASE, AGE_BUCKETS}
 #import shadespace::objectspace::{params, atlas_entries, counters, page_table, page_used, page_owner, request_list,
-    candidates, backed, page_directory, table_chunks, free_chunks, forget_request, BLOCK_PAGES}
+    candidates, backed, page_directory, table_chunks, free_chunks, forget_request, unbind_page, age_bucket, BLOCK_PAGES}
 #import shadespace::objectspace_dispatch::{write_dispatch, ALLOCATE_ARGS, BACKED_ARGS}
-
-// Bucket 0: free pages; 1: unused for 128 frames or more; ...; 8: used last frame.
-fn age_bucket(page: u32) -> u32 {
-    if page_owner[page] == 0u {
-        return 0u;
-    }
-    let age = params.stamp - atomicLoad(&page_used[page]);
-    return AGE_BUCKETS - 1u - min(firstLeadingBit(age), AGE_BUCKETS - 2u);
-}
 
 fn evictable(page: u32) -> bool {
     return page < params.physical_pages && atomicLoad(&page_used[page]) != params.stamp;
@@ -91,34 +82,9 @@ fn allocate(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: v
     }
     let physical = candidates[i];
     // The evicted page was not used this frame, so no request names it.
-    unbind(physical);
+    unbind_page(physical);
     page_owner[physical] = request_list[i].x + 1u;
     atomicStore(&page_used[physical], params.stamp);
-}
-
-// Takes physical page `physical` from the virtual page it backs, if any
-// (its chunk is freed by `release_chunks` when that was its last page).
-fn unbind(physical: u32) {
-    let owner = page_owner[physical];
-    if owner == 0u {
-        return;
-    }
-    let page = owner - 1u;
-    let chunk = atomicLoad(&page_directory[page / BLOCK_PAGES]) - 1u;
-    page_table[chunk * BLOCK_PAGES + page % BLOCK_PAGES] = 0u;
-    atomicSub(&table_chunks[chunk].pages, 1u);
-    page_owner[physical] = 0u;
-}
-
-// Before the atlas shrinks to `params.physical_pages` pages (at the start of
-// a frame, before marking): the pages beyond give up their virtual pages,
-// which this frame's marking then requests again.
-@compute @workgroup_size(64)
-fn evict_beyond(@builtin(global_invocation_id) id: vec3u) {
-    let physical = params.physical_pages + id.x;
-    if physical < arrayLength(&page_owner) {
-        unbind(physical);
-    }
 }
 
 // Per chunk: a chunk left with no page goes back (its block's directory
