@@ -364,8 +364,8 @@ fn the_page_table_follows_pages_evicted_along_a_path() {
 
 /// The physical atlas follows the pages the frames need: from the whole
 /// budget it shrinks, after a run of frames needing little of it, to about
-/// what they need (pages beyond the new size evicted, the page table still
-/// consistent); when a view needs more it grows back within a few frames
+/// what they need (pages beyond the new size moved below it or evicted, the
+/// page table still consistent); when a view needs more it grows back within a few frames
 /// (until then the pages it cannot get are shaded forward), and the image is
 /// the one a renderer that never resized gives.
 #[test]

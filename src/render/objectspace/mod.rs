@@ -61,7 +61,7 @@ use atlas::{AtlasError, AtlasLayout, PagePool};
 use atlas_view::{AtlasPages, AtlasPagesError, AtlasViewPass, draw_atlas_pages};
 use gather::{GatherPass, gather};
 use mark::{MarkPass, mark_backed_pages, mark_tiles};
-use paging::compact::{CompactPass, compact_pages, copy_moved_pages};
+use paging::resize::{ResizePass, compact_pages, copy_pages};
 use paging::{PagingPass, back_pages};
 use residency::Residency;
 use resources::Resources;
@@ -79,7 +79,7 @@ pub const SHARED_WGSL: [ShaderSource; 2] = [
 pub const PASS_SHADERS: &[ShaderSource] = &[
     mark::SHADER,
     paging::SHADER,
-    paging::compact::SHADER,
+    paging::resize::SHADER,
     trimap::SHADER,
     shade::SHADER,
     gather::SHADER,
@@ -428,7 +428,7 @@ pub struct ObjectSpace {
     visibility: Visibility,
     mark: MarkPass,
     paging: PagingPass,
-    compact: CompactPass,
+    resize: ResizePass,
     trimap: TrimapPass,
     shade: ShadePass,
     gather: GatherPass,
@@ -556,7 +556,7 @@ impl ObjectSpace {
             visibility,
             mark: MarkPass::new(device, shaders, scene, &res)?,
             paging: PagingPass::new(device, shaders, scene, &res)?,
-            compact: CompactPass::new(device, shaders, scene, &res)?,
+            resize: ResizePass::new(device, shaders, scene, &res)?,
             trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather,
@@ -623,13 +623,13 @@ impl ObjectSpace {
     /// passes bind the new atlas.
     fn resize_atlas(&mut self, frame: &mut Frame, layers: u32) {
         let pool = self.res.pool.with_layers(layers);
-        let moves = (pool.pages < self.res.pool.pages)
-            .then(|| compact_pages(frame, &self.compact, &self.paging, &self.res, pool.pages));
-        tracing::debug!("atlas resized from {} to {} pages", self.res.pool.pages, pool.pages);
-        let old = self.res.resize(frame.device, frame.encoder, pool);
-        if let Some(moves) = moves {
-            copy_moved_pages(frame, &self.compact, &self.res, &old, &moves);
-        }
+        let old_pages = self.res.pool.pages;
+        let moves =
+            (pool.pages < old_pages).then(|| compact_pages(frame, &self.resize, &self.paging, &self.res, pool.pages));
+        tracing::debug!("atlas resized from {old_pages} to {} pages", pool.pages);
+        let device = frame.device;
+        let old = self.res.resize(device, &mut frame.scope("atlas copy"), pool);
+        copy_pages(frame, &self.resize, &self.res, &old, old_pages, moves.as_ref());
         self.shade.rebind(frame.device, &self.res);
         self.gather.rebind(frame.device, &self.res);
         self.trimap.rebind(frame.device, &self.res);

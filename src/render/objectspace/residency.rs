@@ -12,7 +12,7 @@
 //! that a passing dip does not cost a resize. Both leave the atlas about
 //! [`FILL`] full. Shrinking first moves the pages in use beyond the new
 //! size below it, onto free or less recently used pages, with their shades
-//! (`paging::compact`; pages that find none are evicted, and their tiles
+//! (`paging::resize`; pages that find none are evicted, and their tiles
 //! shaded again the next time they are seen); growing copies nothing but
 //! what is there.
 

@@ -167,15 +167,10 @@ impl PhysicalPages {
         }
     }
 
-    /// Copies what `self` holds of the pages both have into `to`: shades,
-    /// triangle maps, page use and owners, tile stamps (this frame's lists
-    /// are rebuilt every frame).
+    /// Copies what `self` holds of the pages both have into `to`: page use
+    /// and owners, tile stamps (this frame's lists are rebuilt every frame;
+    /// the shades and triangle maps are copied by `paging::resize`).
     fn copy_into(&self, to: &Self, encoder: &mut wgpu::CommandEncoder) {
-        for (from, into) in [(&self.atlas, &to.atlas), (&self.triangle_map, &to.triangle_map)] {
-            let layers = from.depth_or_array_layers().min(into.depth_or_array_layers());
-            let size = wgpu::Extent3d { depth_or_array_layers: layers, ..from.size() };
-            encoder.copy_texture_to_texture(from.as_image_copy(), into.as_image_copy(), size);
-        }
         for (from, into) in [
             (&self.tile_visible, &to.tile_visible),
             (&self.tile_shaded, &to.tile_shaded),
@@ -308,9 +303,9 @@ impl Resources {
     /// Resizes the atlas to `pool` (the same layers, more or fewer of them):
     /// the pages both sizes have keep their shades, maps and state, and
     /// group 1 of every view is bound again. When shrinking, the pages
-    /// beyond `pool` must have been moved below it or evicted first
-    /// (`paging::compact`). Returns the larger atlas's pages, which the
-    /// moved pages' texels are then copied from.
+    /// beyond `pool` must have been moved below it or evicted first. Returns
+    /// the old atlas's pages, whose shades and triangle maps
+    /// `paging::resize::copy_pages` then copies.
     pub fn resize(
         &mut self,
         device: &wgpu::Device,

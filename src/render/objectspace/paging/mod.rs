@@ -3,10 +3,11 @@
 //! recently used first (free pages, then by age bucket), with no CPU round
 //! trip, and the two-level page table follows (a chunk of table words for
 //! each block of pages with backed pages, freed with its last page). The pages backed this frame are then built (`trimap`) and their
-//! requested tiles marked (`mark::mark_backed`). Before the atlas shrinks,
-//! [`compact`] moves the pages beyond its new size below it.
+//! requested tiles marked (`mark::mark_backed`). When the atlas is resized,
+//! [`resize`] copies its pages, and before it shrinks moves the pages beyond
+//! its new size below it.
 
-pub mod compact;
+pub mod resize;
 
 use super::resources::{ALLOCATE_ARGS, Resources};
 use crate::render::frame::Frame;

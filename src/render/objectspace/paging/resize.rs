@@ -1,10 +1,11 @@
-//! Compacting the atlas before it shrinks (`compact.wgsl`): the pages beyond
-//! its new size that back a virtual page move below it, onto free or least
+//! Resizing the atlas (`resize.wgsl`): the pages both sizes have are copied
+//! into the new atlas in compute, and before a shrink the pages beyond its
+//! new size that back a virtual page move below it, onto free or least
 //! recently used pages, with their shades, triangle maps and tile stamps, so
 //! that a shrink costs no re-shading of what the frames still see (until
 //! this existed, those pages were evicted and their tiles shaded again).
 //! Movers that find no page (more of them than pages below the new size, or
-//! only younger pages there) are evicted as before.
+//! only younger pages there) are evicted.
 
 use super::{PagingPass, rank_candidates};
 use crate::render::frame::Frame;
@@ -14,20 +15,21 @@ use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipe
 use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
-pub const SHADER: ShaderSource = ShaderSource::new("compact.wgsl", include_str!("compact.wgsl"));
+pub const SHADER: ShaderSource = ShaderSource::new("resize.wgsl", include_str!("resize.wgsl"));
 
-pub struct CompactPass {
+pub struct ResizePass {
     count_movers: wgpu::ComputePipeline,
     mover_offsets: wgpu::ComputePipeline,
     list_movers: wgpu::ComputePipeline,
     move_pages: wgpu::ComputePipeline,
     evict_rest: wgpu::ComputePipeline,
-    copy_pages: wgpu::ComputePipeline,
+    copy_kept: wgpu::ComputePipeline,
+    copy_moved: wgpu::ComputePipeline,
     moves_layout: wgpu::BindGroupLayout,
     textures_layout: wgpu::BindGroupLayout,
 }
 
-impl CompactPass {
+impl ResizePass {
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
@@ -38,7 +40,7 @@ impl CompactPass {
         let array = wgpu::TextureViewDimension::D2Array;
         let textures_layout = bind_group_layout(
             device,
-            "atlas compaction textures",
+            "atlas resize textures",
             &[
                 Binding::Texture { sample: wgpu::TextureSampleType::Float { filterable: true }, dimension: array },
                 Binding::Texture { sample: wgpu::TextureSampleType::Uint, dimension: array },
@@ -54,19 +56,37 @@ impl CompactPass {
             list_movers: compute_pipeline(device, shaders, SHADER, "list_movers", &moving)?,
             move_pages: compute_pipeline(device, shaders, SHADER, "move_pages", &moving)?,
             evict_rest: compute_pipeline(device, shaders, SHADER, "evict_rest", &moving)?,
-            copy_pages: compute_pipeline(device, shaders, SHADER, "copy_pages", &copying)?,
+            copy_kept: compute_pipeline(device, shaders, SHADER, "copy_kept", &copying)?,
+            copy_moved: compute_pipeline(device, shaders, SHADER, "copy_moved", &copying)?,
             moves_layout,
             textures_layout,
         })
     }
 }
 
-/// The moves of one shrink, from [`compact_pages`] to [`copy_moved_pages`]
-/// (a buffer of the frame that shrinks the atlas: shrinks are rare).
+/// The moves of one resize, from [`compact_pages`] to [`copy_pages`] (a
+/// buffer of the frame that resizes the atlas: resizes are rare).
 pub struct Moves {
     group: wgpu::BindGroup,
     /// Pages beyond the new size: the most there can be.
     capacity: u32,
+}
+
+impl Moves {
+    /// Room for `capacity` moves, none listed yet.
+    fn new(device: &wgpu::Device, pass: &ResizePass, capacity: u32) -> Self {
+        // The count and the age buckets' counts (zeroed on creation), then a
+        // pair per page beyond.
+        let header = (4 + 4 * TileCounter::AGE_BUCKETS as u64).next_multiple_of(8);
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("atlas moves"),
+            size: header + 8 * capacity.max(1) as u64,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let group = bind_group(device, "atlas moves", &pass.moves_layout, &[buffer.as_entire_binding()]);
+        Self { group, capacity }
+    }
 }
 
 /// Before the atlas shrinks to `pages` pages: moves the pages beyond them
@@ -74,24 +94,15 @@ pub struct Moves {
 /// none. Reads the frame's params (which name the new size); writes the page
 /// owners, use stamps, page table and tile stamps, and the counters (cleared
 /// first; the frame clears them again). `res` is still the larger atlas.
-pub fn compact_pages(frame: &mut Frame, pass: &CompactPass, paging: &PagingPass, res: &Resources, pages: u32) -> Moves {
+pub fn compact_pages(frame: &mut Frame, pass: &ResizePass, paging: &PagingPass, res: &Resources, pages: u32) -> Moves {
     let capacity = res.pool.pages.saturating_sub(pages);
-    // The count and the age buckets' counts (zeroed on creation), then a
-    // pair per page beyond.
-    let header = (4 + 4 * TileCounter::AGE_BUCKETS as u64).next_multiple_of(8);
-    let buffer = frame.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("atlas moves"),
-        size: header + 8 * capacity.max(1) as u64,
-        usage: wgpu::BufferUsages::STORAGE,
-        mapped_at_creation: false,
-    });
-    let group = bind_group(frame.device, "atlas moves", &pass.moves_layout, &[buffer.as_entire_binding()]);
+    let moves = Moves::new(frame.device, pass, capacity);
     frame.encoder.clear_buffer(&res.counters, 0, None);
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass("atlas compaction");
     res.bind(&mut cp, scene);
     rank_candidates(&mut cp, paging, res);
-    cp.set_bind_group(2, &group, &[]);
+    cp.set_bind_group(2, &moves.group, &[]);
     cp.set_pipeline(&pass.count_movers);
     cp.dispatch_workgroups(capacity.div_ceil(64), 1, 1);
     cp.set_pipeline(&pass.mover_offsets);
@@ -100,15 +111,24 @@ pub fn compact_pages(frame: &mut Frame, pass: &CompactPass, paging: &PagingPass,
         cp.set_pipeline(pipeline);
         cp.dispatch_workgroups(capacity.div_ceil(64), 1, 1);
     }
-    Moves { group, capacity }
+    drop(cp);
+    moves
 }
 
-/// Once the smaller atlas exists (`res`): copies the moved pages' shades and
-/// triangle maps from the larger one's textures (`old`).
-pub fn copy_moved_pages(frame: &mut Frame, pass: &CompactPass, res: &Resources, old: &PhysicalPages, moves: &Moves) {
+/// Once the new atlas exists (`res`): copies the pages both sizes have (the
+/// old atlas had `old_pages`), and the pages `moves` moved (after a
+/// shrink), from the old atlas's textures (`old`) into the new ones.
+pub fn copy_pages(
+    frame: &mut Frame,
+    pass: &ResizePass,
+    res: &Resources,
+    old: &PhysicalPages,
+    old_pages: u32,
+    moves: Option<&Moves>,
+) {
     let textures = bind_group(
         frame.device,
-        "atlas compaction textures",
+        "atlas resize textures",
         &pass.textures_layout,
         &[
             wgpu::BindingResource::TextureView(&old.atlas_array),
@@ -117,12 +137,25 @@ pub fn copy_moved_pages(frame: &mut Frame, pass: &CompactPass, res: &Resources, 
             wgpu::BindingResource::TextureView(&res.physical.triangle_map_array),
         ],
     );
+    let none;
+    let moves = match moves {
+        Some(moves) => moves,
+        None => {
+            none = Moves::new(frame.device, pass, 0);
+            &none
+        }
+    };
+    let kept = res.pool.pages.min(old_pages);
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass("atlas page copy");
     res.bind(&mut cp, scene);
     cp.set_bind_group(2, &moves.group, &[]);
     cp.set_bind_group(3, &textures, &[]);
-    cp.set_pipeline(&pass.copy_pages);
-    // A workgroup per move, looping past the dimension's limit.
-    cp.dispatch_workgroups(moves.capacity.clamp(1, 65_535), 1, 1);
+    // A workgroup per page, looping past the dimension's limit.
+    cp.set_pipeline(&pass.copy_kept);
+    cp.dispatch_workgroups(kept.clamp(1, 65_535), 1, 1);
+    if moves.capacity > 0 {
+        cp.set_pipeline(&pass.copy_moved);
+        cp.dispatch_workgroups(moves.capacity.min(65_535), 1, 1);
+    }
 }
