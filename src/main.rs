@@ -310,8 +310,7 @@ struct SceneArgs {
     /// rasterizer with 64-bit atomics; surfaces rebuilt from triangle ids) or
     /// `auto` (default: compute where the adapter has 64-bit atomics, which
     /// on the H100 is 1.7x (object space) to 2.2x (deferred-compute) faster
-    /// at 1920x1080, and the scene has no alpha-masked materials, which the
-    /// compute rasterizer does not cut; else raster).
+    /// at 1920x1080, else raster).
     #[arg(long, default_value = "auto", value_parser = visibility_choice)]
     visibility: VisibilityChoice,
     /// Compute visibility: count the rasterizer's work every frame
@@ -836,8 +835,7 @@ impl Setup {
 /// Renderer options from the command line, for object space the texture
 /// sizes the charts gave, and for `--visibility auto` the adapter's features.
 fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu::Features) -> RenderOptions {
-    let alpha_masks = s.scene.has_alpha_masks();
-    let visibility = a.visibility.0.unwrap_or_else(|| VisibilityMethod::preferred(features, alpha_masks));
+    let visibility = a.visibility.0.unwrap_or_else(|| VisibilityMethod::preferred(features));
     let pipeline = match a.pipeline {
         PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::ForwardMultipass => PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),

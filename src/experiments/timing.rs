@@ -265,7 +265,7 @@ impl<'a> Bench<'a> {
             path: cameras.path.clone(),
             camera_label: format!("path from frame {}", grid.first_frame),
             region: cameras.light_region(&scene.render.bounds()),
-            visibility: VisibilityMethod::preferred(ctx.device.features(), scene.render.has_alpha_masks()),
+            visibility: VisibilityMethod::preferred(ctx.device.features()),
             grid,
             progress,
         }

@@ -59,7 +59,7 @@ impl VisibilityRenderer {
         }
         let mut shaders = ShaderLibrary::new()?;
         let scene_gpu = SceneGpu::new(device, &ctx.queue, scene);
-        let method = VisibilityMethod::preferred(device.features(), scene.has_alpha_masks());
+        let method = VisibilityMethod::preferred(device.features());
         let targets = resolutions
             .iter()
             .map(|&(w, h)| -> Result<Target, RenderError> {

@@ -52,11 +52,20 @@ impl ScenePipeline {
     }
 }
 
-/// The pass shaders drawn through [`ScenePipeline`]s, whose [`ALPHA_MASK`]
-/// variants must compose too (checked in `shaders`' tests).
+/// The pass shaders with [`ALPHA_MASK`] variants (those drawn through
+/// [`ScenePipeline`]s, the shadow maps and the compute rasterizer), which
+/// must compose too (checked in `shaders`' tests).
 pub fn alpha_masked_shaders() -> Vec<ShaderSource> {
     // Clustered and multi-pass forward always test `Equal` after a pre-pass.
-    vec![depth_prepass::SHADER, visibility::SHADER, gbuffer::SHADER, crate::render::forward::SHADER, shadows::SHADER]
+    vec![
+        depth_prepass::SHADER,
+        visibility::SHADER,
+        gbuffer::SHADER,
+        crate::render::forward::SHADER,
+        shadows::SHADER,
+        visibility::compute::RASTER,
+        visibility::compute::RASTER_CULLING_COUNTING,
+    ]
 }
 
 /// A raster pipeline over the scene bind group (group 0): vertices pulled
@@ -230,7 +239,19 @@ pub fn compute_pipeline(
     entry: &str,
     groups: &[&wgpu::BindGroupLayout],
 ) -> Result<wgpu::ComputePipeline, ShaderError> {
-    let module = shaders.module(device, shader)?;
+    compute_pipeline_with(device, shaders, shader, &[], entry, groups)
+}
+
+/// [`compute_pipeline`] of `shader` composed with `extra` defined too.
+pub fn compute_pipeline_with(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    shader: ShaderSource,
+    extra: &[&str],
+    entry: &str,
+    groups: &[&wgpu::BindGroupLayout],
+) -> Result<wgpu::ComputePipeline, ShaderError> {
+    let module = shaders.module_with(device, shader, extra)?;
     let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().copied().map(Some).collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(entry),

@@ -10,6 +10,10 @@
 //! 32x32 tiles), `vis: raster big` (one workgroup per queued tile: its 8x8
 //! squares are tested against the triangle's edges, then every pixel of the
 //! squares that pass) and `vis: resolve` (payload to (object + 1, triangle)).
+//! For scenes with alpha-masked materials the raster passes are compiled
+//! with `ALPHA_MASK`: a masked triangle keeps a pixel only where its base
+//! colour alpha passes the cutoff (the other scenes run the same code as
+//! without masks).
 //!
 //! Payload: the complement of the triangle's index in this frame's list of
 //! visible triangles, object by object (at equal depth the first drawn wins,
@@ -27,11 +31,11 @@
 use super::VisibilityBuffer;
 use crate::gpu::readback::ReadbackRing;
 use crate::render::frame::Frame;
-use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, compute_pipeline_with};
 use crate::render::report::Counters;
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::targets::Targets;
-use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
+use crate::shaders::{ALPHA_MASK, ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
 
 pub const RASTER: ShaderSource = ShaderSource::new("raster.wgsl", include_str!("raster.wgsl"));
 /// `raster.wgsl` culling back faces ([`crate::scene::Scene::cull_back_faces`]),
@@ -151,11 +155,6 @@ pub enum ComputeVisibilityError {
         "compute visibility needs 64-bit atomics (SHADER_INT64, SHADER_INT64_ATOMIC_MIN_MAX), which this adapter lacks"
     )]
     NoInt64Atomics,
-    #[error(
-        "the compute rasterizer does not alpha-test, and this scene has alpha-masked materials: \
-         use --visibility raster (the default for such scenes)"
-    )]
-    AlphaMasks,
 }
 
 /// The compute rasterizer's pipelines, buffers and bind groups, for one
@@ -199,11 +198,6 @@ impl ComputeVisibility {
     ) -> Result<Self, ComputeVisibilityError> {
         if !device.features().contains(FEATURES) {
             return Err(ComputeVisibilityError::NoInt64Atomics);
-        }
-        // Simplified: testing alpha per covered pixel would take the
-        // triangle's UVs and a texture lookup into the rasterizer's inner loop.
-        if scene.has_alpha_masks() {
-            return Err(ComputeVisibilityError::AlphaMasks);
         }
         let (width, height) = (targets.width, targets.height);
         let buffer = |label, size: u64, usage| {
@@ -289,11 +283,14 @@ impl ComputeVisibility {
             (true, false) => RASTER_CULLING,
             (true, true) => RASTER_CULLING_COUNTING,
         };
+        // Alpha testing is compiled in only for scenes that need it.
+        let defs: &[&str] = if scene.has_alpha_masks() { &[ALPHA_MASK] } else { &[] };
+        let mut raster = |entry| compute_pipeline_with(device, shaders, raster_shader, defs, entry, &raster_groups);
         Ok(Self {
+            raster: raster("raster")?,
+            raster_big: raster("raster_big")?,
             clear: compute_pipeline(device, shaders, RESOLVE, "clear", &[&resolve_layout])?,
             resolve: compute_pipeline(device, shaders, RESOLVE, "resolve", &[&resolve_layout])?,
-            raster: compute_pipeline(device, shaders, raster_shader, "raster", &raster_groups)?,
-            raster_big: compute_pipeline(device, shaders, raster_shader, "raster_big", &raster_groups)?,
             raster_params,
             resolve_params,
             ranges,

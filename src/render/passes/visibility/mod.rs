@@ -32,13 +32,12 @@ pub enum VisibilityMethod {
 impl VisibilityMethod {
     pub const ALL: [Self; 2] = [Self::Raster, Self::Compute];
 
-    /// The faster method the device can run for a scene: compute where it
-    /// has [`compute::FEATURES`] (measured on the H100: the compute
-    /// rasterizer takes 0.7 ms at 1920x1080 where the hardware's depth
-    /// pre-pass and id pass take 1.65 ms) and the scene has no alpha-masked
-    /// materials (which only the raster method cuts), else raster.
-    pub fn preferred(features: wgpu::Features, alpha_masks: bool) -> Self {
-        if features.contains(compute::FEATURES) && !alpha_masks { Self::Compute } else { Self::Raster }
+    /// The faster method the device can run: compute where it has
+    /// [`compute::FEATURES`] (measured on the H100: the compute rasterizer
+    /// takes 0.7 ms at 1920x1080 where the hardware's depth pre-pass and id
+    /// pass take 1.65 ms), else raster.
+    pub fn preferred(features: wgpu::Features) -> Self {
+        if features.contains(compute::FEATURES) { Self::Compute } else { Self::Raster }
     }
 
     /// The name `--visibility` takes.
