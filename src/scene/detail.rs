@@ -23,14 +23,20 @@ const BRICKS: (u32, u32) = (4, 8);
 
 /// Gives every material of `scene` a detailed albedo (its old base colour
 /// texture's mean colour, modulated by stone-like grain and bricks) and the
-/// normal map of the same relief. Textures the materials no longer use stay
-/// in the list (their indices are unchanged).
+/// normal map of the same relief. Alpha-masked materials keep their base
+/// colour texture, whose alpha is their shape, and get the normal map only.
+/// Textures the materials no longer use stay in the list (their indices are
+/// unchanged).
 pub fn add_detailed_textures(scene: &mut Scene) {
     let relief = Relief::new(DETAIL_SIZE);
     let normal = scene.textures.len();
     scene.textures.push(relief.normal_map("detail normal map"));
     let mut albedos: Vec<(Option<usize>, usize)> = Vec::new();
     for m in &mut scene.materials {
+        m.normal_texture = Some(normal);
+        if m.alpha_cutoff.is_some() {
+            continue;
+        }
         let source = m.base_color_texture;
         let index = match albedos.iter().find(|(s, _)| *s == source) {
             Some(&(_, index)) => index,
@@ -43,7 +49,6 @@ pub fn add_detailed_textures(scene: &mut Scene) {
             }
         };
         m.base_color_texture = Some(index);
-        m.normal_texture = Some(normal);
     }
 }
 
@@ -193,10 +198,14 @@ mod tests {
     #[test]
     fn every_material_gets_detail_with_its_old_tint() {
         let mut scene = crate::scene::load("atrium").unwrap();
+        let masked = scene.materials[1].base_color_texture;
+        scene.materials[1].alpha_cutoff = Some(0.5);
         let before = scene.textures.len();
         add_detailed_textures(&mut scene);
         assert!(scene.materials.iter().all(|m| m.normal_texture == Some(before)));
-        assert!(scene.materials.iter().all(|m| m.base_color_texture.is_some_and(|t| t > before)));
+        let opaque = scene.materials.iter().filter(|m| m.alpha_cutoff.is_none());
+        assert!(opaque.clone().count() > 1 && opaque.clone().all(|m| m.base_color_texture.is_some_and(|t| t > before)));
+        assert_eq!(scene.materials[1].base_color_texture, masked, "a masked material keeps its shape");
         let t = &scene.textures[scene.materials[0].base_color_texture.unwrap()];
         assert_eq!((t.width, t.height), (DETAIL_SIZE, DETAIL_SIZE));
     }

@@ -14,7 +14,12 @@
 //!   `.mtl`: `Kd` -> `base_color` (`d` -> alpha), `Ks` -> `specular` (mean),
 //!   `Ns` -> `shininess` (at least 1; `roughness` is derived from it), `Ke` ->
 //!   `emissive`, `map_Kd` -> an RGBA8 texture loaded relative to the OBJ's folder,
-//!   `map_Ke` -> the emissive texture (multiplying `Ke`, 1 when there is no `Ke`).
+//!   `map_Ke` -> the emissive texture (multiplying `Ke`, 1 when there is no `Ke`),
+//!   `map_d` -> an alpha mask: the image's alpha channel, or its luminance
+//!   where every texel is opaque, becomes the base colour texture's alpha
+//!   (resampled to its size; white colour where there is no `map_Kd`), with
+//!   `alpha_cutoff` 0.5 (OBJ has no alpha mode: a `map_d` is taken as a
+//!   cutout, as real-time renderers take Crytek Sponza's foliage and chains).
 //!   A texture that is missing or cannot be decoded is a warning.
 //! - Objects without a texture get a generated UV checker tinted by their
 //!   index in the whole scene (`checker_texture`).
@@ -138,6 +143,9 @@ struct Loader {
     images: HashMap<PathBuf, Option<usize>>,
     /// Checker slot -> texture index.
     checkers: HashMap<usize, usize>,
+    /// (colour texture, `map_d` file) -> the texture with that mask as its
+    /// alpha (`None`: the mask failed, already warned).
+    cutouts: HashMap<(Option<usize>, PathBuf), Option<usize>>,
 }
 
 /// One output object of a file, before it becomes a [`Mesh`].
@@ -239,6 +247,12 @@ impl Loader {
             if let Some(tex) = &m.diffuse_texture {
                 material.base_color_texture = self.image(scene, obj, dir, tex, "using a generated checker");
             }
+            if let Some(tex) = &m.dissolve_texture
+                && let Some(cutout) = self.cutout(scene, obj, dir, material.base_color_texture, tex)
+            {
+                material.base_color_texture = Some(cutout);
+                material.alpha_cutoff = Some(0.5);
+            }
             // `tobj` keeps `map_Ke` among the parameters it does not know.
             if let Some(tex) = m.unknown_param.get("map_Ke") {
                 material.emissive_texture = self.image(scene, obj, dir, tex, "no emission texture");
@@ -278,6 +292,66 @@ impl Loader {
         };
         self.images.insert(file, loaded);
         loaded
+    }
+
+    /// The texture of colour texture `colour` (white without one) with the
+    /// `map_d` image `spec` as its alpha, made once per pair; `None` (with a
+    /// warning) when the image is missing or cannot be decoded.
+    fn cutout(
+        &mut self,
+        scene: &mut Scene,
+        obj: &Path,
+        dir: &Path,
+        colour: Option<usize>,
+        spec: &str,
+    ) -> Option<usize> {
+        let file = dir.join(texture_file_name(spec));
+        let key = (colour, file.clone());
+        if let Some(&known) = self.cutouts.get(&key) {
+            return known;
+        }
+        let made = match image::open(&file) {
+            Ok(img) => {
+                let rgba = img.to_rgba8();
+                // An alpha channel that cuts something is the mask; else the luminance.
+                let mask: image::GrayImage = if rgba.pixels().any(|p| p[3] < 255) {
+                    image::ImageBuffer::from_fn(rgba.width(), rgba.height(), |x, y| image::Luma([rgba[(x, y)][3]]))
+                } else {
+                    img.to_luma8()
+                };
+                let mut texture = match colour {
+                    Some(t) => scene.textures[t].clone(),
+                    None => Texture {
+                        name: String::new(),
+                        width: mask.width(),
+                        height: mask.height(),
+                        rgba8: vec![255; (mask.width() * mask.height() * 4) as usize],
+                    },
+                };
+                let mask = if mask.dimensions() == (texture.width, texture.height) {
+                    mask
+                } else {
+                    image::imageops::resize(&mask, texture.width, texture.height, image::imageops::FilterType::Triangle)
+                };
+                for (texel, alpha) in texture.rgba8.chunks_exact_mut(4).zip(mask.pixels()) {
+                    texel[3] = alpha[0];
+                }
+                let mask_name = file.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+                texture.name = format!("{} cut by {mask_name}", texture.name);
+                scene.textures.push(texture);
+                Some(scene.textures.len() - 1)
+            }
+            Err(e) => {
+                tracing::warn!(
+                    "{}: alpha mask {} cannot be loaded ({e}); the material stays opaque",
+                    obj.display(),
+                    file.display()
+                );
+                None
+            }
+        };
+        self.cutouts.insert(key, made);
+        made
     }
 }
 
@@ -734,6 +808,62 @@ f 5 6 7
         assert_eq!(grey.base_color, Vec4::new(0.5, 0.5, 0.5, 1.0));
         assert_eq!(grey.specular, Material::default().specular);
         assert_eq!(scene.textures[grey.base_color_texture.unwrap()].width, CHECKER_SIZE);
+    }
+
+    /// `map_d` cuts: its luminance (or its alpha, where it cuts) becomes
+    /// the base colour texture's alpha, resampled to its size, with cutoff
+    /// 0.5; without `map_Kd` the colour is white; a missing `map_d` is a
+    /// warning and leaves the material opaque.
+    #[test]
+    fn mtl_alpha_masks() {
+        let dir = tempfile::tempdir().unwrap();
+        image::RgbaImage::from_pixel(4, 2, image::Rgba([10, 20, 30, 255])).save(dir.path().join("kd.png")).unwrap();
+        image::GrayImage::from_fn(2, 1, |x, _| image::Luma([if x == 0 { 0 } else { 255 }]))
+            .save(dir.path().join("mask.png"))
+            .unwrap();
+        image::RgbaImage::from_fn(2, 2, |x, _| image::Rgba([255, 255, 255, if x == 0 { 0 } else { 255 }]))
+            .save(dir.path().join("alpha.png"))
+            .unwrap();
+        write(
+            dir.path(),
+            "a.mtl",
+            "newmtl leaf
+map_Kd kd.png
+map_d mask.png
+             newmtl chain
+Kd 0.5 0.5 0.5
+map_d alpha.png
+             newmtl lost
+map_Kd kd.png
+map_d missing.png
+",
+        );
+        let obj = "mtllib a.mtl
+v 0 0 0
+v 1 0 0
+v 0 1 0
+                   o a
+usemtl leaf
+f 1 2 3
+o b
+usemtl chain
+f 1 2 3
+o c
+usemtl lost
+f 1 2 3
+";
+        let scene = load_file(&write(dir.path(), "a.obj", obj)).unwrap();
+        let [leaf, chain, lost] = [0, 1, 2].map(|o| &scene.materials[scene.objects[o].material]);
+        assert_eq!(leaf.alpha_cutoff, Some(0.5));
+        let tex = &scene.textures[leaf.base_color_texture.unwrap()];
+        let alphas: Vec<u8> = tex.rgba8.chunks_exact(4).map(|p| p[3]).collect();
+        assert_eq!((tex.width, tex.height, &tex.rgba8[..3]), (4, 2, &[10, 20, 30][..]), "map_Kd's colour and size");
+        assert!(alphas[0] == 0 && alphas[3] == 255 && alphas[1] < alphas[2], "the mask resampled: {alphas:?}");
+        assert_eq!(chain.alpha_cutoff, Some(0.5));
+        let tex = &scene.textures[chain.base_color_texture.unwrap()];
+        assert_eq!((tex.width, &tex.rgba8[..8]), (2, &[255, 255, 255, 0, 255, 255, 255, 255][..]), "white, alpha");
+        assert_eq!(lost.alpha_cutoff, None, "a missing map_d leaves the material opaque");
+        assert!(scene.has_alpha_masks());
     }
 
     /// `map_Ke` (kept by `tobj` among unknown parameters) becomes the
