@@ -404,9 +404,10 @@ fn uv_at(n0: vec3f, n1: vec3f, n2: vec3f, uv0: vec2f, uv1: vec2f, uv2: vec2f, p:
 // Whether list triangle ~payload, of an alpha-masked object, is cut away at
 // pixel p: its base colour texel's alpha there, at the level its UV
 // derivatives across the pixel's 2x2 quad give, as the raster path's
-// fragment shaders take them (with derivatives one pixel ahead instead,
-// 0.3 % of the ids on masked scenes differed from the raster path's, with
-// the quad's 0.04-0.08 %). Simplified: the triangle is fetched again for
+// fragment shaders take them (on lavapipe, with derivatives one pixel ahead
+// instead, 0.3 % of the ids on masked scenes differed from the raster
+// path's, with the quad's 0.04-0.08 %; on the H100 border pixels differ
+// more: BENCHMARKS.md). Simplified: the triangle is fetched again for
 // every pixel it covers nearer than what the pixel holds, rather than set
 // up once.
 fn cut_away(payload: u32, p: vec2i) -> bool {
