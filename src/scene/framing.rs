@@ -188,7 +188,7 @@ fn fit_distance(points: &[Vec3], target: Vec3, forward: Vec3, aspect: f32) -> f3
 /// Clip planes of vertical field of view `fov_y` for a camera whose scene
 /// lies from `nearest` to `farthest` away: far 1 % beyond the farthest point,
 /// near halfway to the nearest (for a camera inside the scene, a
-/// [`MIN_NEAR_FRACTION`] of far).
+/// `MIN_NEAR_FRACTION` of far).
 pub fn clip_planes(fov_y: f32, nearest: f32, farthest: f32) -> Projection {
     let far = 1.01 * farthest.max(f32::MIN_POSITIVE);
     Projection { fov_y, near: (0.5 * nearest).max(MIN_NEAR_FRACTION * far), far }
