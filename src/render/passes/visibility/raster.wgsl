@@ -403,11 +403,11 @@ fn uv_at(n0: vec3f, n1: vec3f, n2: vec3f, uv0: vec2f, uv1: vec2f, uv2: vec2f, p:
 
 // Whether list triangle ~payload, of an alpha-masked object, is cut away at
 // pixel p: its base colour texel's alpha there, at the level its UV
-// derivatives across the pixel's 2x2 quad give, as the raster path's
-// fragment shaders take them (on lavapipe, with derivatives one pixel ahead
-// instead, 0.3 % of the ids on masked scenes differed from the raster
-// path's, with the quad's 0.04-0.08 %; on the H100 border pixels differ
-// more: BENCHMARKS.md). Simplified: the triangle is fetched again for
+// derivatives across the pixel's 2x2 quad give, as fragment shaders take
+// them (coarse: from the quad's first pixel). On lavapipe the ids of masked
+// scenes then differ from the raster path's on 0.01-0.05 % of the pixels
+// (0.3 % with derivatives one pixel ahead, 0.04-0.08 % with fine ones); on
+// the H100 masked borders differ more, with either (BENCHMARKS.md). Simplified: the triangle is fetched again for
 // every pixel it covers nearer than what the pixel holds, rather than set
 // up once.
 fn cut_away(payload: u32, p: vec2i) -> bool {
@@ -424,13 +424,11 @@ fn cut_away(payload: u32, p: vec2i) -> bool {
     let t0 = vertex_uv0(vertices[tri.x]);
     let t1 = vertex_uv0(vertices[tri.y]);
     let t2 = vertex_uv0(vertices[tri.z]);
-    // Derivatives across the pixel's 2x2 quad, as fragment shaders take
-    // them (along its row and its column: fine derivatives).
-    let at = vec2f(p);
     let quad = vec2f(p & vec2i(-2));
-    let uv = uv_at(n0, n1, n2, t0, t1, t2, at);
-    let ddx = uv_at(n0, n1, n2, t0, t1, t2, vec2f(quad.x + 1.0, at.y)) - uv_at(n0, n1, n2, t0, t1, t2, vec2f(quad.x, at.y));
-    let ddy = uv_at(n0, n1, n2, t0, t1, t2, vec2f(at.x, quad.y + 1.0)) - uv_at(n0, n1, n2, t0, t1, t2, vec2f(at.x, quad.y));
+    let uv = uv_at(n0, n1, n2, t0, t1, t2, vec2f(p));
+    let corner = uv_at(n0, n1, n2, t0, t1, t2, quad);
+    let ddx = uv_at(n0, n1, n2, t0, t1, t2, quad + vec2f(1.0, 0.0)) - corner;
+    let ddy = uv_at(n0, n1, n2, t0, t1, t2, quad + vec2f(0.0, 1.0)) - corner;
     return alpha_cut(o, textureSampleGrad(albedo, albedo_sampler, uv, o.albedo_layer, ddx, ddy).a);
 }
 #endif
