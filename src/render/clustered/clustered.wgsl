@@ -5,6 +5,9 @@
     fragment_surface}
 #import shadespace::scene_bindings::objects
 #import shadespace::light_grid::{cluster_of, light_surface_in_cell}
+#ifdef ALPHA_MASK
+#import shadespace::alpha_mask::masked_out
+#endif
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
@@ -13,6 +16,11 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32)
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4f {
+#ifdef ALPHA_MASK
+    if masked_out(in.tag, in.uv) {
+        discard;
+    }
+#endif
     let o = objects[in.tag];
     let s = fragment_surface(o, in, sample_albedo(o, in), sample_normal_map(o, in), sample_material(o, in));
     return vec4f(light_surface_in_cell(o, s, cluster_of(in.clip.xy, in.world)), 1.0);

@@ -6,6 +6,9 @@
 #import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, sample_material,
     fragment_surface}
 #import shadespace::scene_bindings::{view, objects, lights}
+#ifdef ALPHA_MASK
+#import shadespace::alpha_mask::masked_out
+#endif
 
 // Mirrors `render::forward_multipass::LightPair`.
 struct LightPair {
@@ -24,6 +27,11 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) pair: u32) -
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4f {
     let pair = pairs[in.tag];
+#ifdef ALPHA_MASK
+    if masked_out(pair.object, in.uv) {
+        discard;
+    }
+#endif
     let o = objects[pair.object];
     // Sampled before the branch: implicit derivatives need uniform control flow.
     let texel = sample_albedo(o, in);

@@ -32,23 +32,26 @@ impl DepthMode {
 }
 
 /// A scene raster pass's pipelines: one for the opaque objects and, when the
-/// scene has alpha-masked ones and the pass writes depth, the pass shader's
-/// [`ALPHA_MASK`] variant for those, which discards their cut-away
-/// fragments. Two pipelines, so that opaque objects are drawn by a fragment
-/// stage that never discards and keep their early depth test. A pass testing
-/// `Equal` after a depth pre-pass needs no variant: the pre-pass cut the
-/// masked objects' depth already.
+/// scene has alpha-masked ones, the pass shader's [`ALPHA_MASK`] variant for
+/// those, which discards their cut-away fragments. Two pipelines, so that
+/// opaque objects are drawn by a fragment stage that never discards and keep
+/// their early depth test. A pass testing `Equal` after a depth pre-pass
+/// needs the variant too: where a masked triangle is cut away, another
+/// triangle of its object may have left the same depth (coplanar ones), and
+/// the `Equal` test alone would let the cut one through.
 pub struct ScenePipeline {
     opaque: wgpu::RenderPipeline,
     masked: Option<wgpu::RenderPipeline>,
 }
 
 impl ScenePipeline {
-    /// The one pipeline of a pass that tests `Equal` after a depth pre-pass
-    /// (it has no masked variant), for a pass with a draw loop of its own.
-    pub fn into_single(self) -> wgpu::RenderPipeline {
-        debug_assert!(self.masked.is_none());
-        self.opaque
+    /// One pipeline for every object, for a pass with a draw loop of its own
+    /// that tests `Equal` after a depth pre-pass: in scenes with masks the
+    /// [`ALPHA_MASK`] variant (it cuts only the masked objects, and with no
+    /// depth writes a fragment stage that may discard keeps its early depth
+    /// test), else the plain one.
+    pub fn for_every_object(self) -> wgpu::RenderPipeline {
+        self.masked.unwrap_or(self.opaque)
     }
 }
 
@@ -56,8 +59,10 @@ impl ScenePipeline {
 /// [`ScenePipeline`]s, the shadow maps and the compute rasterizer), which
 /// must compose too (checked in `shaders`' tests).
 pub fn alpha_masked_shaders() -> Vec<ShaderSource> {
-    // Clustered and multi-pass forward always test `Equal` after a pre-pass.
+    use crate::render::{clustered, forward_multipass};
     vec![
+        clustered::SHADER,
+        forward_multipass::SHADER,
         depth_prepass::SHADER,
         visibility::SHADER,
         gbuffer::SHADER,
@@ -110,7 +115,7 @@ pub fn scene_raster_pipeline_from(
     raster: &SceneRaster,
 ) -> Result<ScenePipeline, ShaderError> {
     let opaque = raster_pipeline(device, shaders, scene, raster, false)?;
-    let masked = if scene.has_alpha_masks() && raster.depth == DepthMode::Write {
+    let masked = if scene.has_alpha_masks() {
         // A depth-only pass discards in a fragment stage of its own.
         let fragment = raster.fragment.or(Some(("fs_alpha_mask", &[])));
         Some(raster_pipeline(device, shaders, scene, &SceneRaster { fragment, ..*raster }, true)?)
