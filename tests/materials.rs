@@ -317,15 +317,21 @@ mod textured_floor {
     /// Mean absolute difference (8-bit units, over RGB) between `a` and `b`
     /// over the pixels of `slot`'s non-white half (`textured`) or white half.
     pub fn half_difference(a: &RgbaImage, b: &RgbaImage, slot: Slot, textured: bool) -> f64 {
+        difference_where(a, b, |uv| slot.textured(uv) == Some(textured))
+    }
+
+    /// Mean absolute difference (8-bit units, over RGB) between `a` and `b`
+    /// over the pixels whose floor UV passes `keep` (more than 1,000 of them).
+    pub fn difference_where(a: &RgbaImage, b: &RgbaImage, keep: impl Fn(Vec2) -> bool) -> f64 {
         let (mut sum, mut n) = (0.0, 0usize);
         for (x, y, p) in a.enumerate_pixels() {
-            if slot.textured(uv_at(x, y)) == Some(textured) {
+            if keep(uv_at(x, y)) {
                 let q = b.get_pixel(x, y);
                 sum += (0..3).map(|c| (p[c] as f64 - q[c] as f64).abs()).sum::<f64>() / 3.0;
                 n += 1;
             }
         }
-        assert!(n > 1000, "{slot:?}: only {n} pixels in the half");
+        assert!(n > 1000, "only {n} pixels where the floor's UV passes");
         sum / n as f64
     }
 }
@@ -507,7 +513,7 @@ fn alpha_mask_cuts_surfaces_and_shadows_in_every_pipeline() {
     use glam::{Mat4, Vec3, Vec4};
     use shadespace::render::VisibilityMethod;
     use shadespace::scene::{Light, LightKind, Material, Object, Scene};
-    use textured_floor::{HEIGHT, WIDTH, camera, uv_at};
+    use textured_floor::{HEIGHT, WIDTH, camera};
 
     let dir = tempfile::tempdir().unwrap();
     let cut_green = image::RgbaImage::from_fn(64, 64, |x, _| {
@@ -568,17 +574,7 @@ fn alpha_mask_cuts_surfaces_and_shadows_in_every_pipeline() {
     // Mean absolute difference (8-bit, RGB) over the pixels whose upper-floor
     // UV lies in the cut half (u < 0.45) or the solid half (u > 0.55).
     let half_difference = |a: &image::RgbaImage, b: &image::RgbaImage, cut: bool| {
-        let (mut sum, mut n) = (0.0, 0u32);
-        for (x, y, p) in a.enumerate_pixels() {
-            let u = uv_at(x, y).x;
-            if (cut && u < 0.45) || (!cut && u > 0.55) {
-                let q = b.get_pixel(x, y);
-                sum += (0..3).map(|c| (p[c] as f64 - q[c] as f64).abs()).sum::<f64>() / 3.0;
-                n += 1;
-            }
-        }
-        assert!(n > 1000, "only {n} pixels in the half");
-        sum / n as f64
+        textured_floor::difference_where(a, b, |uv| if cut { uv.x < 0.45 } else { uv.x > 0.55 })
     };
 
     let forward = |depth_prepass| PipelineConfig::Forward(ForwardConfig { depth_prepass });
