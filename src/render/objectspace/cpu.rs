@@ -23,7 +23,7 @@ use crate::scene::{Mesh, Scene};
 /// How far (in levels) a pixel's unrounded mip level may be from a rounding
 /// boundary (x.5) and still be rounded either way. The level is
 /// `log2(rho) + biases`, so 1.5e-4 levels is a relative error of 1e-4 in the
-/// footprint `rho`. On lavapipe no pixel of `tests/mark_twin.rs` rounds
+/// footprint `rho`. On lavapipe no pixel of `tests/it/mark_twin.rs` rounds
 /// differently even with no tolerance (the closest came within 4e-6 of x.5),
 /// and the margin makes a few dozen pixels a frame ambiguous, a tile or two.
 pub const LOD_TOLERANCE: f32 = 1.5e-4;
@@ -33,7 +33,7 @@ pub const LOD_TOLERANCE: f32 = 1.5e-4;
 /// way. The chart UV's error is absolute (the barycentrics' rounding, from
 /// cross products of clip coordinates tens of units large, times the UV
 /// extent of the triangle), so the error of `t` grows with the side. On
-/// lavapipe one atrium pixel of `tests/mark_twin.rs` has `t` 8.6e-7 of the
+/// lavapipe one atrium pixel of `tests/it/mark_twin.rs` has `t` 8.6e-7 of the
 /// side from an integer (1.1e-4 texels at 128) and is floored the other way
 /// on the GPU; 1e-5 leaves a tenfold margin.
 pub const TEXEL_TOLERANCE: f32 = 1e-5;

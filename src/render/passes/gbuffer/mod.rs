@@ -15,7 +15,7 @@
 //! Why these: 10-bit linear albedo costs the 4 bytes of `Rgba8Unorm` and is
 //! finer than 8-bit sRGB above a linear albedo of about 0.02 (up to 9x at
 //! white) and than 8-bit linear everywhere. Against forward at 320x180 (mean
-//! FLIP, atrium / voxels; `tests/agreement.rs`): 8-bit sRGB 0.0072 / 0.0013,
+//! FLIP, atrium / voxels; `tests/it/agreement.rs`): 8-bit sRGB 0.0072 / 0.0013,
 //! 8-bit linear 0.0043 / 0.0095, 10-bit linear 0.0022 / 0.0033, half floats
 //! (8 bytes) 0.0017 / 0.0009. Specular, shininess and the material
 //! factors are per object in this renderer, so one object index carries them

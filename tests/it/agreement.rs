@@ -4,8 +4,8 @@
 //! lights too (one shadow term in the shared lighting code, one set of shadow
 //! maps). (Object space, which filters texel shades, has its own looser
 //! bound in `golden.rs`.)
-mod common;
 
+use crate::common;
 use shadespace::metrics;
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, PipelineConfig,

@@ -2,8 +2,8 @@
 //! after every frame the marking state is read back, the twin runs on the
 //! GPU's visibility buffer and on the tile state from before the frame, and
 //! the visible, new and queued tiles and the next state must agree.
-mod common;
 
+use crate::common;
 use std::collections::{BTreeMap, BTreeSet};
 
 use glam::Vec3;

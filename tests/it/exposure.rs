@@ -1,8 +1,8 @@
 //! Automatic exposure: the GPU's log-average matches a CPU computation over
 //! the read-back HDR frame, and a scene lit a thousand times too dimly or
 //! too brightly comes out with its log-average luminance at mid-grey.
-mod common;
 
+use crate::common;
 use shadespace::gpu::{GpuContext, readback};
 use shadespace::render::passes::exposure::KEY;
 use shadespace::render::{Exposure, ForwardConfig, PipelineConfig, RenderOptions, Renderer};

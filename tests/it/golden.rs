@@ -4,8 +4,8 @@
 //! Goldens were rendered on lavapipe; other adapters rasterize slightly
 //! differently, hence a FLIP threshold rather than exact equality. Set
 //! `SHADESPACE_BLESS=1` to (re)write them after an intended change.
-mod common;
 
+use crate::common;
 use std::path::PathBuf;
 
 use shadespace::metrics;

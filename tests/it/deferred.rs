@@ -3,8 +3,8 @@
 //! than their list holds (tiled deferred shades in batches), many chunks of
 //! lights, 10,000 lights, and every kind of light volume (eye inside and
 //! outside, cones, wide spots drawn as spheres, volumes past the far plane).
-mod common;
 
+use crate::common;
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

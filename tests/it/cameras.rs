@@ -1,8 +1,8 @@
 //! Cameras of scenes that bring no camera path: models framed and lit with no
 //! flags, whatever their size; the glTF file's own cameras. Runs the command
 //! line on glTF models written by the test (lavapipe, small images).
-mod common;
 
+use crate::common;
 use std::path::Path;
 use std::process::Command;
 

@@ -2,8 +2,8 @@
 //! into pixels that are black without it, keeps the HDR image finite and its
 //! mean brightness (the composite is a lerp), and strength 0 leaves the
 //! image bit-identical to no bloom.
-mod common;
 
+use crate::common;
 use glam::Vec3;
 use shadespace::gpu::readback;
 use shadespace::render::{ForwardConfig, PipelineConfig, RenderError, RenderOptions, Renderer};

@@ -4,8 +4,8 @@
 //! intensities, colours; spot and shadow counts) and compared with the
 //! summary recorded before the generators became scale-aware. Sponza skips
 //! with a message where the shared scenes are absent.
-mod common;
 
+use crate::common;
 use std::path::Path;
 
 use shadespace::scene::{LightKind, lights};

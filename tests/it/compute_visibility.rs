@@ -4,8 +4,8 @@
 //! pixel where they differ lies on an edge between two surfaces in one of the
 //! two buffers (where rounding decides which triangle a pixel centre is in).
 //! Cameras inside objects and triangles crossing the near plane included.
-mod common;
 
+use crate::common;
 use std::path::Path;
 
 use glam::Vec3;

@@ -4,8 +4,8 @@
 //! light that reaches a cell (its sphere touches the cell's box, exactly;
 //! for a spot, also some point of the box sampled inside its cone) must be
 //! in that cell's list. Extra (conservative) entries are counted and printed.
-mod common;
 
+use crate::common;
 use glam::{Mat4, Vec3};
 use shadespace::gpu::GpuContext;
 use shadespace::render::clustered::Clustered;

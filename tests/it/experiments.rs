@@ -3,8 +3,8 @@
 //! and its outputs are read back and checked: CSV columns and invariants of
 //! the measures, JSON keys, valid PNG and SVG plots, a report naming the
 //! command and commit. Timings are never asserted, only their presence.
-mod common;
 
+use crate::common;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! Forward pipeline on a tiny scene: renders without validation errors and
 //! the image shows lit geometry.
-mod common;
 
+use crate::common;
 use shadespace::render::{ForwardConfig, PipelineConfig, RenderOptions, Renderer};
 
 #[test]

@@ -5,8 +5,8 @@
 //! model visibly change the image (so the agreement is not that of two
 //! images that ignore them); and object space reports how many of its pixels
 //! are under-shaded.
-mod common;
 
+use crate::common;
 use shadespace::metrics;
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,

@@ -1,6 +1,6 @@
 //! Object-space pipeline against forward on a tiny scene.
-mod common;
 
+use crate::common;
 use std::collections::HashSet;
 
 use shadespace::color::reinhard_srgb8;

@@ -5,8 +5,8 @@
 //! capitals and mouldings) would otherwise own only the few texels whose
 //! centres they hold, and bilinear taps between them would find no triangle:
 //! the dark seams object space showed along chart borders on lavapipe.
-mod common;
 
+use crate::common;
 use glam::{Mat4, Vec2, Vec3};
 use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::objectspace::trimap::cpu::covering_triangle;

@@ -2,8 +2,8 @@
 //! point light and the sun, in forward and in object space; cached maps are
 //! rendered once for a static scene (the sun's again when the camera moves)
 //! and every frame when asked.
-mod common;
 
+use crate::common;
 use glam::{Mat4, Vec3};
 use shadespace::gpu::GpuContext;
 use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, ShadowRefresh};

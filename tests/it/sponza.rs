@@ -1,7 +1,7 @@
 //! The shared Sponza (../shared/scenes/sponza-thesis): renders, and object
 //! space agrees with forward. Skips with a message where the folder is absent.
-mod common;
 
+use crate::common;
 use std::path::Path;
 
 use shadespace::metrics;

@@ -4,8 +4,8 @@
 //! 3 coarser (`mip_bias`), where a texel spans several pixels and bilinear
 //! taps near a border reach texels of the neighbouring chart or texels no
 //! triangle owns. A seam shows as border pixels much worse than the others.
-mod common;
 
+use crate::common;
 use shadespace::charts::islands::triangle_islands;
 use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};

@@ -1,8 +1,8 @@
 //! Multi-pass forward against single-pass forward on the floor scene: with
 //! 10,000 point lights (10,000+ draws in one frame, no validation errors),
 //! and with an emissive floor (emission added once).
-mod common;
 
+use crate::common;
 use glam::Vec3;
 use shadespace::metrics;
 use shadespace::render::{ForwardConfig, ForwardMultipassConfig, PipelineConfig, RenderOptions, Renderer};

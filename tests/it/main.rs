@@ -1,0 +1,30 @@
+//! The integration tests, one module per area, linked into one binary so that
+//! the suite builds and links once (each file under `tests/` used to be its
+//! own binary: 23 links of the whole renderer). `cargo test --test it NAME`
+//! runs a part, for example `cargo test --test it golden::`.
+
+mod common;
+
+mod agreement;
+mod bloom;
+mod cameras;
+mod cli;
+mod compute_visibility;
+mod corpus;
+mod deferred;
+mod experiments;
+mod exposure;
+mod forward;
+mod forward_multipass;
+mod fuzz_regressions;
+mod golden;
+mod light_grid;
+mod light_sets;
+mod mark_twin;
+mod materials;
+mod objectspace;
+mod seams;
+mod shadows;
+mod sponza;
+mod trimap;
+mod viewer;
