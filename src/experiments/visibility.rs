@@ -15,7 +15,6 @@ use crate::render::passes::visibility::{VisibilityBuffer, VisibilityMethod, Visi
 use crate::render::scene_gpu::{SceneGpu, gpu_view};
 use crate::render::targets::Targets;
 use crate::scene::{Camera, Scene};
-use crate::shaders::ShaderLibrary;
 
 /// One resolution's targets and visibility pass.
 struct Target {
@@ -57,7 +56,7 @@ impl VisibilityRenderer {
         if let Some(&(w, h)) = resolutions.iter().find(|(w, h)| *w == 0 || *h == 0 || *w > max || *h > max) {
             return Err(RenderError::BadSize(w, h, max));
         }
-        let mut shaders = ShaderLibrary::new()?;
+        let mut shaders = crate::render::shader_set::library()?;
         let scene_gpu = SceneGpu::new(device, &ctx.queue, scene);
         let method = VisibilityMethod::preferred(device.features());
         let targets = resolutions

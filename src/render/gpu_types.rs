@@ -1,6 +1,6 @@
 //! Rust mirrors of the scene structs every pipeline reads
 //! (`shaders/shared/scene.wgsl`, `shaders/shared/lighting.wgsl`). Their
-//! layouts are compared member by member with naga's (`shaders::layout`).
+//! layouts are compared member by member with naga's (`render::shader_set`'s test, with `shaders::layout`).
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use serde::Serialize;

@@ -20,6 +20,7 @@ pub mod objectspace;
 pub mod passes;
 pub mod report;
 pub mod scene_gpu;
+pub mod shader_set;
 pub mod targets;
 
 use std::any::Any;
@@ -31,7 +32,7 @@ use crate::gpu::timing::{FrameTimings, GpuTimer};
 use crate::gpu::{GpuContext, GpuError, readback};
 use crate::hash::fnv1a;
 use crate::scene::{Aabb, Camera, Light, Scene};
-use crate::shaders::{ShaderError, ShaderLibrary};
+use crate::shaders::ShaderError;
 pub use clustered::ClusteredConfig;
 use culling::Frustum;
 pub use deferred::DeferredConfig;
@@ -195,7 +196,7 @@ impl Renderer {
         if width == 0 || height == 0 || width > max || height > max {
             return Err(RenderError::BadSize(width, height, max));
         }
-        let mut shaders = ShaderLibrary::new()?;
+        let mut shaders = crate::render::shader_set::library()?;
         let scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
         if scene_gpu.material_textures {
             shaders.define(crate::shaders::MATERIAL_TEXTURES);

@@ -1,8 +1,10 @@
 //! Structs whose bytes cross between Rust and WGSL. Each is declared with
 //! `gpu_struct!`, which also records its members (name, offset, size), so a
 //! test can compare every member, by name, with the layout naga computes for
-//! the WGSL struct of the same name: a swapped, renamed, missing or
-//! misaligned field fails, not only a wrong total size.
+//! the WGSL struct of the same name ([`wgsl_layout`], [`check`]): a swapped,
+//! renamed, missing or misaligned field fails, not only a wrong total size.
+//! The test that checks every struct of the renderer lives with them, in
+//! `render::shader_set`.
 
 /// One member of a host-shared struct.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,88 +50,91 @@ macro_rules! gpu_struct {
 }
 pub(crate) use gpu_struct;
 
+/// Members (name, offset) and size of the WGSL struct called `name` (or
+/// naga_oil's mangled name of it) in any of `modules`.
+#[cfg(test)]
+pub(crate) fn wgsl_layout(modules: &[wgpu::naga::Module], name: &str) -> (Vec<Member>, usize) {
+    let mangled = format!("{name}X_naga_oil_mod_X");
+    for module in modules {
+        for (_, ty) in module.types.iter() {
+            let Some(ty_name) = ty.name.as_deref() else { continue };
+            if ty_name != name && !ty_name.starts_with(&mangled) {
+                continue;
+            }
+            if let wgpu::naga::TypeInner::Struct { members, span } = &ty.inner {
+                let members = members
+                    .iter()
+                    .map(|m| Member { name: m.name.clone().unwrap_or_default().leak(), offset: m.offset as usize })
+                    .collect();
+                return (members, *span as usize);
+            }
+        }
+    }
+    panic!("no WGSL struct {name} in any of the modules");
+}
+
+/// Asserts that `T` has the members (by name and offset) and the size of
+/// its WGSL struct in `modules`.
+#[cfg(test)]
+pub(crate) fn check<T: GpuStruct>(modules: &[wgpu::naga::Module]) {
+    let (wgsl, size) = wgsl_layout(modules, T::WGSL_NAME);
+    let rust = T::members();
+    assert_eq!(rust, wgsl, "{}: Rust members (left) differ from WGSL (right)", T::WGSL_NAME);
+    assert_eq!(size_of::<T>(), size, "{}: size", T::WGSL_NAME);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::deferred::volumes::GpuVolumeParams;
-    use crate::render::forward_multipass::LightPair;
-    use crate::render::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
-    use crate::render::objectspace::atlas::{GpuAtlasEntry, GpuAtlasLevel};
-    use crate::render::objectspace::atlas_view::GpuAtlasPages;
-    use crate::render::objectspace::resources::GpuParams;
-    use crate::render::objectspace::trimap::GpuChartGrid;
-    use crate::render::passes::gbuffer::GpuUnproject;
-    use crate::render::passes::light_grid::GpuLightGridParams;
-    use crate::render::passes::visibility::compute::{GpuRasterParams, GpuResolveParams};
-    use crate::shaders::{ShaderLibrary, pass_shaders};
-    use wgpu::naga;
 
-    /// Members (name, offset) and size of the WGSL struct called `name` (or
-    /// naga_oil's mangled name of it) in any of `modules`.
-    fn wgsl_layout(modules: &[naga::Module], name: &str) -> (Vec<Member>, usize) {
-        let mangled = format!("{name}X_naga_oil_mod_X");
-        for module in modules {
-            for (_, ty) in module.types.iter() {
-                let Some(ty_name) = ty.name.as_deref() else { continue };
-                if ty_name != name && !ty_name.starts_with(&mangled) {
-                    continue;
-                }
-                if let naga::TypeInner::Struct { members, span } = &ty.inner {
-                    let members = members
-                        .iter()
-                        .map(|m| Member { name: m.name.clone().unwrap_or_default().leak(), offset: m.offset as usize })
-                        .collect();
-                    return (members, *span as usize);
-                }
-            }
-        }
-        panic!("no WGSL struct {name} in any pass shader");
-    }
+    const WGSL: &str = "struct Level { size: u32, page_base: u32, tile_base: u32, scale: f32 }
+        @group(0) @binding(0) var<storage> levels: array<Level>;";
 
-    fn check<T: GpuStruct>(modules: &[naga::Module]) {
-        let (wgsl, size) = wgsl_layout(modules, T::WGSL_NAME);
-        let rust = T::members();
-        assert_eq!(rust, wgsl, "{}: Rust members (left) differ from WGSL (right)", T::WGSL_NAME);
-        assert_eq!(size_of::<T>(), size, "{}: size", T::WGSL_NAME);
-    }
-
-    /// Every host-shared struct matches its WGSL struct member by member.
-    #[test]
-    fn rust_structs_match_wgsl_member_by_member() {
-        let mut library = ShaderLibrary::new().unwrap();
-        let modules: Vec<naga::Module> = pass_shaders().into_iter().map(|s| library.compose(s).unwrap()).collect();
-        check::<GpuVertex>(&modules);
-        check::<GpuObject>(&modules);
-        check::<GpuView>(&modules);
-        check::<GpuLight>(&modules);
-        check::<GpuAtlasLevel>(&modules);
-        check::<GpuAtlasEntry>(&modules);
-        check::<GpuParams>(&modules);
-        check::<GpuAtlasPages>(&modules);
-        check::<GpuChartGrid>(&modules);
-        check::<LightPair>(&modules);
-        check::<GpuLightGridParams>(&modules);
-        check::<GpuUnproject>(&modules);
-        check::<GpuVolumeParams>(&modules);
-        check::<GpuRasterParams>(&modules);
-        check::<GpuResolveParams>(&modules);
+    fn modules() -> Vec<wgpu::naga::Module> {
+        vec![wgpu::naga::front::wgsl::parse_str(WGSL).unwrap()]
     }
 
     gpu_struct! {
-        struct Swapped as "AtlasLevel" {
+        struct Level as "Level" {
+            size: u32,
+            page_base: u32,
+            tile_base: u32,
+            scale: f32,
+        }
+    }
+
+    gpu_struct! {
+        struct Swapped as "Level" {
             page_base: u32,
             size: u32,
             tile_base: u32,
-            pad: u32,
+            scale: f32,
         }
+    }
+
+    gpu_struct! {
+        struct Short as "Level" {
+            size: u32,
+            page_base: u32,
+            tile_base: u32,
+        }
+    }
+
+    #[test]
+    fn a_matching_struct_passes() {
+        check::<Level>(&modules());
     }
 
     /// A struct with the right size but two members swapped is caught.
     #[test]
     #[should_panic(expected = "Rust members (left) differ from WGSL")]
     fn swapped_members_are_caught() {
-        let mut library = ShaderLibrary::new().unwrap();
-        let modules: Vec<naga::Module> = pass_shaders().into_iter().map(|s| library.compose(s).unwrap()).collect();
-        check::<Swapped>(&modules);
+        check::<Swapped>(&modules());
+    }
+
+    #[test]
+    #[should_panic(expected = "Rust members (left) differ from WGSL")]
+    fn a_missing_member_is_caught() {
+        check::<Short>(&modules());
     }
 }

@@ -8,6 +8,11 @@
 //! generated from the Rust definitions ([`contract`]), and every struct whose
 //! bytes cross between the two is declared with `gpu_struct!` so that a
 //! test can compare it member by member ([`layout`]).
+//!
+//! This module is the mechanism and the lowest shared WGSL; it imports
+//! nothing from the layers above. What the pipelines add (their shared
+//! modules, the constants they share, the list of pass shaders, and the
+//! tests that validate them all) is `render::shader_set`.
 
 pub mod contract;
 pub mod layout;
@@ -41,9 +46,11 @@ impl ShaderSource {
     }
 }
 
-/// Modules that other shaders `#import`, in dependency order (after the
-/// generated `shadespace::contract`).
-const SHARED: &[ShaderSource] = &[
+/// The modules of `shaders/shared/` that pass shaders `#import`, in
+/// dependency order (after the generated `shadespace::contract`); they
+/// import nothing but each other and the contract. The render layer adds
+/// its own shared modules after them ([`ShaderLibrary::new`]).
+pub const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/shadows.wgsl", include_str!("shared/shadows.wgsl")),
     ShaderSource::new("shared/lighting.wgsl", include_str!("shared/lighting.wgsl")),
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
@@ -53,35 +60,9 @@ const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
     ShaderSource::new("shared/pixel_surface.wgsl", include_str!("shared/pixel_surface.wgsl")),
     ShaderSource::new("shared/raster_surface.wgsl", include_str!("shared/raster_surface.wgsl")),
-    crate::render::passes::light_grid::SHARED_WGSL[0],
-    crate::render::passes::light_grid::SHARED_WGSL[1],
     ShaderSource::new("shared/octahedral.wgsl", include_str!("shared/octahedral.wgsl")),
     ShaderSource::new("shared/light_bounds.wgsl", include_str!("shared/light_bounds.wgsl")),
-    crate::render::objectspace::SHARED_WGSL[0],
-    crate::render::objectspace::SHARED_WGSL[1],
-    crate::render::passes::gbuffer::SHARED_WGSL,
-    crate::render::passes::visibility::compute::SHARED_WGSL,
-    crate::render::deferred::SHARED_WGSL,
 ];
-
-/// Every pass shader, for the test that validates them all.
-pub fn pass_shaders() -> Vec<ShaderSource> {
-    use crate::render::{clustered, deferred, deferred_compute, forward, forward_multipass, objectspace, passes};
-    let mut all =
-        vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
-    all.push(passes::shadows::SHADER);
-    all.extend([forward_multipass::SHADER, passes::bloom::SHADER, passes::exposure::SHADER]);
-    {
-        use passes::visibility::compute::*;
-        all.extend([RASTER, RASTER_CULLING, RASTER_COUNTING, RASTER_CULLING_COUNTING, RESOLVE]);
-    }
-    all.extend_from_slice(objectspace::PASS_SHADERS);
-    all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
-    all.push(clustered::SHADER);
-    all.extend([passes::gbuffer::SHADER, deferred_compute::SHADER, deferred_compute::SHADER_VISIBILITY]);
-    all.extend_from_slice(deferred::PASS_SHADERS);
-    all
-}
 
 /// Defined when some object of the scene has an emissive, metallic-roughness
 /// or occlusion texture ([`ShaderLibrary::define`]): the shaders then sample
@@ -92,7 +73,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
 pub const MATERIAL_TEXTURES: &str = "MATERIAL_TEXTURES";
 
 /// Defined in the variant of a scene raster pass that draws the alpha-masked
-/// objects ([`crate::render::passes::ScenePipeline`]): its fragment stage
+/// objects (`render::passes::ScenePipeline`): its fragment stage
 /// discards their cut-away fragments (`shared/alpha_mask.wgsl`); a depth-only
 /// pass gains the fragment entry point `fs_alpha_mask` for it.
 pub const ALPHA_MASK: &str = "ALPHA_MASK";
@@ -112,11 +93,16 @@ pub struct ShaderError {
 }
 
 impl ShaderLibrary {
-    pub fn new() -> Result<Self, ShaderError> {
+    /// A library of the generated `shadespace::contract` (from `constants`,
+    /// the `u32` constants WGSL shares with Rust), the modules of [`SHARED`],
+    /// then `modules` (shared modules of the layers above, in dependency
+    /// order). `render::shader_set::library` is the one the renderer uses.
+    pub fn new(constants: &[(&str, u32)], modules: &[ShaderSource]) -> Result<Self, ShaderError> {
         let mut composer = Composer::default().with_capabilities(wgpu::naga::valid::Capabilities::all());
-        let contract = contract::wgsl();
+        let contract = contract::wgsl(constants);
         let generated = [("shadespace::contract (generated)", contract.as_str())];
-        for (file, source) in generated.into_iter().chain(SHARED.iter().map(|s| (s.file, s.source))) {
+        let shared = SHARED.iter().chain(modules).map(|s| (s.file, s.source));
+        for (file, source) in generated.into_iter().chain(shared) {
             let added = composer.add_composable_module(ComposableModuleDescriptor {
                 source,
                 file_path: file,
@@ -190,34 +176,4 @@ pub fn struct_size(module: &wgpu::naga::Module, name: &str) -> Option<u64> {
 
 fn error(composer: &Composer, file: &str, e: ComposerError) -> ShaderError {
     ShaderError { file: file.to_string(), message: e.emit_to_string(composer) }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Every pass shader composes and passes naga's validation, without a GPU,
-    /// with and without the material textures, and the scene raster passes'
-    /// alpha-mask variants too.
-    #[test]
-    fn all_shaders_compose_and_validate() {
-        let masked = crate::render::passes::alpha_masked_shaders();
-        for materials in [false, true] {
-            let mut lib = ShaderLibrary::new().expect("shared modules compose");
-            if materials {
-                lib.define(MATERIAL_TEXTURES);
-            }
-            let variants =
-                pass_shaders().into_iter().map(|s| (s, &[][..])).chain(masked.iter().map(|s| (*s, &[ALPHA_MASK][..])));
-            for (shader, extra) in variants {
-                let module = lib.compose_with(shader, extra).unwrap_or_else(|e| panic!("{e}"));
-                wgpu::naga::valid::Validator::new(
-                    wgpu::naga::valid::ValidationFlags::all(),
-                    wgpu::naga::valid::Capabilities::all(),
-                )
-                .validate(&module)
-                .unwrap_or_else(|e| panic!("{} {extra:?} (material textures: {materials}): {e:?}", shader.file));
-            }
-        }
-    }
 }

@@ -18,6 +18,7 @@ mod forward;
 mod forward_multipass;
 mod fuzz_regressions;
 mod golden;
+mod layers;
 mod light_grid;
 mod light_sets;
 mod mark_twin;
