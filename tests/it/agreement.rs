@@ -54,21 +54,38 @@ fn render(
     image
 }
 
+/// Forward's image of `name`'s path frame under `spec`, rendered once for
+/// the tests that compare against it.
+fn forward_once(ctx: &shadespace::gpu::GpuContext, name: &str, spec: &str, sun: bool) -> image::RgbaImage {
+    common::rendered_once(&format!("agreement forward {name} {spec} sun {sun}"), || {
+        let frame = common::path_frame(name, spec, WIDTH, HEIGHT);
+        render(ctx, &frame, sun, PipelineConfig::Forward(ForwardConfig::default()))
+    })
+}
+
 fn check(name: &str, spec: &str, sun: bool) {
     let ctx = common::gpu();
     let frame = common::path_frame(name, spec, WIDTH, HEIGHT);
-    check_frame(&ctx, name, spec, sun, &frame);
+    let reference = forward_once(&ctx, name, spec, sun);
+    check_frame(&ctx, name, spec, sun, &frame, &reference);
 }
 
-fn check_frame(ctx: &shadespace::gpu::GpuContext, name: &str, spec: &str, sun: bool, frame: &common::PathFrame) {
-    let reference = render(ctx, frame, sun, PipelineConfig::Forward(ForwardConfig::default()));
+/// Every pipeline of [`pipelines`] against forward's `reference` image of `frame`.
+fn check_frame(
+    ctx: &shadespace::gpu::GpuContext,
+    name: &str,
+    spec: &str,
+    sun: bool,
+    frame: &common::PathFrame,
+    reference: &image::RgbaImage,
+) {
     let out = common::out_dir();
     for (i, pipeline) in pipelines().into_iter().enumerate() {
         let sun = if sun { "-sun" } else { "" };
         let label = format!("{name}-{spec}{sun}-{i}-{}", pipeline.name());
         let settings = format!("{pipeline:?}");
         let test = render(ctx, frame, !sun.is_empty(), pipeline);
-        let (err, map) = metrics::compare(&reference, &test);
+        let (err, map) = metrics::compare(reference, &test);
         eprintln!("{label} ({settings}): against forward: {err:?}");
         if err.flip_mean > AGREEMENT_FLIP {
             test.save(out.join(format!("{label}.png"))).unwrap();
@@ -106,13 +123,12 @@ fn conventional_pipelines_agree_with_forward_shadowed_voxels() {
 #[test]
 fn conventional_pipelines_agree_with_forward_with_back_faces_culled() {
     let ctx = common::gpu();
-    let both = common::path_frame("atrium", LIGHTS, WIDTH, HEIGHT);
+    let both = forward_once(&ctx, "atrium", LIGHTS, false);
     let mut culled = common::path_frame("atrium", LIGHTS, WIDTH, HEIGHT);
     culled.scene.cull_back_faces = true;
-    let forward = PipelineConfig::Forward(ForwardConfig::default());
-    let (err, _) =
-        metrics::compare(&render(&ctx, &both, false, forward.clone()), &render(&ctx, &culled, false, forward));
+    let forward = render(&ctx, &culled, false, PipelineConfig::Forward(ForwardConfig::default()));
+    let (err, _) = metrics::compare(&both, &forward);
     eprintln!("atrium, forward, culled against both faces: {err:?}");
     assert!(err.flip_mean < 0.005, "culling back faces changed the atrium: {err:?}");
-    check_frame(&ctx, "atrium-culled", LIGHTS, false, &culled);
+    check_frame(&ctx, "atrium-culled", LIGHTS, false, &culled, &forward);
 }

@@ -121,3 +121,17 @@ pub fn path_frame_seeded(name: &str, spec: &str, width: u32, height: u32, seed: 
     let lights = lights::build_lights(&spec, &bounds, &camera, width as f32 / height as f32, seed).unwrap();
     PathFrame { scene, camera, lights }
 }
+
+/// An image that several tests compare against (a forward reference of a
+/// path frame, say), rendered once per test process by whichever test asks
+/// first and shared with the others: the suite is one binary, so a frame
+/// that several tests need is not rendered again. `key` must name every
+/// input of `render`; tests asking for a key being rendered wait for it.
+pub fn rendered_once(key: &str, render: impl FnOnce() -> image::RgbaImage) -> image::RgbaImage {
+    use std::collections::HashMap;
+    use std::sync::{Arc, LazyLock, Mutex, OnceLock};
+    type Images = Mutex<HashMap<String, Arc<OnceLock<image::RgbaImage>>>>;
+    static IMAGES: LazyLock<Images> = LazyLock::new(Default::default);
+    let slot = IMAGES.lock().unwrap_or_else(|e| e.into_inner()).entry(key.to_string()).or_default().clone();
+    slot.get_or_init(render).clone()
+}
