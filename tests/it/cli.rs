@@ -197,3 +197,34 @@ fn atlas_pages_need_an_object_and_level_that_exist() {
     assert_eq!(code, 0, "{err}");
     assert!(out.is_file());
 }
+
+/// `render` prints the frame's GPU time and, for object space, how the frame
+/// was shaded (tiles reused with `--reuse 2` after a frame of history); a flag
+/// given again replaces the earlier value, as `scripts/render --pipeline
+/// forward` needs.
+#[test]
+fn render_reports_object_space_shading_and_later_flags_win() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("frame.png");
+    let render = |flags: &[&str]| {
+        let base = ["render", "--size", "48x27", "--out", out.to_str().unwrap(), "--pipeline", "objectspace"];
+        let result = Command::new(env!("CARGO_BIN_EXE_shadespace")).args(base).args(flags).output().unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(result.status.success(), "{flags:?}: {stderr}");
+        String::from_utf8_lossy(&result.stdout).to_string()
+    };
+    let text = render(&["--reuse", "2", "--frame", "1", "--history", "1"]);
+    assert!(text.starts_with("objectspace:"), "{text}");
+    assert!(text.lines().any(|l| l.trim_start().starts_with("frame ") && l.ends_with(" ms GPU")), "{text}");
+    assert!(text.contains(" visible texels per pixel, "), "{text}");
+    let tiles = text.lines().find_map(|l| l.trim().strip_prefix("tiles: ")).expect("a tiles line");
+    let count = |what: &str| -> u64 {
+        let before = tiles.split(what).next().unwrap();
+        before.rsplit([' ', ',']).find(|w| !w.is_empty()).unwrap().parse().unwrap()
+    };
+    assert!(count(" visible") > 0 && count(" reused") > 0, "{tiles}");
+    assert_eq!(count(" visible"), count(" shaded") + count(" reused"), "{tiles}");
+    let text = render(&["--pipeline", "forward", "--size", "32x18"]);
+    assert!(text.starts_with("forward:") && text.contains(", 32x18,"), "{text}");
+    assert!(!text.contains("texels per pixel"), "{text}");
+}

@@ -1,7 +1,7 @@
-//! `shadespace view`: the command line's side of the viewer (part of the
-//! binary, beside `main.rs`). The viewer's [`Session`] is answered with the
-//! functions `render` itself uses (`setup`, `render_options`, `configure`),
-//! so that a frame in the window and `render` with the same options match.
+//! `shadespace view` (feature `viewer`): the command line's side of the
+//! viewer. The viewer's [`Session`] is answered with the functions `render`
+//! itself uses (`setup`, `render_options`, `configure`), so that a frame in
+//! the window and `render` with the same options match.
 
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -17,11 +17,14 @@ use shadespace::viewer::script::Script;
 use shadespace::viewer::settings::{ObjectSpaceSettings, Settings, exposure_arg};
 use shadespace::viewer::{self, Session, ViewCamera, ViewerOptions};
 
-use super::{
-    Failure, InputError, PipelineName, SceneArgs, Setup, configure, input, light_set, mip_bias, on_off,
-    parse_tile_size, render_options, setup, shade_budget, shell_quote, texel_density, variable_rate,
-};
+use super::lights::light_set;
+use super::options::{PipelineName, SceneArgs};
+use super::output::shell_quote;
+use super::parse::{mip_bias, on_off, shade_budget, texel_density, tile_size, variable_rate};
+use super::setup::{Setup, configure, render_options, setup};
+use super::{Failure, input};
 
+/// `view`'s options: the scene's, then the viewer's.
 #[derive(Args)]
 pub struct ViewArgs {
     #[command(flatten)]
@@ -97,17 +100,18 @@ const CAMERA_FLAGS: [&str; 5] = ["--camera", "--eye", "--target", "--orbit", "--
 /// The decoupled-rate flags, replaced once the panel sets `--reuse` itself.
 const RATE_FLAGS: [&str; 2] = ["--shade-hz", "--frame-hz"];
 
-pub fn view(a: ViewArgs) -> Result<(), Failure> {
+/// Opens the window (or runs headless) and prints the run's report.
+pub fn run(a: ViewArgs) -> Result<(), Failure> {
     if a.headless && a.script.is_none() && a.frames.is_none() {
         let why = "--headless needs --frames or --script: without a window nothing else ends the run";
-        return Err(Failure::Input(InputError(anyhow::anyhow!(why))));
+        return input(Err(anyhow::anyhow!(why)));
     }
     let session = ViewSession::new(&a.scene)?;
     let settings = Settings {
         atlas_pages: AtlasPages { object: a.atlas_object, level: a.atlas_level },
         ..session.initial_settings(a.view)
     };
-    let script = a.script.as_deref().map(Script::load).transpose().map_err(|e| Failure::Input(InputError(e)))?;
+    let script = a.script.as_deref().map(Script::load).transpose().map_err(Failure::Input)?;
     let options = ViewerOptions {
         settings,
         size: a.scene.size,
@@ -156,12 +160,6 @@ struct ViewSession {
     object_names: Vec<String>,
     /// `--exposure`, or its default for how the scene is seen (as `render`).
     exposure: Exposure,
-}
-
-fn anyhow_of(f: Failure) -> anyhow::Error {
-    match f {
-        Failure::Input(InputError(e)) | Failure::Other(e) => e,
-    }
 }
 
 impl ViewSession {
@@ -218,7 +216,7 @@ impl ViewSession {
         a.seed = settings.seed;
         a.exposure = Some(settings.exposure);
         let (os, wanted) = (&mut a.objectspace, &settings.objectspace);
-        os.tile_size = checked(parse_tile_size(&wanted.tile_size.to_string()))?;
+        os.tile_size = checked(tile_size(&wanted.tile_size.to_string()))?;
         if wanted.reuse != self.initial_settings(settings.view).objectspace.reuse {
             anyhow::ensure!(wanted.reuse >= 1, "reuse {} is not at least 1", wanted.reuse);
             (os.reuse, os.shade_hz) = (wanted.reuse, None);
@@ -278,7 +276,7 @@ impl Session for ViewSession {
 
     fn renderer(&mut self, ctx: &GpuContext, settings: &Settings) -> anyhow::Result<Renderer> {
         let a = self.args_for(settings)?;
-        let s = self.setup_for(&a).map_err(anyhow_of)?;
+        let s = self.setup_for(&a).map_err(Failure::into_error)?;
         let mut renderer = Renderer::new(ctx, &s.scene, &render_options(&a, s, settings.view, ctx.device.features()))?;
         configure(&mut renderer, &a, s);
         // A kept setup holds the exposure of the options it was built for.
@@ -288,7 +286,7 @@ impl Session for ViewSession {
 
     fn lights(&mut self, settings: &Settings) -> anyhow::Result<Vec<Light>> {
         let a = self.args_for(settings)?;
-        Ok(light_set(&a, &self.light_region, &self.path).map_err(anyhow_of)?.0)
+        Ok(light_set(&a, &self.light_region, &self.path).map_err(Failure::into_error)?.0)
     }
 
     fn path(&self) -> &CameraPath {

@@ -1,0 +1,89 @@
+//! `shadespace bench`: many frames along the camera path, GPU time per pass
+//! (median and p95 after warm-up) as JSON.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use shadespace::bench::{self, BenchPlan};
+use shadespace::render::Renderer;
+use shadespace::render::objectspace::DebugView;
+
+use super::Failure;
+use super::options::SceneArgs;
+use super::output::write_report;
+use super::setup::{configure, open_gpu, render_options, setup};
+
+/// `bench`'s options: the scene's, then the frames and the output.
+#[derive(Args)]
+pub struct BenchArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Measured frames (the camera path repeats if it is shorter).
+    #[arg(help_heading = "Frames and output", long, default_value_t = 600)]
+    pub frames: u32,
+    /// Frames rendered first and not measured.
+    #[arg(help_heading = "Frames and output", long, default_value_t = 60)]
+    pub warmup: u32,
+    /// Measured frame i shows path frame i x STEP (mod the path length): a
+    /// shorter run that still covers the whole path. Reuse between frames
+    /// shrinks as the step grows.
+    #[arg(help_heading = "Frames and output", long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub frame_step: u32,
+    /// Result JSON.
+    #[arg(help_heading = "Frames and output", long, default_value = "bench.json")]
+    pub out: PathBuf,
+    /// No progress bar.
+    #[arg(help_heading = "Frames and output", long)]
+    pub quiet: bool,
+}
+
+/// Runs the frames, writes the report, prints the medians.
+pub fn run(a: BenchArgs) -> Result<(), Failure> {
+    let s = setup(&a.scene)?;
+    let ctx = open_gpu(&a.scene.gpu)?;
+    let (w, h) = a.scene.size;
+    let mut renderer =
+        Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s, DebugView::Shade, ctx.device.features()))?;
+    configure(&mut renderer, &a.scene, &s);
+    if !renderer.timing_enabled() {
+        tracing::warn!("{} has no timestamp queries: the result has CPU times only", ctx.info.name);
+    }
+    let total = (a.warmup + a.frames) as u64;
+    let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(total) };
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} frames, {elapsed} elapsed, eta {eta}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(format!("{} {}", renderer.pipeline_name(), s.scene.name));
+    let plan = BenchPlan {
+        path: &s.path,
+        lights: &s.lights,
+        warmup: a.warmup,
+        frames: a.frames,
+        first: 0,
+        step: a.frame_step,
+    };
+    let result = bench::run(&ctx, &mut renderer, &plan, &s.bench_setup(&a.scene), |i| bar.set_position(i as u64))?;
+    bar.finish_and_clear();
+    write_report(&result, &a.out)?;
+    let summary = &result.summary;
+    println!(
+        "{} {} {}x{} lights {} ({}): GPU frame median {:.3} ms, p95 {:.3} ms; CPU {:.3} ms  -> {}",
+        renderer.pipeline_name(),
+        result.scene,
+        w,
+        h,
+        result.lights_spec,
+        result.light_count,
+        summary.gpu_frame_ms.median,
+        summary.gpu_frame_ms.p95,
+        summary.cpu_frame_ms.median,
+        a.out.display()
+    );
+    for (name, s) in &summary.gpu_passes_ms {
+        println!("  {name:<16} median {:8.3} ms  p95 {:8.3} ms", s.median, s.p95);
+    }
+    Ok(())
+}

@@ -1,0 +1,245 @@
+//! The option groups several commands share, each defined once: the scene
+//! and its lights and shading ([`SceneArgs`]), free cameras, object-space
+//! shading, the GPU.
+
+use std::str::FromStr;
+
+use clap::{Args, ValueEnum};
+use glam::Vec3;
+use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, MAX_ATLAS_BUDGET_MI};
+use shadespace::render::{Exposure, ShadingModel, ShadowRefresh};
+use shadespace::scene::free_camera;
+
+use super::parse::{self, Orbit, Views, VisibilityChoice};
+
+/// `--adapter`: which GPU.
+#[derive(Args, Clone)]
+#[command(next_help_heading = "GPU")]
+pub struct GpuArgs {
+    /// Use the first adapter whose name contains this text (case-insensitive);
+    /// also read from SHADESPACE_ADAPTER. Default: the fastest kind available.
+    #[arg(long)]
+    pub adapter: Option<String>,
+}
+
+/// `--textures`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TextureChoice {
+    File,
+    Detailed,
+}
+
+/// What `render`, `bench` and `view` draw and how: the scene, pipeline,
+/// size, camera, lights, shading, and the groups below.
+#[derive(Args, Clone)]
+pub struct SceneArgs {
+    /// `atrium` (default), `voxels`, or a path: a .gltf/.glb file, an .obj file,
+    /// or a folder of .obj files (e.g. ../shared/scenes/sponza-thesis).
+    #[arg(long, default_value = "atrium")]
+    pub scene: String,
+    /// Shading pipeline.
+    #[arg(long, value_enum, default_value = "forward")]
+    pub pipeline: PipelineName,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720", value_parser = parse::size)]
+    pub size: (u32, u32),
+    /// `path`: the scene's camera path (from cameras.json beside a shared
+    /// scene; an orbit for atrium and voxels; for other scenes the file's
+    /// first camera, or else a turntable framing the whole scene), `fixed:K`
+    /// (fixed camera K, from 0; framed views for other scenes), `gltf:K`
+    /// (camera K of the glTF file) or `bookmark:FILE:NAME` (the view saved as
+    /// NAME, the text after the last colon, in the viewer's bookmark file FILE).
+    #[arg(long, default_value = "path")]
+    pub camera: String,
+    /// Lights besides the ambient and directional light that every set has:
+    /// `small:N` (each covers 0.25-5% of the screen), `big:N` (20-100%),
+    /// `shadowed:N` (big lights that cast shadows: a quarter are spots),
+    /// `mixed:N:R` (N such big lights, R small ones per big one), `none`,
+    /// several joined with `+` (`small:100+big:2`), or a JSON light file.
+    #[arg(long, default_value = "small:32")]
+    pub lights: String,
+    /// Seed of the light placement (same seed, same lights).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Exposure before tone mapping: a multiplier (positive, finite), or
+    /// `auto`: computed on the GPU every frame, the HDR frame's log-average
+    /// luminance over the pixels any light reached, mapped to mid-grey 0.18.
+    /// Default: `auto` for a model seen from outside (a glTF or OBJ file
+    /// framed automatically or seen through its own camera), 1 for scenes
+    /// the camera moves through (the generated scenes, scenes with a camera
+    /// file), as the studies and goldens use.
+    #[arg(long, value_parser = parse::exposure)]
+    pub exposure: Option<Exposure>,
+    /// Bloom strength, 0 to 1: the fraction of the HDR image replaced by its
+    /// glow (an average of blurs from half to 1/64 of the image size) before
+    /// tone mapping; 0 (default) turns bloom off.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse::bloom_strength)]
+    pub bloom: f32,
+    /// When shadow maps are rendered: `on-change` (default: a face again only
+    /// when its view changes, i.e. its light changed or, for the sun's
+    /// cascades, the camera moved; objects never move) or `every-frame` (the
+    /// cost dynamic casters would have).
+    #[arg(long, default_value = "on-change", value_parser = ShadowRefresh::from_str)]
+    pub shadow_refresh: ShadowRefresh,
+    /// `on`: the directional light (the sun) casts cascaded shadows (4
+    /// cascades of 2048x2048 fitted to the view, 64 MiB, re-rendered when
+    /// the camera moves). Default `off`: the generated sets' sun is a dim fill.
+    #[arg(long, default_value = "off", value_parser = parse::on_off, action = clap::ArgAction::Set)]
+    pub sun_shadow: bool,
+    /// Lighting model, the same in every pipeline: `phong` (default, the
+    /// studies' model: materials' specular strength and exponent) or `pbr`
+    /// (GGX metallic-roughness, as glTF 2.0 defines it: the materials'
+    /// metallic and roughness factors; OBJ materials get roughness from `Ns`).
+    #[arg(long, value_enum, default_value = "phong")]
+    pub shading: ShadingModel,
+    /// `file` (default): the scene's own textures (generated scenes: UV
+    /// checkers); `detailed`: every material gets a procedural high-frequency
+    /// albedo (bricks and grain down to 4 texels, tinted with its old
+    /// texture's mean colour) and the matching normal map, 512x512 per
+    /// repeat of its `uv0`: texture detail that shows what object-space
+    /// shading blurs.
+    #[arg(long, value_enum, default_value = "file")]
+    pub textures: TextureChoice,
+    /// Cull back faces in every pipeline (the compute rasterizer too), for
+    /// scenes whose meshes are closed or seen from the front only: about
+    /// half the rasterization work on Sponza. Default: both faces drawn.
+    #[arg(long)]
+    pub cull_back_faces: bool,
+    /// Forward, deferred, deferred-compute: skip the depth pre-pass (shade or
+    /// write the G-buffer for every rasterized fragment).
+    #[arg(long)]
+    pub no_depth_prepass: bool,
+    /// Objectspace, deferred-compute: how pixels find their surface:
+    /// `raster` (hardware visibility or G-buffer pass), `compute` (software
+    /// rasterizer with 64-bit atomics; surfaces rebuilt from triangle ids) or
+    /// `auto` (default: compute where the adapter has 64-bit atomics, which
+    /// on the H100 is 1.7x (object space) to 2.2x (deferred-compute) faster
+    /// at 1920x1080, else raster).
+    #[arg(long, default_value = "auto", value_parser = parse::visibility)]
+    pub visibility: VisibilityChoice,
+    /// Compute visibility: count the rasterizer's work every frame
+    /// (triangles per path, 32x32 tiles, 8x8 squares that pass the edge test,
+    /// pixels tested, atomics per pixel) into the `--stats`/`bench`
+    /// counters. Adds atomics: for profiling, not for timing.
+    #[arg(long)]
+    pub count_visibility: bool,
+    #[command(flatten)]
+    pub free_camera: FreeCameraArgs,
+    #[command(flatten)]
+    pub objectspace: ObjectSpaceArgs,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+/// `--eye`/`--target`, `--orbit`: a camera of the user's instead of the scene's.
+#[derive(Args, Clone)]
+#[command(next_help_heading = "Free cameras (instead of --camera)")]
+pub struct FreeCameraArgs {
+    /// Place the camera at X,Y,Z (world metres, +y up) looking at --target;
+    /// the near and far planes hold the whole scene.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse::point,
+          group = "free", requires = "target", conflicts_with = "camera")]
+    pub eye: Option<Vec3>,
+    /// The point --eye looks at, or --orbit circles (default for --orbit: the
+    /// centre of the scene's bounds).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse::point, requires = "free")]
+    pub target: Option<Vec3>,
+    /// Camera path circling --target: the eye RADIUS metres from it
+    /// horizontally and HEIGHT metres above it, one turn in PERIOD frames
+    /// (from the +x side towards +z).
+    #[arg(long, value_name = "RADIUS,HEIGHT,PERIOD", allow_hyphen_values = true, value_parser = parse::orbit,
+          group = "free", conflicts_with = "camera")]
+    pub orbit: Option<Orbit>,
+    /// Vertical field of view of --eye or --orbit, degrees (above 0, below 180).
+    #[arg(long, value_name = "DEG", default_value_t = free_camera::DEFAULT_FOV_DEG, value_parser = parse::fov_degrees,
+          requires = "free")]
+    pub fov: f32,
+}
+
+/// The object-space pipeline's settings (and `charts`' texture sizing).
+#[derive(Args, Clone)]
+#[command(next_help_heading = "Object-space shading (--pipeline objectspace)")]
+pub struct ObjectSpaceArgs {
+    /// Tile side in texels: 8, 16, 32 or 64.
+    #[arg(long, default_value_t = 8, value_parser = parse::tile_size)]
+    pub tile_size: u32,
+    /// Re-shade a visible tile when its shade is N frames old (1 = every frame).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub reuse: u32,
+    /// Decoupled shading rate: shade each visible tile S times a second at
+    /// --frame-hz frames a second (every R/S frames, rounded), spread evenly
+    /// over the frames so that each frame shades about the same number of
+    /// tiles. Replaces --reuse.
+    #[arg(long, value_parser = parse::hertz, conflicts_with = "reuse")]
+    pub shade_hz: Option<f64>,
+    /// The frame rate --shade-hz divides (frames a second).
+    #[arg(long, default_value_t = 60.0, value_parser = parse::hertz, requires = "shade_hz")]
+    pub frame_hz: f64,
+    /// Shading texels per metre of surface (above 0, at most 65536); an
+    /// object's texture side is its charted area times this, rounded up to a
+    /// power of two.
+    #[arg(long, default_value_t = 256.0, value_parser = parse::texel_density)]
+    pub texel_density: f32,
+    /// Give every object an S x S shading texture instead (the reference study used 4096).
+    #[arg(long)]
+    pub texture_size: Option<u32>,
+    /// Added to every pixel's mip level (positive: coarser shading; -16 to 16).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse::mip_bias)]
+    pub mip_bias: f32,
+    /// Most texels shaded per frame, in millions: above it every pixel's mip
+    /// level is biased coarser (up to 8 levels, on top of --mip-bias) until
+    /// the shading fits, and the bias falls back when there is room; the
+    /// counters report it as `budget_bias`. Default: no limit.
+    #[arg(long, value_parser = parse::shade_budget)]
+    pub shade_budget: Option<f64>,
+    /// Variable rate: shade up to this many mip levels coarser where a
+    /// triangle's normals do not vary (0 = off; at most 16).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse::variable_rate)]
+    pub variable_rate: f32,
+    /// Most texels of the physical atlas, in Mi (12 bytes each with the
+    /// triangle maps): the pages that back the objects' virtual textures
+    /// where visible tiles need them. The atlas starts at this size, then
+    /// follows the pages the frames need (in 32 steps, about 1.4 times
+    /// them); when a frame needs more than the budget, the mip bias rises
+    /// until it fits (the counters report `budget_bias` and `atlas_pages`).
+    /// Default: 1 texel per pixel at 1920x1080 (2.1 Mi), growing as the
+    /// square root of the pixels (4.1 Mi at 3840x2160), at least 1 Mi.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=MAX_ATLAS_BUDGET_MI))]
+    pub atlas_budget: Option<u64>,
+    /// Page side of the virtual textures in texels (a power of two, at most
+    /// four times the tile size; raised to the tile size). Larger pages
+    /// make a smaller page table but hold more texels no pixel needs.
+    #[arg(long, default_value_t = DEFAULT_PAGE_SIZE)]
+    pub page_size: u32,
+    /// Skip the depth pre-pass before the visibility (id) pass (with it, each
+    /// pixel's ids are written once; measured faster on the H100).
+    #[arg(long)]
+    pub no_visibility_prepass: bool,
+    /// More views marking into the same atlas in each frame, each tile shaded
+    /// once for all (compute visibility): `stereo:D` (a right eye D scene
+    /// units to the right of the camera) or `fixed` (the scene's fixed
+    /// cameras other than --camera's). `render` writes view K beside --out
+    /// as NAME-viewK.png.
+    #[arg(long, value_parser = parse::views)]
+    pub views: Option<Views>,
+    /// Shade these objects (comma-separated names) forward instead of in object space.
+    #[arg(long, value_delimiter = ',')]
+    pub forward_only: Vec<String>,
+}
+
+/// The shading pipelines, for `--pipeline`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PipelineName {
+    /// Single-pass forward: one draw per object, fragments loop over its CPU light list (the reference).
+    Forward,
+    /// Multi-pass forward: depth pre-pass, then one additive pass per light over the objects it reaches.
+    ForwardMultipass,
+    /// Clustered forward: fragments lit by GPU-built view-space light clusters.
+    Clustered,
+    /// Deferred shading: G-buffer, then light volumes (spheres, cones) blended per light.
+    Deferred,
+    /// Tiled deferred shading: G-buffer, then one compute pass culls and shades 16x16 tiles.
+    DeferredCompute,
+    /// Object-space (texel) shading: visible tiles shaded by compute into an atlas, reused, gathered.
+    Objectspace,
+}

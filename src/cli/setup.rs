@@ -1,0 +1,206 @@
+//! The setup every rendering command shares: the scene, its charts, cameras
+//! and lights as the options describe them, and the renderer they configure.
+
+use anyhow::Context;
+use glam::Vec3;
+use shadespace::bench::BenchSetup;
+use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
+use shadespace::gpu::{GpuContext, GpuOptions};
+use shadespace::render::objectspace::atlas::MAX_TEXTURE_SIZE;
+use shadespace::render::objectspace::{DebugView, ExtraViews, MAX_DENSITY_SIZE};
+use shadespace::render::{
+    ClusteredConfig, DeferredComputeConfig, DeferredConfig, Exposure, ForwardConfig, ForwardMultipassConfig,
+    ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
+};
+use shadespace::scene::bookmarks::BookmarkRef;
+use shadespace::scene::free_camera::{LookAt, OrbitSpec};
+use shadespace::scene::path::SceneCameras;
+use shadespace::scene::{self, Aabb, CameraPath, Light, Scene, path};
+
+use super::lights::light_set;
+use super::options::{GpuArgs, ObjectSpaceArgs, PipelineName, SceneArgs, TextureChoice};
+use super::parse::Views;
+use super::{Failure, input};
+
+/// The scene, its cameras and its lights, as the options describe them.
+pub struct Setup {
+    pub scene: Scene,
+    /// Object space: shading-texture side per object.
+    pub texture_sizes: Option<Vec<Option<u32>>>,
+    pub path: CameraPath,
+    pub camera_label: String,
+    pub lights: Vec<Light>,
+    pub lights_spec: String,
+    /// Object space: views besides the camera's.
+    pub extra_views: ExtraViews,
+    /// `--exposure`, or its default for how the scene is seen.
+    pub exposure: Exposure,
+}
+
+/// Loads the scene and builds what the options ask of it (validating the
+/// options that depend on one another).
+pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
+    let os = &a.objectspace;
+    let (page, tile) = (os.page_size, os.tile_size);
+    if !page.is_power_of_two() || page > 4 * tile {
+        return input(Err(anyhow::anyhow!(
+            "--page-size {page}: expected a power of two at most four times the tile size ({tile})"
+        )));
+    }
+    if os.views.is_some() && a.visibility.0 == Some(VisibilityMethod::Raster) {
+        return input(Err(anyhow::anyhow!("--views needs compute visibility, not --visibility raster")));
+    }
+    let mut scene = input(scene::load(&a.scene))?;
+    scene.cull_back_faces = a.cull_back_faces;
+    if a.textures == TextureChoice::Detailed {
+        scene::detail::add_detailed_textures(&mut scene);
+    }
+    for name in &a.objectspace.forward_only {
+        let Some(o) = scene.objects.iter_mut().find(|o| &o.name == name) else {
+            let known: Vec<_> = scene.objects.iter().map(|o| o.name.as_str()).collect();
+            return input(Err(anyhow::anyhow!("--forward-only: no object '{name}' (objects: {})", known.join(", "))));
+        };
+        o.forward_only = true;
+    }
+    let bounds = scene.bounds();
+    let aspect = a.size.0 as f32 / a.size.1 as f32;
+    let cameras = input(path::cameras_for_scene(&a.scene, &scene, aspect))?;
+    let (path, camera_label) = camera_path(a, &cameras, &bounds)?;
+    let extra_views = match a.objectspace.views {
+        None => ExtraViews::None,
+        Some(Views::Stereo(eye_distance)) => ExtraViews::Stereo { eye_distance },
+        Some(Views::Fixed) => {
+            let own = match a.camera.parse() {
+                Ok(path::CameraChoice::Fixed(k)) => Some(k),
+                _ => None,
+            };
+            let others = cameras.fixed.iter().enumerate().filter(|(k, _)| Some(*k) != own).map(|(_, c)| *c);
+            ExtraViews::Cameras(others.collect())
+        }
+    };
+    let (lights, lights_spec) = light_set(a, &cameras.light_region(&bounds), &path)?;
+    let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {
+        let (charted, charts) = chart(&scene, &a.objectspace)?;
+        (charted, Some(charts.texture_sizes()))
+    } else {
+        (scene, None)
+    };
+    let exposure =
+        a.exposure.unwrap_or(if cameras.source.seen_from_outside() { Exposure::Auto } else { Exposure::default() });
+    Ok(Setup { scene, texture_sizes, path, camera_label, lights, lights_spec, extra_views, exposure })
+}
+
+/// The camera path the options ask for, and its label for reports: a free
+/// camera (`--eye`, `--orbit`) or one of the scene's (`--camera`).
+fn camera_path(a: &SceneArgs, cameras: &SceneCameras, bounds: &Aabb) -> Result<(CameraPath, String), Failure> {
+    let f = &a.free_camera;
+    let fov = f.fov;
+    if let (Some(eye), Some(target)) = (f.eye, f.target) {
+        let camera = LookAt { eye, target, fov_deg: fov }.camera(bounds);
+        let camera = input(camera.context("--eye, --target"))?;
+        let label = format!("eye {} target {} fov {fov}", xyz(eye), xyz(target));
+        return Ok((CameraPath::Fixed(camera), label));
+    }
+    if let Some(o) = f.orbit {
+        let spec = OrbitSpec { radius: o.radius, height: o.height, frames: o.frames, target: f.target, fov_deg: fov };
+        let turntable = input(spec.turntable(bounds).context("--orbit"))?;
+        let label = format!("orbit {},{},{} target {} fov {fov}", o.radius, o.height, o.frames, xyz(turntable.target));
+        return Ok((CameraPath::Turntable(turntable), label));
+    }
+    if let Some(mark) = input(BookmarkRef::from_camera_arg(&a.camera).context("--camera"))? {
+        let look = input(mark.find().context("--camera"))?;
+        let camera = input(look.camera(bounds).with_context(|| format!("--camera {mark}")))?;
+        return Ok((CameraPath::Fixed(camera), a.camera.clone()));
+    }
+    let choice: path::CameraChoice = input(a.camera.parse().context("--camera"))?;
+    Ok((input(cameras.select(choice).context("--camera"))?, a.camera.clone()))
+}
+
+fn xyz(v: Vec3) -> String {
+    format!("{},{},{}", v.x, v.y, v.z)
+}
+
+impl Setup {
+    /// The run's description for a [`shadespace::bench::RunReport`].
+    pub fn bench_setup<'a>(&'a self, a: &SceneArgs) -> BenchSetup<'a> {
+        BenchSetup {
+            scene_name: &self.scene.name,
+            objects: self.scene.objects.len(),
+            lights_spec: &self.lights_spec,
+            seed: a.seed,
+            camera: &self.camera_label,
+        }
+    }
+}
+
+/// Renderer options from the command line, for object space the texture
+/// sizes the charts gave, and for `--visibility auto` the adapter's features.
+pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu::Features) -> RenderOptions {
+    let visibility = a.visibility.0.unwrap_or_else(|| VisibilityMethod::preferred(features));
+    let pipeline = match a.pipeline {
+        PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
+        PipelineName::ForwardMultipass => PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
+        PipelineName::Clustered => PipelineConfig::Clustered(ClusteredConfig::default()),
+        PipelineName::Objectspace => PipelineConfig::ObjectSpace(ObjectSpaceConfig {
+            tile_size: a.objectspace.tile_size,
+            reuse: match a.objectspace.shade_hz {
+                Some(hz) => (a.objectspace.frame_hz / hz).round().max(1.0) as u32,
+                None => a.objectspace.reuse,
+            },
+            spread_reshading: a.objectspace.shade_hz.is_some(),
+            page_size: a.objectspace.page_size,
+            mip_bias: a.objectspace.mip_bias,
+            shade_budget_texels: a.objectspace.shade_budget.map(|m| (m * 1.0e6) as u64),
+            variable_rate: a.objectspace.variable_rate,
+            view,
+            texture_sizes: s.texture_sizes.clone().unwrap_or_default(),
+            extra_views: s.extra_views.clone(),
+            atlas_budget_texels: a.objectspace.atlas_budget.map(|m| m << 20),
+            visibility_prepass: !a.objectspace.no_visibility_prepass,
+            visibility,
+            count_visibility: a.count_visibility,
+        }),
+        PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
+        PipelineName::DeferredCompute => PipelineConfig::DeferredCompute(DeferredComputeConfig {
+            depth_prepass: !a.no_depth_prepass,
+            visibility,
+            count_visibility: a.count_visibility,
+        }),
+    };
+    RenderOptions { width: a.size.0, height: a.size.1, pipeline }
+}
+
+/// The texture sizing the options ask for.
+fn sizing(a: &ObjectSpaceArgs) -> Result<TextureSizing, Failure> {
+    match a.texture_size {
+        Some(size) if size.is_power_of_two() && (8..=MAX_TEXTURE_SIZE).contains(&size) => {
+            Ok(TextureSizing::Fixed(size))
+        }
+        Some(size) => {
+            input(Err(anyhow::anyhow!("--texture-size {size} is not a power of two from 8 to {MAX_TEXTURE_SIZE}")))
+        }
+        // The value parser has checked the density.
+        None => Ok(TextureSizing::Density { texels_per_metre: a.texel_density, min: 64, max: MAX_DENSITY_SIZE }),
+    }
+}
+
+/// Charts every object shaded in object space; returns the scene with its
+/// charts in `uv1` and the charts (texture sizes, sources).
+pub fn chart(scene: &Scene, a: &ObjectSpaceArgs) -> Result<(Scene, SceneCharts), Failure> {
+    let charts = charts::chart_scene(scene, &sizing(a)?, &ChartCache::from_env())?;
+    Ok((charts.apply(scene), charts))
+}
+
+/// The GPU `--adapter` names (or the fastest one).
+pub fn open_gpu(a: &GpuArgs) -> Result<GpuContext, Failure> {
+    Ok(GpuContext::new(&GpuOptions { adapter: a.adapter.clone() })?)
+}
+
+/// The renderer settings the scene options choose (besides the pipeline).
+pub fn configure(renderer: &mut Renderer, a: &SceneArgs, s: &Setup) {
+    renderer.exposure = s.exposure;
+    renderer.bloom = a.bloom;
+    renderer.shadow_refresh = a.shadow_refresh;
+    renderer.sun_shadow = a.sun_shadow;
+    renderer.shading = a.shading;
+}
