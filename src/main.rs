@@ -27,7 +27,7 @@ use shadespace::render::{
 use shadespace::scene::bookmarks::BookmarkRef;
 use shadespace::scene::free_camera::{self, LookAt, OrbitSpec};
 use shadespace::scene::path::SceneCameras;
-use shadespace::scene::{self, Aabb, Camera, CameraPath, Light, LightSpec, Scene, lights, path};
+use shadespace::scene::{self, Aabb, Camera, CameraPath, Light, LightSpec, Scene, path};
 
 #[derive(Parser)]
 #[command(name = "shadespace", version, about = "Object-space shading renderer and testbed", long_about = None)]
@@ -247,12 +247,17 @@ struct SceneArgs {
     /// NAME, the text after the last colon, in the viewer's bookmark file FILE).
     #[arg(long, default_value = "path")]
     camera: String,
-    /// Lights besides the ambient and directional light that every set has:
+    /// `studio` (a white key light that casts shadows, fill, rim and ambient,
+    /// placed from the model's bounds and the camera), or lights besides the
+    /// ambient and directional light that every generated set has:
     /// `small:N` (each covers 0.25-5% of the screen), `big:N` (20-100%),
     /// `shadowed:N` (big lights that cast shadows: a quarter are spots),
     /// `mixed:N:R` (N such big lights, R small ones per big one), `none`,
     /// several joined with `+` (`small:100+big:2`), or a JSON light file.
-    #[arg(long, default_value = "small:32")]
+    /// `auto` (default): `studio` for a model seen from outside (a glTF or
+    /// OBJ file framed automatically or seen through its own camera),
+    /// `small:32` for scenes the camera moves through.
+    #[arg(long, default_value = "auto")]
     lights: String,
     /// Seed of the light placement (same seed, same lights).
     #[arg(long, default_value_t = 1)]
@@ -768,7 +773,7 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
             ExtraViews::Cameras(others.collect())
         }
     };
-    let (lights, lights_spec) = light_set(a, &cameras.light_region(&bounds), &path)?;
+    let (lights, lights_spec) = light_set(a, &cameras, &bounds, &path)?;
     let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {
         let (charted, charts) = chart(&scene, &a.objectspace)?;
         (charted, Some(charts.texture_sizes()))
@@ -780,13 +785,18 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     Ok(Setup { scene, texture_sizes, path, camera_label, lights, lights_spec, extra_views, exposure })
 }
 
-/// The `--lights` set placed in `region` for the path's first camera, and
-/// its spec as text.
-fn light_set(a: &SceneArgs, region: &Aabb, path: &CameraPath) -> Result<(Vec<Light>, String), Failure> {
+/// The `--lights` set of a scene of `bounds` seen through `cameras`, placed
+/// for the path's first camera, and its spec as text (`auto` resolved).
+fn light_set(
+    a: &SceneArgs,
+    cameras: &SceneCameras,
+    bounds: &Aabb,
+    path: &CameraPath,
+) -> Result<(Vec<Light>, String), Failure> {
     let spec: LightSpec = input(a.lights.parse())?;
     let reference: Camera = path.camera_at(0);
     let aspect = a.size.0 as f32 / a.size.1 as f32;
-    let lights = input(lights::build_lights(&spec, region, &reference, aspect, a.seed))?;
+    let (spec, lights) = input(cameras.build_lights(&spec, bounds, &reference, aspect, a.seed))?;
     Ok((lights, spec.to_string()))
 }
 

@@ -151,7 +151,7 @@ struct ViewSession {
     charted: Option<(u32, Setup)>,
     path: CameraPath,
     bounds: Aabb,
-    light_region: Aabb,
+    cameras: path::SceneCameras,
     pipelines: Vec<&'static str>,
     object_names: Vec<String>,
     /// `--exposure`, or its default for how the scene is seen (as `render`).
@@ -177,7 +177,7 @@ impl ViewSession {
             charted: None,
             path: s.path.clone(),
             bounds,
-            light_region: cameras.light_region(&bounds),
+            cameras,
             pipelines: PipelineName::value_variants().iter().map(|p| p.name()).collect(),
             object_names: s.scene.objects.iter().map(|o| o.name.clone()).collect(),
             exposure: s.exposure,
@@ -288,7 +288,7 @@ impl Session for ViewSession {
 
     fn lights(&mut self, settings: &Settings) -> anyhow::Result<Vec<Light>> {
         let a = self.args_for(settings)?;
-        Ok(light_set(&a, &self.light_region, &self.path).map_err(anyhow_of)?.0)
+        Ok(light_set(&a, &self.cameras, &self.bounds, &self.path).map_err(anyhow_of)?.0)
     }
 
     fn path(&self) -> &CameraPath {
