@@ -11,7 +11,7 @@ use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::atlas_view::AtlasPages;
 use shadespace::render::objectspace::{DebugView, MAX_ATLAS_BUDGET_MI};
 use shadespace::render::{Exposure, Renderer};
-use shadespace::scene::{Aabb, CameraPath, Light, path};
+use shadespace::scene::{Aabb, CameraPath, Light, LightSpec, path};
 use shadespace::viewer::camera::look_at_args;
 use shadespace::viewer::script::Script;
 use shadespace::viewer::settings::{ObjectSpaceSettings, Settings, exposure_arg};
@@ -191,7 +191,11 @@ impl ViewSession {
         let (a, os) = (&self.base, &self.base.objectspace);
         Settings {
             pipeline: a.pipeline.name().to_string(),
-            lights: a.lights.clone(),
+            // `auto` as the set it stands for, so that the panel offers its kind and count.
+            lights: a
+                .lights
+                .parse::<LightSpec>()
+                .map_or(a.lights.clone(), |spec| spec.resolve(self.cameras.source.seen_from_outside()).to_string()),
             seed: a.seed,
             exposure: self.exposure,
             view,

@@ -41,6 +41,7 @@ fn render_frame_draws_what_the_command_line_draws() {
     let lit = example.pixels().filter(|p| p[0].max(p[1]).max(p[2]) > 20).count() as f32;
     assert!(lit > 0.1 * (160 * 90) as f32, "the model is hardly there: {lit} lit pixels");
     let flip = metrics::compare(&cli, &example).0.flip_mean;
+    eprintln!("render_frame against shadespace render: FLIP {flip:.4}");
     assert!(flip <= MAX_FLIP, "the example's image is off the command line's: FLIP {flip:.4}");
 
     let bad = ["x.obj", "no-such-pipeline"].map(String::from);
