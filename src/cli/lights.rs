@@ -1,17 +1,23 @@
 //! Which lights a scene gets: the one place the command line picks the light
 //! set (from `--lights` and `--seed`), for `render`, `bench` and `view`.
 
-use shadespace::scene::{Aabb, Camera, CameraPath, Light, LightSpec, lights};
+use shadespace::scene::path::SceneCameras;
+use shadespace::scene::{Aabb, Camera, CameraPath, Light, LightSpec};
 
 use super::options::SceneArgs;
 use super::{Failure, input};
 
-/// The `--lights` set placed in `region` for the path's first camera, and
-/// its spec as text.
-pub fn light_set(a: &SceneArgs, region: &Aabb, path: &CameraPath) -> Result<(Vec<Light>, String), Failure> {
+/// The `--lights` set of a scene of `bounds` seen through `cameras`, placed
+/// for the path's first camera, and its spec as text (`auto` resolved).
+pub fn light_set(
+    a: &SceneArgs,
+    cameras: &SceneCameras,
+    bounds: &Aabb,
+    path: &CameraPath,
+) -> Result<(Vec<Light>, String), Failure> {
     let spec: LightSpec = input(a.lights.parse())?;
     let reference: Camera = path.camera_at(0);
     let aspect = a.size.0 as f32 / a.size.1 as f32;
-    let lights = input(lights::build_lights(&spec, region, &reference, aspect, a.seed))?;
+    let (spec, lights) = input(cameras.build_lights(&spec, bounds, &reference, aspect, a.seed))?;
     Ok((lights, spec.to_string()))
 }

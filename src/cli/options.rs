@@ -51,12 +51,17 @@ pub struct SceneArgs {
     /// NAME, the text after the last colon, in the viewer's bookmark file FILE).
     #[arg(long, default_value = "path")]
     pub camera: String,
-    /// Lights besides the ambient and directional light that every set has:
+    /// `studio` (a white key light that casts shadows, fill, rim and ambient,
+    /// placed from the model's bounds and the camera), or lights besides the
+    /// ambient and directional light that every generated set has:
     /// `small:N` (each covers 0.25-5% of the screen), `big:N` (20-100%),
     /// `shadowed:N` (big lights that cast shadows: a quarter are spots),
     /// `mixed:N:R` (N such big lights, R small ones per big one), `none`,
     /// several joined with `+` (`small:100+big:2`), or a JSON light file.
-    #[arg(long, default_value = "small:32")]
+    /// `auto` (default): `studio` for a model seen from outside (a glTF or
+    /// OBJ file framed automatically or seen through its own camera),
+    /// `small:32` for scenes the camera moves through.
+    #[arg(long, default_value = "auto")]
     pub lights: String,
     /// Seed of the light placement (same seed, same lights).
     #[arg(long, default_value_t = 1)]

@@ -78,7 +78,7 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
             ExtraViews::Cameras(others.collect())
         }
     };
-    let (lights, lights_spec) = light_set(a, &cameras.light_region(&bounds), &path)?;
+    let (lights, lights_spec) = light_set(a, &cameras, &bounds, &path)?;
     let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {
         let (charted, charts) = chart(&scene, &a.objectspace)?;
         (charted, Some(charts.texture_sizes()))

@@ -11,7 +11,7 @@ use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::atlas_view::AtlasPages;
 use shadespace::render::objectspace::{DebugView, MAX_ATLAS_BUDGET_MI};
 use shadespace::render::{Exposure, Renderer};
-use shadespace::scene::{Aabb, CameraPath, Light, path};
+use shadespace::scene::{Aabb, CameraPath, Light, LightSpec, path};
 use shadespace::viewer::camera::look_at_args;
 use shadespace::viewer::script::Script;
 use shadespace::viewer::settings::{ObjectSpaceSettings, Settings, exposure_arg};
@@ -155,7 +155,7 @@ struct ViewSession {
     charted: Option<(u32, Setup)>,
     path: CameraPath,
     bounds: Aabb,
-    light_region: Aabb,
+    cameras: path::SceneCameras,
     pipelines: Vec<&'static str>,
     object_names: Vec<String>,
     /// `--exposure`, or its default for how the scene is seen (as `render`).
@@ -175,7 +175,7 @@ impl ViewSession {
             charted: None,
             path: s.path.clone(),
             bounds,
-            light_region: cameras.light_region(&bounds),
+            cameras,
             pipelines: PipelineName::value_variants().iter().map(|p| p.name()).collect(),
             object_names: s.scene.objects.iter().map(|o| o.name.clone()).collect(),
             exposure: s.exposure,
@@ -189,7 +189,11 @@ impl ViewSession {
         let (a, os) = (&self.base, &self.base.objectspace);
         Settings {
             pipeline: a.pipeline.name().to_string(),
-            lights: a.lights.clone(),
+            // `auto` as the set it stands for, so that the panel offers its kind and count.
+            lights: a
+                .lights
+                .parse::<LightSpec>()
+                .map_or(a.lights.clone(), |spec| spec.resolve(self.cameras.source.seen_from_outside()).to_string()),
             seed: a.seed,
             exposure: self.exposure,
             view,
@@ -286,7 +290,7 @@ impl Session for ViewSession {
 
     fn lights(&mut self, settings: &Settings) -> anyhow::Result<Vec<Light>> {
         let a = self.args_for(settings)?;
-        Ok(light_set(&a, &self.light_region, &self.path).map_err(Failure::into_error)?.0)
+        Ok(light_set(&a, &self.cameras, &self.bounds, &self.path).map_err(Failure::into_error)?.0)
     }
 
     fn path(&self) -> &CameraPath {

@@ -80,6 +80,24 @@ pub enum PipelineConfig {
 }
 
 impl PipelineConfig {
+    /// Every pipeline's name, as [`PipelineConfig::name`] gives it.
+    pub const NAMES: [&'static str; 6] =
+        ["forward", "forward-multipass", "objectspace", "clustered", "deferred", "deferred-compute"];
+
+    /// The pipeline called `name` ([`PipelineConfig::NAMES`]) with its
+    /// default settings; `None` for any other name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Some(match name {
+            "forward" => Self::Forward(ForwardConfig::default()),
+            "forward-multipass" => Self::ForwardMultipass(ForwardMultipassConfig::default()),
+            "objectspace" => Self::ObjectSpace(ObjectSpaceConfig::default()),
+            "clustered" => Self::Clustered(ClusteredConfig::default()),
+            "deferred" => Self::Deferred(DeferredConfig::default()),
+            "deferred-compute" => Self::DeferredCompute(DeferredComputeConfig::default()),
+            _ => return None,
+        })
+    }
+
     /// The name `--pipeline` takes and reports carry.
     pub fn name(&self) -> &'static str {
         match self {
@@ -417,5 +435,18 @@ impl Renderer {
         let bytes = readback::read_texture_rgba8(ctx, &self.targets.ldr)?;
         Ok(image::RgbaImage::from_raw(self.targets.width, self.targets.height, bytes)
             .expect("read-back has w*h*4 bytes"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PipelineConfig;
+
+    #[test]
+    fn every_pipeline_name_builds_its_config() {
+        for name in PipelineConfig::NAMES {
+            assert_eq!(PipelineConfig::from_name(name).map(|p| p.name()), Some(name));
+        }
+        assert!(PipelineConfig::from_name("Forward").is_none() && PipelineConfig::from_name("").is_none());
     }
 }

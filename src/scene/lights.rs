@@ -1,5 +1,6 @@
 //! Lights and the seeded light-set generators of the four classic scenarios
-//! (small, big, big shadowed, mixed), parsed from `--lights SPEC`.
+//! (small, big, big shadowed, mixed), the three-point [`studio`] set for
+//! models seen from outside, parsed from `--lights SPEC`.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -148,13 +149,19 @@ impl fmt::Display for LightPart {
 
 /// What `--lights SPEC` asks for.
 ///
-/// Grammar: `none` | `PART(+PART)*` | a path to a JSON light file, where PART
-/// is `small:N`, `big:N`, `shadowed:N` or `mixed:N:R`. A spec that ends in
-/// `.json`, or names an existing file, is a light file; anything else is parsed
-/// as parts. `Display` gives the canonical form (`small:100+shadowed:2`), which
-/// parses back to the same spec.
+/// Grammar: `auto` | `studio` | `none` | `PART(+PART)*` | a path to a JSON
+/// light file, where PART is `small:N`, `big:N`, `shadowed:N` or
+/// `mixed:N:R`. A spec that ends in `.json`, or names an existing file, is a
+/// light file; anything else is parsed as parts. `Display` gives the
+/// canonical form (`small:100+shadowed:2`), which parses back to the same spec.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum LightSpec {
+    /// The default for how the scene is seen, chosen by [`LightSpec::resolve`]:
+    /// [`LightSpec::Studio`] for a model seen from outside, `small:32` for a
+    /// scene the cameras move through.
+    Auto,
+    /// Three-point studio lighting around the model ([`studio`]).
+    Studio,
     /// Only the fixed ambient and directional lights.
     None,
     /// Fixed ambient + directional lights plus the generated parts, in order.
@@ -166,12 +173,30 @@ pub enum LightSpec {
 
 impl LightSpec {
     /// Number of generated lights (not counting the fixed ambient and
-    /// directional ones); `None` for a light file.
+    /// directional ones); `None` for a light file, `studio` and `auto`.
     pub fn generated_count(&self) -> Option<u64> {
         match self {
             LightSpec::None => Some(0),
             LightSpec::Generated(parts) => Some(parts.iter().map(LightPart::count).sum()),
-            LightSpec::File(_) => None,
+            LightSpec::File(_) | LightSpec::Studio | LightSpec::Auto => None,
+        }
+    }
+
+    /// The set a scene the cameras move through gets by default (the
+    /// generated scenes, the shared ones): `small:32`, 32 coloured point lights.
+    pub fn scene_default() -> LightSpec {
+        LightSpec::Generated(vec![LightPart::Small(32)])
+    }
+
+    /// This spec with `auto` replaced by the default for how the scene is
+    /// seen: `studio` for a model seen from outside (framed automatically,
+    /// or through its file's own camera: [`super::path::CameraSource::seen_from_outside`]),
+    /// [`LightSpec::scene_default`] otherwise. Other specs are returned as they are.
+    pub fn resolve(&self, seen_from_outside: bool) -> LightSpec {
+        match self {
+            LightSpec::Auto if seen_from_outside => LightSpec::Studio,
+            LightSpec::Auto => LightSpec::scene_default(),
+            other => other.clone(),
         }
     }
 }
@@ -179,6 +204,8 @@ impl LightSpec {
 impl fmt::Display for LightSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            LightSpec::Auto => f.write_str("auto"),
+            LightSpec::Studio => f.write_str("studio"),
             LightSpec::None => f.write_str("none"),
             LightSpec::Generated(parts) => {
                 for (i, p) in parts.iter().enumerate() {
@@ -198,10 +225,12 @@ impl fmt::Display for LightSpec {
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum LightSpecError {
     /// Nothing was given.
-    #[error("empty light spec (expected small:N, big:N, shadowed:N, mixed:N:R, none, or a .json light file)")]
+    #[error(
+        "empty light spec (expected auto, studio, small:N, big:N, shadowed:N, mixed:N:R, none, or a .json light file)"
+    )]
     Empty,
     #[error(
-        "\"{part}\": unknown light kind '{kind}' (expected small:N, big:N, shadowed:N, mixed:N:R, none, or a .json light file)"
+        "\"{part}\": unknown light kind '{kind}' (expected auto, studio, small:N, big:N, shadowed:N, mixed:N:R, none, or a .json light file)"
     )]
     /// A part names no known kind (and the spec is no `.json` file).
     UnknownKind { part: String, kind: String },
@@ -217,9 +246,9 @@ pub enum LightSpecError {
     #[error("\"{spec}\": {count} lights in all is more than the limit of {MAX_GENERATED_LIGHTS}")]
     /// The parts add up to more than [`MAX_GENERATED_LIGHTS`].
     TooMany { spec: String, count: u64 },
-    #[error("\"{spec}\": 'none' cannot be combined with other parts")]
-    /// `none` joined with other parts.
-    NoneCombined { spec: String },
+    #[error("\"{spec}\": '{word}' cannot be combined with other parts")]
+    /// `none`, `auto` or `studio` joined with other parts.
+    Combined { spec: String, word: &'static str },
 }
 
 impl FromStr for LightSpec {
@@ -230,8 +259,10 @@ impl FromStr for LightSpec {
         if spec.is_empty() {
             return Err(LightSpecError::Empty);
         }
-        if spec.eq_ignore_ascii_case("none") {
-            return Ok(LightSpec::None);
+        for (word, whole) in [("none", LightSpec::None), ("auto", LightSpec::Auto), ("studio", LightSpec::Studio)] {
+            if spec.eq_ignore_ascii_case(word) {
+                return Ok(whole);
+            }
         }
         // A file wins over parts: `x.json` is checked when the set is built,
         // so that a missing file is reported by name rather than as a bad kind.
@@ -241,8 +272,8 @@ impl FromStr for LightSpec {
         let mut parts = Vec::new();
         for part in spec.split('+') {
             let part = part.trim();
-            if part.eq_ignore_ascii_case("none") {
-                return Err(LightSpecError::NoneCombined { spec: spec.into() });
+            if let Some(word) = ["none", "auto", "studio"].into_iter().find(|w| part.eq_ignore_ascii_case(w)) {
+                return Err(LightSpecError::Combined { spec: spec.into(), word });
             }
             parts.push(parse_part(part)?);
         }
@@ -311,6 +342,10 @@ pub enum LightSetError {
     /// Generated lights need a non-empty, finite box to be placed in.
     #[error("cannot place generated lights: the scene bounds are empty or not finite")]
     EmptyBounds,
+    /// `auto` depends on how the scene is seen: [`LightSpec::resolve`] it
+    /// first (as [`super::path::SceneCameras::build_lights`] does).
+    #[error("light spec 'auto' depends on how the scene is seen: resolve it with the scene's cameras first")]
+    Unresolved,
 }
 
 /// The fixed ambient light of every generated set: a dim, cool sky fill.
@@ -351,6 +386,96 @@ pub fn default_sun() -> Light {
 pub fn region_around(bounds: &Aabb) -> Aabb {
     let grow = 0.25 * bounds.extent();
     Aabb { min: bounds.min - grow.with_y(0.0), max: bounds.max + grow }
+}
+
+/// Share of the key light's intensity the fill light brings to the model's centre.
+pub const STUDIO_FILL: f32 = 0.4;
+/// Share of the key light's intensity the rim light brings to the model's centre.
+pub const STUDIO_RIM: f32 = 0.7;
+/// The studio set's ambient light, as a share of the key light at the
+/// model's centre: enough that faces the key and fill miss are not black.
+pub const STUDIO_AMBIENT: f32 = 0.08;
+/// Distance of the studio lights from the model's centre, in radii of its
+/// bounding sphere: far enough that the light falls evenly across the
+/// model, near enough that the key's spot cone stays narrow (19 degrees)
+/// and its shadow map sharp.
+pub const STUDIO_DISTANCE: f32 = 3.0;
+
+/// Three-point studio lighting for a model of bounds `model` seen from
+/// `camera`: neutral white lights placed relative to the view, all aimed at
+/// the centre of the bounds and scaled with them, so that a 5 cm model and a
+/// 200 m one are lit alike.
+///
+/// Seen from above with the camera at the bottom, the model's bounding
+/// sphere of radius R, each light [`STUDIO_DISTANCE`] R from its centre:
+/// - the key: a spot light that casts shadows, 45 degrees to the camera's
+///   left and 40 degrees up, its cone just holding the sphere (intensity 1
+///   at the centre);
+/// - the fill: a point light 60 degrees to the camera's right and 15 degrees
+///   up, [`STUDIO_FILL`] of the key;
+/// - the rim: a point light behind the model, 150 degrees to the camera's
+///   left and 50 degrees up, [`STUDIO_RIM`] of the key, outlining the
+///   silhouette against the black background;
+/// - a white ambient light, [`STUDIO_AMBIENT`] of the key.
+///
+/// Intensities are set where the lights meet the model's centre: the shared
+/// attenuation `1/(1+d²)` is in absolute units, so each light's intensity is
+/// its share times `1 + d²`. There is no directional light (no sun). The
+/// views are horizontal: a camera looking straight down takes its own up
+/// vector as its facing. Fails when the bounds are empty, not finite or a point.
+pub fn studio(model: &Aabb, camera: &Camera) -> Result<Vec<Light>, LightSetError> {
+    if model.is_empty() || !model.min.is_finite() || !model.max.is_finite() {
+        return Err(LightSetError::EmptyBounds);
+    }
+    let centre = model.center();
+    let radius = 0.5 * model.extent().length();
+    if radius <= 0.0 || !radius.is_finite() {
+        return Err(LightSetError::EmptyBounds);
+    }
+    // The camera's facing on the ground plane (from the camera to the model).
+    let towards = (centre - camera.position).with_y(0.0);
+    let facing = towards
+        .try_normalize()
+        .or_else(|| camera.forward.with_y(0.0).try_normalize())
+        .or_else(|| camera.up.with_y(0.0).try_normalize())
+        .unwrap_or(Vec3::NEG_Z);
+    let right = facing.cross(Vec3::Y);
+    let distance = STUDIO_DISTANCE * radius;
+    // A point `azimuth` degrees from the camera's side of the model (positive
+    // to the camera's left) and `elevation` degrees up, `distance` from the centre.
+    let place = |azimuth: f32, elevation: f32| {
+        let (a, e) = (azimuth.to_radians(), elevation.to_radians());
+        let horizontal = -facing * a.cos() - right * a.sin();
+        centre + distance * (horizontal * e.cos() + Vec3::Y * e.sin())
+    };
+    // Light reaching the centre with `share` of the key's strength; its range
+    // reaches past the far side of the sphere.
+    let light = |kind: LightKind, position: Vec3, share: f32| Light {
+        kind,
+        color: Vec3::ONE,
+        intensity: share * (1.0 + distance * distance),
+        position,
+        direction: (centre - position).normalize(),
+        radius: 1.25 * (distance + radius),
+        casts_shadows: false,
+        ..default_ambient()
+    };
+    // The key's cone holds the bounding sphere inside its full-intensity
+    // core; the fade to the outer edge falls beyond it.
+    let core = (radius / distance).asin() * 1.05;
+    let key = Light {
+        cos_inner: core.cos(),
+        cos_outer: (core + 8f32.to_radians()).cos(),
+        casts_shadows: true,
+        ..light(LightKind::Spot, place(45.0, 40.0), 1.0)
+    };
+    let ambient = Light { color: Vec3::ONE, intensity: STUDIO_AMBIENT, ..default_ambient() };
+    Ok(vec![
+        ambient,
+        key,
+        light(LightKind::Point, place(-60.0, 15.0), STUDIO_FILL),
+        light(LightKind::Point, place(150.0, 50.0), STUDIO_RIM),
+    ])
 }
 
 /// Radius that makes a sphere at distance `distance` from a camera with
@@ -400,7 +525,8 @@ fn log_uniform_mean((lo, hi): (f32, f32)) -> f32 {
 
 /// Builds the light set of `spec` for a scene with bounds `bounds`.
 ///
-/// A generated set is `[ambient, directional, part 0's lights, part 1's lights, ...]`
+/// `studio` is [`studio`]`(bounds, reference)`; `auto` must be resolved
+/// first ([`LightSpec::resolve`]). A generated set is `[ambient, directional, part 0's lights, part 1's lights, ...]`
 /// ([`default_ambient`], [`default_sun`]); a light file's lights are returned
 /// as given (after validation, with directions normalised).
 ///
@@ -436,6 +562,8 @@ pub fn build_lights(
 ) -> Result<Vec<Light>, LightSetError> {
     let parts = match spec {
         LightSpec::File(path) => return load_light_file(path),
+        LightSpec::Studio => return studio(bounds, reference),
+        LightSpec::Auto => return Err(LightSetError::Unresolved),
         LightSpec::None => &[][..],
         LightSpec::Generated(parts) => &parts[..],
     };
@@ -844,6 +972,90 @@ mod tests {
         assert_eq!(around.min.y, b.min.y, "not below its bottom");
         assert_eq!(around.max - b.max, 0.25 * b.extent());
         assert_eq!((b.min - around.min).with_y(0.0), 0.25 * b.extent().with_y(0.0));
+    }
+
+    #[test]
+    fn auto_and_studio_are_whole_specs() {
+        assert_eq!("auto".parse(), Ok(LightSpec::Auto));
+        assert_eq!("Studio".parse(), Ok(LightSpec::Studio));
+        for canonical in ["auto", "studio"] {
+            assert_eq!(canonical.parse::<LightSpec>().unwrap().to_string(), canonical);
+        }
+        assert_eq!(parse_err("studio+small:3"), "\"studio+small:3\": 'studio' cannot be combined with other parts");
+        assert_eq!(parse_err("small:3+auto"), "\"small:3+auto\": 'auto' cannot be combined with other parts");
+        assert_eq!(LightSpec::Auto.resolve(true), LightSpec::Studio);
+        assert_eq!(LightSpec::Auto.resolve(false).to_string(), "small:32");
+        let given: LightSpec = "big:3".parse().unwrap();
+        assert_eq!(given.resolve(true), given, "a given spec overrides the default");
+        assert!(matches!(
+            build_lights(&LightSpec::Auto, &bounds(), &reference(), 1.0, 0),
+            Err(LightSetError::Unresolved)
+        ));
+    }
+
+    /// The studio set of a model of `bounds` seen by a camera at `eye`
+    /// looking at the bounds' centre.
+    fn studio_for(bounds: &Aabb, eye: Vec3) -> Vec<Light> {
+        let camera = Camera { position: eye, forward: (bounds.center() - eye).normalize(), ..reference() };
+        build_lights(&LightSpec::Studio, bounds, &camera, 1.5, 0).unwrap()
+    }
+
+    #[test]
+    fn studio_lights_are_placed_from_the_view_and_the_bounds() {
+        // A 2 m model seen from the +z side: the camera's left is -x.
+        let model = Aabb { min: Vec3::new(-1.0, 0.0, -0.5), max: Vec3::new(1.0, 1.5, 0.5) };
+        let (centre, radius) = (model.center(), 0.5 * model.extent().length());
+        let set = studio_for(&model, Vec3::new(0.0, 2.0, 8.0));
+        let kinds: Vec<LightKind> = set.iter().map(|l| l.kind).collect();
+        assert_eq!(kinds, [LightKind::Ambient, LightKind::Spot, LightKind::Point, LightKind::Point]);
+        assert!(set.iter().all(|l| l.color == Vec3::ONE), "neutral white");
+        let [ambient, key, fill, rim] = [set[0], set[1], set[2], set[3]];
+        assert_eq!(set.iter().filter(|l| l.casts_shadows).count(), 1);
+        assert!(key.casts_shadows);
+        // Key: camera side, to the left, above; fill: camera side, right, lower; rim: behind, above.
+        let at = |l: &Light| l.position - centre;
+        assert!(at(&key).z > 0.0 && at(&key).x < 0.0 && at(&key).y > 0.5 * radius, "{key:?}");
+        assert!(at(&fill).z > 0.0 && at(&fill).x > 0.0 && at(&fill).y < at(&key).y, "{fill:?}");
+        assert!(at(&rim).z < 0.0 && at(&rim).y > at(&key).y, "{rim:?}");
+        // Each reaches the centre with its share of the key's strength.
+        let at_centre = |l: &Light| l.intensity / (1.0 + l.position.distance_squared(centre));
+        assert!((at_centre(&key) - 1.0).abs() < 1e-4);
+        assert!((at_centre(&fill) - STUDIO_FILL).abs() < 1e-4);
+        assert!((at_centre(&rim) - STUDIO_RIM).abs() < 1e-4);
+        assert_eq!(ambient.intensity, STUDIO_AMBIENT);
+        // The whole model is in every light's range and in the key's full-intensity cone.
+        for corner in model.corners() {
+            for l in &set[1..] {
+                assert!(corner.distance(l.position) < 0.9 * l.radius, "{l:?} misses {corner}");
+            }
+            assert!((corner - key.position).normalize().dot(key.direction) > key.cos_inner, "{corner}");
+        }
+        assert!(key.cos_outer < key.cos_inner && key.cos_outer > 60f32.to_radians().cos(), "one shadow face");
+    }
+
+    #[test]
+    fn studio_lights_scale_with_the_model() {
+        let model = |size: f32| Aabb { min: Vec3::new(-0.3, 0.0, -0.2) * size, max: Vec3::new(0.3, 0.4, 0.2) * size };
+        let eye = Vec3::new(0.5, 0.4, 1.0);
+        // A 5 cm model and a 200 m one: the same lights, scaled (the ambient has no place).
+        let (small, large) = (studio_for(&model(0.1), 0.1 * eye), studio_for(&model(400.0), 400.0 * eye));
+        assert_eq!(small[0], large[0]);
+        for (s, l) in small.iter().zip(&large).skip(1) {
+            assert!((l.position - 4000.0 * s.position).length() <= 1e-3 * l.position.length(), "{s:?} {l:?}");
+            assert!((l.radius / s.radius - 4000.0).abs() < 0.1);
+            assert!(l.direction.distance(s.direction) < 1e-4 && l.cos_inner == s.cos_inner);
+        }
+        // Turning the camera around the model turns the lights with it.
+        let behind = studio_for(&model(1.0), eye * Vec3::new(-1.0, 1.0, -1.0));
+        let front = studio_for(&model(1.0), eye);
+        let centre = model(1.0).center();
+        for (f, b) in front.iter().zip(&behind).skip(1) {
+            let turned = (f.position - centre) * Vec3::new(-1.0, 1.0, -1.0);
+            assert!((turned - (b.position - centre)).length() < 1e-4, "{f:?} {b:?}");
+        }
+        assert!(matches!(studio(&Aabb::EMPTY, &reference()), Err(LightSetError::EmptyBounds)));
+        let point = Aabb { min: Vec3::ONE, max: Vec3::ONE };
+        assert!(matches!(studio(&point, &reference()), Err(LightSetError::EmptyBounds)));
     }
 
     #[test]

@@ -13,7 +13,8 @@ use std::str::FromStr;
 use glam::{EulerRot, Quat, Vec3};
 use serde::Deserialize;
 
-use super::{Aabb, Camera, Scene, framing};
+use super::lights::{LightSetError, LightSpec};
+use super::{Aabb, Camera, Light, Scene, framing};
 
 /// Vertical field of view and clip planes of a path's cameras.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -321,6 +322,25 @@ impl SceneCameras {
     /// it when they look at it from outside ([`CameraSource::seen_from_outside`]).
     pub fn light_region(&self, bounds: &Aabb) -> Aabb {
         if self.source.seen_from_outside() { super::lights::region_around(bounds) } else { *bounds }
+    }
+
+    /// The light set `spec` asks for in a scene of `bounds` seen through
+    /// these cameras, placed for the `reference` camera at image aspect
+    /// `aspect`, and the spec it built (`auto` resolved for how the scene is
+    /// seen: [`LightSpec::resolve`]). `studio` is placed around `bounds`,
+    /// generated lights in [`SceneCameras::light_region`].
+    pub fn build_lights(
+        &self,
+        spec: &LightSpec,
+        bounds: &Aabb,
+        reference: &Camera,
+        aspect: f32,
+        seed: u64,
+    ) -> Result<(LightSpec, Vec<Light>), LightSetError> {
+        let spec = spec.resolve(self.source.seen_from_outside());
+        let region = if spec == LightSpec::Studio { *bounds } else { self.light_region(bounds) };
+        let lights = super::lights::build_lights(&spec, &region, reference, aspect, seed)?;
+        Ok((spec, lights))
     }
 
     /// The path `choice` selects: the scene path, or one fixed or file camera

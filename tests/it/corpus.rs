@@ -17,6 +17,11 @@
 //! (textured files included: the Cesium logo box, the voxel knight, the
 //! duck, the fox).
 //!
+//! No model shows a coloured spot its materials do not have ([`spots`]): with
+//! no `--lights`, a model is lit by the neutral studio set. The random
+//! coloured point lights of `--lights small:32`, the default before, fail
+//! that check on grey models ([`coloured_lights_leave_spots_the_check_finds`]).
+//!
 //! The test writes each render, a contact sheet and a table of the measures
 //! to `target/tmp/corpus/`.
 
@@ -112,6 +117,10 @@ const MODELS: &[Model] = &[
 const REFUSED: &[(&str, &str)] =
     &[("acme-box/ACMEBox.gltf", "ACME_gizmo"), ("dense-sphere.glb", "KHR_draco_mesh_compression")];
 
+/// Untextured models that `--lights small:32` leaves spotted
+/// ([`coloured_lights_leave_spots_the_check_finds`]).
+const SPOTTED: [&str; 3] = ["missing-material-file.obj", "unassigned-skeleton.gltf", "shape-collection.glb"];
+
 const PIPELINES: [&str; 2] = ["forward", "objectspace"];
 const WIDTH: u32 = 320;
 const HEIGHT: u32 = 180;
@@ -144,12 +153,24 @@ fn out_dir() -> PathBuf {
     dir
 }
 
-fn render(file: &Path, pipeline: &str, out: &Path) -> Output {
+/// Least value (max of R, G, B, 0-255) of a pixel whose colour [`spots`]
+/// judges: in darker pixels 8-bit rounding and sRGB's linear toe move the
+/// saturation too much.
+const SPOT_MIN_VALUE: u8 = 64;
+/// How far a pixel's saturation may exceed the model's [`palette_bound`]
+/// before it is a spot pixel (8-bit rounding moves it by at most 0.016 at
+/// [`SPOT_MIN_VALUE`]; the GPU's rounding may differ from the CPU's by one).
+const SPOT_MARGIN: f32 = 0.05;
+/// Most of the model's pixels that may be spot pixels.
+const MAX_SPOT_SHARE: f32 = 0.01;
+
+fn render(file: &Path, pipeline: &str, out: &Path, extra: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_shadespace"))
         .args(["render", "--size", &format!("{WIDTH}x{HEIGHT}"), "--pipeline", pipeline, "--scene"])
         .arg(file)
         .arg("--out")
         .arg(out)
+        .args(extra)
         .env("SHADESPACE_CACHE_DIR", Path::new(env!("CARGO_TARGET_TMPDIR")).join("corpus-charts"))
         .env("RUST_LOG", "warn")
         .output()
@@ -207,6 +228,71 @@ fn measure(image: &RgbaImage) -> Shot {
     }
 }
 
+/// Saturation `(max - min) / max` of an RGB colour (0 for black).
+fn saturation(c: [f32; 3]) -> f32 {
+    let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
+    if hi > 0.0 { (hi - lo) / hi } else { 0.0 }
+}
+
+/// The most saturated pixel, of value at least [`SPOT_MIN_VALUE`], that the
+/// model's materials can give under white light.
+///
+/// Its palette is every object's base colour factor times each texel of its
+/// base colour texture (or alone), and its emissive colour times each
+/// emissive texel, in linear RGB; `r` is the least `min / max` of those
+/// colours. Under white lights a pixel is, in linear RGB, a positive mix of
+/// these colours and of white (specular, Fresnel; textures and object-space
+/// shades are filtered in linear RGB), so its `min / max` is at least `r`;
+/// the exposure scales it, per-channel Reinhard only raises it. The sRGB
+/// encoding then lowers it most where the pixel is darkest: the bound is the
+/// largest saturation of the 8-bit sRGB encoding of `(r M, M)` over the
+/// linear values M the brightest channel can have (from [`SPOT_MIN_VALUE`]
+/// to 1). A pixel more saturated than that shows a light's colour.
+fn palette_bound(file: &Path) -> f32 {
+    let scene = shadespace::scene::load(file.to_str().unwrap()).unwrap();
+    let linear = shadespace::color::srgb8_to_linear;
+    let mut least = 1.0f32;
+    let mut add = |c: [f32; 3]| least = least.min(1.0 - saturation(c));
+    for object in &scene.objects {
+        let m = &scene.materials[object.material];
+        for (factor, texture) in [(m.base_color.truncate(), m.base_color_texture), (m.emissive, m.emissive_texture)] {
+            match texture {
+                None => add(factor.to_array()),
+                Some(t) => {
+                    for texel in scene.textures[t].rgba8.chunks_exact(4) {
+                        add([0, 1, 2].map(|k| factor[k] * linear(texel[k])));
+                    }
+                }
+            }
+        }
+    }
+    let lowest = linear(SPOT_MIN_VALUE);
+    let srgb = |v: f32| shadespace::color::linear_to_srgb8(v) as f32;
+    (0..=256)
+        .map(|k| lowest + (1.0 - lowest) * k as f32 / 256.0)
+        .map(|m| saturation([srgb(least * m), srgb(m), srgb(m)]))
+        .fold(0.0, f32::max)
+}
+
+/// Share of the model's pixels (any channel above [`MODEL_THRESHOLD`])
+/// that are spot pixels: at least [`SPOT_MIN_VALUE`] bright and more
+/// saturated than `bound` (the model's [`palette_bound`]) by more than
+/// [`SPOT_MARGIN`]. A model with coloured spots its materials do not have
+/// has more than [`MAX_SPOT_SHARE`].
+fn spots(image: &RgbaImage, bound: f32) -> f32 {
+    let (mut model, mut spot) = (0usize, 0usize);
+    for p in image.pixels() {
+        let hi = p[0].max(p[1]).max(p[2]);
+        if hi <= MODEL_THRESHOLD {
+            continue;
+        }
+        model += 1;
+        let c = [p[0], p[1], p[2]].map(|c| c as f32);
+        spot += usize::from(hi >= SPOT_MIN_VALUE && saturation(c) > bound + SPOT_MARGIN);
+    }
+    spot as f32 / model.max(1) as f32
+}
+
 /// Tiles the images into rows of five.
 fn contact_sheet(images: &[RgbaImage]) -> RgbaImage {
     let columns = 5;
@@ -222,15 +308,17 @@ fn contact_sheet(images: &[RgbaImage]) -> RgbaImage {
 #[test]
 fn every_corpus_model_renders_framed_and_lit_in_forward_and_object_space() {
     let out = out_dir();
-    let mut table = String::from("model\tpipeline\tsilhouette\textent\tspan\tluma\tblown\tflip_vs_forward\n");
+    let mut table =
+        String::from("model\tpipeline\tsilhouette\textent\tspan\tluma\tblown\tflip_vs_forward\tpalette\tspots\n");
     let mut failures = Vec::new();
     let mut sheets: [Vec<RgbaImage>; 2] = Default::default();
     for m in MODELS {
         let mut forward: Option<RgbaImage> = None;
+        let palette = palette_bound(&corpus().join(m.file));
         for (p, pipeline) in PIPELINES.iter().enumerate() {
             let name = format!("{}-{pipeline}.png", m.file.replace(['/', ' '], "_"));
             let png = out.join(&name);
-            let run = render(&corpus().join(m.file), pipeline, &png);
+            let run = render(&corpus().join(m.file), pipeline, &png, &[]);
             let stderr = String::from_utf8_lossy(&run.stderr);
             assert!(!stderr.contains("panicked"), "{}, {pipeline}: panicked:\n{stderr}", m.file);
             assert!(run.status.success(), "{}, {pipeline}: exit {:?}:\n{stderr}", m.file, run.status.code());
@@ -240,9 +328,10 @@ fn every_corpus_model_renders_framed_and_lit_in_forward_and_object_space() {
             let image = image::open(&png).unwrap().to_rgba8();
             let shot = measure(&image);
             let flip = forward.as_ref().map_or(0.0, |f| metrics::compare(f, &image).0.flip_mean);
+            let spots = spots(&image, palette);
             writeln!(
                 table,
-                "{}\t{pipeline}\t{:.3}\t{:.3}\t{:.3}\t{:.3}\t{:.4}\t{flip:.4}",
+                "{}\t{pipeline}\t{:.3}\t{:.3}\t{:.3}\t{:.3}\t{:.4}\t{flip:.4}\t{palette:.3}\t{spots:.4}",
                 m.file, shot.silhouette, shot.extent, shot.span, shot.luma, shot.blown
             )
             .unwrap();
@@ -250,8 +339,9 @@ fn every_corpus_model_renders_framed_and_lit_in_forward_and_object_space() {
                 || shot.luma < MIN_LUMA
                 || shot.blown > MAX_BLOWN
                 || flip > MAX_FLIP
+                || spots > MAX_SPOT_SHARE
             {
-                failures.push(format!("{} ({pipeline}): {shot:?}", m.file));
+                failures.push(format!("{} ({pipeline}): {shot:?}, flip {flip:.4}, spots {spots:.4}", m.file));
             }
             if p == 0 {
                 forward = Some(image.clone());
@@ -266,15 +356,30 @@ fn every_corpus_model_renders_framed_and_lit_in_forward_and_object_space() {
     println!("{table}");
     assert!(
         failures.is_empty(),
-        "not framed ({COVERAGE:?} of the frame, or a span of {MIN_SPAN}, uncut), black (luma < {MIN_LUMA}), blown out (> {MAX_BLOWN} white) or object space off forward (FLIP > {MAX_FLIP}):\n{}",
+        "not framed ({COVERAGE:?} of the frame, or a span of {MIN_SPAN}, uncut), black (luma < {MIN_LUMA}), blown out (> {MAX_BLOWN} white), object space off forward (FLIP > {MAX_FLIP}) or coloured spots (> {MAX_SPOT_SHARE} of the model):\n{}",
         failures.join("\n")
     );
+}
+
+/// Untextured models (the loader gives them a pale checker) under
+/// `--lights small:32`, the default before the studio set: the spot check
+/// finds the lights' colours on each, where the default lighting leaves none.
+#[test]
+fn coloured_lights_leave_spots_the_check_finds() {
+    for file in SPOTTED {
+        let path = corpus().join(file);
+        let png = out_dir().join(format!("{}-small32.png", file.replace(['/', ' '], "_")));
+        let run = render(&path, "forward", &png, &["--lights", "small:32"]);
+        assert!(run.status.success(), "{file}: {}", String::from_utf8_lossy(&run.stderr));
+        let share = spots(&image::open(&png).unwrap().to_rgba8(), palette_bound(&path));
+        assert!(share > MAX_SPOT_SHARE, "{file}: small:32 leaves spots on only {share:.4} of the model");
+    }
 }
 
 #[test]
 fn files_requiring_unsupported_extensions_are_refused_clearly() {
     for (file, named) in REFUSED {
-        let run = render(&corpus().join(file), "forward", &out_dir().join("refused.png"));
+        let run = render(&corpus().join(file), "forward", &out_dir().join("refused.png"), &[]);
         let stderr = String::from_utf8_lossy(&run.stderr);
         assert_eq!(run.status.code(), Some(2), "{file}: {stderr}");
         let file_name = Path::new(file).file_name().unwrap().to_str().unwrap();
