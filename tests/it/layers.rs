@@ -13,7 +13,7 @@ const LAYERS: &[&[&str]] = &[
     &["scene"],
     &["charts"],
     &["render"],
-    &["bench"],
+    &["bench", "stage"],
     &["experiments", "viewer"],
 ];
 
