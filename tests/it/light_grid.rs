@@ -255,3 +255,33 @@ fn world_grid_holds_every_light_that_reaches_it() {
     let mut r = Renderer::new(&ctx, &charted, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
     check(&ctx, Grid::World, &mut r, &camera, &sets);
 }
+
+/// The world grid depends on the lights alone (its cells cover the scene's
+/// fixed bounds): frames with the same lights keep the first build, even
+/// as the camera moves, and moving one light builds it again, with the
+/// moved light in the cells it now reaches.
+#[test]
+fn the_world_grid_is_built_again_only_when_the_lights_change() {
+    let ctx = common::gpu();
+    let (scene, camera, mut lights) = common::floor_scene();
+    let config = ObjectSpaceConfig { texture_sizes: vec![Some(256)], ..Default::default() };
+    let options = RenderOptions { width: 64, height: 64, pipeline: PipelineConfig::ObjectSpace(config) };
+    let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
+    let builds = |r: &Renderer| r.pipeline::<ObjectSpace>().unwrap().light_grid().builds();
+    let moved_camera = Camera { position: camera.position + Vec3::X, ..camera };
+    for frame in 0..3 {
+        r.render(&ctx, if frame == 1 { &moved_camera } else { &camera }, &lights, frame).unwrap();
+    }
+    assert_eq!(builds(&r), 1, "static lights: built once");
+    let point = lights.iter().position(|l| l.kind == LightKind::Point).expect("the floor has point lights");
+    lights[point].position += Vec3::new(1.5, 0.0, -1.0);
+    r.render(&ctx, &camera, &lights, 3).unwrap();
+    assert_eq!(builds(&r), 2, "a light moved: built again");
+    let g = r.pipeline::<ObjectSpace>().unwrap().light_grid().read_back(&ctx).unwrap();
+    let (ordered, first) = gpu_order(&lights);
+    let (needed, _, fallback) = compare("moved light", Grid::World, &g, &ordered, first);
+    assert!(needed > 0 && fallback == 0, "{needed} entries needed, {fallback} cells over capacity");
+    r.render(&ctx, &camera, &lights, 4).unwrap();
+    ctx.check_errors().unwrap();
+    assert_eq!(builds(&r), 2, "the same lights again: kept");
+}

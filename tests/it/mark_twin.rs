@@ -94,6 +94,7 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
         let params = MarkParams {
             stamp: gpu.stamp,
             reuse: o.reuse,
+            view_since: gpu.view_since,
             tile_size: o.tile_size,
             mip_bias: o.mip_bias,
             variable_rate: o.variable_rate,
@@ -185,9 +186,13 @@ fn floor_cameras(start: Vec3, step: Vec3, frames: usize) -> Vec<Camera> {
 }
 
 #[test]
-fn static_floor_reuses_shades_until_they_age_or_the_lights_change() {
+fn static_floor_reuses_shades_until_they_age_and_the_camera_moves_or_the_lights_change() {
     let ctx = common::gpu();
     let (scene, _, lights) = common::floor_scene();
+    // Four frames at one camera, then three a millimetre nearer.
+    let start = Vec3::new(0.0, 4.0, 6.0);
+    let mut cameras = floor_cameras(start, Vec3::ZERO, 4);
+    cameras.extend(floor_cameras(start * 0.9998, Vec3::ZERO, 3));
     let reports = check(
         &ctx,
         Run {
@@ -199,16 +204,17 @@ fn static_floor_reuses_shades_until_they_age_or_the_lights_change() {
             reuse: 3,
             variable_rate: 0.0,
             visibility: VisibilityMethod::Raster,
-            cameras: floor_cameras(Vec3::new(0.0, 4.0, 6.0), Vec3::ZERO, 6),
+            cameras,
             lights,
-            lights_change_at: Some(5),
+            lights_change_at: Some(6),
         },
     );
     // The twin agreed frame by frame; make sure each rule was exercised: first
-    // shade, reuse, re-shade at age 3, re-shade after the lights changed (age 2).
+    // shade, reuse, no re-shade at age 3 while the camera stays, re-shade when
+    // it moved (age 4), reuse, re-shade after the lights changed (age 2).
     let queued: Vec<usize> = reports.iter().map(|r| r.queued).collect();
-    let visible = reports[0].visible;
-    assert_eq!(queued, [visible, 0, 0, visible, 0, visible], "queued per frame");
+    let visible: Vec<usize> = reports.iter().map(|r| r.visible).collect();
+    assert_eq!(queued, [visible[0], 0, 0, 0, visible[4], 0, visible[6]], "queued per frame");
 }
 
 #[test]

@@ -19,6 +19,11 @@ fn objectspace(reuse: u32) -> RenderOptions {
     RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config) }
 }
 
+/// `camera` a millimetre nearer what it looks at (another view, the same tiles).
+fn nudged(camera: &shadespace::scene::Camera) -> shadespace::scene::Camera {
+    shadespace::scene::Camera { position: camera.position + camera.forward * 1e-3, ..*camera }
+}
+
 /// The counter `name` of every collected frame.
 fn counter(c: &[(u64, shadespace::render::Counters)], name: &str) -> Vec<f64> {
     c.iter().map(|(_, c)| c[name]).collect()
@@ -45,20 +50,21 @@ fn objectspace_matches_forward_on_floor() {
     assert!(err.flip_mean < 0.05, "{err:?}");
 }
 
-/// With `--reuse 2` a static camera shades every visible tile in the first
-/// frame, none in the second, and all again in the third (age 2 reached).
-/// With `--reuse 1` every frame shades every visible tile. Changing a light
-/// invalidates the cache.
+/// With `--reuse 2` a camera shades every visible tile in the first
+/// frame, none in the second, and all again in the third (age 2 reached)
+/// once it moved (a millimetre). With `--reuse 1` every frame shades every
+/// visible tile. Changing a light invalidates the cache.
 #[test]
 fn reuse_skips_young_tiles_and_light_changes_invalidate() {
     let ctx = common::gpu();
     let (scene, camera, mut lights) = common::floor_scene();
     let mut os = Renderer::new(&ctx, &scene, &objectspace(2)).unwrap();
+    let moved = nudged(&camera);
     for frame in 0..3 {
-        os.render(&ctx, &camera, &lights, frame).unwrap();
+        os.render(&ctx, if frame < 2 { &camera } else { &moved }, &lights, frame).unwrap();
     }
     lights[1].intensity *= 2.0;
-    os.render(&ctx, &camera, &lights, 3).unwrap();
+    os.render(&ctx, &moved, &lights, 3).unwrap();
     let c = os.collect_counters(&ctx, true);
     assert_eq!(c.len(), 4);
     let (visible, shaded) = (counter(&c, "visible_tiles"), counter(&c, "shaded_tiles"));
@@ -69,7 +75,7 @@ fn reuse_skips_young_tiles_and_light_changes_invalidate() {
     assert_eq!(shaded[1], 0.0, "second frame reuses all");
     assert_eq!(reused[1], visible[1]);
     assert_eq!(new[1], 0.0, "static camera: no new tiles");
-    assert_eq!(shaded[2], visible[2], "age 2 reached: shade again");
+    assert_eq!(shaded[2], visible[2], "age 2 reached, the camera moved: shade again");
     assert_eq!(shaded[3], visible[3], "a light changed: shade again");
 
     let mut every = Renderer::new(&ctx, &scene, &objectspace(1)).unwrap();
@@ -181,8 +187,8 @@ fn an_atlas_ten_times_over_budget_biases_until_the_pages_fit() {
     assert!(err.flip_mean < 0.05, "coarser shading in a small atlas: {err:?}");
 }
 
-/// Decoupled shading rate: with re-shading spread over N = 4 frames, a static
-/// view shades every visible tile in the first frame, then about a quarter of
+/// Decoupled shading rate: with re-shading spread over N = 4 frames, a view
+/// moving by a millimetre each frame shades every visible tile in the first frame, then about a quarter of
 /// them in every frame after it (no frame shading all of them again), the
 /// frame that shrinks the atlas included: the atlas starts at the whole
 /// budget and, after four frames needing little of it, shrinks to the
@@ -199,8 +205,11 @@ fn spread_reshading_shades_a_share_of_the_tiles_each_frame() {
     let options = RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config) };
     let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
     let mut counters = Vec::new();
+    // The camera moves back and forth by a millimetre (a static one would
+    // shade nothing after the first frame).
+    let moved = nudged(&camera);
     for frame in 0..FRAMES as u64 {
-        os.render(&ctx, &camera, &lights, frame).unwrap();
+        os.render(&ctx, if frame % 2 == 0 { &camera } else { &moved }, &lights, frame).unwrap();
         counters.extend(os.collect_counters(&ctx, true));
     }
     let (visible, shaded) = (counter(&counters, "visible_tiles"), counter(&counters, "shaded_tiles"));
@@ -468,4 +477,60 @@ fn atlas_page_view_shows_the_page_tables_backed_pages() {
         os.set_atlas_pages(AtlasPages { object: 1, level: 0 }),
         Err(AtlasPagesError::NoObject { object: 1, count: 1 })
     );
+}
+
+/// Nothing moves when nothing changed: a static camera and static lights
+/// over 10 frames at reuse 4 shade every visible tile and back every page
+/// they need in the first frame, and after it shade no tile, back no page,
+/// build no triangle map and no light grid, and gather the same image. Once
+/// a frame 4 frames into the run (the reuse) has come back needing nothing,
+/// the frames after it record no paging, triangle maps or shading at all
+/// (`quiet`), until the camera moves: that frame shades every visible tile
+/// again.
+#[test]
+fn a_static_camera_shades_and_backs_nothing_after_the_first_frame() {
+    const FRAMES: u64 = 10;
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let mut os = Renderer::new(&ctx, &scene, &objectspace(4)).unwrap();
+    let mut counters = Vec::new();
+    let mut first = None;
+    for frame in 0..FRAMES {
+        os.render(&ctx, &camera, &lights, frame).unwrap();
+        counters.extend(os.collect_counters(&ctx, true));
+        if frame == 0 {
+            first = Some(os.read_image(&ctx).unwrap());
+        }
+    }
+    let last = os.read_image(&ctx).unwrap();
+    ctx.check_errors().unwrap();
+    let (visible, shaded) = (counter(&counters, "visible_tiles"), counter(&counters, "shaded_tiles"));
+    let (backed, trimaps) = (counter(&counters, "pages_backed"), counter(&counters, "trimap_pages"));
+    eprintln!("visible {visible:?}\nshaded {shaded:?}\nbacked {backed:?}\ntriangle maps {trimaps:?}");
+    assert_eq!(counters.len(), FRAMES as usize);
+    assert!(visible[0] > 0.0 && backed[0] > 0.0);
+    assert_eq!((shaded[0], trimaps[0]), (visible[0], backed[0]), "the first frame shades all and maps its pages");
+    for f in 1..FRAMES as usize {
+        assert_eq!(visible[f], visible[0], "frame {f}");
+        assert_eq!((shaded[f], backed[f], trimaps[f]), (0.0, 0.0, 0.0), "frame {f} shades, backs or maps pages");
+    }
+    assert_eq!(os.pipeline::<ObjectSpace>().unwrap().light_grid().builds(), 1, "the light grid was built again");
+    assert!(first.unwrap().as_raw() == last.as_raw(), "the image changed although nothing did");
+    // Quiet from 4 frames after the last change on: the first frame, or the
+    // atlas's shrink to the floor's pages (a resize may evict pages).
+    let (quiet, atlas) = (counter(&counters, "quiet"), counter(&counters, "atlas_pages"));
+    eprintln!("quiet {quiet:?}\natlas pages {atlas:?}");
+    let changed = (1..FRAMES as usize).rfind(|&f| atlas[f] != atlas[f - 1]).unwrap_or(0);
+    assert!(changed < 5, "the atlas resized late (frame {changed}): the run shows too few quiet frames");
+    for (f, &q) in quiet.iter().enumerate() {
+        assert_eq!(q, if f > changed + 4 { 1.0 } else { 0.0 }, "frame {f} (last change at {changed}): {quiet:?}");
+    }
+    let chunks = counter(&counters, "table_chunks");
+    assert!(chunks[0] > 0.0 && chunks.iter().all(|&c| c == chunks[0]), "table chunks {chunks:?}");
+
+    os.render(&ctx, &nudged(&camera), &lights, FRAMES).unwrap();
+    let c = os.collect_counters(&ctx, true);
+    ctx.check_errors().unwrap();
+    assert_eq!(counter(&c, "quiet"), [0.0], "the camera moved");
+    assert_eq!(counter(&c, "shaded_tiles"), counter(&c, "visible_tiles"), "the camera moved: every tile is due");
 }

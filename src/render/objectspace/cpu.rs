@@ -44,6 +44,8 @@ pub struct MarkParams {
     /// This frame's stamp (frames rendered so far, this one included).
     pub stamp: u32,
     pub reuse: u32,
+    /// Stamp of the first frame with this frame's view.
+    pub view_since: u32,
     pub tile_size: u32,
     pub mip_bias: f32,
     pub variable_rate: f32,
@@ -297,10 +299,17 @@ pub fn is_new(previous_visible: u32, stamp: u32) -> bool {
     previous_visible == 0 || previous_visible.wrapping_add(1) != stamp
 }
 
-/// The queueing rule of `mark_tile`: never shaded, shaded `reuse` or more
-/// frames ago, or shaded before the object's shades became stale.
-pub fn needs_shading(shaded: u32, stamp: u32, reuse: u32, valid_since: u32) -> bool {
-    shaded == 0 || stamp.wrapping_sub(shaded) >= reuse || shaded < valid_since
+/// The queueing rule of `mark_tile`: never shaded, shaded before the
+/// object's shades became stale, or shaded `reuse` or more frames ago with
+/// another view (with reuse 1: every frame).
+pub fn needs_shading(shaded: u32, stamp: u32, reuse: u32, valid_since: u32, view_since: u32) -> bool {
+    if shaded == 0 || shaded < valid_since {
+        return true;
+    }
+    if reuse > 1 && shaded >= view_since {
+        return false;
+    }
+    stamp.wrapping_sub(shaded) >= reuse
 }
 
 /// The object and level owning a global tile (the `object << 8 | level` of
@@ -362,7 +371,8 @@ pub fn mark_frame(
         }
         let (object, level) = tile_owner(entries, params.tile_size, tile)
             .unwrap_or_else(|| panic!("tile {tile} lies in no object's atlas levels"));
-        if needs_shading(previous.shaded[t], stamp, params.reuse, entries[object as usize].valid_since) {
+        let valid_since = entries[object as usize].valid_since;
+        if needs_shading(previous.shaded[t], stamp, params.reuse, valid_since, params.view_since) {
             next.shaded[t] = stamp;
             queued.insert(tile, (object << 8) | level);
         }
@@ -414,7 +424,7 @@ mod tests {
     }
 
     fn params(mip_bias: f32, variable_rate: f32) -> MarkParams {
-        MarkParams { stamp: 1, reuse: 1, tile_size: 8, mip_bias, variable_rate }
+        MarkParams { stamp: 1, reuse: 1, view_since: 1, tile_size: 8, mip_bias, variable_rate }
     }
 
     /// One object of texture side 256 in tiles of 8, levels 256 down to 32.
@@ -551,15 +561,20 @@ mod tests {
     }
 
     #[test]
-    fn reuse_ages_and_valid_since_decide_the_queue() {
-        // Shaded at stamp 1: reuse N re-shades at stamp 1 + N.
+    fn reuse_ages_valid_since_and_view_since_decide_the_queue() {
+        // Shaded at stamp 1, the view changed since (every frame): reuse N
+        // re-shades at stamp 1 + N.
         for (reuse, stamps) in [(1, [true, true, true]), (2, [false, true, true]), (3, [false, false, true])] {
-            let queued = [2, 3, 4].map(|stamp| needs_shading(1, stamp, reuse, 1));
+            let queued = [2, 3, 4].map(|stamp| needs_shading(1, stamp, reuse, 1, stamp));
             assert_eq!(queued, stamps, "reuse {reuse}");
         }
-        assert!(needs_shading(0, 5, 3, 1), "never shaded");
-        assert!(needs_shading(3, 4, 3, 4), "shaded before the lights changed");
-        assert!(!needs_shading(4, 5, 3, 4), "shaded since");
+        // The same view since stamp 1: kept whatever its age, but with reuse 1.
+        let kept = [1, 2, 3].map(|reuse| needs_shading(1, 9, reuse, 1, 1));
+        assert_eq!(kept, [true, false, false]);
+        assert!(needs_shading(1, 9, 3, 1, 2), "shaded with an earlier view");
+        assert!(needs_shading(0, 5, 3, 1, 1), "never shaded");
+        assert!(needs_shading(3, 4, 3, 4, 1), "shaded before the lights changed");
+        assert!(!needs_shading(4, 5, 3, 4, 5), "shaded since");
         assert!(is_new(0, 1) && is_new(2, 4) && !is_new(3, 4));
     }
 
@@ -577,7 +592,7 @@ mod tests {
             visible: (0..24).map(|t| [0, 2, 1, 1][t % 4]).collect(),
             shaded: (0..24).map(|t| [0, 2, 1, 2][t % 4]).collect(),
         };
-        let params = MarkParams { stamp: 3, reuse: 2, tile_size: 8, mip_bias: 0.0, variable_rate: 0.0 };
+        let params = MarkParams { stamp: 3, reuse: 2, view_since: 3, tile_size: 8, mip_bias: 0.0, variable_rate: 0.0 };
         let visible: BTreeSet<u32> = [0, 1, 2, 3, 21].into();
         let marks = mark_frame(&previous, &visible, &params, &entries);
         assert_eq!(marks.new, [0, 2, 3].into());

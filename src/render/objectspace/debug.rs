@@ -15,6 +15,8 @@ pub struct MarkState {
     pub stamp: u32,
     /// Per scene object: shades stamped before this are stale.
     pub valid_since: Vec<u32>,
+    /// Stamp of the first frame with this frame's view.
+    pub view_since: u32,
     /// Per pixel, row-major: (object + 1, triangle); object 0 = background.
     pub visibility: Vec<[u32; 2]>,
     /// Per virtual tile: stamp of the last frame it was visible (0 for
@@ -151,6 +153,7 @@ impl ObjectSpace {
         Ok(MarkState {
             stamp: self.frames,
             valid_since: res.entry_data.iter().map(|e| e.valid_since).collect(),
+            view_since: self.view_since,
             visibility: ids.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
             tile_visible,
             tile_shaded,

@@ -229,10 +229,13 @@ pub enum TileCounter {
     ChunksTaken = 13,
     /// Page-table chunks in use after this frame's paging.
     TableChunks = 14,
+    /// Pages whose triangle maps the triangle-map pass built this frame
+    /// (the pages backed this frame: none when none is new).
+    TrimapPages = 15,
 }
 
 impl TileCounter {
-    pub const ALL: [Self; 15] = [
+    pub const ALL: [Self; 16] = [
         Self::Queued,
         Self::Visible,
         Self::New,
@@ -248,13 +251,14 @@ impl TileCounter {
         Self::FreeChunks,
         Self::ChunksTaken,
         Self::TableChunks,
+        Self::TrimapPages,
     ];
     /// First slot of the age buckets (free pages, then unused for 128 or
     /// more frames, 64-127, ..., 1 frame).
-    pub const AGE_BUCKET_BASE: usize = 15;
+    pub const AGE_BUCKET_BASE: usize = 16;
     pub const AGE_BUCKETS: usize = 9;
     /// Slots in the counter buffer (a multiple of four: 16-byte rows).
-    pub const SLOTS: usize = 24;
+    pub const SLOTS: usize = 28;
 
     pub fn wgsl_name(self) -> &'static str {
         match self {
@@ -273,6 +277,7 @@ impl TileCounter {
             Self::FreeChunks => "COUNT_FREE_CHUNKS",
             Self::ChunksTaken => "COUNT_CHUNKS_TAKEN",
             Self::TableChunks => "COUNT_TABLE_CHUNKS",
+            Self::TrimapPages => "COUNT_TRIMAP_PAGES",
         }
     }
 }
@@ -327,7 +332,10 @@ struct ExtraView {
 pub struct ObjectSpaceConfig {
     /// Tile side in texels: 8, 16, 32 or 64.
     pub tile_size: u32,
-    /// Re-shade a visible tile when its shade is this many frames old (N >= 1).
+    /// Re-shade a visible tile when its shade is this many frames old (N >= 1)
+    /// and the view (camera) changed since it was shaded: with N >= 2 a static
+    /// camera and static lights shade nothing; N = 1 shades every visible
+    /// tile every frame.
     pub reuse: u32,
     /// Spread re-shading over the N frames (decoupled shading rate): each
     /// tile is shaded again on its own phase frame, so every frame shades
@@ -439,6 +447,21 @@ pub struct ObjectSpace {
     readback: ReadbackRing<u64>,
     /// Frames rendered so far; stamps are `frames + 1` so that 0 means never.
     frames: u32,
+    /// The last frame's view uniform, and the stamp since which it is the
+    /// same (`GpuParams::view_since`).
+    last_view: Option<GpuView>,
+    view_since: u32,
+    /// Stamp since which nothing that marking, paging or shading read
+    /// changed: the view, the lights, the atlas's size, the objects' biases.
+    quiet_since: u32,
+    /// A frame of the quiet run, at least `reuse` frames into it (every
+    /// visible tile shaded with this view), came back having requested no
+    /// page and queued no tile: until something changes, every frame would
+    /// do the same, so paging, triangle maps and shading are not recorded.
+    settled: bool,
+    /// `table_chunks` of the last frame that ran paging (reported for the
+    /// frames that skip it).
+    table_chunks: f64,
     budget: Budget,
     /// The atlas at the whole budget; `res.pool` is what is resident now.
     budget_pool: PagePool,
@@ -456,6 +479,10 @@ struct InFlight {
     bias: f32,
     /// Physical pages of the atlas.
     pages: u32,
+    /// Its stamp.
+    stamp: u32,
+    /// It skipped paging, triangle maps and shading (settled).
+    quiet: bool,
 }
 
 impl ObjectSpace {
@@ -570,6 +597,11 @@ impl ObjectSpace {
             config,
             readback: ReadbackRing::new("tile counters", TileCounter::SLOTS as u64 * 4),
             frames: 0,
+            last_view: None,
+            view_since: 0,
+            quiet_since: 0,
+            settled: false,
+            table_chunks: 0.0,
             budget: Budget::default(),
             residency: Residency::new(pool.layer_page_count(), pool.layers),
             budget_pool: pool,
@@ -664,18 +696,29 @@ impl Pipeline for ObjectSpace {
     fn encode(&mut self, frame: &mut Frame) {
         self.frames += 1;
         let stale = frame.lights_changed || self.frames == 1;
-        if let Some(layers) = self.residency.resize(self.res.pool.layers) {
+        let resize = self.residency.resize(self.res.pool.layers);
+        if let Some(layers) = resize {
             self.resize_atlas(frame, layers);
         }
         let added = self.budget.bias;
-        self.in_flight.insert(frame.number, InFlight { bias: added, pages: self.res.pool.pages });
         // Screen shares only matter once the bias goes past its uniform part.
         let ranked = added > budget::UNIFORM_BIAS;
         let shares: Vec<Option<f32>> = (0..frame.scene.object_bounds.len())
             .map(|o| (ranked && frame.visible[o] && self.layout.objects[o].is_some()).then(|| screen_share(frame, o)))
             .collect();
-        self.res.set_object_biases(frame.queue, &budget::object_biases(added, &shares));
-        self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, &self.config);
+        let biased = self.res.set_object_biases(frame.queue, &budget::object_biases(added, &shares));
+        if self.last_view.is_none_or(|v| bytemuck::bytes_of(&v) != bytemuck::bytes_of(frame.view)) {
+            self.view_since = self.frames;
+            self.last_view = Some(*frame.view);
+        }
+        if stale || resize.is_some() || biased || self.view_since == self.frames || self.config.reuse == 1 {
+            self.quiet_since = self.frames;
+            self.settled = false;
+        }
+        let quiet = self.settled;
+        let (pages, stamp) = (self.res.pool.pages, self.frames);
+        self.in_flight.insert(frame.number, InFlight { bias: added, pages, stamp, quiet });
+        self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, self.view_since, &self.config);
         match &mut self.visibility {
             Visibility::Raster { prepass, ids } => {
                 if let Some(prepass) = prepass {
@@ -687,11 +730,15 @@ impl Pipeline for ObjectSpace {
         }
         mark_tiles(frame, &self.mark, &self.res, 0);
         let views = self.mark_extra_views(frame);
-        back_pages(frame, &self.paging, &self.res);
-        build_triangle_maps(frame, &self.trimap, &self.res);
-        mark_backed_pages(frame, &self.mark, &self.res);
+        if !quiet {
+            back_pages(frame, &self.paging, &self.res);
+            build_triangle_maps(frame, &self.trimap, &self.res);
+            mark_backed_pages(frame, &self.mark, &self.res);
+        }
         build_world_grid(frame, &mut self.grid);
-        shade_tiles(frame, &self.shade, &self.res, &self.grid.grid);
+        if !quiet {
+            shade_tiles(frame, &self.shade, &self.res, &self.grid.grid);
+        }
         gather(frame, &self.gather, &self.res, &self.grid.grid, 0);
         for (k, group) in views.iter().enumerate() {
             let mut view = frame.with_scene_group(group);
@@ -724,7 +771,10 @@ impl Pipeline for ObjectSpace {
     /// (backing visible tiles this frame), `pages_backed` (newly),
     /// `pages_failed` (found no page: the atlas was full), `page_texels`
     /// (texels of the pages in use), `table_chunks` (page-table chunks in
-    /// use), `atlas_pages` and `atlas_texels` (the physical atlas the frame
+    /// use), `trimap_pages` (pages whose triangle maps were built), `quiet`
+    /// (1: nothing changed and the frame recorded no paging, triangle maps
+    /// or shading),
+    /// `atlas_pages` and `atlas_texels` (the physical atlas the frame
     /// had: it follows the pages needed, [`residency`]) and `budget_bias`
     /// (levels the budget added); with extra views, `shared_view_tiles` (tiles on pages
     /// backed before this frame, marked once for all views) and
@@ -753,6 +803,20 @@ impl Pipeline for ObjectSpace {
                 let failed = count(TileCounter::PagesFailed);
                 let rendered = self.in_flight.remove(&frame);
                 let (used, resident) = rendered.map_or((0.0, self.res.pool.pages), |r| (r.bias, r.pages));
+                let quiet = rendered.is_some_and(|r| r.quiet);
+                // Settled: this frame is `reuse` frames into the quiet run
+                // (tiles shaded with an earlier view are due by then) and
+                // needed nothing; the quiet run's later frames will not either.
+                let requested = count(TileCounter::PagesRequested);
+                if let Some(r) = rendered
+                    && r.stamp >= self.quiet_since.saturating_add(self.config.reuse)
+                    && requested + failed + shaded == 0.0
+                {
+                    self.settled = true;
+                }
+                if !quiet {
+                    self.table_chunks = count(TileCounter::TableChunks);
+                }
                 // Demand: the pages this frame needed, against the share of
                 // the budget it may fill (the atlas grows up to it) ...
                 let mut load = (in_use + failed) / (PAGE_FILL * budget_pages);
@@ -778,7 +842,9 @@ impl Pipeline for ObjectSpace {
                     ("page_texels", in_use * page_texels),
                     ("atlas_pages", resident as f64),
                     ("atlas_texels", resident as f64 * page_texels),
-                    ("table_chunks", count(TileCounter::TableChunks)),
+                    ("table_chunks", self.table_chunks),
+                    ("trimap_pages", count(TileCounter::TrimapPages)),
+                    ("quiet", quiet as u8 as f64),
                     ("budget_bias", used as f64),
                     // Share of the atlas-shaded pixels whose level gives them
                     // fewer than one shading texel (blurrier than the screen).

@@ -53,7 +53,9 @@ struct Params {
     // Slots of the page request list (the budget's pages, whatever the
     // atlas's size now: a shrunk atlas still lists what the frame asks).
     request_capacity: u32,
-    pad_c: u32,
+    // Stamp of the first frame with this frame's view (camera): with reuse
+    // above 1, a tile shaded since then keeps its shade (it would be the same).
+    view_since: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: Params;

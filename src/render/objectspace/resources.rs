@@ -41,7 +41,10 @@ gpu_struct! {
         pub table_chunks: u32,
         /// Slots of the page request list (the budget's pages).
         pub request_capacity: u32,
-        pub pad_c: u32,
+        /// Stamp of the first frame with this frame's view (camera): with
+        /// reuse above 1, a tile shaded since then is not shaded again by
+        /// age, since it would get the same shade.
+        pub view_since: u32,
     }
 }
 
@@ -396,8 +399,8 @@ impl Resources {
     }
 
     /// Sets each object's mip bias (the budget's share per object), uploading
-    /// the atlas table when they changed.
-    pub fn set_object_biases(&mut self, queue: &wgpu::Queue, biases: &[f32]) {
+    /// the atlas table when they changed; returns whether they did.
+    pub fn set_object_biases(&mut self, queue: &wgpu::Queue, biases: &[f32]) -> bool {
         let mut changed = false;
         for (e, &b) in self.entry_data.iter_mut().zip(biases) {
             changed |= e.mip_bias != b;
@@ -406,10 +409,12 @@ impl Resources {
         if changed {
             queue.write_buffer(&self.entries, 0, bytemuck::cast_slice(&self.entry_data));
         }
+        changed
     }
 
     /// Uploads this frame's settings (and, when the shades went stale, the
-    /// atlas table with its new `valid_since`) and clears the counters.
+    /// atlas table with its new `valid_since`; `view_since`: the stamp since
+    /// which the view is unchanged) and clears the counters.
     /// The budget's bias is per object, in the table ([`Self::set_object_biases`]).
     pub fn begin_frame(
         &mut self,
@@ -417,6 +422,7 @@ impl Resources {
         encoder: &mut wgpu::CommandEncoder,
         stamp: u32,
         stale: bool,
+        view_since: u32,
         config: &ObjectSpaceConfig,
     ) {
         if stale {
@@ -441,7 +447,7 @@ impl Resources {
             request_tile_base: self.request_tile_base,
             table_chunks: self.chunk_count(),
             request_capacity: self.budget_pages,
-            pad_c: 0,
+            view_since,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(&self.counters, 0, None);

@@ -28,6 +28,11 @@ fn due(shaded: u32, valid_since: u32, tile: u32) -> bool {
     if shaded == 0u || shaded < valid_since {
         return true;
     }
+    // Shaded with this view and these lights: shading again gives the same
+    // shade, so a static camera shades nothing (reuse 1 shades every frame).
+    if params.reuse > 1u && shaded >= params.view_since {
+        return false;
+    }
     let age = params.stamp - shaded;
     if params.spread == 0u {
         return age >= params.reuse;

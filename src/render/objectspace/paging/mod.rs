@@ -21,6 +21,8 @@ pub struct PagingPass {
     age_pages: wgpu::ComputePipeline,
     page_offsets: wgpu::ComputePipeline,
     list_candidates: wgpu::ComputePipeline,
+    age_pages_if_requested: wgpu::ComputePipeline,
+    list_candidates_if_requested: wgpu::ComputePipeline,
     allocate: wgpu::ComputePipeline,
     release_chunks: wgpu::ComputePipeline,
     claim_blocks: wgpu::ComputePipeline,
@@ -41,6 +43,14 @@ impl PagingPass {
             age_pages: compute_pipeline(device, shaders, SHADER, "age_pages", &plain)?,
             page_offsets: compute_pipeline(device, shaders, SHADER, "page_offsets", &with_dispatch)?,
             list_candidates: compute_pipeline(device, shaders, SHADER, "list_candidates", &plain)?,
+            age_pages_if_requested: compute_pipeline(device, shaders, SHADER, "age_pages_if_requested", &plain)?,
+            list_candidates_if_requested: compute_pipeline(
+                device,
+                shaders,
+                SHADER,
+                "list_candidates_if_requested",
+                &plain,
+            )?,
             allocate: compute_pipeline(device, shaders, SHADER, "allocate", &plain)?,
             release_chunks: compute_pipeline(device, shaders, SHADER, "release_chunks", &plain)?,
             claim_blocks: compute_pipeline(device, shaders, SHADER, "claim_blocks", &plain)?,
@@ -57,7 +67,7 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass("paging");
     res.bind(&mut cp, scene);
-    rank_candidates(&mut cp, pass, res);
+    rank_candidates(&mut cp, pass, res, Ranking::IfRequested);
     drop(cp);
     // A pass of its own: it reads the dispatch buffer as INDIRECT.
     let mut cp = frame.compute_pass("allocate");
@@ -78,17 +88,31 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     cp.dispatch_workgroups(1, 1, 1);
 }
 
+/// When [`rank_candidates`] ranks the pages.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Ranking {
+    /// Always (a resize's moves need candidates).
+    Always,
+    /// Only when this frame requested a page (paging: a frame that needs no
+    /// new page ranks none, and allocates none).
+    IfRequested,
+}
+
 /// Lists the physical pages below `params.physical_pages` not used this
 /// frame as `candidates`, free first, then least recently used (counts in
 /// the counters' age buckets and `COUNT_CANDIDATES`), on a compute pass with
 /// `res` bound as group 1. Rebinds group 2.
-pub(super) fn rank_candidates(cp: &mut wgpu::ComputePass, pass: &PagingPass, res: &Resources) {
+pub(super) fn rank_candidates(cp: &mut wgpu::ComputePass, pass: &PagingPass, res: &Resources, ranking: Ranking) {
     let pages = res.pool.pages.div_ceil(64);
+    let (age, list) = match ranking {
+        Ranking::Always => (&pass.age_pages, &pass.list_candidates),
+        Ranking::IfRequested => (&pass.age_pages_if_requested, &pass.list_candidates_if_requested),
+    };
     cp.set_bind_group(2, &res.dispatch_group, &[]);
-    cp.set_pipeline(&pass.age_pages);
+    cp.set_pipeline(age);
     cp.dispatch_workgroups(pages, 1, 1);
     cp.set_pipeline(&pass.page_offsets);
     cp.dispatch_workgroups(1, 1, 1);
-    cp.set_pipeline(&pass.list_candidates);
+    cp.set_pipeline(list);
     cp.dispatch_workgroups(pages, 1, 1);
 }

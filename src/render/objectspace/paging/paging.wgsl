@@ -22,10 +22,42 @@ fn evictable(page: u32) -> bool {
     return page < params.physical_pages && atomicLoad(&page_used[page]) != params.stamp;
 }
 
+fn age(page: u32) {
+    if evictable(page) {
+        atomicAdd(&counters[AGE_BUCKET_BASE + age_bucket(page)], 1u);
+    }
+}
+
+fn list(page: u32) {
+    if evictable(page) {
+        candidates[atomicAdd(&counters[AGE_BUCKET_BASE + age_bucket(page)], 1u)] = page;
+    }
+}
+
+// Ranking for a resize (`resize.wgsl` moves pages onto the candidates).
 @compute @workgroup_size(64)
 fn age_pages(@builtin(global_invocation_id) id: vec3u) {
-    if evictable(id.x) {
-        atomicAdd(&counters[AGE_BUCKET_BASE + age_bucket(id.x)], 1u);
+    age(id.x);
+}
+
+@compute @workgroup_size(64)
+fn list_candidates(@builtin(global_invocation_id) id: vec3u) {
+    list(id.x);
+}
+
+// Ranking for paging: nothing to rank in a frame that requested no page
+// (the allocation then dispatches no workgroup).
+@compute @workgroup_size(64)
+fn age_pages_if_requested(@builtin(global_invocation_id) id: vec3u) {
+    if requests() > 0u {
+        age(id.x);
+    }
+}
+
+@compute @workgroup_size(64)
+fn list_candidates_if_requested(@builtin(global_invocation_id) id: vec3u) {
+    if requests() > 0u {
+        list(id.x);
     }
 }
 
@@ -46,12 +78,6 @@ fn page_offsets() {
     write_dispatch(ALLOCATE_ARGS, (requests() + 63u) / 64u);
 }
 
-@compute @workgroup_size(64)
-fn list_candidates(@builtin(global_invocation_id) id: vec3u) {
-    if evictable(id.x) {
-        candidates[atomicAdd(&counters[AGE_BUCKET_BASE + age_bucket(id.x)], 1u)] = id.x;
-    }
-}
 
 // Request `i` of this frame's list, when there is one.
 fn request_index(wg: vec3u, groups: vec3u, lid: u32) -> u32 {
@@ -87,23 +113,44 @@ fn allocate(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: v
     atomicStore(&page_used[physical], params.stamp);
 }
 
+var<workgroup> group_free: atomic<u32>;
+var<workgroup> group_used: atomic<u32>;
+var<workgroup> group_base: u32;
+
 // Per chunk: a chunk left with no page goes back (its block's directory
-// word cleared); the free ones are listed.
+// word cleared); the free ones are listed. Counted per workgroup first:
+// one global atomic per 64 chunks, not one per chunk on a single word.
 @compute @workgroup_size(64)
-fn release_chunks(@builtin(global_invocation_id) id: vec3u) {
+fn release_chunks(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) li: u32) {
     let c = id.x;
-    if c >= params.table_chunks {
-        return;
+    if li == 0u {
+        atomicStore(&group_free, 0u);
+        atomicStore(&group_used, 0u);
     }
-    let block = table_chunks[c].block;
-    if block != 0u && atomicLoad(&table_chunks[c].pages) == 0u {
-        atomicStore(&page_directory[block - 1u], 0u);
-        table_chunks[c].block = 0u;
+    workgroupBarrier();
+    var free = false;
+    var slot = 0u;
+    if c < params.table_chunks {
+        let block = table_chunks[c].block;
+        if block != 0u && atomicLoad(&table_chunks[c].pages) == 0u {
+            atomicStore(&page_directory[block - 1u], 0u);
+            table_chunks[c].block = 0u;
+        }
+        free = table_chunks[c].block == 0u;
+        if free {
+            slot = atomicAdd(&group_free, 1u);
+        } else {
+            atomicAdd(&group_used, 1u);
+        }
     }
-    if table_chunks[c].block == 0u {
-        free_chunks[atomicAdd(&counters[COUNT_FREE_CHUNKS], 1u)] = c;
-    } else {
-        atomicAdd(&counters[COUNT_TABLE_CHUNKS], 1u);
+    workgroupBarrier();
+    if li == 0u {
+        group_base = atomicAdd(&counters[COUNT_FREE_CHUNKS], atomicLoad(&group_free));
+        atomicAdd(&counters[COUNT_TABLE_CHUNKS], atomicLoad(&group_used));
+    }
+    workgroupBarrier();
+    if free {
+        free_chunks[group_base + slot] = c;
     }
 }
 

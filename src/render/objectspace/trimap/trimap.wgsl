@@ -7,7 +7,7 @@
 // triangle touches takes the nearest triangle touching its 3x3 neighbourhood
 // (one ring of dilation, so that bilinear taps just outside a chart find a
 // triangle to extrapolate); else 0. `cpu.rs` has the same rule in Rust.
-#import shadespace::contract::COUNT_PAGES_BACKED
+#import shadespace::contract::{COUNT_PAGES_BACKED, COUNT_TRIMAP_PAGES}
 #import shadespace::scene_bindings::{vertices, objects, triangle_vertices}
 #import shadespace::scene::Object
 #import shadespace::objectspace::{params, entry_level, counters, backed, atlas_texel, page_origin}
@@ -121,6 +121,9 @@ fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     let index = wg.y * groups.x + wg.x;
     if index >= min(atomicLoad(&counters[COUNT_PAGES_BACKED]), params.physical_pages) {
         return;
+    }
+    if all(lid.xy == vec2u(0u)) {
+        atomicAdd(&counters[COUNT_TRIMAP_PAGES], 1u);
     }
     let b = backed[index];
     let object = b.y >> 8u;

@@ -1,4 +1,4 @@
-//! Light grids built on the GPU every frame from the light buffer: for each
+//! Light grids built on the GPU from the light buffer: for each
 //! cell of a grid, the list of point and spot lights that may reach it, with
 //! no cap on lights per cell and no CPU round trip. Ambient and directional
 //! lights (the first `view.global_light_count`) reach everywhere and are
@@ -139,6 +139,8 @@ pub struct LightGrid {
     last: GpuLightGridParams,
     /// Largest total entries seen (read back).
     peak_entries: u64,
+    /// Builds recorded so far.
+    builds: u64,
 }
 
 /// A grid read back to the CPU (tests).
@@ -248,6 +250,7 @@ impl LightGrid {
             totals: ReadbackRing::new("light grid totals", 4),
             last: GpuLightGridParams::default(),
             peak_entries: 0,
+            builds: 0,
         })
     }
 
@@ -346,6 +349,26 @@ impl LightGrid {
         self.work_count = Some(items.len() as u32);
     }
 
+    /// Takes in the totals of earlier builds that came back, growing the
+    /// list when one did not fit (the next build then fits).
+    pub fn collect_totals(&mut self, device: &wgpu::Device) {
+        let totals: Vec<u64> = self
+            .totals
+            .collect(device, false)
+            .into_iter()
+            .map(|(_, bytes)| u32::from_le_bytes(bytes[..4].try_into().expect("4 bytes")) as u64)
+            .collect();
+        if let Some(&peak) = totals.iter().max() {
+            self.peak_entries = self.peak_entries.max(peak);
+            self.reserve(device, peak);
+        }
+    }
+
+    /// Builds recorded so far.
+    pub fn builds(&self) -> u64 {
+        self.builds
+    }
+
     /// Records this frame's build over `params` (its geometry; the capacity
     /// and work are filled in here); `cells(light)` bounds the cells a light's
     /// walk covers (how its work is split; 1 keeps one item per light).
@@ -359,16 +382,7 @@ impl LightGrid {
             params.cell_count,
             self.max_cells
         );
-        let totals: Vec<u64> = self
-            .totals
-            .collect(frame.device, false)
-            .into_iter()
-            .map(|(_, bytes)| u32::from_le_bytes(bytes[..4].try_into().expect("4 bytes")) as u64)
-            .collect();
-        if let Some(&peak) = totals.iter().max() {
-            self.peak_entries = self.peak_entries.max(peak);
-            self.reserve(frame.device, peak);
-        }
+        self.collect_totals(frame.device);
         if frame.lights_changed || self.work_count.is_none() {
             self.set_work(frame, cells);
         }
@@ -398,6 +412,7 @@ impl LightGrid {
         );
         run(frame, "fill", &[(&self.fill, light_groups), (&self.finish, cell_groups)]);
         self.totals.copy(frame.device, frame.encoder, &self.status, 4, ());
+        self.builds += 1;
     }
 
     /// Starts the read-back of the frame's total; call after its submit.

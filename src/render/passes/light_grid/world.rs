@@ -1,5 +1,5 @@
 //! The world grid (Oxide's "light matrix"): uniform cubic cells over the
-//! scene's bounds, rebuilt every frame, lights binned as world-space spheres
+//! scene's bounds, rebuilt when the lights change, lights binned as world-space spheres
 //! (spots also against their cone). Object space shades texels anywhere in
 //! the scene, visible or not yet, so its grid cannot follow the view.
 //!
@@ -38,6 +38,9 @@ pub struct WorldGrid {
     bounds: Aabb,
     /// Geometry and entry bound for the current lights.
     current: Option<(GpuLightGridParams, u64)>,
+    /// The list's capacity at the last build (a grown list is empty until
+    /// built again).
+    built_capacity: Option<u64>,
 }
 
 impl WorldGrid {
@@ -45,7 +48,7 @@ impl WorldGrid {
         let bounds = covered_bounds(&scene.object_bounds);
         let (dims, _) = dims_for(&bounds, finest_cell(&bounds));
         let grid = LightGrid::new(device, shaders, scene, "world grid", SHADER, dims.x * dims.y * dims.z)?;
-        Ok(Self { grid, bounds, current: None })
+        Ok(Self { grid, bounds, current: None, built_capacity: None })
     }
 }
 
@@ -91,15 +94,22 @@ pub fn geometry(bounds: &Aabb, lights: &[Light]) -> (GpuLightGridParams, u64) {
 
 /// Reads: the scene's lights. Writes: the world grid's cells and lists
 /// (timed as `world grid: count`, `world grid: scan`, `world grid: fill`).
-/// The geometry is chosen again when the lights change, and the list is
-/// grown to its entry bound before the build.
+/// The grid covers the scene's fixed bounds, so it depends on the lights
+/// alone: it is built when they change (the geometry chosen again and the
+/// list grown to its entry bound first), or when its list grew since the
+/// last build, and otherwise kept as it is.
 pub fn build_world_grid(frame: &mut Frame, world: &mut WorldGrid) {
+    world.grid.collect_totals(frame.device);
+    if !frame.lights_changed && world.current.is_some() && world.built_capacity == Some(world.grid.capacity()) {
+        return;
+    }
     if frame.lights_changed || world.current.is_none() {
         world.current = Some(geometry(&world.bounds, frame.lights));
     }
     let (params, bound) = world.current.expect("set above");
     world.grid.reserve(frame.device, bound);
     world.grid.build(frame, params, |l| box_cells(&params, l.position, l.radius));
+    world.built_capacity = Some(world.grid.capacity());
 }
 
 /// The smallest cell side: the longest side over [`MAX_CELLS_PER_AXIS`] (a
