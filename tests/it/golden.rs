@@ -13,15 +13,39 @@ use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, Rende
 
 const WIDTH: u32 = 192;
 const HEIGHT: u32 = 108;
-/// Mean FLIP allowed between a render and its golden image.
-const GOLDEN_FLIP: f32 = 0.02;
-/// Object space against forward at 320x180 on lavapipe: FLIP <= 0.05 and
-/// PSNR >= 35 dB (issue 3's bound). Measured with conservative triangle maps
-/// and filtering within chart islands: atrium 0.0165 / 42.3 dB (shadowed
-/// 0.0174 / 41.7), voxels 0.0087 / 52.8 dB; before them the voxels' chart
-/// borders (each block face is a chart) brought it to 0.0285 / 33.7 dB.
-const AGREEMENT_FLIP: f32 = 0.05;
-const AGREEMENT_PSNR: f64 = 35.0;
+/// Mean FLIP allowed between a render and its golden image. The goldens
+/// are lavapipe's renders, and lavapipe reproduces them exactly (measured:
+/// FLIP 0.0 for both scenes); the bound is an absolute margin for another
+/// Mesa build's rasterization (other adapters were not measured). Catches a
+/// point light's attenuation 1 / (1 + d) instead of 1 / (1 + d^2) in
+/// `lighting.wgsl`, which every pipeline shares, so that no agreement test
+/// can see it: atrium 0.0163 (which the former bound of 0.02 let
+/// through), voxels 0.321.
+const GOLDEN_FLIP: f32 = 0.005;
+
+/// What object space may differ from forward by on one frame at 320x180:
+/// mean FLIP at most `flip`, PSNR at least `psnr` dB. Issue 3 asked for
+/// FLIP 0.05 and 35 dB; each test's bound is tighter, its value measured
+/// on lavapipe plus 25 % of FLIP and less 1 dB of PSNR (26 % more squared
+/// error), so that a wrong filter fails it.
+#[derive(Clone, Copy, Debug)]
+struct Bound {
+    flip: f32,
+    psnr: f64,
+}
+
+/// Measured + 25 % / - 1 dB: atrium 0.0164 / 41.75 dB, with the raster or
+/// the compute visibility buffer (the same ids, the same image).
+const ATRIUM: Bound = Bound { flip: 0.0205, psnr: 40.75 };
+/// Measured + 25 % / - 1 dB: shadowed atrium 0.0173 / 41.27 dB.
+const SHADOWED_ATRIUM: Bound = Bound { flip: 0.0216, psnr: 40.27 };
+/// Measured + 25 % / - 1 dB: voxels 0.00763-0.00794 / 53.03-53.31 dB
+/// (raster visibility; two runs of the suite differed, the margin is over
+/// the worse).
+const VOXELS: Bound = Bound { flip: 0.00993, psnr: 52.03 };
+/// Measured + 25 % / - 1 dB: voxels 0.00805-0.00818 / 51.55-51.59 dB
+/// (compute visibility: a few edge pixels see another face than raster's).
+const VOXELS_COMPUTE: Bound = Bound { flip: 0.0102, psnr: 50.55 };
 
 #[derive(Clone, Copy)]
 enum Pipeline {
@@ -120,11 +144,13 @@ fn check_golden(name: &str) {
     assert!(lum.iter().max().unwrap() - lum.iter().min().unwrap() > 150, "{name}: nearly uniform image");
 }
 
+/// Catches the attenuation fault of [`GOLDEN_FLIP`]: 0.0163.
 #[test]
 fn golden_atrium() {
     check_golden("atrium");
 }
 
+/// Catches the attenuation fault of [`GOLDEN_FLIP`]: 0.321.
 #[test]
 fn golden_voxels() {
     check_golden("voxels");
@@ -140,7 +166,7 @@ fn same_inputs_give_the_same_image() {
     assert!(a == b, "two renders of the same frame differ");
 }
 
-fn check_agreement(name: &str, spec: &str, visibility: VisibilityMethod) {
+fn check_agreement(name: &str, spec: &str, visibility: VisibilityMethod, bound: Bound) {
     let ctx = common::gpu();
     let reference = forward_once(&ctx, name, spec, 320, 180);
     let test = render_at(&ctx, name, spec, Pipeline::ObjectSpace(visibility), 320, 180);
@@ -151,31 +177,40 @@ fn check_agreement(name: &str, spec: &str, visibility: VisibilityMethod) {
     reference.save(out.join(format!("{name}-forward.png"))).unwrap();
     map.save(out.join(format!("{name}-objectspace-{vis}-flip.png"))).unwrap();
     eprintln!("{name} ({spec}): object space ({vis} visibility) vs forward: {err:?}");
-    assert!(err.flip_mean <= AGREEMENT_FLIP && err.psnr_db >= AGREEMENT_PSNR, "{name}: {err:?}");
+    assert!(err.flip_mean <= bound.flip && err.psnr_db >= bound.psnr, "{name}: {err:?}, bound {bound:?}");
 }
 
+/// Catches the gather's bilinear weights of taps (x+1, y) and (x, y+1)
+/// swapped in `gather.wgsl`: 0.0249 / 38.40 dB.
 #[test]
 fn objectspace_agrees_with_forward_atrium() {
-    check_agreement("atrium", LIGHTS, VisibilityMethod::Raster);
+    check_agreement("atrium", LIGHTS, VisibilityMethod::Raster, ATRIUM);
 }
 
+/// Catches the gather's island filter dropped (every tap kept, across
+/// chart borders; each block face is a chart): 0.0129 / 41.60 dB. The
+/// swapped weights stay under the bound here (0.00875 / 52.20 dB: flat
+/// faces, neighbouring texels alike); the stage twins catch them.
 #[test]
 fn objectspace_agrees_with_forward_voxels() {
-    check_agreement("voxels", LIGHTS, VisibilityMethod::Raster);
+    check_agreement("voxels", LIGHTS, VisibilityMethod::Raster, VOXELS);
 }
 
+/// Catches the swapped gather weights: 0.0249 / 38.40 dB.
 #[test]
 fn objectspace_with_compute_visibility_agrees_with_forward_atrium() {
-    check_agreement("atrium", LIGHTS, VisibilityMethod::Compute);
+    check_agreement("atrium", LIGHTS, VisibilityMethod::Compute, ATRIUM);
 }
 
+/// Catches the gather's island filter dropped: 0.0131 / 41.46 dB.
 #[test]
 fn objectspace_with_compute_visibility_agrees_with_forward_voxels() {
-    check_agreement("voxels", LIGHTS, VisibilityMethod::Compute);
+    check_agreement("voxels", LIGHTS, VisibilityMethod::Compute, VOXELS_COMPUTE);
 }
 
-/// Object space evaluates the same shadow term per texel.
+/// Object space evaluates the same shadow term per texel. Catches the
+/// swapped gather weights: 0.0261 / 37.81 dB.
 #[test]
 fn objectspace_agrees_with_forward_shadowed_atrium() {
-    check_agreement("atrium", "shadowed:3+small:8", VisibilityMethod::Raster);
+    check_agreement("atrium", "shadowed:3+small:8", VisibilityMethod::Raster, SHADOWED_ATRIUM);
 }

@@ -28,5 +28,6 @@ mod objectspace;
 mod seams;
 mod shadows;
 mod sponza;
+mod stage_twins;
 mod trimap;
 mod viewer;

@@ -11,6 +11,13 @@
 //! [`visible_tiles`] returns the tiles every outcome marks (`must`) and the
 //! tiles some outcome marks (`may`), and the GPU's visible set must lie in
 //! between.
+//!
+//! The stages after marking have twins of their own: [`shade`] (a texel's
+//! triangle, barycentrics and Phong shade) and [`gather`] (a pixel's level,
+//! bilinear taps, weights, kept taps and filtered colour).
+
+pub mod gather;
+pub mod shade;
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -218,9 +225,44 @@ pub fn footprint_tiles(l: &GpuAtlasLevel, tile_size: u32, texel: IVec2, texel_hi
 }
 
 /// The values `x` floors to when it may be off by up to `tolerance`.
-fn floor_candidates(x: f32, tolerance: f32) -> impl Iterator<Item = i32> {
+pub fn floor_candidates(x: f32, tolerance: f32) -> impl Iterator<Item = i32> {
     let (low, high) = ((x - tolerance).floor() as i32, (x + tolerance).floor() as i32);
     low..=high
+}
+
+/// One level of an object's virtual texture as the GPU holds it
+/// (`ObjectSpace::read_levels`), row-major, `size` texels a row: what the
+/// twins of shade and gather read. `None` for texels of pages with no
+/// physical page.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LevelTexels {
+    pub size: u32,
+    /// Shade (RGBA) per texel.
+    pub shades: Vec<Option<[f32; 4]>>,
+    /// Triangle + 1 covering the texel (0: none).
+    pub triangles: Vec<Option<u32>>,
+}
+
+impl LevelTexels {
+    /// Index of level-local texel `texel` (inside the level) in the rows.
+    pub fn index(&self, texel: IVec2) -> usize {
+        texel.y as usize * self.size as usize + texel.x as usize
+    }
+}
+
+/// The spacing of `Rgba16Float` values (one unit in the last place) at
+/// `x`, the unit of the shade and gather twins' bounds: 2^-10 of the
+/// binade's base, 2^-24 among the subnormals.
+pub fn f16_ulp(x: f32) -> f32 {
+    let x = x.abs();
+    if x < 2f32.powi(-14) { 2f32.powi(-24) } else { 2f32.powi(x.log2().floor() as i32 - 10) }
+}
+
+/// The levels a pixel of unrounded level `lod` may select on the GPU
+/// (lowest, highest): both sides of a rounding boundary within
+/// [`LOD_TOLERANCE`].
+pub fn level_candidates(lod: f32, level_count: u32) -> (u32, u32) {
+    (select_level(lod - LOD_TOLERANCE, level_count), select_level(lod + LOD_TOLERANCE, level_count))
 }
 
 /// The tiles one pixel marks.
@@ -245,8 +287,7 @@ pub fn pixel_tiles(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Option<P
     let normals = &inputs.scene.meshes[inputs.scene.objects[p.object].mesh].normals;
     let bias = variable_rate_bias(inputs.params.variable_rate, p.tri.map(|v| normals[v]));
     let lod = level_of_detail(e, &inputs.params, &f, bias);
-    let lowest = select_level(lod - LOD_TOLERANCE, e.level_count);
-    let highest = select_level(lod + LOD_TOLERANCE, e.level_count);
+    let (lowest, highest) = level_candidates(lod, e.level_count);
     let mut outcomes: Vec<Vec<u32>> = Vec::new();
     for level in lowest..=highest {
         let l = &e.levels[level as usize];
@@ -430,6 +471,20 @@ mod tests {
     /// One object of texture side 256 in tiles of 8, levels 256 down to 32.
     fn entries() -> Vec<GpuAtlasEntry> {
         AtlasLayout::new(&[Some(256)], 8, 16, 4096, 32).unwrap().gpu_entries()
+    }
+
+    #[test]
+    fn f16_ulps_follow_the_binades() {
+        assert_eq!(f16_ulp(1.0), 1.0 / 1024.0);
+        assert_eq!(f16_ulp(-1.99), 1.0 / 1024.0);
+        assert_eq!(f16_ulp(2.0), 1.0 / 512.0);
+        assert_eq!(f16_ulp(0.3), 1.0 / 4096.0);
+        assert_eq!(f16_ulp(0.0), 2f32.powi(-24));
+        // Each is the step between neighbouring halves.
+        for x in [0.3f32, 1.0, 7.5, 1000.0] {
+            let h = half::f16::from_f32(x);
+            assert_eq!(half::f16::from_bits(h.to_bits() + 1).to_f32() - h.to_f32(), f16_ulp(x), "{x}");
+        }
     }
 
     #[test]

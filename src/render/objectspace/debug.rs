@@ -218,6 +218,43 @@ impl ObjectSpace {
         Ok(image::RgbaImage::from_raw(size, size, pixels.collect()).expect("size matches"))
     }
 
+    /// Levels of objects' virtual textures as the GPU holds them, raw: the
+    /// shades (`Rgba16Float`, widened to `f32`) and triangle maps of the
+    /// backed pages, for the CPU twins of shade and gather
+    /// ([`super::cpu::LevelTexels`]). Reads the physical atlas once for all
+    /// of `levels` (object, level).
+    pub fn read_levels(
+        &self,
+        ctx: &GpuContext,
+        levels: &[(usize, usize)],
+    ) -> Result<Vec<super::cpu::LevelTexels>, GpuError> {
+        let shade_texel = ATLAS_FORMAT.block_copy_size(None).expect("uncompressed format");
+        let id_texel = TRIANGLE_MAP_FORMAT.block_copy_size(None).expect("uncompressed format");
+        let shades = self.read_layers(ctx, &self.res.physical.atlas, shade_texel)?;
+        let ids = self.read_layers(ctx, &self.res.physical.triangle_map, id_texel)?;
+        let mut out = Vec::with_capacity(levels.len());
+        for &(object, level) in levels {
+            // Texels of pages with no physical page: triangle u32::MAX,
+            // which no triangle map holds.
+            let nan = [half::f16::NAN; 4];
+            let (size, s) =
+                self.gather_level(ctx, &shades, shade_texel as usize, object, level, bytemuck::cast_slice(&nan))?;
+            let (_, t) = self.gather_level(ctx, &ids, id_texel as usize, object, level, &[0xff; 4])?;
+            let halves: Vec<half::f16> = bytemuck::pod_collect_to_vec(&s);
+            let triangles: Vec<u32> = bytemuck::pod_collect_to_vec(&t);
+            out.push(super::cpu::LevelTexels {
+                size,
+                shades: halves
+                    .chunks_exact(4)
+                    .zip(&triangles)
+                    .map(|(h, &id)| (id != u32::MAX).then(|| std::array::from_fn(|i| h[i].to_f32())))
+                    .collect(),
+                triangles: triangles.into_iter().map(|id| (id != u32::MAX).then_some(id)).collect(),
+            });
+        }
+        Ok(out)
+    }
+
     /// One mip level of one object's triangle map, row-major: triangle + 1
     /// per texel (0 for none), `None` for texels of pages with no physical page.
     pub fn read_triangle_map(

@@ -1,0 +1,270 @@
+//! CPU twin of shade gathering (`gather/gather.wgsl`): for a pixel of the
+//! visibility buffer, the level marking chose, the bilinear taps in it, their
+//! weights, the taps kept (those in the pixel's chart island) and the colour
+//! filtered from the shades the GPU holds ([`LevelTexels`]), in `f32` and in
+//! the WGSL's order.
+//!
+//! As for marking, the GPU may round a near-boundary decision the other way;
+//! [`gather_pixel`] returns every outcome (level within [`LOD_TOLERANCE`] of a
+//! rounding boundary, bilinear coordinate within [`TEXEL_TOLERANCE`] of an
+//! integer), each with how far its colour may be from the GPU's.
+//!
+//! [`LOD_TOLERANCE`]: super::LOD_TOLERANCE
+
+use glam::{IVec2, UVec2, Vec2, Vec3};
+
+use super::{
+    LevelTexels, MarkInputs, TEXEL_TOLERANCE, bilinear_taps, chart_footprint, floor_candidates, level_candidates,
+    level_of_detail, sample_pixel, variable_rate_bias,
+};
+
+/// Bound on a gathered colour channel besides the weights' error, in
+/// units in the last place of `Rgba16Float` at the twin's value
+/// ([`super::f16_ulp`]): the HDR target stores 11 significant bits
+/// (lavapipe rounds towards zero: up to one unit), and the GPU's `f32`
+/// rounding of the weights and the sum may carry a value across a rounding
+/// step. On lavapipe the largest difference in `tests/it/stage_twins.rs` is
+/// 1.0 unit.
+pub const COLOR_ULPS: f32 = 2.0;
+
+/// One way the GPU may gather a pixel: one outcome of its near-boundary
+/// decisions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GatherTaps {
+    pub level: u32,
+    /// Level-local texels of the taps, clamped into the level: top-left,
+    /// right, lower, lower right (`taps` in `gather.wgsl`).
+    pub taps: [IVec2; 4],
+    /// Bilinear weights of the taps, before island filtering.
+    pub weights: [f32; 4],
+    /// Which taps lie in the pixel's chart island (their triangle map names
+    /// a triangle of its island).
+    pub kept: [bool; 4],
+    /// The filtered colour; `None` when a tap's page has no physical page
+    /// (the GPU shades the pixel forward then).
+    pub color: Option<Vec3>,
+    /// How far (per channel) the GPU's colour may be from `color` through
+    /// the error of its bilinear coordinate (up to [`TEXEL_TOLERANCE`] of
+    /// the level's side) moving the weights; [`COLOR_ULPS`] come on top.
+    pub weight_tolerance: f32,
+    /// The kept taps' weights sum to so little that the GPU's rounding may
+    /// change which of them count: the colour is not checked.
+    pub fragile: bool,
+}
+
+impl GatherTaps {
+    /// Whether the GPU's colour `gpu` is what this outcome filters, within
+    /// the bounds. Fragile outcomes and those with no colour match nothing.
+    pub fn matches(&self, gpu: Vec3) -> bool {
+        self.bound_used(gpu) <= 1.0
+    }
+
+    /// The largest share of its bound that a channel of the GPU's colour
+    /// `gpu` uses (1: at the bound); infinite for fragile outcomes and
+    /// those with no colour.
+    pub fn bound_used(&self, gpu: Vec3) -> f32 {
+        let Some(c) = self.color.filter(|_| !self.fragile) else { return f32::INFINITY };
+        (0..3)
+            .map(|i| (gpu[i] - c[i]).abs() / (COLOR_ULPS * super::f16_ulp(c[i]) + self.weight_tolerance))
+            .fold(0.0, f32::max)
+    }
+}
+
+/// What the gather writes for a pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PixelGather {
+    /// Background: black.
+    Background,
+    /// An object outside the atlas, shaded forward in the gather (not twinned).
+    Forward,
+    /// Filtered from the atlas: every outcome the GPU may take.
+    Atlas(Vec<GatherTaps>),
+}
+
+/// The levels (object, level) [`gather_pixel`] may read for a pixel
+/// (none for background and forward-shaded objects).
+pub fn pixel_levels(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Vec<(usize, u32)> {
+    if ids[0] == 0 {
+        return Vec::new();
+    }
+    let p = sample_pixel(inputs.scene, inputs.view, pixel, ids);
+    let e = &inputs.entries[p.object];
+    if e.size == 0 {
+        return Vec::new();
+    }
+    let (lowest, highest) = level_candidates(pixel_lod(inputs, ids, pixel), e.level_count);
+    (lowest..=highest).map(|l| (p.object, l)).collect()
+}
+
+/// The unrounded level of the pixel (as marking computes it).
+fn pixel_lod(inputs: &MarkInputs, ids: [u32; 2], pixel: UVec2) -> f32 {
+    let p = sample_pixel(inputs.scene, inputs.view, pixel, ids);
+    let f = chart_footprint(inputs.scene, &p);
+    let normals = &inputs.scene.meshes[inputs.scene.objects[p.object].mesh].normals;
+    let bias = variable_rate_bias(inputs.params.variable_rate, p.tri.map(|v| normals[v]));
+    level_of_detail(&inputs.entries[p.object], &inputs.params, &f, bias)
+}
+
+/// The bilinear weights of `gather.wgsl` for the fractions `w` of the
+/// right and lower taps.
+pub fn tap_weights(w: Vec2) -> [f32; 4] {
+    [(1.0 - w.x) * (1.0 - w.y), w.x * (1.0 - w.y), (1.0 - w.x) * w.y, w.x * w.y]
+}
+
+/// The colour of one outcome: `gather.wgsl`'s island filter and weighted
+/// sum over the taps' shades.
+pub fn filter_taps(
+    level: &LevelTexels,
+    own_island: u32,
+    islands: &[u32],
+    level_index: u32,
+    taps: [IVec2; 4],
+    weights: [f32; 4],
+) -> GatherTaps {
+    let texels = taps.map(|t| level.index(t));
+    let shades = texels.map(|i| level.shades[i]);
+    let kept = texels.map(|i| level.triangles[i].is_some_and(|id| id != 0 && islands[id as usize - 1] == own_island));
+    let keep = kept.map(f32::from);
+    let kept_weight = weights[0] * keep[0] + weights[1] * keep[1] + weights[2] * keep[2] + weights[3] * keep[3];
+    let mut w = weights;
+    if kept_weight > 0.0 {
+        w = std::array::from_fn(|i| weights[i] * keep[i] / kept_weight);
+    }
+    let color = shades.iter().all(Option::is_some).then(|| {
+        let s = shades.map(|s| Vec3::from_slice(&s.expect("checked")[..3]));
+        s[0] * w[0] + s[1] * w[1] + s[2] * w[2] + s[3] * w[3]
+    });
+    // The colour moves by at most the spread of the taps' shades per texel
+    // the bilinear coordinate moves, along each axis, divided by the kept
+    // weight it is renormalized by.
+    let delta = level.size as f32 * TEXEL_TOLERANCE;
+    let spread = color.map_or(0.0, |_| {
+        let s = shades.map(|s| Vec3::from_slice(&s.expect("checked")[..3]));
+        (s.iter().copied().fold(Vec3::MIN, Vec3::max) - s.iter().copied().fold(Vec3::MAX, Vec3::min)).max_element()
+    });
+    let any_kept = kept.iter().any(|&k| k);
+    let norm = if kept_weight > 0.0 { kept_weight } else { 1.0 };
+    GatherTaps {
+        level: level_index,
+        taps,
+        weights,
+        kept,
+        color,
+        weight_tolerance: 4.0 * delta * spread / norm,
+        fragile: any_kept && kept_weight < 4.0 * delta,
+    }
+}
+
+/// Mirrors `gather` for pixel `pixel` whose visibility ids are `ids`:
+/// every outcome of its near-boundary decisions. `islands` holds the chart
+/// island of each triangle of each object's mesh (`triangle_charts`);
+/// `level(object, level)` the texels of the levels [`pixel_levels`] names.
+pub fn gather_pixel<'a>(
+    inputs: &MarkInputs,
+    islands: &[Vec<u32>],
+    pixel: UVec2,
+    ids: [u32; 2],
+    level: impl Fn(usize, u32) -> &'a LevelTexels,
+) -> PixelGather {
+    if ids[0] == 0 {
+        return PixelGather::Background;
+    }
+    let p = sample_pixel(inputs.scene, inputs.view, pixel, ids);
+    let e = &inputs.entries[p.object];
+    if e.size == 0 {
+        return PixelGather::Forward;
+    }
+    let f = chart_footprint(inputs.scene, &p);
+    let (lowest, highest) = level_candidates(pixel_lod(inputs, ids, pixel), e.level_count);
+    let islands = &islands[p.object];
+    let own = islands[p.triangle];
+    let mut outcomes = Vec::new();
+    for level_index in lowest..=highest {
+        let texels = level(p.object, level_index);
+        let size = e.levels[level_index as usize].size;
+        assert_eq!(texels.size, size, "object {} level {level_index}: texels of another size", p.object);
+        // `t` and its floor as in `bilinear`, floored both ways when near an integer.
+        let t = f.uv * size as f32 - 0.5;
+        let tolerance = size as f32 * TEXEL_TOLERANCE;
+        for x in floor_candidates(t.x, tolerance) {
+            for y in floor_candidates(t.y, tolerance) {
+                let base = IVec2::new(x, y);
+                let (lo, hi) = bilinear_taps(size, base);
+                let taps = [lo, IVec2::new(hi.x, lo.y), IVec2::new(lo.x, hi.y), hi];
+                let weights = tap_weights(t - base.as_vec2());
+                outcomes.push(filter_taps(texels, own, islands, level_index, taps, weights));
+            }
+        }
+    }
+    PixelGather::Atlas(outcomes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4x4 level: shades are x + 10 y in red; triangle 1 (island 0) on
+    /// columns 0-1, triangle 2 (island 5) on columns 2-3, row 3 empty.
+    fn level() -> LevelTexels {
+        let texel = |i: u32| IVec2::new(i as i32 % 4, i as i32 / 4);
+        LevelTexels {
+            size: 4,
+            shades: (0..16).map(texel).map(|t| Some([(t.x + 10 * t.y) as f32, 0.0, 0.0, 1.0])).collect(),
+            triangles: (0..16)
+                .map(texel)
+                .map(|t| {
+                    Some(if t.y == 3 {
+                        0
+                    } else if t.x < 2 {
+                        1
+                    } else {
+                        2
+                    })
+                })
+                .collect(),
+        }
+    }
+
+    const ISLANDS: [u32; 2] = [0, 5];
+
+    fn taps(x: i32, y: i32) -> [IVec2; 4] {
+        [IVec2::new(x, y), IVec2::new(x + 1, y), IVec2::new(x, y + 1), IVec2::new(x + 1, y + 1)]
+    }
+
+    #[test]
+    fn weights_interpolate_along_each_axis() {
+        assert_eq!(tap_weights(Vec2::new(0.25, 0.5)), [0.375, 0.125, 0.375, 0.125]);
+        // Inside one island: the bilinear interpolation of x + 10 y.
+        let g = filter_taps(&level(), 0, &ISLANDS, 0, taps(0, 0), tap_weights(Vec2::new(0.25, 0.5)));
+        assert_eq!(g.kept, [true; 4]);
+        assert_eq!(g.color, Some(Vec3::new(0.25 + 5.0, 0.0, 0.0)));
+        // Swapping the right and lower taps' weights is a different colour.
+        let swapped = GatherTaps { color: Some(Vec3::new(0.5 + 2.5, 0.0, 0.0)), ..g.clone() };
+        assert!(g.matches(g.color.unwrap()) && !swapped.matches(g.color.unwrap()));
+    }
+
+    #[test]
+    fn taps_outside_the_island_are_left_out() {
+        // Columns 1-2 straddle the islands: the pixel of island 0 keeps column 1 only.
+        let g = filter_taps(&level(), 0, &ISLANDS, 0, taps(1, 0), tap_weights(Vec2::new(0.5, 0.5)));
+        assert_eq!(g.kept, [true, false, true, false]);
+        assert_eq!(g.color, Some(Vec3::new(1.0 + 5.0, 0.0, 0.0)));
+        // Row 3 has no triangle: taps there are left out too.
+        let g = filter_taps(&level(), 5, &ISLANDS, 0, taps(2, 2), tap_weights(Vec2::new(0.5, 0.25)));
+        assert_eq!(g.kept, [true, true, false, false]);
+        assert_eq!(g.color, Some(Vec3::new(22.5, 0.0, 0.0)));
+        // No tap in the island: all four, unfiltered.
+        let g = filter_taps(&level(), 7, &ISLANDS, 0, taps(0, 0), tap_weights(Vec2::new(0.5, 0.5)));
+        assert_eq!((g.kept, g.color), ([false; 4], Some(Vec3::new(5.5, 0.0, 0.0))));
+        // Kept taps of weight 0 only: the GPU's rounding decides, unchecked.
+        let g = filter_taps(&level(), 5, &ISLANDS, 0, taps(1, 0), tap_weights(Vec2::new(0.0, 0.5)));
+        assert!(g.fragile && !g.matches(g.color.unwrap()));
+    }
+
+    #[test]
+    fn unbacked_taps_have_no_colour() {
+        let mut l = level();
+        l.shades[5] = None;
+        assert_eq!(filter_taps(&l, 0, &ISLANDS, 0, taps(0, 0), tap_weights(Vec2::ZERO)).color, None);
+    }
+}

@@ -1,0 +1,312 @@
+//! Shade evaluation and shade gathering on the GPU against their CPU twins
+//! (`render::objectspace::cpu::{shade, gather}`), one frame each:
+//!
+//! - shade: every texel of every tile queued this frame, read back from the
+//!   atlas, against the Phong shade of its triangle (from the triangle map)
+//!   at its barycentrics, within [`shade::SHADE_ULPS`]; texels no
+//!   triangle covers must be black;
+//! - gather: every pixel of the frame (HDR, read back) against the twin's
+//!   level, taps, weights and island filter over the shades read back,
+//!   within [`gather::COLOR_ULPS`] plus what the bilinear coordinate's
+//!   rounding may move; background pixels must be black.
+//!
+//! Each failure names the stage and the first differing pixel or texel with
+//! what the twin computed there. What the tests read from the GPU: the
+//! visibility buffer, the shade queue (`ObjectSpace::read_mark_state`), the
+//! atlas and triangle maps of the backed pages (`ObjectSpace::read_levels`)
+//! and the HDR target (`Renderer::targets.hdr`, `Rgba16Float`).
+
+use crate::common;
+use std::collections::BTreeMap;
+
+use glam::{UVec2, Vec3};
+use shadespace::charts::islands::triangle_islands;
+use shadespace::gpu::{GpuContext, readback};
+use shadespace::render::gpu_types::GpuLight;
+use shadespace::render::objectspace::ObjectSpace;
+use shadespace::render::objectspace::cpu::gather::{self, GatherTaps, PixelGather};
+use shadespace::render::objectspace::cpu::{self, LevelTexels, MarkInputs, MarkParams, shade};
+use shadespace::render::scene_gpu::{gpu_view, order_lights};
+use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
+
+/// One frame to render and check.
+struct Case<'a> {
+    name: &'static str,
+    scene: &'a Scene,
+    texture_sizes: Vec<Option<u32>>,
+    camera: Camera,
+    lights: Vec<Light>,
+    width: u32,
+    height: u32,
+    mip_bias: f32,
+    /// Check the shade stage too (the scene has no textures).
+    shade: bool,
+}
+
+/// What a frame's check saw, to make sure it exercised something.
+#[derive(Debug, Default)]
+struct Report {
+    /// Texels of queued tiles compared, and those no triangle covers.
+    texels: usize,
+    empty_texels: usize,
+    /// Pixels compared, of which some taps were left out by the island filter.
+    pixels: usize,
+    filtered_pixels: usize,
+    /// Pixels not compared: a fragile island filter, a tap not backed.
+    skipped_pixels: usize,
+    /// Pixels per level.
+    levels: BTreeMap<u32, usize>,
+    /// Largest shade difference, in `Rgba16Float` units in the last place.
+    worst_shade: f32,
+    /// Largest share of its bound a pixel's colour difference uses.
+    worst_gather: f32,
+}
+
+fn describe(t: &GatherTaps) -> String {
+    let taps: Vec<String> = t.taps.iter().map(|p| format!("({}, {})", p.x, p.y)).collect();
+    format!(
+        "level {}, taps [{}], weights {:?}, kept {:?}, colour {:?}",
+        t.level,
+        taps.join(", "),
+        t.weights,
+        t.kept,
+        t.color.map(|c| c.to_array())
+    )
+}
+
+fn check(ctx: &GpuContext, case: Case) -> Report {
+    let objectspace =
+        ObjectSpaceConfig { texture_sizes: case.texture_sizes.clone(), mip_bias: case.mip_bias, ..Default::default() };
+    let options =
+        RenderOptions { width: case.width, height: case.height, pipeline: PipelineConfig::ObjectSpace(objectspace) };
+    let mut renderer = Renderer::new(ctx, case.scene, &options).unwrap();
+    renderer.render(ctx, &case.camera, &case.lights, 0).unwrap();
+    let os = renderer.pipeline::<ObjectSpace>().unwrap();
+    let gpu = os.read_mark_state(ctx).unwrap();
+    let hdr: Vec<half::f16> =
+        bytemuck::pod_collect_to_vec(&readback::read_texture(ctx, &renderer.targets.hdr, 8).unwrap());
+    let name = case.name;
+
+    let view = gpu_view(&case.camera, case.width, case.height);
+    let entries = os.layout.gpu_entries();
+    let o = os.config();
+    let params = MarkParams {
+        stamp: gpu.stamp,
+        reuse: o.reuse,
+        tile_size: o.tile_size,
+        mip_bias: o.mip_bias,
+        variable_rate: 0.0,
+    };
+    let inputs = MarkInputs { scene: case.scene, view: &view, entries: &entries, params };
+    let islands: Vec<Vec<u32>> = case
+        .scene
+        .objects
+        .iter()
+        .map(|o| {
+            let mesh = &case.scene.meshes[o.mesh];
+            triangle_islands(&mesh.indices, cpu::chart_uvs(mesh))
+        })
+        .collect();
+
+    // The levels the pixels gather from and the queued tiles lie in, read at once.
+    let pixel = |i: usize| UVec2::new(i as u32 % case.width, i as u32 / case.width);
+    let mut wanted: Vec<(usize, u32)> =
+        gpu.visibility.iter().enumerate().flat_map(|(i, ids)| gather::pixel_levels(&inputs, pixel(i), *ids)).collect();
+    let queued: Vec<(usize, u32, u32)> =
+        gpu.queue.iter().map(|&[tile, code]| ((code >> 8) as usize, code & 0xff, tile)).collect();
+    if case.shade {
+        wanted.extend(queued.iter().map(|&(object, level, _)| (object, level)));
+    }
+    wanted.sort_unstable();
+    wanted.dedup();
+    let read: Vec<(usize, usize)> = wanted.iter().map(|&(o, l)| (o, l as usize)).collect();
+    let levels: BTreeMap<(usize, u32), LevelTexels> =
+        wanted.into_iter().zip(os.read_levels(ctx, &read).unwrap()).collect();
+    let mut report = Report::default();
+
+    if case.shade {
+        let (ordered, _) = order_lights(&case.lights);
+        let lights: Vec<GpuLight> = ordered.iter().map(GpuLight::from).collect();
+        let tile = o.tile_size;
+        for &(object, level, global_tile) in &queued {
+            let l = entries[object].levels[level as usize];
+            let texels = &levels[&(object, level)];
+            let per_row = l.size / tile;
+            let local = global_tile - l.tile_base;
+            let origin = UVec2::new(local % per_row, local / per_row) * tile;
+            for i in 0..tile * tile {
+                let texel = origin + UVec2::new(i % tile, i / tile);
+                let at = texels.index(texel.as_ivec2());
+                let where_ =
+                    format!("shade ({name}): texel ({}, {}) of object {object} level {level}", texel.x, texel.y);
+                let id = texels.triangles[at].unwrap_or_else(|| panic!("{where_}: queued, but its page is not backed"));
+                let got = texels.shades[at].expect("backed");
+                assert_eq!(got[3], 1.0, "{where_}: alpha");
+                let got = Vec3::from_slice(&got[..3]);
+                report.texels += 1;
+                if id == 0 {
+                    report.empty_texels += 1;
+                    assert_eq!(got, Vec3::ZERO, "{where_}: no triangle covers it, yet it is not black");
+                    continue;
+                }
+                let s = shade::texel_surface(case.scene, object, l.size, texel, id as usize - 1);
+                let want = shade::shade(&s, &lights, case.camera.position);
+                let ulps = shade::shade_ulps(got, want);
+                report.worst_shade = report.worst_shade.max(ulps);
+                assert!(
+                    ulps <= shade::SHADE_ULPS,
+                    "{where_} (triangle {}, barycentrics {:?}, position {:?}, normal {:?}): GPU {:?}, twin {:?}: {ulps} \
+                     units in the last place apart, more than {}",
+                    s.triangle,
+                    s.b.to_array(),
+                    s.position.to_array(),
+                    s.normal.to_array(),
+                    got.to_array(),
+                    want.to_array(),
+                    shade::SHADE_ULPS
+                );
+            }
+        }
+    }
+
+    let mut first_difference = None;
+    let mut differing = 0;
+    for (i, ids) in gpu.visibility.iter().enumerate() {
+        let p = pixel(i);
+        let got = Vec3::new(hdr[4 * i].to_f32(), hdr[4 * i + 1].to_f32(), hdr[4 * i + 2].to_f32());
+        match gather::gather_pixel(&inputs, &islands, p, *ids, |o, l| &levels[&(o, l)]) {
+            PixelGather::Background => {
+                assert_eq!(got, Vec3::ZERO, "gather ({name}): background pixel ({}, {}) is not black", p.x, p.y)
+            }
+            PixelGather::Forward => {}
+            PixelGather::Atlas(outcomes) => {
+                if outcomes.iter().any(|t| t.fragile || t.color.is_none()) {
+                    report.skipped_pixels += 1;
+                    continue;
+                }
+                report.pixels += 1;
+                *report.levels.entry(outcomes[0].level).or_default() += 1;
+                report.filtered_pixels += usize::from(outcomes[0].kept.iter().any(|k| !k));
+                let error = outcomes.iter().map(|t| t.bound_used(got)).fold(f32::MAX, f32::min);
+                if outcomes.iter().any(|t| t.matches(got)) {
+                    report.worst_gather = report.worst_gather.max(error);
+                    continue;
+                }
+                differing += 1;
+                if first_difference.is_none() {
+                    let twin: Vec<String> = outcomes.iter().map(describe).collect();
+                    first_difference = Some(format!(
+                        "pixel ({}, {}) (object {}, triangle {}): GPU {:?}, twin {}",
+                        p.x,
+                        p.y,
+                        ids[0] - 1,
+                        ids[1],
+                        got.to_array(),
+                        twin.join(" or ")
+                    ));
+                }
+            }
+        }
+    }
+    if let Some(first) = first_difference {
+        panic!("gather ({name}): {differing} of {} pixels differ from the twin; first: {first}", report.pixels);
+    }
+    eprintln!("{name}: {report:?}");
+    // The twin must have checked nearly every pixel, or its slack would hide faults.
+    assert!(report.skipped_pixels * 100 <= report.pixels, "{name}: {report:?}");
+    report
+}
+
+/// The floor scene (checker texture: neighbouring texels differ, which a
+/// wrong filter cannot hide) seen from its camera, at two levels.
+#[test]
+fn gather_on_the_floor() {
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let mut levels = BTreeMap::new();
+    for mip_bias in [0.0, -2.5] {
+        let report = check(
+            &ctx,
+            Case {
+                name: if mip_bias == 0.0 { "floor" } else { "floor, mip bias -2.5" },
+                scene: &scene,
+                texture_sizes: vec![Some(2048)],
+                camera,
+                lights: lights.clone(),
+                width: 128,
+                height: 96,
+                mip_bias,
+                shade: false,
+            },
+        );
+        assert!(report.pixels > 5000, "{report:?}");
+        levels.extend(report.levels);
+    }
+    assert!(levels.len() >= 2, "{levels:?}");
+}
+
+/// The floor without its texture, shaded and gathered.
+#[test]
+fn shade_and_gather_on_the_untextured_floor() {
+    let ctx = common::gpu();
+    let (mut scene, camera, lights) = common::floor_scene();
+    scene.materials[0].base_color_texture = None;
+    scene.materials[0].base_color = glam::Vec4::new(0.8, 0.6, 0.4, 1.0);
+    assert_eq!(shade::unsupported(&scene, &lights), None);
+    let report = check(
+        &ctx,
+        Case {
+            name: "untextured floor",
+            scene: &scene,
+            texture_sizes: vec![Some(2048)],
+            camera,
+            lights,
+            width: 96,
+            height: 64,
+            mip_bias: 0.0,
+            shade: true,
+        },
+    );
+    assert!(report.texels > 10_000 && report.pixels > 3000, "{report:?}");
+}
+
+/// The atrium without textures: many objects, chart islands and levels.
+#[test]
+fn shade_and_gather_in_the_atrium() {
+    let ctx = common::gpu();
+    let mut scene = scene::load("atrium").unwrap();
+    for m in &mut scene.materials {
+        m.base_color_texture = None;
+        m.normal_texture = None;
+        m.metallic_roughness_texture = None;
+        m.emissive_texture = None;
+        m.occlusion_texture = None;
+    }
+    let (width, height) = (128, 72);
+    let camera = path::cameras_for_scene("atrium", &scene, width as f32 / height as f32)
+        .unwrap()
+        .select(path::CameraChoice::Path)
+        .unwrap()
+        .camera_at(0);
+    let spec: LightSpec = "small:8+big:1".parse().unwrap();
+    let lights = lights::build_lights(&spec, &scene.bounds(), &camera, width as f32 / height as f32, 7).unwrap();
+    assert_eq!(shade::unsupported(&scene, &lights), None);
+    let (scene, texture_sizes) = common::charted(&scene);
+    let report = check(
+        &ctx,
+        Case {
+            name: "atrium",
+            scene: &scene,
+            texture_sizes,
+            camera,
+            lights,
+            width,
+            height,
+            mip_bias: 0.0,
+            shade: true,
+        },
+    );
+    // Several levels, and island filtering at chart borders, were exercised.
+    assert!(report.levels.len() >= 3 && report.filtered_pixels > 20, "{report:?}");
+}
