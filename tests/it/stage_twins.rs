@@ -94,6 +94,7 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
     let params = MarkParams {
         stamp: gpu.stamp,
         reuse: o.reuse,
+        view_since: gpu.view_since,
         tile_size: o.tile_size,
         mip_bias: o.mip_bias,
         variable_rate: 0.0,
