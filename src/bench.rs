@@ -13,7 +13,7 @@ use crate::render::{Counters, FrameStats, PipelineReport, RenderError, Renderer}
 use crate::scene::{CameraPath, Light};
 
 /// Version of the [`RunReport`] schema (bump on any change of its fields).
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// Median, 95th percentile and mean of a series (in the series' unit: the
 /// key it is stored under says which, e.g. `_ms`).
@@ -89,13 +89,33 @@ pub struct FrameReport {
     pub counters: Counters,
 }
 
+/// Whether a pass belongs to the floor every pipeline pays on top of its
+/// shading: visibility (the compute rasterizer's `vis: ...` passes, the
+/// raster `visibility` or `depth prepass`) and the post-processing of the
+/// HDR frame (`exposure`, `bloom`, `tonemap`). What a frame costs over the
+/// floor is the pipeline's own work (for object space: marking, paging,
+/// triangle maps, shading and gathering), so a regression in any of its
+/// passes shows there.
+pub fn is_floor_pass(name: &str) -> bool {
+    name.starts_with("vis") || matches!(name, "depth prepass" | "exposure" | "bloom" | "tonemap")
+}
+
 /// Medians over the measured frames.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct RunSummary {
     pub gpu_frame_ms: Summary,
     pub cpu_frame_ms: Summary,
-    /// Per pass name.
+    /// Per pass name, over the frames that ran the pass (a pass that runs
+    /// in a few frames only, an atlas resize say, has few samples).
     pub gpu_passes_ms: BTreeMap<String, Summary>,
+    /// Per pass name, its GPU time summed over the measured frames and
+    /// divided by their count: what it adds to the average frame, whether
+    /// it runs every frame or in a few.
+    pub gpu_passes_per_frame_ms: BTreeMap<String, f64>,
+    /// Per frame, the GPU time of the floor passes ([`is_floor_pass`]).
+    pub floor_ms: Summary,
+    /// Per frame, the GPU frame time less its floor: the pipeline's own work.
+    pub over_floor_ms: Summary,
     /// Per counter name.
     pub counters: BTreeMap<String, Summary>,
     pub light_assignments: Summary,
@@ -243,6 +263,7 @@ pub fn summarise(frames: &[FrameReport]) -> RunSummary {
     let of = |f: &dyn Fn(&FrameReport) -> Option<f64>| Summary::of(&frames.iter().filter_map(f).collect::<Vec<_>>());
     let mut passes: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
     let mut counters: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    let floor = |f: &FrameReport| f.gpu_passes.iter().filter(|p| is_floor_pass(&p.pass)).map(|p| p.ms).sum::<f64>();
     for f in frames {
         for p in &f.gpu_passes {
             passes.entry(&p.pass).or_default().push(p.ms);
@@ -254,7 +275,13 @@ pub fn summarise(frames: &[FrameReport]) -> RunSummary {
     RunSummary {
         gpu_frame_ms: of(&|f| f.gpu_ms),
         cpu_frame_ms: of(&|f| Some(f.cpu_ms)),
+        gpu_passes_per_frame_ms: passes
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.iter().sum::<f64>() / frames.len() as f64))
+            .collect(),
         gpu_passes_ms: passes.into_iter().map(|(k, v)| (k.to_string(), Summary::of(&v))).collect(),
+        floor_ms: of(&|f| f.gpu_ms.map(|_| floor(f))),
+        over_floor_ms: of(&|f| f.gpu_ms.map(|gpu| gpu - floor(f))),
         counters: counters.into_iter().map(|(k, v)| (k.to_string(), Summary::of(&v))).collect(),
         light_assignments: of(&|f| Some(f.light_assignments as f64)),
     }
@@ -292,5 +319,37 @@ mod tests {
         assert_eq!(s.gpu_passes_ms["mark"].median, 0.6);
         assert_eq!(s.counters["visible_tiles"].median, 20.0);
         assert_eq!(s.counters["visible_tiles"].samples, 3);
+    }
+
+    /// The floor is the visibility and post passes of each frame; what is
+    /// over it, the rest of the frame; a pass run in one frame of two adds
+    /// half its time to the average frame.
+    #[test]
+    fn the_floor_and_what_a_frame_costs_over_it() {
+        let pass = |pass: &str, ms: f64| PassTime { pass: pass.into(), ms };
+        let frame = |gpu: f64, passes: Vec<PassTime>| FrameReport {
+            frame: 0,
+            path_frame: 0,
+            cpu_ms: 1.0,
+            visible_objects: 1,
+            light_assignments: 0,
+            gpu_ms: Some(gpu),
+            gpu_passes: passes,
+            counters: Counters::default(),
+        };
+        let frames = [
+            frame(2.0, vec![pass("vis: raster", 0.5), pass("mark", 0.25), pass("tonemap", 0.25), pass("shade", 1.0)]),
+            frame(1.5, vec![pass("vis: raster", 0.75), pass("mark", 0.25), pass("tonemap", 0.25)]),
+        ];
+        let s = summarise(&frames);
+        assert_eq!((s.floor_ms.samples, s.floor_ms.mean), (2, 0.875));
+        assert_eq!(s.over_floor_ms.mean, 0.875);
+        assert_eq!(s.over_floor_ms.p95, 1.25);
+        assert_eq!(s.gpu_passes_per_frame_ms["shade"], 0.5);
+        assert_eq!(s.gpu_passes_ms["shade"].median, 1.0);
+        assert!(["vis: clear", "visibility", "depth prepass", "bloom", "exposure"].iter().all(|p| is_floor_pass(p)));
+        assert!(
+            !["mark", "gather", "tiled lighting", "forward shade", "triangle maps"].iter().any(|p| is_floor_pass(p))
+        );
     }
 }

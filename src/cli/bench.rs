@@ -82,8 +82,15 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
         summary.cpu_frame_ms.median,
         a.out.display()
     );
+    println!(
+        "  floor (visibility and post) median {:.3} ms; the pipeline's own passes over it: median {:.3} ms, p95 {:.3} ms",
+        summary.floor_ms.median, summary.over_floor_ms.median, summary.over_floor_ms.p95
+    );
+    println!("  {:<26} {:>9} {:>9} {:>10} {:>7}", "pass", "median", "p95", "per frame", "frames");
     for (name, s) in &summary.gpu_passes_ms {
-        println!("  {name:<16} median {:8.3} ms  p95 {:8.3} ms", s.median, s.p95);
+        let floor = if shadespace::bench::is_floor_pass(name) { " (floor)" } else { "" };
+        let per_frame = summary.gpu_passes_per_frame_ms[name];
+        println!("  {name:<26} {:9.3} {:9.3} {per_frame:10.3} {:7}{floor}", s.median, s.p95, s.samples);
     }
     Ok(())
 }
