@@ -65,15 +65,20 @@ fn check_common(dir: &Path, options: &ExperimentOptions, summary: &Value) {
     assert!(report.contains(&options.command), "the report does not state the command");
     assert!(report.contains(GIT_COMMIT) && GIT_COMMIT.len() >= 40, "the report does not state the commit");
     assert!(report.contains("Differences from the study"));
-    // Every figure the report embeds exists as a valid PNG, with its SVG beside it.
+    // Every figure the report embeds exists as a whole SVG, with a valid PNG beside it.
     let figures: Vec<&str> = report.split("](").skip(1).filter_map(|s| s.split(')').next()).collect();
-    let pngs: Vec<&&str> = figures.iter().filter(|f| f.ends_with(".png")).collect();
-    assert!(!pngs.is_empty(), "no figure in the report");
-    for png in pngs {
-        let image = image::open(dir.join(png)).unwrap_or_else(|e| panic!("{png}: {e}"));
+    let svgs: Vec<&&str> = figures.iter().filter(|f| f.ends_with(".svg")).collect();
+    assert!(!svgs.is_empty(), "no figure in the report");
+    assert!(!figures.iter().any(|f| f.ends_with(".png")), "the report links PNGs, which docs/ does not hold");
+    for svg_path in svgs {
+        let svg = std::fs::read_to_string(dir.join(svg_path)).unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+            "{svg_path}: SVG is not a whole document"
+        );
+        let png = Path::new(svg_path).with_extension("png");
+        let image = image::open(dir.join(&png)).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
         assert!(image.width() > 100 && image.height() > 100);
-        let svg = std::fs::read_to_string(dir.join(Path::new(png).with_extension("svg"))).unwrap();
-        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "{png}: SVG is not a whole document");
     }
 }
 

@@ -12,6 +12,7 @@ mod cli;
 mod compute_visibility;
 mod corpus;
 mod deferred;
+mod doc_links;
 mod experiments;
 mod exposure;
 mod forward;
