@@ -43,7 +43,7 @@ impl ShaderSource {
 
 /// Modules that other shaders `#import`, in dependency order (after the
 /// generated `shadespace::contract`).
-const SHARED: &[ShaderSource] = &[
+pub const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/shadows.wgsl", include_str!("shared/shadows.wgsl")),
     ShaderSource::new("shared/lighting.wgsl", include_str!("shared/lighting.wgsl")),
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),

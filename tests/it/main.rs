@@ -24,6 +24,7 @@ mod light_sets;
 mod mark_twin;
 mod materials;
 mod objectspace;
+mod reference;
 mod seams;
 mod shadows;
 mod sponza;
