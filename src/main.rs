@@ -319,6 +319,12 @@ struct SceneArgs {
     /// counters. Adds atomics: for profiling, not for timing.
     #[arg(long)]
     count_visibility: bool,
+    // --- Material override (src/scene/gloss.rs) ---
+    /// `default`: the scene's materials; `high`: every material with Phong
+    /// exponent 1500, GGX roughness 0.05 and specular strength at least 1, to
+    /// provoke specular aliasing (normal maps: the file's or --textures detailed).
+    #[arg(long, value_enum, default_value = "default")]
+    gloss: scene::gloss::Gloss,
     #[command(flatten)]
     free_camera: FreeCameraArgs,
     #[command(flatten)]
@@ -752,6 +758,7 @@ fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     if a.textures == TextureChoice::Detailed {
         scene::detail::add_detailed_textures(&mut scene);
     }
+    scene::gloss::apply(&mut scene, a.gloss);
     for name in &a.objectspace.forward_only {
         let Some(o) = scene.objects.iter_mut().find(|o| &o.name == name) else {
             let known: Vec<_> = scene.objects.iter().map(|o| o.name.as_str()).collect();
