@@ -114,6 +114,8 @@ enum ExperimentChoice {
     Lights,
     /// Object space (reuse 1-4, variable rate) against forward and the fastest conventional pipeline.
     Speedup,
+    /// Every pipeline's error and flicker against supersampled references, against its cost (Pareto front).
+    Quality,
 }
 
 #[derive(Args)]
@@ -1139,6 +1141,7 @@ fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
         ExperimentChoice::Reuse => ExperimentName::Reuse,
         ExperimentChoice::Lights => ExperimentName::Lights,
         ExperimentChoice::Speedup => ExperimentName::Speedup,
+        ExperimentChoice::Quality => ExperimentName::Quality,
     };
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("experiment-{}", name.name())));
     if out.exists() && !out.is_dir() {

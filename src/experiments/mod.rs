@@ -8,7 +8,8 @@
 //! ([`marking::Variant`]) and tile size at once ([`census::Census`]).
 //!
 //! The timing studies (`lights`, `speedup`) measure GPU frame times of
-//! pipelines over light sets with `bench`'s run loop ([`timing::Bench`]).
+//! pipelines over light sets with `bench`'s run loop ([`timing::Bench`]);
+//! `quality` also judges their images against supersampled references.
 
 pub mod census;
 pub mod lights;
@@ -16,6 +17,7 @@ pub mod marking;
 pub mod overlap;
 pub mod overshading;
 pub mod plot;
+pub mod quality;
 pub mod report;
 pub mod reuse;
 pub mod scenarios;
@@ -60,6 +62,8 @@ pub enum ExperimentName {
     Lights,
     /// Object space's speed-up and image error against conventional shading.
     Speedup,
+    /// Every pipeline's error and flicker against supersampled references, and its cost.
+    Quality,
 }
 
 impl ExperimentName {
@@ -70,13 +74,14 @@ impl ExperimentName {
             Self::Reuse => "reuse",
             Self::Lights => "lights",
             Self::Speedup => "speedup",
+            Self::Quality => "quality",
         }
     }
 
     /// Whether it measures frame times (its grid is a [`TimingGrid`], its
     /// progress counts frames) rather than tiles (a [`Grid`], views).
     pub fn is_timing(self) -> bool {
-        matches!(self, Self::Lights | Self::Speedup)
+        matches!(self, Self::Lights | Self::Speedup | Self::Quality)
     }
 
     /// The timing grid of a timing study, full or quick; `None` for the tile studies.
@@ -84,6 +89,7 @@ impl ExperimentName {
         match self {
             Self::Lights => Some(lights::grid(quick)),
             Self::Speedup => Some(speedup::grid(quick)),
+            Self::Quality => Some(quality::grid(quick)),
             Self::Overshading | Self::Overlap | Self::Reuse => None,
         }
     }
@@ -299,6 +305,7 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
         ExperimentName::Speedup => {
             timing_study(ctx, options, &scene, (output, progress), speedup::run, speedup::differences)?
         }
+        ExperimentName::Quality => quality::study(ctx, options, &scene, output, progress)?,
     };
     let findings = outcome.findings;
     let headline = findings.results.get("headline").and_then(|h| h.as_str()).unwrap_or_default().to_string();

@@ -428,3 +428,55 @@ fn bad_experiment_input_names_the_flag_or_file() {
     let (code, _) = run_cli(&["experiment", "speed"]);
     assert_eq!(code, 2);
 }
+
+/// The columns of `quality`'s `data.csv`.
+const QUALITY_COLUMNS: [&str; 13] = [
+    "textures",
+    "gloss",
+    "lights_spec",
+    "msaa",
+    "pipeline",
+    "config",
+    "frames",
+    "median_ms",
+    "p95_ms",
+    "flip_mean",
+    "psnr_db",
+    "flicker_mean",
+    "flicker_sum",
+];
+
+#[test]
+fn quality_quick() {
+    let start = std::time::Instant::now();
+    let (dir, summary) = run_quick(ExperimentName::Quality, "atrium", &[]);
+    eprintln!("quality quick: {:.1} s", start.elapsed().as_secs_f64());
+    let rows = read_csv(dir.path(), &QUALITY_COLUMNS);
+    let grid = ExperimentName::Quality.timing_grid(true).unwrap();
+    let cells = experiments::quality::cells(&grid, true);
+    assert_eq!(rows.len(), cells.len());
+    for r in &rows {
+        assert_eq!(num(r, "frames"), f64::from(grid.frames), "{r:?}");
+        assert!(num(r, "median_ms") > 0.0, "{r:?}");
+        // Every pipeline is near the reference, none equal to it (one sample aliases).
+        let flip = num(r, "flip_mean");
+        assert!(flip > 0.0 && flip < 0.15, "{r:?}");
+        assert!(num(r, "psnr_db") > 15.0, "{r:?}");
+        let flicker = num(r, "flicker_mean");
+        assert!(flicker >= 0.0 && (num(r, "flicker_sum") - flicker * f64::from(grid.frames - 1)).abs() < 1e-6, "{r:?}");
+    }
+    // The gloss override reaches the pipelines: forward's error changes with it.
+    let forward = |gloss: &str| rows.iter().find(|r| r["config"] == "forward" && r["gloss"] == gloss).unwrap();
+    assert_ne!(forward("default")["flip_mean"], forward("high")["flip_mean"]);
+    for group in summary["results"]["pareto"].as_array().unwrap() {
+        let front = group["front"].as_array().unwrap();
+        assert!(!front.is_empty(), "{group}");
+        // Cheapest first, each strictly less wrong than the one before.
+        for pair in front.windows(2) {
+            assert!(pair[0]["cost_ms"].as_f64() <= pair[1]["cost_ms"].as_f64(), "{group}");
+            assert!(pair[0]["error"].as_f64() > pair[1]["error"].as_f64(), "{group}");
+        }
+    }
+    let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(report.contains("Cheapest configuration per error level"), "{report}");
+}
