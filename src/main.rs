@@ -116,6 +116,8 @@ enum ExperimentChoice {
     Speedup,
     /// Every pipeline's error and flicker against supersampled references, against its cost (Pareto front).
     Quality,
+    /// Merge shards (`--shard K/N` runs) given as DIR... into --out: the summary, plots and report of one run.
+    Merge,
 }
 
 #[derive(Args)]
@@ -123,6 +125,14 @@ struct ExperimentArgs {
     /// The experiment to run.
     #[arg(value_enum)]
     name: ExperimentChoice,
+    // --- Sharded sweeps (src/experiments/quality.rs) ---
+    /// `merge`: the shard folders to merge.
+    #[arg(value_name = "DIR")]
+    shards: Vec<PathBuf>,
+    /// Run only the K-th of N disjoint parts of the grid (1 <= K <= N;
+    /// `quality` only); `experiment merge DIR...` joins the parts.
+    #[arg(long, value_name = "K/N", value_parser = shadespace::experiments::quality::Shard::from_str)]
+    shard: Option<shadespace::experiments::quality::Shard>,
     /// `atrium` (default), `voxels`, or a path (see `render --help`), e.g.
     /// ../shared/scenes/sponza-thesis.
     #[arg(long, default_value = "atrium")]
@@ -1142,7 +1152,15 @@ fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
         ExperimentChoice::Lights => ExperimentName::Lights,
         ExperimentChoice::Speedup => ExperimentName::Speedup,
         ExperimentChoice::Quality => ExperimentName::Quality,
+        ExperimentChoice::Merge => return merge_shards(&a),
     };
+    if !a.shards.is_empty() {
+        let dirs: Vec<String> = a.shards.iter().map(|d| d.display().to_string()).collect();
+        return input(Err(anyhow::anyhow!(
+            "unexpected arguments {}: only `experiment merge` takes folders",
+            dirs.join(" ")
+        )));
+    }
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("experiment-{}", name.name())));
     if out.exists() && !out.is_dir() {
         return input(Err(anyhow::anyhow!("--out {}: exists and is not a folder", out.display())));
@@ -1170,6 +1188,7 @@ fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
         out,
         command: command_line(),
         chart_cache: None,
+        shard: a.shard,
     };
     let ctx = open_gpu(&a.gpu)?;
     let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
@@ -1188,6 +1207,22 @@ fn experiment(a: ExperimentArgs) -> Result<(), Failure> {
     };
     bar.finish_and_clear();
     println!("{}: {} -> {}", name.name(), written.headline, written.report.display());
+    Ok(())
+}
+
+// --- Sharded sweeps (src/experiments/quality.rs) ---
+
+/// `experiment merge DIR...`: the shards' rows as one run's outputs in --out.
+fn merge_shards(a: &ExperimentArgs) -> Result<(), Failure> {
+    if a.shards.is_empty() {
+        return input(Err(anyhow::anyhow!("experiment merge: name the shard folders (DIR...)")));
+    }
+    let out = a.out.clone().unwrap_or_else(|| PathBuf::from("experiment-quality"));
+    if out.exists() && !out.is_dir() {
+        return input(Err(anyhow::anyhow!("--out {}: exists and is not a folder", out.display())));
+    }
+    let written = input(shadespace::experiments::quality::merge(&a.shards, &out, &command_line()))?;
+    println!("quality (merged): {} -> {}", written.headline, written.report.display());
     Ok(())
 }
 

@@ -171,6 +171,8 @@ pub struct ExperimentOptions {
     pub command: String,
     /// Where generated charts are cached (`None`: `$SHADESPACE_CACHE_DIR` or the default).
     pub chart_cache: Option<PathBuf>,
+    /// Measure only this part of the grid (`--shard K/N`; `quality` only).
+    pub shard: Option<quality::Shard>,
 }
 
 /// Why an experiment failed.
@@ -194,6 +196,8 @@ pub enum ExperimentError {
     NoTimestamps(String),
     #[error("experiment {0} needs a timing grid")]
     NoTimingGrid(&'static str),
+    #[error("--shard: experiment {0} is not sharded (only quality is)")]
+    NotSharded(&'static str),
 }
 
 impl ExperimentError {
@@ -202,7 +206,7 @@ impl ExperimentError {
     pub fn is_input(&self) -> bool {
         match self {
             Self::Scene(StudySceneError::Charts(_)) => false,
-            Self::Scene(_) | Self::Cameras(_) | Self::Output { .. } | Self::Lights(_) => true,
+            Self::Scene(_) | Self::Cameras(_) | Self::Output { .. } | Self::Lights(_) | Self::NotSharded(_) => true,
             Self::Atlas(_) | Self::Render(_) | Self::Plot(_) | Self::NoTimestamps(_) | Self::NoTimingGrid(_) => false,
         }
     }
@@ -288,6 +292,9 @@ struct Outcome {
 
 /// Runs an experiment and writes its outputs into `options.out`.
 pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar) -> Result<Written, ExperimentError> {
+    if options.shard.is_some() && options.name != ExperimentName::Quality {
+        return Err(ExperimentError::NotSharded(options.name.name()));
+    }
     let out = options.out.as_path();
     std::fs::create_dir_all(out).map_err(|e| ExperimentError::output(out, format!("cannot create the folder: {e}")))?;
     let provenance = Provenance::new(ctx, &options.command);

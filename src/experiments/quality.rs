@@ -40,12 +40,17 @@ pub const REFERENCE_SAMPLES: u32 = 4;
 /// The timing side of the grid (size, frames, light sets, the pipelines):
 /// every pipeline, object space with reuse 2 and variable rate 1; the
 /// quality axes are in [`axes`]. Full: 1920x1080, 30 shadowed lights, 4
-/// warm-up and 30 measured consecutive path frames. Quick: 96x54, 8 small
-/// lights, 1 + 3 frames.
+/// warm-up and 30 measured consecutive path frames. Quick: forward,
+/// deferred-compute and object space only, 96x54, 8 small lights, 1 + 3 frames.
 pub fn grid(quick: bool) -> TimingGrid {
     let mut shadings = Shading::pipelines();
     shadings.push(Shading::ObjectSpace { reuse: 2, variable_rate: 0.0 });
     shadings.push(Shading::ObjectSpace { reuse: 1, variable_rate: 1.0 });
+    if quick {
+        // Each cell builds a renderer (shaders compiled by the CPU driver):
+        // forward, the compute-lit baseline and object space keep CI short.
+        shadings = vec![Shading::Forward, Shading::DeferredCompute, Shading::OBJECT_SPACE];
+    }
     let (sweep, grid) = if quick {
         let sweep = Sweep { scenario: Scenario::Small, counts: vec![8] };
         (sweep, TimingGrid { width: 96, height: 54, warmup: 1, frames: 3, ..TimingGrid::new(true, vec![], vec![]) })
@@ -115,12 +120,14 @@ pub struct Axes {
 }
 
 /// The configurations of a grid: its shadings, then object space at 30 Hz
-/// (reuse 2, spread over the frames) and with mip bias 1.
-pub fn configs(grid: &TimingGrid) -> Vec<Config> {
+/// (reuse 2, spread over the frames) and, but in quick mode, with mip bias 1.
+pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
     let mut all: Vec<Config> = grid.shadings.iter().map(|&s| Config::plain(s)).collect();
     if grid.shadings.iter().any(|s| !s.is_conventional()) {
         all.push(Config { spread: true, ..Config::plain(Shading::ObjectSpace { reuse: 2, variable_rate: 0.0 }) });
-        all.push(Config { mip_bias: 1.0, ..Config::plain(Shading::OBJECT_SPACE) });
+        if !quick {
+            all.push(Config { mip_bias: 1.0, ..Config::plain(Shading::OBJECT_SPACE) });
+        }
     }
     all
 }
@@ -131,7 +138,7 @@ pub fn axes(grid: &TimingGrid, quick: bool) -> Axes {
         textures: if quick { vec!["detailed"] } else { vec!["file", "detailed"] },
         gloss: vec![Gloss::Default, Gloss::High],
         msaa: vec![1],
-        configs: configs(grid).iter().map(Config::label).collect(),
+        configs: configs(grid, quick).iter().map(Config::label).collect(),
     }
 }
 
@@ -155,7 +162,7 @@ pub fn cells(grid: &TimingGrid, quick: bool) -> Vec<Cell> {
             for sweep in &grid.sweeps {
                 for &lights in &sweep.counts {
                     for &msaa in &a.msaa {
-                        for config in configs(grid) {
+                        for config in configs(grid, quick) {
                             out.push(Cell { textures, gloss, scenario: sweep.scenario, lights, msaa, config });
                         }
                     }
@@ -169,6 +176,8 @@ pub fn cells(grid: &TimingGrid, quick: bool) -> Vec<Cell> {
 /// A row of `data.csv`: one cell measured along the path.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Row {
+    /// The cell's index in the grid's order ([`cells`]): shards are merged back in it.
+    pub cell: usize,
     pub textures: String,
     pub gloss: String,
     pub lights_spec: String,
@@ -214,7 +223,7 @@ pub fn measure(
     options: &ExperimentOptions,
     scene: &StudyScene,
     grid: &TimingGrid,
-    cells: &[Cell],
+    cells: &[(usize, Cell)],
     progress: &indicatif::ProgressBar,
 ) -> Result<Vec<Row>, ExperimentError> {
     let aspect = grid.width as f32 / grid.height as f32;
@@ -232,7 +241,7 @@ pub fn measure(
     // Cells sharing a scene variant and light set share its references.
     let mut variants: BTreeMap<(&str, &str), Variant> = BTreeMap::new();
     let mut reference_images: BTreeMap<(&str, &str, String), Vec<RgbaImage>> = BTreeMap::new();
-    for cell in cells {
+    for (index, cell) in cells {
         let variant = variants
             .entry((cell.textures, cell.gloss.name()))
             .or_insert_with(|| Variant::new(scene, cell.textures, cell.gloss));
@@ -284,6 +293,7 @@ pub fn measure(
         times.sort_by(f64::total_cmp);
         let q = path_quality(&images, &reference_images[&key]);
         rows.push(Row {
+            cell: *index,
             textures: cell.textures.to_string(),
             gloss: cell.gloss.name().to_string(),
             lights_spec: spec.to_string(),
@@ -346,7 +356,8 @@ fn groups(rows: &[Row]) -> Vec<((String, String, String, u32), Vec<&Row>)> {
 
 /// The tables, figures and results of measured rows (a whole run's, or
 /// shards' merged).
-pub fn summarize(grid: &TimingGrid, rows: &[Row], output: Output) -> Result<Findings, ExperimentError> {
+pub fn summarize(setup: &Setup, rows: &[Row], output: Output) -> Result<Findings, ExperimentError> {
+    let grid = setup;
     let mut sections = Vec::new();
     let mut fronts = Vec::new();
     let mut headline = Vec::new();
@@ -436,6 +447,84 @@ pub fn summarize(grid: &TimingGrid, rows: &[Row], output: Output) -> Result<Find
     })
 }
 
+/// What a run measured, as `summary.json` keeps it (`quality`): enough to
+/// summarize its rows again, so that shards can be merged without the scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Setup {
+    pub scene: String,
+    pub objects: usize,
+    pub width: u32,
+    pub height: u32,
+    pub first_frame: u32,
+    pub warmup: u32,
+    pub frames: u32,
+    pub seed: u64,
+    pub lights: Vec<String>,
+    pub textures: Vec<String>,
+    pub gloss: Vec<String>,
+    pub msaa: Vec<u32>,
+    pub configs: Vec<String>,
+    /// Cells of the whole grid (every shard's together).
+    pub cells: usize,
+    pub quick: bool,
+    pub visibility: String,
+}
+
+impl Setup {
+    fn new(grid: &TimingGrid, quick: bool, scene: &StudyScene, visibility: VisibilityMethod) -> Self {
+        let axes = axes(grid, quick);
+        Self {
+            scene: scene.name.clone(),
+            objects: scene.render.objects.len(),
+            width: grid.width,
+            height: grid.height,
+            first_frame: grid.first_frame,
+            warmup: grid.warmup,
+            frames: grid.frames,
+            seed: grid.seed,
+            lights: grid.sweeps.iter().flat_map(|s| s.counts.iter().map(|&n| s.scenario.spec(n).to_string())).collect(),
+            textures: axes.textures.iter().map(|s| s.to_string()).collect(),
+            gloss: axes.gloss.iter().map(|g| g.name().to_string()).collect(),
+            msaa: axes.msaa,
+            configs: axes.configs,
+            cells: cells(grid, quick).len(),
+            quick,
+            visibility: visibility.name().to_string(),
+        }
+    }
+}
+
+/// Which part of a grid a run measures: shard `index` (1-based) of `count`
+/// takes every `count`-th cell from cell `index - 1`, so that the shards
+/// are disjoint, cover the grid, and each gets a mix of pipelines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    pub index: u32,
+    pub count: u32,
+}
+
+impl Shard {
+    /// Whether cell `i` of the grid belongs to this shard.
+    pub fn holds(self, i: usize) -> bool {
+        i % self.count as usize == (self.index - 1) as usize
+    }
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+
+    /// `K/N`, 1 <= K <= N.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("'{s}' is not K/N with 1 <= K <= N (the K-th of N parts)");
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count) = (k.trim().parse::<u32>().map_err(|_| bad())?, n.trim().parse::<u32>().map_err(|_| bad())?);
+        if index == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Self { index, count })
+    }
+}
+
 /// `shadespace experiment quality`: measures the grid's cells (all, or the
 /// shard `options` names) and writes `data.csv`, the figures and the findings.
 pub(super) fn study(
@@ -446,41 +535,48 @@ pub(super) fn study(
     progress: &indicatif::ProgressBar,
 ) -> Result<Outcome, ExperimentError> {
     let grid = options.timing.as_ref().ok_or(ExperimentError::NoTimingGrid("quality"))?;
-    let cells = cells(grid, options.quick);
+    let cells: Vec<(usize, Cell)> = cells(grid, options.quick)
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| options.shard.is_none_or(|s| s.holds(*i)))
+        .collect();
     progress.set_length(cells.len() as u64 * u64::from(grid.warmup + grid.frames));
     let rows = measure(ctx, options, scene, grid, &cells, progress)?;
     output.write_rows(&rows)?;
-    let findings = summarize(grid, &rows, output)?;
-    Ok(outcome(grid, options.quick, scene, VisibilityMethod::preferred(ctx.device.features()), findings))
+    let setup = Setup::new(grid, options.quick, scene, VisibilityMethod::preferred(ctx.device.features()));
+    let findings = summarize(&setup, &rows, output)?;
+    let mut outcome = outcome(&setup, findings);
+    if let serde_json::Value::Object(summary) = &mut outcome.summary {
+        summary.insert("grid".into(), serde_json::json!(grid));
+        if let Some(shard) = options.shard {
+            summary.insert("shard".into(), serde_json::json!(shard));
+        }
+    }
+    Ok(outcome)
 }
 
-/// The summary keys, setup and differences of a run (or a merge) of `grid`.
-fn outcome(
-    grid: &TimingGrid,
-    quick: bool,
-    scene: &StudyScene,
-    visibility: VisibilityMethod,
-    findings: Findings,
-) -> Outcome {
-    let axes = axes(grid, quick);
-    let sweeps: Vec<String> = grid.sweeps.iter().map(|s| format!("{} at {:?}", s.scenario, s.counts)).collect();
+/// The summary keys, setup and differences of a run (or a merge).
+fn outcome(setup: &Setup, findings: Findings) -> Outcome {
     let text = format!(
-        "Scene `{}` ({} objects), {}x{}, {}; lights {} (seed {}); textures {:?}; gloss {:?}; samples per pixel \
-         {:?}. Configurations: {}. References: forward at {REFERENCE_SAMPLES}x{REFERENCE_SAMPLES} sub-pixel \
-         offsets per pixel, averaged in linear HDR, exposure 1 (as every configuration). Visibility of object \
-         space and deferred-compute: {}.\n",
-        scene.name,
-        scene.render.objects.len(),
-        grid.width,
-        grid.height,
-        if quick { "quick mode (a reduced grid)" } else { "the full grid" },
-        sweeps.join("; "),
-        grid.seed,
-        axes.textures,
-        axes.gloss.iter().map(|g| g.name()).collect::<Vec<_>>(),
-        axes.msaa,
-        axes.configs.join(", "),
-        visibility.name(),
+        "Scene `{}` ({} objects), {}x{}, {}; path frames {} to {} ({} warm-up); lights {} (seed {}); textures \
+         {:?}; gloss {:?}; samples per pixel {:?}. Configurations: {}. References: forward at \
+         {REFERENCE_SAMPLES}x{REFERENCE_SAMPLES} sub-pixel offsets per pixel, averaged in linear HDR, exposure 1 \
+         (as every configuration). Visibility of object space and deferred-compute: {}.\n",
+        setup.scene,
+        setup.objects,
+        setup.width,
+        setup.height,
+        if setup.quick { "quick mode (a reduced grid)" } else { "the full grid" },
+        setup.first_frame,
+        setup.first_frame + setup.warmup + setup.frames - 1,
+        setup.warmup,
+        setup.lights.join(", "),
+        setup.seed,
+        setup.textures,
+        setup.gloss,
+        setup.msaa,
+        setup.configs.join(", "),
+        setup.visibility,
     );
     let items = vec![
         "MSAA: the pipelines have no MSAA yet; the sample count is an axis of the grid with 1 only.".to_string(),
@@ -494,14 +590,104 @@ fn outcome(
     ];
     Outcome {
         summary: serde_json::json!({
-            "grid": grid,
-            "axes": axes,
+            "quality": setup,
             "reference_samples": REFERENCE_SAMPLES,
-            "visibility": visibility.name(),
+            "visibility": setup.visibility,
         }),
         sections: vec![Section { heading: "Setup".into(), text, ..Default::default() }, differences(&items)],
         findings,
     }
+}
+
+/// Why shards cannot be merged.
+fn merge_error(path: &std::path::Path, message: impl std::fmt::Display) -> ExperimentError {
+    ExperimentError::Output { path: path.to_path_buf(), message: message.to_string() }
+}
+
+/// `shadespace experiment merge DIR...`: the shards' rows in the grid's
+/// order, summarized, plotted and reported into `out` as one run would be.
+/// Every shard must be of one run's grid, each of 1..=N exactly once.
+pub fn merge(
+    dirs: &[std::path::PathBuf],
+    out: &std::path::Path,
+    command: &str,
+) -> Result<super::Written, ExperimentError> {
+    use std::path::Path;
+    let read_summary = |dir: &Path| -> Result<serde_json::Value, ExperimentError> {
+        let path = dir.join("summary.json");
+        let text = std::fs::read_to_string(&path).map_err(|e| merge_error(&path, e))?;
+        serde_json::from_str(&text).map_err(|e| merge_error(&path, e))
+    };
+    let Some(first_dir) = dirs.first() else {
+        return Err(merge_error(out, "no shard folders to merge"));
+    };
+    let first = read_summary(first_dir)?;
+    let setup: Setup = serde_json::from_value(first["quality"].clone())
+        .map_err(|e| merge_error(&first_dir.join("summary.json"), format!("not a quality run: {e}")))?;
+    let mut seen = Vec::new();
+    let mut rows: Vec<Row> = Vec::new();
+    for dir in dirs {
+        let summary = read_summary(dir)?;
+        let path = dir.join("summary.json");
+        let shard: Shard = serde_json::from_value(summary["shard"].clone())
+            .map_err(|_| merge_error(&path, "not a shard (run with --shard K/N)"))?;
+        if summary["quality"] != first["quality"]
+            || summary["grid"] != first["grid"]
+            || summary["scene_spec"] != first["scene_spec"]
+        {
+            return Err(merge_error(&path, format!("a shard of another grid than {}'s", first_dir.display())));
+        }
+        seen.push(shard);
+        let csv_path = dir.join("data.csv");
+        let mut reader = csv::Reader::from_path(&csv_path).map_err(|e| merge_error(&csv_path, e))?;
+        for row in reader.deserialize() {
+            rows.push(row.map_err(|e| merge_error(&csv_path, e))?);
+        }
+    }
+    let count = seen[0].count;
+    let mut indices: Vec<u32> = seen.iter().map(|s| s.index).collect();
+    indices.sort_unstable();
+    if seen.iter().any(|s| s.count != count) || indices != (1..=count).collect::<Vec<_>>() {
+        let got: Vec<String> = seen.iter().map(|s| format!("{}/{}", s.index, s.count)).collect();
+        return Err(merge_error(
+            first_dir,
+            format!("the shards are {}: each of 1..={count} of {count} once is needed", got.join(", ")),
+        ));
+    }
+    rows.sort_by_key(|r| r.cell);
+    if rows.len() != setup.cells || rows.iter().enumerate().any(|(i, r)| r.cell != i) {
+        return Err(merge_error(
+            first_dir,
+            format!("the shards hold {} rows of a grid of {} cells", rows.len(), setup.cells),
+        ));
+    }
+    std::fs::create_dir_all(out).map_err(|e| merge_error(out, format!("cannot create the folder: {e}")))?;
+    let output = Output { dir: out };
+    output.write_rows(&rows)?;
+    let findings = summarize(&setup, &rows, output)?;
+    let outcome = outcome(&setup, findings);
+    let mut provenance: super::report::Provenance = serde_json::from_value(first["provenance"].clone())
+        .map_err(|e| merge_error(&first_dir.join("summary.json"), e))?;
+    provenance.command = command.to_string();
+    provenance.date = super::report::utc_now();
+    let headline = outcome.findings.results["headline"].as_str().unwrap_or_default().to_string();
+    let mut summary = first;
+    if let Some(all) = summary.as_object_mut() {
+        all.remove("shard");
+        all.insert("provenance".into(), serde_json::json!(provenance));
+        all.insert("results".into(), outcome.findings.results.clone());
+        all.insert("merged_from".into(), serde_json::json!(dirs));
+    }
+    let summary_path = out.join("summary.json");
+    let text = serde_json::to_string_pretty(&summary).expect("the summary serializes");
+    std::fs::write(&summary_path, text).map_err(|e| merge_error(&summary_path, e))?;
+    let mut sections = outcome.sections;
+    sections.extend(outcome.findings.sections);
+    let title = format!("Experiment `quality`: {}", setup.scene);
+    let report_path = out.join("report.md");
+    std::fs::write(&report_path, super::report::markdown(&title, &provenance, &sections))
+        .map_err(|e| merge_error(&report_path, e))?;
+    Ok(super::Written { folder: out.to_path_buf(), report: report_path, headline })
 }
 
 #[cfg(test)]
@@ -524,8 +710,8 @@ mod tests {
 
     #[test]
     fn configurations_and_cells_cover_the_axes() {
-        let grid = grid(true);
-        let labels: Vec<String> = configs(&grid).iter().map(Config::label).collect();
+        let full = grid(false);
+        let labels: Vec<String> = configs(&full, false).iter().map(Config::label).collect();
         assert_eq!(
             labels,
             [
@@ -541,9 +727,14 @@ mod tests {
                 "objectspace-bias1"
             ]
         );
-        let cells = cells(&grid, true);
-        assert_eq!(cells.len(), labels.len() * 2, "quick: detailed textures, two gloss settings, one light set");
+        let all = cells(&full, false);
+        assert_eq!(all.len(), labels.len() * 2 * 2, "full: two textures, two gloss settings, one light set");
+        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 5 * 4);
+        let quick = grid(true);
+        let labels: Vec<String> = configs(&quick, true).iter().map(Config::label).collect();
+        assert_eq!(labels, ["forward", "deferred-compute", "objectspace", "objectspace-hz30"]);
+        let cells = cells(&quick, true);
+        assert_eq!(cells.len(), 4 * 2, "quick: detailed textures, two gloss settings, one light set");
         assert!(cells.iter().all(|c| c.msaa == 1 && c.textures == "detailed"));
-        assert_eq!(cells.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 5 * 2);
     }
 }

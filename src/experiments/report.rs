@@ -14,7 +14,7 @@ use crate::gpu::GpuContext;
 pub const GIT_COMMIT: &str = env!("SHADESPACE_GIT_COMMIT");
 
 /// Where a run's figures came from.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Provenance {
     pub adapter: String,
     pub backend: String,
@@ -42,7 +42,7 @@ impl Provenance {
 }
 
 /// The current UTC time as `YYYY-MM-DDTHH:MM:SSZ`.
-fn utc_now() -> String {
+pub(crate) fn utc_now() -> String {
     let secs = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs());
     utc_from_unix(secs)
 }

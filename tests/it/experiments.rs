@@ -25,22 +25,31 @@ fn chart_cache() -> PathBuf {
     Path::new(env!("CARGO_TARGET_TMPDIR")).join("charts")
 }
 
-/// Runs `name` in quick mode on `scene` into a fresh folder; returns the folder.
-fn run_quick(name: ExperimentName, scene: &str, exclude: &[&str]) -> (tempfile::TempDir, Value) {
-    let ctx = common::gpu();
-    let dir = tempfile::tempdir().unwrap();
-    let options = ExperimentOptions {
+/// The options of a quick run of `name` on `scene` into `out`.
+fn quick_options(name: ExperimentName, scene: &str, out: &Path) -> ExperimentOptions {
+    ExperimentOptions {
         name,
         scene: scene.into(),
-        exclude: exclude.iter().map(|s| s.to_string()).collect(),
+        exclude: Vec::new(),
         markings: Marking::ALL.to_vec(),
         grid: Grid::quick(),
         timing: name.timing_grid(true),
         quick: true,
         texel_density: 256.0,
-        out: dir.path().to_path_buf(),
+        out: out.to_path_buf(),
         command: format!("shadespace experiment {} --quick --scene {scene}", name.name()),
         chart_cache: Some(chart_cache()),
+        shard: None,
+    }
+}
+
+/// Runs `name` in quick mode on `scene` into a fresh folder; returns the folder.
+fn run_quick(name: ExperimentName, scene: &str, exclude: &[&str]) -> (tempfile::TempDir, Value) {
+    let ctx = common::gpu();
+    let dir = tempfile::tempdir().unwrap();
+    let options = ExperimentOptions {
+        exclude: exclude.iter().map(|s| s.to_string()).collect(),
+        ..quick_options(name, scene, dir.path())
     };
     experiments::run(&ctx, &options, &ProgressBar::hidden()).unwrap();
     let summary: Value =
@@ -427,10 +436,20 @@ fn bad_experiment_input_names_the_flag_or_file() {
     assert!(err.contains("--cap-ms"), "{err}");
     let (code, _) = run_cli(&["experiment", "speed"]);
     assert_eq!(code, 2);
+    let (code, err) = run_cli(&["experiment", "quality", "--shard", "3/2"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--shard") && err.contains("3/2"), "{err}");
+    let (code, err) = run_cli(&["experiment", "merge"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("merge"), "{err}");
+    let (code, err) = run_cli(&["experiment", "merge", dir.path().to_str().unwrap(), "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("summary.json"), "{err}");
 }
 
 /// The columns of `quality`'s `data.csv`.
-const QUALITY_COLUMNS: [&str; 13] = [
+const QUALITY_COLUMNS: [&str; 14] = [
+    "cell",
     "textures",
     "gloss",
     "lights_spec",
@@ -479,4 +498,48 @@ fn quality_quick() {
     }
     let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(report.contains("Cheapest configuration per error level"), "{report}");
+
+    // Two shards, merged, give the unsharded run's rows and summary (timings aside).
+    let start = std::time::Instant::now();
+    let ctx = common::gpu();
+    let parts = tempfile::tempdir().unwrap();
+    let mut shards = Vec::new();
+    for index in 1..=2 {
+        let out = parts.path().join(format!("shard{index}"));
+        let options = ExperimentOptions {
+            out: out.clone(),
+            shard: Some(experiments::quality::Shard { index, count: 2 }),
+            ..quick_options(ExperimentName::Quality, "atrium", dir.path())
+        };
+        experiments::run(&ctx, &options, &ProgressBar::hidden()).unwrap();
+        let rows = read_csv(&out, &QUALITY_COLUMNS).len();
+        assert!(rows > 0 && rows < cells.len(), "shard {index} measured {rows} of {} cells", cells.len());
+        shards.push(out);
+    }
+    let merged = parts.path().join("merged");
+    assert!(experiments::quality::merge(&shards[..1], &merged, "merge").is_err(), "one shard of two is not a run");
+    experiments::quality::merge(&shards, &merged, "shadespace experiment merge").unwrap();
+    eprintln!("quality shards and merge: {:.1} s", start.elapsed().as_secs_f64());
+    let untimed = |dir: &Path| -> Vec<BTreeMap<String, String>> {
+        let mut rows = read_csv(dir, &QUALITY_COLUMNS);
+        for r in &mut rows {
+            r.remove("median_ms");
+            r.remove("p95_ms");
+        }
+        rows
+    };
+    assert_eq!(untimed(&merged), untimed(dir.path()));
+    let summary_of = |dir: &Path| -> Value {
+        let mut s: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+        let all = s.as_object_mut().unwrap();
+        // Provenance (date, command) and the Pareto fronts (built from GPU times) differ.
+        for key in ["provenance", "results", "merged_from"] {
+            all.remove(key);
+        }
+        s
+    };
+    assert_eq!(summary_of(&merged), summary_of(dir.path()));
+    let merged_report = std::fs::read_to_string(merged.join("report.md")).unwrap();
+    let headings = |r: &str| r.lines().filter(|l| l.starts_with("## ")).map(String::from).collect::<Vec<_>>();
+    assert_eq!(headings(&merged_report), headings(&report));
 }
