@@ -197,7 +197,7 @@ pub struct Row {
     pub flicker_sum: f64,
 }
 
-/// One scene variant (textures and gloss applied) and its references' renderer.
+/// One scene variant: textures and gloss applied to the scene as drawn and as charted.
 struct Variant {
     render: Scene,
     charted: Scene,
@@ -341,9 +341,12 @@ pub fn pareto_front(points: &[Point]) -> Vec<Point> {
     front
 }
 
-/// Rows of one group (textures, gloss, light set, samples), in the grid's order.
-fn groups(rows: &[Row]) -> Vec<((String, String, String, u32), Vec<&Row>)> {
-    let mut out: Vec<((String, String, String, u32), Vec<&Row>)> = Vec::new();
+/// What the rows of one table and plot share: textures, gloss, light set, samples.
+type GroupKey = (String, String, String, u32);
+
+/// Rows of one group, in the grid's order.
+fn groups(rows: &[Row]) -> Vec<(GroupKey, Vec<&Row>)> {
+    let mut out: Vec<(GroupKey, Vec<&Row>)> = Vec::new();
     for r in rows {
         let key = (r.textures.clone(), r.gloss.clone(), r.lights_spec.clone(), r.msaa);
         match out.iter_mut().find(|(k, _)| *k == key) {

@@ -183,6 +183,8 @@ impl<'a> References<'a> {
             for i in 0..n {
                 renderer.jitter = Vec2::new(offset(i, n), offset(j, n));
                 renderer.render(ctx, view.camera, view.lights, 0)?;
+                // Its timings are not wanted: drain them so that none pile up.
+                renderer.collect_timings(ctx, false);
                 let bytes = readback::read_texture(ctx, &renderer.targets.hdr, 8).map_err(RenderError::from)?;
                 // Rgba16Float texels, 8 bytes each (the bytes need not be 2-aligned).
                 for (p, t) in bytes.chunks_exact(8).enumerate() {

@@ -56,8 +56,8 @@ mod tests {
 
     #[test]
     fn high_gloss_overrides_every_material_and_default_none() {
-        let mut scene = Scene::default();
-        scene.materials = vec![Material::default(), Material { specular: 2.0, roughness: 0.9, ..Material::default() }];
+        let materials = vec![Material::default(), Material { specular: 2.0, roughness: 0.9, ..Material::default() }];
+        let mut scene = Scene { materials, ..Scene::default() };
         let before = format!("{:?}", scene.materials);
         apply(&mut scene, Gloss::Default);
         assert_eq!(format!("{:?}", scene.materials), before);
