@@ -198,6 +198,8 @@ pub enum ExperimentError {
     NoTimingGrid(&'static str),
     #[error("--shard: experiment {0} is not sharded (only quality is)")]
     NotSharded(&'static str),
+    #[error("--frames {0}: quality needs at least 2 measured frames (flicker compares consecutive frames)")]
+    TooFewFrames(u32),
 }
 
 impl ExperimentError {
@@ -206,7 +208,12 @@ impl ExperimentError {
     pub fn is_input(&self) -> bool {
         match self {
             Self::Scene(StudySceneError::Charts(_)) => false,
-            Self::Scene(_) | Self::Cameras(_) | Self::Output { .. } | Self::Lights(_) | Self::NotSharded(_) => true,
+            Self::Scene(_)
+            | Self::Cameras(_)
+            | Self::Output { .. }
+            | Self::Lights(_)
+            | Self::NotSharded(_)
+            | Self::TooFewFrames(_) => true,
             Self::Atlas(_) | Self::Render(_) | Self::Plot(_) | Self::NoTimestamps(_) | Self::NoTimingGrid(_) => false,
         }
     }
@@ -294,6 +301,11 @@ struct Outcome {
 pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar) -> Result<Written, ExperimentError> {
     if options.shard.is_some() && options.name != ExperimentName::Quality {
         return Err(ExperimentError::NotSharded(options.name.name()));
+    }
+    if let (ExperimentName::Quality, Some(grid)) = (options.name, &options.timing)
+        && grid.frames < 2
+    {
+        return Err(ExperimentError::TooFewFrames(grid.frames));
     }
     let out = options.out.as_path();
     std::fs::create_dir_all(out).map_err(|e| ExperimentError::output(out, format!("cannot create the folder: {e}")))?;

@@ -439,6 +439,12 @@ fn bad_experiment_input_names_the_flag_or_file() {
     let (code, err) = run_cli(&["experiment", "quality", "--shard", "3/2"]);
     assert_eq!(code, 2);
     assert!(err.contains("--shard") && err.contains("3/2"), "{err}");
+    let (code, err) = run_cli(&["experiment", "quality", "--quick", "--frames", "1", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--frames 1"), "{err}");
+    let (code, err) = run_cli(&["experiment", "lights", "--quick", "--shard", "1/2", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--shard") && err.contains("lights"), "{err}");
     let (code, err) = run_cli(&["experiment", "merge"]);
     assert_eq!(code, 2);
     assert!(err.contains("merge"), "{err}");
