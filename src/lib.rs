@@ -64,6 +64,7 @@ pub mod experiments;
 pub mod gpu;
 pub mod hash;
 pub mod metrics;
+pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod shaders;

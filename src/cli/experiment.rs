@@ -7,6 +7,7 @@ use std::str::FromStr;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use shadespace::experiments::marking::Marking;
+use shadespace::experiments::quality::{self, Shard};
 use shadespace::experiments::scenarios::Scenario;
 use shadespace::experiments::timing::{Sweep, TimingGrid};
 use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid};
@@ -69,6 +70,10 @@ pub enum ExperimentChoice {
     Lights,
     /// Object space (reuse 1-4, variable rate) against forward and the fastest conventional pipeline.
     Speedup,
+    /// Every pipeline's error and flicker against supersampled references, against its cost (Pareto front).
+    Quality,
+    /// Merge shards (`--shard K/N` runs) given as DIR... into --out: the summary, plots and report of one run.
+    Merge,
 }
 
 /// `experiment`'s options.
@@ -77,6 +82,13 @@ pub struct ExperimentArgs {
     /// The experiment to run.
     #[arg(value_enum)]
     pub name: ExperimentChoice,
+    /// `merge`: the shard folders to merge.
+    #[arg(value_name = "DIR")]
+    pub shards: Vec<PathBuf>,
+    /// Run only the K-th of N disjoint parts of the grid (1 <= K <= N;
+    /// `quality` only); `experiment merge DIR...` joins the parts.
+    #[arg(long, value_name = "K/N", value_parser = Shard::from_str)]
+    pub shard: Option<Shard>,
     /// `atrium` (default), `voxels`, or a path (see `render --help`), e.g.
     /// ../shared/scenes/sponza-thesis.
     #[arg(long, default_value = "atrium")]
@@ -156,7 +168,16 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
         ExperimentChoice::Reuse => ExperimentName::Reuse,
         ExperimentChoice::Lights => ExperimentName::Lights,
         ExperimentChoice::Speedup => ExperimentName::Speedup,
+        ExperimentChoice::Quality => ExperimentName::Quality,
+        ExperimentChoice::Merge => return merge_shards(&a),
     };
+    if !a.shards.is_empty() {
+        let dirs: Vec<String> = a.shards.iter().map(|d| d.display().to_string()).collect();
+        return input(Err(anyhow::anyhow!(
+            "unexpected arguments {}: only `experiment merge` takes folders",
+            dirs.join(" ")
+        )));
+    }
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("experiment-{}", name.name())));
     if out.exists() && !out.is_dir() {
         return input(Err(anyhow::anyhow!("--out {}: exists and is not a folder", out.display())));
@@ -184,6 +205,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
         out,
         command: command_line(),
         chart_cache: None,
+        shard: a.shard,
     };
     let ctx = open_gpu(&a.gpu)?;
     let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
@@ -202,6 +224,20 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
     };
     bar.finish_and_clear();
     println!("{}: {} -> {}", name.name(), written.headline, written.report.display());
+    Ok(())
+}
+
+/// `experiment merge DIR...`: the shards' rows as one run's outputs in --out.
+fn merge_shards(a: &ExperimentArgs) -> Result<(), Failure> {
+    if a.shards.is_empty() {
+        return input(Err(anyhow::anyhow!("experiment merge: name the shard folders (DIR...)")));
+    }
+    let out = a.out.clone().unwrap_or_else(|| PathBuf::from("experiment-quality"));
+    if out.exists() && !out.is_dir() {
+        return input(Err(anyhow::anyhow!("--out {}: exists and is not a folder", out.display())));
+    }
+    let written = input(quality::merge(&a.shards, &out, &command_line()))?;
+    println!("quality (merged): {} -> {}", written.headline, written.report.display());
     Ok(())
 }
 

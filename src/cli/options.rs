@@ -128,6 +128,11 @@ pub struct SceneArgs {
     /// counters. Adds atomics: for profiling, not for timing.
     #[arg(long)]
     pub count_visibility: bool,
+    /// `default`: the scene's materials; `high`: every material with Phong
+    /// exponent 1500, GGX roughness 0.05 and specular strength at least 1, to
+    /// provoke specular aliasing (normal maps: the file's or --textures detailed).
+    #[arg(long, value_enum, default_value = "default")]
+    pub gloss: shadespace::scene::gloss::Gloss,
     #[command(flatten)]
     pub free_camera: FreeCameraArgs,
     #[command(flatten)]

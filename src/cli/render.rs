@@ -10,7 +10,7 @@ use shadespace::render::objectspace::atlas_view::AtlasPages;
 use shadespace::render::objectspace::{DebugView, ObjectSpace};
 use shadespace::render::{Exposure, Renderer};
 
-use super::options::SceneArgs;
+use super::options::{PipelineName, SceneArgs};
 use super::output::{save_png, write_report, write_trace};
 use super::setup::{configure, open_gpu, render_options, setup};
 use super::{Failure, input};
@@ -56,10 +56,19 @@ pub struct RenderArgs {
     /// chrome://tracing or ui.perfetto.dev).
     #[arg(help_heading = "Frame and output", long)]
     pub trace: Option<PathBuf>,
+    /// Write the frame's supersampled reference instead: forward shading at
+    /// N x N sub-pixel offsets per pixel (N from 4 to 32), averaged in linear
+    /// HDR before tone mapping with --exposure; cached in
+    /// $SHADESPACE_CACHE_DIR/references.
+    #[arg(help_heading = "Reference", long, value_name = "N", value_parser = clap::value_parser!(u32).range(4..=32))]
+    pub reference: Option<u32>,
 }
 
 /// Renders the frame, writes the outputs, prints what it cost.
 pub fn run(a: RenderArgs) -> Result<(), Failure> {
+    if let Some(n) = a.reference {
+        return render_reference(&a, n);
+    }
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
@@ -194,4 +203,48 @@ mod tests {
         assert_eq!(forward.len(), 3);
         assert!(forward[2].starts_with("frame: no GPU time"), "{forward:?}");
     }
+}
+
+/// `render --reference N`: the frame's supersampled reference, from the cache
+/// when it holds it.
+fn render_reference(a: &RenderArgs, n: u32) -> Result<(), Failure> {
+    use shadespace::reference::{ReferenceCache, ReferenceSettings, ReferenceView, References};
+    if a.scene.pipeline != PipelineName::Forward {
+        return input(Err(anyhow::anyhow!("--reference renders with forward shading: leave out --pipeline")));
+    }
+    if a.scene.bloom != 0.0 {
+        return input(Err(anyhow::anyhow!("--reference is resolved before bloom: leave out --bloom")));
+    }
+    if a.stats.is_some() || a.trace.is_some() || a.history != 0 || a.atlas_out.is_some() {
+        return input(Err(anyhow::anyhow!(
+            "--reference writes an image only (no --stats, --trace, --history, --atlas-out)"
+        )));
+    }
+    let s = setup(&a.scene)?;
+    let ctx = open_gpu(&a.scene.gpu)?;
+    let (width, height) = a.scene.size;
+    let settings = ReferenceSettings {
+        width,
+        height,
+        shading: a.scene.shading,
+        sun_shadow: a.scene.sun_shadow,
+        exposure: s.exposure,
+    };
+    let mut references = References::new(&ctx, &s.scene, settings, ReferenceCache::from_env());
+    let camera = s.path.camera_at(a.frame);
+    let (reference, cached) = references
+        .get(&ReferenceView { camera: &camera, lights: &s.lights, samples: n })
+        .map_err(anyhow::Error::new)?;
+    save_png(&reference.image(), &a.out)?;
+    println!(
+        "reference {n}x{n}: {} ({} objects), {} lights, {width}x{height}, exposure {:.4}, {} -> {} ({})",
+        s.scene.name,
+        s.scene.objects.len(),
+        s.lights.len(),
+        reference.exposure,
+        ctx.info.name,
+        a.out.display(),
+        if cached { "from the cache" } else { "rendered" }
+    );
+    Ok(())
 }

@@ -8,7 +8,8 @@
 //! ([`marking::Variant`]) and tile size at once ([`census::Census`]).
 //!
 //! The timing studies (`lights`, `speedup`) measure GPU frame times of
-//! pipelines over light sets with `bench`'s run loop ([`timing::Bench`]).
+//! pipelines over light sets with `bench`'s run loop ([`timing::Bench`]);
+//! `quality` also judges their images against supersampled references.
 
 pub mod census;
 pub mod lights;
@@ -16,6 +17,7 @@ pub mod marking;
 pub mod overlap;
 pub mod overshading;
 pub mod plot;
+pub mod quality;
 pub mod report;
 pub mod reuse;
 pub mod scenarios;
@@ -60,6 +62,8 @@ pub enum ExperimentName {
     Lights,
     /// Object space's speed-up and image error against conventional shading.
     Speedup,
+    /// Every pipeline's error and flicker against supersampled references, and its cost.
+    Quality,
 }
 
 impl ExperimentName {
@@ -70,13 +74,14 @@ impl ExperimentName {
             Self::Reuse => "reuse",
             Self::Lights => "lights",
             Self::Speedup => "speedup",
+            Self::Quality => "quality",
         }
     }
 
     /// Whether it measures frame times (its grid is a [`TimingGrid`], its
     /// progress counts frames) rather than tiles (a [`Grid`], views).
     pub fn is_timing(self) -> bool {
-        matches!(self, Self::Lights | Self::Speedup)
+        matches!(self, Self::Lights | Self::Speedup | Self::Quality)
     }
 
     /// The timing grid of a timing study, full or quick; `None` for the tile studies.
@@ -84,6 +89,7 @@ impl ExperimentName {
         match self {
             Self::Lights => Some(lights::grid(quick)),
             Self::Speedup => Some(speedup::grid(quick)),
+            Self::Quality => Some(quality::grid(quick)),
             Self::Overshading | Self::Overlap | Self::Reuse => None,
         }
     }
@@ -165,6 +171,8 @@ pub struct ExperimentOptions {
     pub command: String,
     /// Where generated charts are cached (`None`: `$SHADESPACE_CACHE_DIR` or the default).
     pub chart_cache: Option<PathBuf>,
+    /// Measure only this part of the grid (`--shard K/N`; `quality` only).
+    pub shard: Option<quality::Shard>,
 }
 
 /// Why an experiment failed.
@@ -188,6 +196,10 @@ pub enum ExperimentError {
     NoTimestamps(String),
     #[error("experiment {0} needs a timing grid")]
     NoTimingGrid(&'static str),
+    #[error("--shard: experiment {0} is not sharded (only quality is)")]
+    NotSharded(&'static str),
+    #[error("--frames {0}: quality needs at least 2 measured frames (flicker compares consecutive frames)")]
+    TooFewFrames(u32),
 }
 
 impl ExperimentError {
@@ -196,7 +208,12 @@ impl ExperimentError {
     pub fn is_input(&self) -> bool {
         match self {
             Self::Scene(StudySceneError::Charts(_)) => false,
-            Self::Scene(_) | Self::Cameras(_) | Self::Output { .. } | Self::Lights(_) => true,
+            Self::Scene(_)
+            | Self::Cameras(_)
+            | Self::Output { .. }
+            | Self::Lights(_)
+            | Self::NotSharded(_)
+            | Self::TooFewFrames(_) => true,
             Self::Atlas(_) | Self::Render(_) | Self::Plot(_) | Self::NoTimestamps(_) | Self::NoTimingGrid(_) => false,
         }
     }
@@ -282,6 +299,14 @@ struct Outcome {
 
 /// Runs an experiment and writes its outputs into `options.out`.
 pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar) -> Result<Written, ExperimentError> {
+    if options.shard.is_some() && options.name != ExperimentName::Quality {
+        return Err(ExperimentError::NotSharded(options.name.name()));
+    }
+    if let (ExperimentName::Quality, Some(grid)) = (options.name, &options.timing)
+        && grid.frames < 2
+    {
+        return Err(ExperimentError::TooFewFrames(grid.frames));
+    }
     let out = options.out.as_path();
     std::fs::create_dir_all(out).map_err(|e| ExperimentError::output(out, format!("cannot create the folder: {e}")))?;
     let provenance = Provenance::new(ctx, &options.command);
@@ -299,6 +324,7 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
         ExperimentName::Speedup => {
             timing_study(ctx, options, &scene, (output, progress), speedup::run, speedup::differences)?
         }
+        ExperimentName::Quality => quality::study(ctx, options, &scene, output, progress)?,
     };
     let findings = outcome.findings;
     let headline = findings.results.get("headline").and_then(|h| h.as_str()).unwrap_or_default().to_string();

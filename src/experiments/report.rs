@@ -14,7 +14,7 @@ use crate::gpu::GpuContext;
 pub const GIT_COMMIT: &str = env!("SHADESPACE_GIT_COMMIT");
 
 /// Where a run's figures came from.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Provenance {
     pub adapter: String,
     pub backend: String,
@@ -42,7 +42,7 @@ impl Provenance {
 }
 
 /// The current UTC time as `YYYY-MM-DDTHH:MM:SSZ`.
-fn utc_now() -> String {
+pub(crate) fn utc_now() -> String {
     let secs = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs());
     utc_from_unix(secs)
 }
@@ -91,7 +91,8 @@ pub struct Section {
     pub heading: String,
     pub text: String,
     pub tables: Vec<(String, Table)>,
-    /// PNG figures, relative to the report's folder (the SVG lies beside each).
+    /// PNG figures, relative to the report's folder; the report embeds the
+    /// SVG that lies beside each.
     pub figures: Vec<(String, PathBuf)>,
 }
 
@@ -122,10 +123,11 @@ pub fn markdown(title: &str, provenance: &Provenance, sections: &[Section]) -> S
             out += &t.markdown();
             out += "\n";
         }
+        // The SVG is embedded: it is what gets committed under docs/ (small,
+        // text), so the report's links resolve there; the PNG stays beside it.
         for (caption, png) in &s.figures {
-            let png = png.display().to_string();
-            let svg = Path::new(&png).with_extension("svg").display().to_string();
-            let _ = write!(out, "![{caption}]({png})\n\n{caption} ([SVG]({svg}))\n\n");
+            let svg = png.with_extension("svg").display().to_string();
+            let _ = write!(out, "![{caption}]({svg})\n\n{caption}\n\n");
         }
     }
     out

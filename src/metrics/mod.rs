@@ -2,6 +2,7 @@
 //! `nv-flip`), PSNR and SSIM. Used by golden-image tests and pipeline comparisons.
 
 pub mod ssim;
+pub mod temporal;
 
 use image::{RgbImage, RgbaImage};
 use serde::Serialize;

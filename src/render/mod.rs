@@ -194,6 +194,10 @@ pub struct Renderer {
     pub sun_shadow: bool,
     /// The lighting model every pass evaluates (default Phong, the studies').
     pub shading: ShadingModel,
+    /// Sub-pixel offset of the projection, in pixels (x right, y down;
+    /// default none): supersampled references (`crate::reference`) average
+    /// frames rendered at a grid of such offsets.
+    pub jitter: glam::Vec2,
     shadows: ShadowMaps,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
@@ -258,6 +262,7 @@ impl Renderer {
             shadow_refresh: ShadowRefresh::default(),
             sun_shadow: false,
             shading: ShadingModel::Phong,
+            jitter: glam::Vec2::ZERO,
             shadows,
             lights_hash: None,
             in_flight: Default::default(),
@@ -308,6 +313,12 @@ impl Renderer {
         let (w, h) = (self.targets.width, self.targets.height);
         let (lights, global_lights) = scene_gpu::order_lights(lights);
         let mut view = scene_gpu::gpu_view(camera, w, h);
+        if self.jitter != glam::Vec2::ZERO {
+            // A shift in NDC after the projection (scaled by clip w): every
+            // pass that rasterizes the camera's view moves by the same offset.
+            let ndc = glam::Vec3::new(2.0 * self.jitter.x / w as f32, -2.0 * self.jitter.y / h as f32, 0.0);
+            view.view_proj = glam::Mat4::from_translation(ndc) * view.view_proj;
+        }
         view.light_count = lights.len() as u32;
         view.global_light_count = global_lights;
         view.shading = self.shading as u32;

@@ -13,7 +13,7 @@ use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 /// Shared modules of the render layer, in dependency order (after those of
 /// `shaders/shared/`, which they may import).
-const SHARED: &[ShaderSource] = &[
+pub const SHARED: &[ShaderSource] = &[
     passes::light_grid::SHARED_WGSL[0],
     passes::light_grid::SHARED_WGSL[1],
     objectspace::SHARED_WGSL[0],

@@ -12,6 +12,7 @@ pub mod error;
 pub mod framing;
 pub mod free_camera;
 pub mod generate;
+pub mod gloss;
 pub mod gltf;
 pub mod lights;
 pub mod obj;

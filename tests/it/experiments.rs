@@ -25,22 +25,31 @@ fn chart_cache() -> PathBuf {
     Path::new(env!("CARGO_TARGET_TMPDIR")).join("charts")
 }
 
-/// Runs `name` in quick mode on `scene` into a fresh folder; returns the folder.
-fn run_quick(name: ExperimentName, scene: &str, exclude: &[&str]) -> (tempfile::TempDir, Value) {
-    let ctx = common::gpu();
-    let dir = tempfile::tempdir().unwrap();
-    let options = ExperimentOptions {
+/// The options of a quick run of `name` on `scene` into `out`.
+fn quick_options(name: ExperimentName, scene: &str, out: &Path) -> ExperimentOptions {
+    ExperimentOptions {
         name,
         scene: scene.into(),
-        exclude: exclude.iter().map(|s| s.to_string()).collect(),
+        exclude: Vec::new(),
         markings: Marking::ALL.to_vec(),
         grid: Grid::quick(),
         timing: name.timing_grid(true),
         quick: true,
         texel_density: 256.0,
-        out: dir.path().to_path_buf(),
+        out: out.to_path_buf(),
         command: format!("shadespace experiment {} --quick --scene {scene}", name.name()),
         chart_cache: Some(chart_cache()),
+        shard: None,
+    }
+}
+
+/// Runs `name` in quick mode on `scene` into a fresh folder; returns the folder.
+fn run_quick(name: ExperimentName, scene: &str, exclude: &[&str]) -> (tempfile::TempDir, Value) {
+    let ctx = common::gpu();
+    let dir = tempfile::tempdir().unwrap();
+    let options = ExperimentOptions {
+        exclude: exclude.iter().map(|s| s.to_string()).collect(),
+        ..quick_options(name, scene, dir.path())
     };
     experiments::run(&ctx, &options, &ProgressBar::hidden()).unwrap();
     let summary: Value =
@@ -65,15 +74,20 @@ fn check_common(dir: &Path, options: &ExperimentOptions, summary: &Value) {
     assert!(report.contains(&options.command), "the report does not state the command");
     assert!(report.contains(GIT_COMMIT) && GIT_COMMIT.len() >= 40, "the report does not state the commit");
     assert!(report.contains("Differences from the study"));
-    // Every figure the report embeds exists as a valid PNG, with its SVG beside it.
+    // Every figure the report embeds exists as a whole SVG, with a valid PNG beside it.
     let figures: Vec<&str> = report.split("](").skip(1).filter_map(|s| s.split(')').next()).collect();
-    let pngs: Vec<&&str> = figures.iter().filter(|f| f.ends_with(".png")).collect();
-    assert!(!pngs.is_empty(), "no figure in the report");
-    for png in pngs {
-        let image = image::open(dir.join(png)).unwrap_or_else(|e| panic!("{png}: {e}"));
+    let svgs: Vec<&&str> = figures.iter().filter(|f| f.ends_with(".svg")).collect();
+    assert!(!svgs.is_empty(), "no figure in the report");
+    assert!(!figures.iter().any(|f| f.ends_with(".png")), "the report links PNGs, which docs/ does not hold");
+    for svg_path in svgs {
+        let svg = std::fs::read_to_string(dir.join(svg_path)).unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+            "{svg_path}: SVG is not a whole document"
+        );
+        let png = Path::new(svg_path).with_extension("png");
+        let image = image::open(dir.join(&png)).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
         assert!(image.width() > 100 && image.height() > 100);
-        let svg = std::fs::read_to_string(dir.join(Path::new(png).with_extension("svg"))).unwrap();
-        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "{png}: SVG is not a whole document");
     }
 }
 
@@ -422,4 +436,116 @@ fn bad_experiment_input_names_the_flag_or_file() {
     assert!(err.contains("--cap-ms"), "{err}");
     let (code, _) = run_cli(&["experiment", "speed"]);
     assert_eq!(code, 2);
+    let (code, err) = run_cli(&["experiment", "quality", "--shard", "3/2"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--shard") && err.contains("3/2"), "{err}");
+    let (code, err) = run_cli(&["experiment", "quality", "--quick", "--frames", "1", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--frames 1"), "{err}");
+    let (code, err) = run_cli(&["experiment", "lights", "--quick", "--shard", "1/2", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--shard") && err.contains("lights"), "{err}");
+    let (code, err) = run_cli(&["experiment", "merge"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("merge"), "{err}");
+    let (code, err) = run_cli(&["experiment", "merge", dir.path().to_str().unwrap(), "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("summary.json"), "{err}");
+}
+
+/// The columns of `quality`'s `data.csv`.
+const QUALITY_COLUMNS: [&str; 14] = [
+    "cell",
+    "textures",
+    "gloss",
+    "lights_spec",
+    "msaa",
+    "pipeline",
+    "config",
+    "frames",
+    "median_ms",
+    "p95_ms",
+    "flip_mean",
+    "psnr_db",
+    "flicker_mean",
+    "flicker_sum",
+];
+
+#[test]
+fn quality_quick() {
+    let start = std::time::Instant::now();
+    let (dir, summary) = run_quick(ExperimentName::Quality, "atrium", &[]);
+    eprintln!("quality quick: {:.1} s", start.elapsed().as_secs_f64());
+    let rows = read_csv(dir.path(), &QUALITY_COLUMNS);
+    let grid = ExperimentName::Quality.timing_grid(true).unwrap();
+    let cells = experiments::quality::cells(&grid, true);
+    assert_eq!(rows.len(), cells.len());
+    for r in &rows {
+        assert_eq!(num(r, "frames"), f64::from(grid.frames), "{r:?}");
+        assert!(num(r, "median_ms") > 0.0, "{r:?}");
+        // Every pipeline is near the reference, none equal to it (one sample aliases).
+        let flip = num(r, "flip_mean");
+        assert!(flip > 0.0 && flip < 0.15, "{r:?}");
+        assert!(num(r, "psnr_db") > 15.0, "{r:?}");
+        let flicker = num(r, "flicker_mean");
+        assert!(flicker >= 0.0 && (num(r, "flicker_sum") - flicker * f64::from(grid.frames - 1)).abs() < 1e-6, "{r:?}");
+    }
+    // The gloss override reaches the pipelines: forward's error changes with it.
+    let forward = |gloss: &str| rows.iter().find(|r| r["config"] == "forward" && r["gloss"] == gloss).unwrap();
+    assert_ne!(forward("default")["flip_mean"], forward("high")["flip_mean"]);
+    for group in summary["results"]["pareto"].as_array().unwrap() {
+        let front = group["front"].as_array().unwrap();
+        assert!(!front.is_empty(), "{group}");
+        // Cheapest first, each strictly less wrong than the one before.
+        for pair in front.windows(2) {
+            assert!(pair[0]["cost_ms"].as_f64() <= pair[1]["cost_ms"].as_f64(), "{group}");
+            assert!(pair[0]["error"].as_f64() > pair[1]["error"].as_f64(), "{group}");
+        }
+    }
+    let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(report.contains("Cheapest configuration per error level"), "{report}");
+
+    // Two shards, merged, give the unsharded run's rows and summary (timings aside).
+    let start = std::time::Instant::now();
+    let ctx = common::gpu();
+    let parts = tempfile::tempdir().unwrap();
+    let mut shards = Vec::new();
+    for index in 1..=2 {
+        let out = parts.path().join(format!("shard{index}"));
+        let options = ExperimentOptions {
+            out: out.clone(),
+            shard: Some(experiments::quality::Shard { index, count: 2 }),
+            ..quick_options(ExperimentName::Quality, "atrium", dir.path())
+        };
+        experiments::run(&ctx, &options, &ProgressBar::hidden()).unwrap();
+        let rows = read_csv(&out, &QUALITY_COLUMNS).len();
+        assert!(rows > 0 && rows < cells.len(), "shard {index} measured {rows} of {} cells", cells.len());
+        shards.push(out);
+    }
+    let merged = parts.path().join("merged");
+    assert!(experiments::quality::merge(&shards[..1], &merged, "merge").is_err(), "one shard of two is not a run");
+    experiments::quality::merge(&shards, &merged, "shadespace experiment merge").unwrap();
+    eprintln!("quality shards and merge: {:.1} s", start.elapsed().as_secs_f64());
+    let untimed = |dir: &Path| -> Vec<BTreeMap<String, String>> {
+        let mut rows = read_csv(dir, &QUALITY_COLUMNS);
+        for r in &mut rows {
+            r.remove("median_ms");
+            r.remove("p95_ms");
+        }
+        rows
+    };
+    assert_eq!(untimed(&merged), untimed(dir.path()));
+    let summary_of = |dir: &Path| -> Value {
+        let mut s: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+        let all = s.as_object_mut().unwrap();
+        // Provenance (date, command) and the Pareto fronts (built from GPU times) differ.
+        for key in ["provenance", "results", "merged_from"] {
+            all.remove(key);
+        }
+        s
+    };
+    assert_eq!(summary_of(&merged), summary_of(dir.path()));
+    let merged_report = std::fs::read_to_string(merged.join("report.md")).unwrap();
+    let headings = |r: &str| r.lines().filter(|l| l.starts_with("## ")).map(String::from).collect::<Vec<_>>();
+    assert_eq!(headings(&merged_report), headings(&report));
 }

@@ -13,7 +13,7 @@ const LAYERS: &[&[&str]] = &[
     &["scene"],
     &["charts"],
     &["render"],
-    &["bench", "stage"],
+    &["bench", "reference", "stage"],
     &["experiments", "viewer"],
 ];
 
