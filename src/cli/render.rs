@@ -156,6 +156,50 @@ fn frame_lines(f: &FrameReport) -> Vec<String> {
     lines
 }
 
+/// `render --reference N`: the frame's supersampled reference, from the cache
+/// when it holds it.
+fn render_reference(a: &RenderArgs, n: u32) -> Result<(), Failure> {
+    use shadespace::reference::{ReferenceCache, ReferenceSettings, ReferenceView, References};
+    if a.scene.pipeline != PipelineName::Forward {
+        return input(Err(anyhow::anyhow!("--reference renders with forward shading: leave out --pipeline")));
+    }
+    if a.scene.bloom != 0.0 {
+        return input(Err(anyhow::anyhow!("--reference is resolved before bloom: leave out --bloom")));
+    }
+    if a.stats.is_some() || a.trace.is_some() || a.history != 0 || a.atlas_out.is_some() {
+        return input(Err(anyhow::anyhow!(
+            "--reference writes an image only (no --stats, --trace, --history, --atlas-out)"
+        )));
+    }
+    let s = setup(&a.scene)?;
+    let ctx = open_gpu(&a.scene.gpu)?;
+    let (width, height) = a.scene.size;
+    let settings = ReferenceSettings {
+        width,
+        height,
+        shading: a.scene.shading,
+        sun_shadow: a.scene.sun_shadow,
+        exposure: s.exposure,
+    };
+    let mut references = References::new(&ctx, &s.scene, settings, ReferenceCache::from_env());
+    let camera = s.path.camera_at(a.frame);
+    let (reference, cached) = references
+        .get(&ReferenceView { camera: &camera, lights: &s.lights, samples: n })
+        .map_err(anyhow::Error::new)?;
+    save_png(&reference.image(), &a.out)?;
+    println!(
+        "reference {n}x{n}: {} ({} objects), {} lights, {width}x{height}, exposure {:.4}, {} -> {} ({})",
+        s.scene.name,
+        s.scene.objects.len(),
+        s.lights.len(),
+        reference.exposure,
+        ctx.info.name,
+        a.out.display(),
+        if cached { "from the cache" } else { "rendered" }
+    );
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use shadespace::bench::PassTime;
@@ -203,48 +247,4 @@ mod tests {
         assert_eq!(forward.len(), 3);
         assert!(forward[2].starts_with("frame: no GPU time"), "{forward:?}");
     }
-}
-
-/// `render --reference N`: the frame's supersampled reference, from the cache
-/// when it holds it.
-fn render_reference(a: &RenderArgs, n: u32) -> Result<(), Failure> {
-    use shadespace::reference::{ReferenceCache, ReferenceSettings, ReferenceView, References};
-    if a.scene.pipeline != PipelineName::Forward {
-        return input(Err(anyhow::anyhow!("--reference renders with forward shading: leave out --pipeline")));
-    }
-    if a.scene.bloom != 0.0 {
-        return input(Err(anyhow::anyhow!("--reference is resolved before bloom: leave out --bloom")));
-    }
-    if a.stats.is_some() || a.trace.is_some() || a.history != 0 || a.atlas_out.is_some() {
-        return input(Err(anyhow::anyhow!(
-            "--reference writes an image only (no --stats, --trace, --history, --atlas-out)"
-        )));
-    }
-    let s = setup(&a.scene)?;
-    let ctx = open_gpu(&a.scene.gpu)?;
-    let (width, height) = a.scene.size;
-    let settings = ReferenceSettings {
-        width,
-        height,
-        shading: a.scene.shading,
-        sun_shadow: a.scene.sun_shadow,
-        exposure: s.exposure,
-    };
-    let mut references = References::new(&ctx, &s.scene, settings, ReferenceCache::from_env());
-    let camera = s.path.camera_at(a.frame);
-    let (reference, cached) = references
-        .get(&ReferenceView { camera: &camera, lights: &s.lights, samples: n })
-        .map_err(anyhow::Error::new)?;
-    save_png(&reference.image(), &a.out)?;
-    println!(
-        "reference {n}x{n}: {} ({} objects), {} lights, {width}x{height}, exposure {:.4}, {} -> {} ({})",
-        s.scene.name,
-        s.scene.objects.len(),
-        s.lights.len(),
-        reference.exposure,
-        ctx.info.name,
-        a.out.display(),
-        if cached { "from the cache" } else { "rendered" }
-    );
-    Ok(())
 }
