@@ -1,7 +1,7 @@
 //! Structs whose bytes cross between Rust and WGSL. Each is declared with
 //! `gpu_struct!`, which also records its members (name, offset, size), so a
 //! test can compare every member, by name, with the layout naga computes for
-//! the WGSL struct of the same name ([`wgsl_layout`], [`check`]): a swapped,
+//! the WGSL struct of the same name (`wgsl_layout` and `check`, test builds only): a swapped,
 //! renamed, missing or misaligned field fails, not only a wrong total size.
 //! The test that checks every struct of the renderer lives with them, in
 //! `render::shader_set`.
