@@ -10,7 +10,7 @@ use glam::Vec3;
 use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::objectspace::atlas::GpuAtlasEntry;
-use shadespace::render::objectspace::cpu::{self, MarkInputs, MarkParams, TileState};
+use shadespace::render::objectspace::cpu::{self, MarkInputs, TileState};
 use shadespace::render::scene_gpu::gpu_view;
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
 use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
@@ -90,15 +90,7 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
         for (e, valid_since) in entries.iter_mut().zip(&gpu.valid_since) {
             e.valid_since = *valid_since;
         }
-        let o = os.config();
-        let params = MarkParams {
-            stamp: gpu.stamp,
-            reuse: o.reuse,
-            view_since: gpu.view_since,
-            tile_size: o.tile_size,
-            mip_bias: o.mip_bias,
-            variable_rate: o.variable_rate,
-        };
+        let params = os.mark_params(&gpu);
         let inputs = MarkInputs { scene: run.scene, view: &view, entries: &entries, params };
         let twin = cpu::visible_tiles(&inputs, &gpu.visibility, run.width);
         let name = |tiles: Vec<u32>| describe(&entries, params.tile_size, &tiles);

@@ -25,7 +25,7 @@ use shadespace::gpu::{GpuContext, readback};
 use shadespace::render::gpu_types::GpuLight;
 use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::objectspace::cpu::gather::{self, GatherTaps, PixelGather};
-use shadespace::render::objectspace::cpu::{self, LevelTexels, MarkInputs, MarkParams, shade};
+use shadespace::render::objectspace::cpu::{self, LevelTexels, MarkInputs, shade};
 use shadespace::render::scene_gpu::{gpu_view, order_lights};
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
@@ -90,15 +90,7 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
 
     let view = gpu_view(&case.camera, case.width, case.height);
     let entries = os.layout.gpu_entries();
-    let o = os.config();
-    let params = MarkParams {
-        stamp: gpu.stamp,
-        reuse: o.reuse,
-        view_since: gpu.view_since,
-        tile_size: o.tile_size,
-        mip_bias: o.mip_bias,
-        variable_rate: 0.0,
-    };
+    let params = os.mark_params(&gpu);
     let inputs = MarkInputs { scene: case.scene, view: &view, entries: &entries, params };
     let islands: Vec<Vec<u32>> = case
         .scene
@@ -129,7 +121,7 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
     if case.shade {
         let (ordered, _) = order_lights(&case.lights);
         let lights: Vec<GpuLight> = ordered.iter().map(GpuLight::from).collect();
-        let tile = o.tile_size;
+        let tile = params.tile_size;
         for &(object, level, global_tile) in &queued {
             let l = entries[object].levels[level as usize];
             let texels = &levels[&(object, level)];

@@ -130,6 +130,20 @@ impl ObjectSpace {
         }
     }
 
+    /// The parameters the frame of `state` was marked with (its stamp and
+    /// view, this pipeline's settings): what the CPU twin of marking takes.
+    pub fn mark_params(&self, state: &MarkState) -> super::cpu::MarkParams {
+        let o = self.config();
+        super::cpu::MarkParams {
+            stamp: state.stamp,
+            reuse: o.reuse,
+            view_since: state.view_since,
+            tile_size: o.tile_size,
+            mip_bias: o.mip_bias,
+            variable_rate: o.variable_rate,
+        }
+    }
+
     /// The marking state after the last frame, for tests that check tile
     /// marking against its CPU twin.
     pub fn read_mark_state(&self, ctx: &GpuContext) -> Result<MarkState, GpuError> {
