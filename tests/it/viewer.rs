@@ -16,9 +16,10 @@ use shadespace::metrics;
 /// Mean FLIP error allowed between the viewer's frame and `render`'s.
 const VIEWER_FLIP: f32 = 0.02;
 /// Pipeline and option switches of the switching test (18 per script
-/// round, 5 of them renderer builds); `SHADESPACE_VIEWER_SWITCHES=1000`
-/// runs more by hand.
-const SWITCHES: u32 = 200;
+/// round, 5 of them renderer builds): seven rounds, the fewest that leave
+/// two rounds of warm-up and a last third of three rounds after a gap;
+/// `SHADESPACE_VIEWER_SWITCHES=1000` runs more by hand.
+const SWITCHES: u32 = 7 * SWITCHES_PER_ROUND;
 /// Setting changes per round of the switching script.
 const SWITCHES_PER_ROUND: u32 = 18;
 /// Host memory the switching run's floor may rise: the lowest RSS of its
