@@ -12,6 +12,7 @@ mod cli;
 mod compute_visibility;
 mod corpus;
 mod deferred;
+mod density;
 mod doc_links;
 mod examples;
 mod experiments;
