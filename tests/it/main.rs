@@ -32,5 +32,6 @@ mod seams;
 mod shadows;
 mod sponza;
 mod stage_twins;
+mod terrain;
 mod trimap;
 mod viewer;
