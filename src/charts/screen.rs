@@ -14,10 +14,10 @@
 //! the longer one). [`TextureSizing::Density`] then rounds the side up to a
 //! power of two and clamps it.
 
-use glam::{Vec3, Vec4};
+use glam::{Mat4, Vec3, Vec4};
 
 use super::density::TextureSizing;
-use crate::scene::{Aabb, Camera, CameraPath, Scene};
+use crate::scene::{Aabb, Camera, CameraPath, Mesh, Scene};
 
 /// Most cameras sampled along a path: longer paths are sampled evenly.
 pub const MAX_PATH_SAMPLES: u32 = 2048;
@@ -37,9 +37,16 @@ pub fn path_cameras(path: &CameraPath) -> Vec<Camera> {
 
 /// Per object of `scene`, the most screen pixels per metre of surface any of
 /// `cameras` can show it at in a `width` x `height` image: `height / (2 d
-/// tan(fov / 2))` at the distance `d` from the eye to the nearest point of the
-/// object's bounds (at least the camera's near plane), over the cameras
-/// whose frustum the bounds touch; 0 for an object no camera sees.
+/// tan(fov / 2))` at the distance `d` from the eye to the object (at least
+/// the camera's near plane), over the cameras whose frustum its bounds
+/// touch; 0 for an object no camera sees.
+///
+/// `d` is the distance to the object's bounding box, or where the eye is
+/// within a triangle edge of the box (inside a heightfield patch's box, low
+/// over it; inside a room), the larger of that and the distance to the
+/// nearest vertex less the longest edge: no point of a triangle is farther
+/// than its longest edge from one of its vertices, so `d` never exceeds the
+/// distance to the surface.
 pub fn projected_densities(scene: &Scene, cameras: &[Camera], width: u32, height: u32) -> Vec<f32> {
     let aspect = width.max(1) as f32 / height.max(1) as f32;
     let views: Vec<_> = cameras.iter().map(|c| (c, c.view_projection(aspect))).collect();
@@ -49,16 +56,40 @@ pub fn projected_densities(scene: &Scene, cameras: &[Camera], width: u32, height
             if bounds.is_empty() {
                 return 0.0;
             }
+            let object = &scene.objects[i];
+            let mesh = &scene.meshes[object.mesh];
+            // World vertices and longest edge, only if some eye comes that close.
+            let mut near: Option<(Vec<Vec3>, f32)> = None;
             views
                 .iter()
                 .filter(|(_, vp)| touches_frustum(&bounds, vp))
                 .map(|(c, _)| {
-                    let d = distance(&bounds, c.position).max(c.near).max(f32::MIN_POSITIVE);
+                    let mut d = distance(&bounds, c.position);
+                    let (vertices, edge) = near.get_or_insert_with(|| world_vertices(mesh, &object.transform));
+                    if d <= *edge {
+                        let nearest = vertices.iter().map(|v| v.distance_squared(c.position)).fold(f32::MAX, f32::min);
+                        d = d.max(nearest.sqrt() - *edge);
+                    }
+                    let d = d.max(c.near).max(f32::MIN_POSITIVE);
                     height as f32 / (2.0 * d * (0.5 * c.fov_y).tan())
                 })
                 .fold(0.0, f32::max)
         })
         .collect()
+}
+
+/// The mesh's vertices placed by `transform`, and its longest triangle edge.
+fn world_vertices(mesh: &Mesh, transform: &Mat4) -> (Vec<Vec3>, f32) {
+    let world: Vec<Vec3> = mesh.positions.iter().map(|&p| transform.transform_point3(p)).collect();
+    let edge = mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| {
+            let [a, b, c] = [0, 1, 2].map(|k| world[t[k] as usize]);
+            a.distance(b).max(b.distance(c)).max(c.distance(a))
+        })
+        .fold(0.0, f32::max);
+    (world, edge)
 }
 
 /// One [`TextureSizing::Density`] per object from [`projected_densities`],
@@ -102,10 +133,10 @@ fn touches_frustum(b: &Aabb, vp: &glam::Mat4) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use glam::{Mat4, Vec2};
+    use glam::Vec2;
 
     use super::*;
-    use crate::scene::{Material, Mesh, Object};
+    use crate::scene::{Material, Object};
 
     /// A scene of `n` unit quads facing +z, quad k at z = -k * 10.
     fn quads(n: usize) -> Scene {
@@ -156,6 +187,39 @@ mod tests {
         let near = camera(Vec3::new(0.0, 0.0, -9.0), Vec3::NEG_Z);
         let d = projected_densities(&scene, &[looking, near], 400, 200);
         assert!((d[1] - 100.0).abs() < 1e-3, "{d:?}");
+    }
+
+    #[test]
+    fn an_eye_inside_the_box_is_as_far_as_the_surface_allows() {
+        // A 10 x 10 m ramp of 1 m cells rising 0.3 m a metre along x: its box
+        // is 3 m tall, its longest edge 1.44 m. An eye 2.2 m over it at x = 1
+        // is inside the box; its nearest vertex is 2.15 m away, so it is taken
+        // as 0.7 m from the surface (the ramp's plane is 2.1 m away), not as
+        // at the near plane (0.01 m: 10,000 px/m).
+        let mut scene = quads(1);
+        let n = 10;
+        let positions: Vec<Vec3> =
+            (0..=n).flat_map(|z| (0..=n).map(move |x| Vec3::new(x as f32, 0.3 * x as f32, z as f32))).collect();
+        let mut indices = Vec::new();
+        for z in 0..n {
+            for x in 0..n {
+                let a = z * (n + 1) + x;
+                indices.extend([a, a + n + 1, a + 1, a + 1, a + n + 1, a + n + 2]);
+            }
+        }
+        let count = positions.len();
+        scene.meshes[0] = Mesh {
+            positions,
+            normals: vec![Vec3::Y; count],
+            tangents: vec![Vec4::X; count],
+            uv0: vec![Vec2::ZERO; count],
+            indices,
+            ..scene.meshes[0].clone()
+        };
+        let eye = camera(Vec3::new(1.0, 2.5, 1.0), Vec3::new(1.0, -1.0, 0.0).normalize());
+        let d = projected_densities(&scene, &[eye], 200, 200)[0];
+        // 200 px at 90 degrees: 100 / d px/m.
+        assert!((100.0 / 2.2..=100.0 / 0.6).contains(&d), "{d} px/m");
     }
 
     #[test]
