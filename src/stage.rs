@@ -79,14 +79,15 @@ impl Stage {
     /// default exposure. For object space without texture sizes the scene is
     /// charted first (cached where `SHADESPACE_CACHE_DIR` or the user's cache
     /// folder says), each object's texture sized for the most pixels per
-    /// metre it covers along the camera path and from the fixed cameras at
-    /// the stage's size, as `render` sizes it ([`charts::screen`]).
+    /// metre it covers along the camera path at the stage's size, as `render
+    /// --camera path` sizes it ([`charts::screen`]; a program that renders
+    /// from elsewhere charts the scene itself with
+    /// [`charts::screen_sizings`] for its cameras).
     pub fn renderer(&self, ctx: &GpuContext, pipeline: PipelineConfig) -> Result<Renderer, StageError> {
         let mut options = RenderOptions { width: self.width, height: self.height, pipeline };
         let mut renderer = match &mut options.pipeline {
             PipelineConfig::ObjectSpace(c) if c.texture_sizes.is_empty() => {
-                let mut views = charts::path_cameras(&self.cameras.path);
-                views.extend(&self.cameras.fixed);
+                let views = charts::path_cameras(&self.cameras.path);
                 let sizings =
                     charts::screen_sizings(&self.scene, &views, self.width, self.height, 64, MAX_DENSITY_SIZE);
                 let settings = ChartSettings::default();

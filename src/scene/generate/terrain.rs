@@ -10,7 +10,7 @@
 //! of [`MARGIN`] texels on every side, computed from one texel grid over the
 //! whole terrain: neighbouring patches hold the same texels where they
 //! overlap, and the renderer's repeating sampler does not reach the opposite
-//! edge until level 4 of the texture, so the colour is continuous across
+//! edge up to level 4 of the texture, so the colour is continuous across
 //! patch borders. Vertex normals come from the height function at the vertex
 //! (the same on both sides of a border). Charts (`uv1`) are the patch seen
 //! from above: one chart per patch, so steep slopes get fewer texels per
