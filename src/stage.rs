@@ -5,17 +5,13 @@
 //! (`examples/render_frame.rs`); the modules behind it stay available for
 //! everything it does not cover.
 
-use crate::charts::{self, ChartCache, ChartError, TextureSizing};
+use crate::charts::{self, ChartCache, ChartError, ChartSettings};
 use crate::gpu::GpuContext;
 use crate::render::objectspace::MAX_DENSITY_SIZE;
 use crate::render::{Exposure, PipelineConfig, RenderError, RenderOptions, Renderer};
 use crate::scene::lights::LightSetError;
 use crate::scene::path::{CameraFileError, SceneCameras};
 use crate::scene::{self, Camera, Light, LightSpec, Scene, SceneError};
-
-/// Shading texels per metre of surface the object-space pipeline gets from
-/// [`Stage::renderer`] (the command line's `--texel-density` default).
-pub const TEXEL_DENSITY: f32 = 256.0;
 
 /// A scene, its cameras and the image size it is rendered at.
 #[derive(Clone, Debug)]
@@ -81,14 +77,27 @@ impl Stage {
 
     /// A renderer of the scene for `pipeline` at the stage's size, with the
     /// default exposure. For object space without texture sizes the scene is
-    /// charted first, at [`TEXEL_DENSITY`] (cached where
-    /// `SHADESPACE_CACHE_DIR` or the user's cache folder says).
+    /// charted first (cached where `SHADESPACE_CACHE_DIR` or the user's cache
+    /// folder says), each object's texture sized for the most pixels per
+    /// metre it covers along the camera path at the stage's size, as `render
+    /// --camera path` sizes it ([`charts::screen`]; a program that renders
+    /// from elsewhere charts the scene itself with
+    /// [`charts::screen_sizings`] for its cameras).
     pub fn renderer(&self, ctx: &GpuContext, pipeline: PipelineConfig) -> Result<Renderer, StageError> {
         let mut options = RenderOptions { width: self.width, height: self.height, pipeline };
         let mut renderer = match &mut options.pipeline {
             PipelineConfig::ObjectSpace(c) if c.texture_sizes.is_empty() => {
-                let sizing = TextureSizing::Density { texels_per_metre: TEXEL_DENSITY, min: 64, max: MAX_DENSITY_SIZE };
-                let charts = charts::chart_scene(&self.scene, &sizing, &ChartCache::from_env())?;
+                let views = charts::path_cameras(&self.cameras.path);
+                let sizings =
+                    charts::screen_sizings(&self.scene, &views, self.width, self.height, 64, MAX_DENSITY_SIZE);
+                let settings = ChartSettings::default();
+                let charts = charts::chart_scene_sized(
+                    &self.scene,
+                    &sizings,
+                    &charts::PACKING_SIZING,
+                    &settings,
+                    &ChartCache::from_env(),
+                )?;
                 c.texture_sizes = charts.texture_sizes();
                 Renderer::new(ctx, &charts.apply(&self.scene), &options)?
             }

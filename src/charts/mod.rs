@@ -19,6 +19,7 @@ pub mod density;
 pub mod generate;
 pub mod islands;
 pub mod overlap;
+pub mod screen;
 
 use std::fmt;
 use std::time::Instant;
@@ -27,6 +28,7 @@ pub use cache::ChartCache;
 pub use density::{TextureSize, TextureSizing, mip_count, uv_area, world_area};
 pub use generate::{GeneratedChart, GeneratorSettings};
 pub use overlap::{OverlapReport, check_overlap, collapsed_area_fraction};
+pub use screen::{PACKING_SIZING, path_cameras, projected_densities, screen_sizings};
 
 use crate::scene::{Mesh, Scene};
 
@@ -393,6 +395,24 @@ pub fn chart_scene_with(
     settings: &ChartSettings,
     cache: &ChartCache,
 ) -> Result<SceneCharts, ChartError> {
+    chart_scene_sized(scene, &vec![*sizing; scene.objects.len()], sizing, settings, cache)
+}
+
+/// [`chart_scene_with`] with a texture sizing per object (`sizings[i]` for
+/// `scene.objects[i]`; [`screen::screen_sizings`] gives one that follows the
+/// screen; an object without one is sized like the last that has one),
+/// generated charts packed as for `packing` (so that the charts, and their
+/// cache entries, do not change with the image size or the camera: a
+/// texture smaller than the packing page is like a coarser mip level of it).
+pub fn chart_scene_sized(
+    scene: &Scene,
+    sizings: &[TextureSizing],
+    packing: &TextureSizing,
+    settings: &ChartSettings,
+    cache: &ChartCache,
+) -> Result<SceneCharts, ChartError> {
+    let fallback = TextureSizing::Density { texels_per_metre: 0.0, min: 64, max: 64 };
+    let sizing = |i: usize| *sizings.get(i).or(sizings.last()).unwrap_or(&fallback);
     for o in &scene.objects {
         if o.mesh >= scene.meshes.len() {
             return Err(ChartError::MissingMesh { object: o.name.clone(), mesh: o.mesh });
@@ -407,7 +427,7 @@ pub fn chart_scene_with(
             .iter()
             .zip(&areas)
             .filter(|(o, _)| o.mesh == m && !o.forward_only)
-            .map(|(_, &area)| sizing.min_side(area))
+            .map(|(_, &area)| packing.min_side(area))
             .min();
         if let Some(side) = side {
             *slot = Some(chart_mesh(&scene.meshes[m], side, settings, cache)?);
@@ -425,7 +445,7 @@ pub fn chart_scene_with(
                     source: c.source,
                     overlap_fraction: c.overlap.fraction,
                     uv_coverage,
-                    texture: sizing.size(areas[i], uv_coverage),
+                    texture: sizing(i).size(areas[i], uv_coverage),
                 }
             });
             ObjectChart {

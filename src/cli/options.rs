@@ -187,9 +187,10 @@ pub struct ObjectSpaceArgs {
     pub frame_hz: f64,
     /// Shading texels per metre of surface (above 0, at most 65536); an
     /// object's texture side is its charted area times this, rounded up to a
-    /// power of two.
-    #[arg(long, default_value_t = 256.0, value_parser = parse::texel_density)]
-    pub texel_density: f32,
+    /// power of two. Default: each object's side follows the screen, from
+    /// the most pixels per metre it covers along the camera path at --size.
+    #[arg(long, value_parser = parse::texel_density)]
+    pub texel_density: Option<f32>,
     /// Give every object an S x S shading texture instead (the reference study used 4096).
     #[arg(long)]
     pub texture_size: Option<u32>,

@@ -15,7 +15,7 @@ use shadespace::render::{
 use shadespace::scene::bookmarks::BookmarkRef;
 use shadespace::scene::free_camera::{LookAt, OrbitSpec};
 use shadespace::scene::path::SceneCameras;
-use shadespace::scene::{self, Aabb, CameraPath, Light, Scene, path};
+use shadespace::scene::{self, Aabb, Camera, CameraPath, Light, Scene, path};
 
 use super::lights::light_set;
 use super::options::{GpuArgs, ObjectSpaceArgs, PipelineName, SceneArgs, TextureChoice};
@@ -81,7 +81,12 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     };
     let (lights, lights_spec) = light_set(a, &cameras, &bounds, &path)?;
     let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {
-        let (charted, charts) = chart(&scene, &a.objectspace)?;
+        // Textures follow the screen along the path and in the extra views.
+        let mut views = charts::path_cameras(&path);
+        if let ExtraViews::Cameras(others) = &extra_views {
+            views.extend(others);
+        }
+        let (charted, charts) = chart(&scene, &a.objectspace, &views, a.size)?;
         (charted, Some(charts.texture_sizes()))
     } else {
         (scene, None)
@@ -171,24 +176,43 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
     RenderOptions { width: a.size.0, height: a.size.1, pipeline }
 }
 
-/// The texture sizing the options ask for.
-fn sizing(a: &ObjectSpaceArgs) -> Result<TextureSizing, Failure> {
-    match a.texture_size {
-        Some(size) if size.is_power_of_two() && (8..=MAX_TEXTURE_SIZE).contains(&size) => {
-            Ok(TextureSizing::Fixed(size))
+/// The texture sizing per object the options ask for: `--texture-size`,
+/// `--texel-density`, or by default sides that follow the screen: the most
+/// pixels per metre each object can cover in `views` at `size`
+/// ([`charts::screen`]).
+fn sizings(
+    scene: &Scene,
+    a: &ObjectSpaceArgs,
+    views: &[Camera],
+    size: (u32, u32),
+) -> Result<Vec<TextureSizing>, Failure> {
+    let uniform = |s: TextureSizing| Ok(vec![s; scene.objects.len()]);
+    match (a.texture_size, a.texel_density) {
+        (Some(size), _) if size.is_power_of_two() && (8..=MAX_TEXTURE_SIZE).contains(&size) => {
+            uniform(TextureSizing::Fixed(size))
         }
-        Some(size) => {
+        (Some(size), _) => {
             input(Err(anyhow::anyhow!("--texture-size {size} is not a power of two from 8 to {MAX_TEXTURE_SIZE}")))
         }
         // The value parser has checked the density.
-        None => Ok(TextureSizing::Density { texels_per_metre: a.texel_density, min: 64, max: MAX_DENSITY_SIZE }),
+        (None, Some(d)) => uniform(TextureSizing::Density { texels_per_metre: d, min: 64, max: MAX_DENSITY_SIZE }),
+        (None, None) => Ok(charts::screen_sizings(scene, views, size.0, size.1, 64, MAX_DENSITY_SIZE)),
     }
 }
 
-/// Charts every object shaded in object space; returns the scene with its
-/// charts in `uv1` and the charts (texture sizes, sources).
-pub fn chart(scene: &Scene, a: &ObjectSpaceArgs) -> Result<(Scene, SceneCharts), Failure> {
-    let charts = charts::chart_scene(scene, &sizing(a)?, &ChartCache::from_env())?;
+/// Charts every object shaded in object space, its texture sized for
+/// `views` at `size` unless the options fix the sizes; returns the scene
+/// with its charts in `uv1` and the charts (texture sizes, sources).
+pub fn chart(
+    scene: &Scene,
+    a: &ObjectSpaceArgs,
+    views: &[Camera],
+    size: (u32, u32),
+) -> Result<(Scene, SceneCharts), Failure> {
+    let sizings = sizings(scene, a, views, size)?;
+    let settings = charts::ChartSettings::default();
+    let charts =
+        charts::chart_scene_sized(scene, &sizings, &charts::PACKING_SIZING, &settings, &ChartCache::from_env())?;
     Ok((charts.apply(scene), charts))
 }
 

@@ -99,6 +99,10 @@ const SETTING_FLAGS: [&str; 14] = [
 const CAMERA_FLAGS: [&str; 5] = ["--camera", "--eye", "--target", "--orbit", "--fov"];
 /// The decoupled-rate flags, replaced once the panel sets `--reuse` itself.
 const RATE_FLAGS: [&str; 2] = ["--shade-hz", "--frame-hz"];
+/// Where the panel's density slider starts when texture sizes follow the
+/// screen (no `--texel-density`): the former default; moving it sizes every
+/// object at the density it shows.
+const PANEL_TEXEL_DENSITY: f32 = 256.0;
 
 /// Opens the window (or runs headless) and prints the run's report.
 pub fn run(a: ViewArgs) -> Result<(), Failure> {
@@ -152,7 +156,7 @@ struct ViewSession {
     /// texel density): switching pipelines reuses them instead of loading
     /// and charting the scene again.
     plain: Option<Setup>,
-    charted: Option<(u32, Setup)>,
+    charted: Option<(Option<u32>, Setup)>,
     path: CameraPath,
     bounds: Aabb,
     cameras: path::SceneCameras,
@@ -203,7 +207,8 @@ impl ViewSession {
                 reuse: os.shade_hz.map_or(os.reuse, |hz| (os.frame_hz / hz).round().max(1.0) as u32),
                 mip_bias: os.mip_bias,
                 variable_rate: os.variable_rate,
-                texel_density: os.texel_density,
+                // The slider's start when the sizes follow the screen.
+                texel_density: os.texel_density.unwrap_or(PANEL_TEXEL_DENSITY),
                 shade_budget: os.shade_budget,
                 atlas_budget: os.atlas_budget,
             },
@@ -234,9 +239,10 @@ impl ViewSession {
             );
         }
         os.atlas_budget = wanted.atlas_budget;
-        os.texel_density = checked(texel_density(&wanted.texel_density.to_string()))?;
         os.shade_budget = wanted.shade_budget.map(|m| checked(shade_budget(&m.to_string()))).transpose()?;
-        if os.texel_density != self.base.objectspace.texel_density {
+        // A density set in the panel replaces the command line's sizing.
+        if wanted.texel_density != self.initial_settings(settings.view).objectspace.texel_density {
+            os.texel_density = Some(checked(texel_density(&wanted.texel_density.to_string()))?);
             os.texture_size = None;
         }
         Ok(a)
@@ -245,7 +251,7 @@ impl ViewSession {
     /// Keeps a setup for the next renderers of its kind.
     fn keep(&mut self, a: &SceneArgs, s: Setup) {
         if s.texture_sizes.is_some() {
-            self.charted = Some((a.objectspace.texel_density.to_bits(), s));
+            self.charted = Some((a.objectspace.texel_density.map(f32::to_bits), s));
         } else {
             self.plain = Some(s);
         }
@@ -254,7 +260,7 @@ impl ViewSession {
     /// The setup (scene, charts) for `a`, built only if no kept one fits.
     fn setup_for(&mut self, a: &SceneArgs) -> Result<&Setup, Failure> {
         let charted = a.pipeline == PipelineName::Objectspace;
-        let density = a.objectspace.texel_density.to_bits();
+        let density = a.objectspace.texel_density.map(f32::to_bits);
         let fits =
             if charted { self.charted.as_ref().is_some_and(|(d, _)| *d == density) } else { self.plain.is_some() };
         if !fits {
@@ -327,9 +333,12 @@ impl Session for ViewSession {
         }
         add("--mip-bias", os.mip_bias.to_string());
         add("--variable-rate", os.variable_rate.to_string());
-        match self.base.objectspace.texture_size {
-            Some(size) if !density_changed => add("--texture-size", size.to_string()),
-            _ => add("--texel-density", os.texel_density.to_string()),
+        match (self.base.objectspace.texture_size, self.base.objectspace.texel_density) {
+            _ if density_changed => add("--texel-density", os.texel_density.to_string()),
+            (Some(size), _) => add("--texture-size", size.to_string()),
+            (None, Some(d)) => add("--texel-density", d.to_string()),
+            // Sizes that follow the screen: the default, no flag.
+            (None, None) => {}
         }
         if let Some(m) = os.shade_budget {
             add("--shade-budget", m.to_string());

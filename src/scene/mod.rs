@@ -410,15 +410,18 @@ impl Scene {
 }
 
 /// The names of the procedural scenes, for `--scene` and `--help`.
-pub const PROCEDURAL_SCENES: [&str; 2] = ["atrium", "voxels"];
+pub const PROCEDURAL_SCENES: [&str; 4] = ["atrium", "voxels", "terrain", "terrain-small"];
 
-/// Loads a scene by procedural name (`atrium`, `voxels`) or by path: a `.gltf`
+/// Loads a scene by procedural name (`atrium`, `voxels`, `terrain`,
+/// `terrain-small`) or by path: a `.gltf`
 /// or `.glb` file, an `.obj` file, or a folder of `.obj` files (one scene).
 /// The result is validated, so a bad file fails here with its name.
 pub fn load(spec: &str) -> Result<Scene, SceneError> {
     let scene = match spec {
         "atrium" => generate::atrium(),
         "voxels" => generate::voxels(),
+        "terrain" => generate::terrain(false),
+        "terrain-small" => generate::terrain(true),
         _ => {
             let path = Path::new(spec);
             if !path.exists() {

@@ -276,6 +276,9 @@ pub enum CameraSource {
     Orbit(OrbitStyle),
     /// The turntable framing the scene's bounds ([`framing`]).
     Framed,
+    /// The procedural terrain's flight, low and high
+    /// ([`super::generate::terrain::TerrainSpec::path`]).
+    Flight,
     /// Camera `index` of the scene file (glTF).
     Own { scene: String, index: usize },
 }
@@ -296,6 +299,7 @@ impl fmt::Display for CameraSource {
             CameraSource::Orbit(OrbitStyle::Inside) => f.write_str("orbit inside the scene bounds"),
             CameraSource::Orbit(OrbitStyle::Above) => f.write_str("orbit above the scene bounds"),
             CameraSource::Framed => f.write_str("turntable framing the scene bounds"),
+            CameraSource::Flight => f.write_str("flight over the terrain, low and high"),
             CameraSource::Own { scene, index } => write!(f, "{scene} [camera {index}]"),
         }
     }
@@ -583,6 +587,14 @@ fn cameras_for(
             let style = if spec == "atrium" { OrbitStyle::Inside } else { OrbitStyle::Above };
             let orbit = Orbit::with_style(bounds, style);
             (CameraPath::Orbit(orbit), orbit.fixed_cameras(), CameraSource::Orbit(style))
+        }
+        "terrain" | "terrain-small" => {
+            use super::generate::terrain::TerrainSpec;
+            let terrain = if spec == "terrain" { TerrainSpec::DEFAULT } else { TerrainSpec::SMALL };
+            let flight = terrain.path();
+            // The fixed cameras: the flight's first five keys (low, low, high, high, low).
+            let fixed = flight.keys.iter().take(5).map(|k| k.to_camera(flight.projection)).collect();
+            (CameraPath::Keyed(flight), fixed, CameraSource::Flight)
         }
         _ => {
             let framed = frame().ok_or(CameraFileError::EmptyBounds)?;

@@ -35,7 +35,7 @@ fn pixel_charts(scene: &Scene, ids: &[[u32; 2]]) -> Vec<(u32, u32)> {
 }
 
 /// PSNR (8-bit RGB) of `test` against `reference` over the pixels `keep`.
-fn psnr(reference: &image::RgbaImage, test: &image::RgbaImage, keep: &[bool]) -> (f64, usize) {
+pub(crate) fn psnr(reference: &image::RgbaImage, test: &image::RgbaImage, keep: &[bool]) -> (f64, usize) {
     let mut sum = 0.0;
     let mut n = 0;
     for (i, (a, b)) in reference.pixels().zip(test.pixels()).enumerate() {
@@ -110,7 +110,7 @@ fn seams(name: &str, mip_bias: f32) -> (f64, f64, usize) {
 /// but taps crossing into neighbouring charts: atrium 33.4 dB at bias 3,
 /// voxels 38.7 dB (colour bleeding across chart borders).
 const MIN_BORDER_PSNR: [(&str, f64); 2] = [("atrium", 36.5), ("voxels", 49.5)];
-const MAX_BORDER_GAP_DB: f64 = 6.0;
+pub(crate) const MAX_BORDER_GAP_DB: f64 = 6.0;
 /// Border pixels this close to forward show no seam whatever the gap (the
 /// voxels' inside pixels reach 63 dB at bias 0 with virtual textures).
 const SEAMLESS_PSNR: f64 = 50.0;

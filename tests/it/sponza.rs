@@ -27,7 +27,7 @@ fn sponza_forward_and_objectspace_agree() {
     let (w, h) = (480, 270);
     let spec: LightSpec = "small:32".parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &camera, w as f32 / h as f32, 1).unwrap();
-    let (scene, texture_sizes) = common::charted(&scene);
+    let (scene, texture_sizes) = common::charted_for(&scene, &camera, w, h);
     let objectspace = ObjectSpaceConfig { texture_sizes, ..Default::default() };
     let mut images = Vec::new();
     for pipeline in [PipelineConfig::Forward(ForwardConfig::default()), PipelineConfig::ObjectSpace(objectspace)] {

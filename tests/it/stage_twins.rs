@@ -261,7 +261,9 @@ fn shade_and_gather_on_the_untextured_floor() {
             shade: true,
         },
     );
-    assert!(report.texels > 10_000 && report.pixels > 3000, "{report:?}");
+    // The floor is one chart island, so its levels go on below 128 texels
+    // (levels 4-7 of 2048 here, 3,584 texels; 10,000+ when they stopped at 128).
+    assert!(report.texels > 3000 && report.pixels > 3000 && report.levels.len() >= 3, "{report:?}");
 }
 
 /// The atrium without textures: many objects, chart islands and levels.

@@ -128,13 +128,24 @@ impl AtlasLayout {
         max_size: u32,
         coarsest: u32,
     ) -> Result<Self, AtlasError> {
+        Self::with_coarsest(sizes, tile_size, page_size, max_size, &vec![coarsest; sizes.len()])
+    }
+
+    /// [`AtlasLayout::new`] with the coarsest level's side per object
+    /// (`coarsest[i]` for object i; objects past its end take its last).
+    pub fn with_coarsest(
+        sizes: &[Option<u32>],
+        tile_size: u32,
+        page_size: u32,
+        max_size: u32,
+        coarsest: &[u32],
+    ) -> Result<Self, AtlasError> {
         if ![8, 16, 32, 64].contains(&tile_size) {
             return Err(AtlasError::BadTileSize(tile_size));
         }
         if !page_size.is_power_of_two() || page_size < tile_size || page_size > 4 * tile_size {
             return Err(AtlasError::BadPageSize { page: page_size, tile: tile_size });
         }
-        let coarsest = coarsest.max(tile_size);
         let (mut tiles, mut pages) = (0u64, 0u64);
         let mut objects = Vec::with_capacity(sizes.len());
         for (object, s) in sizes.iter().enumerate() {
@@ -146,6 +157,7 @@ impl AtlasLayout {
                     continue;
                 }
             };
+            let coarsest = coarsest.get(object).or(coarsest.last()).copied().unwrap_or(tile_size).max(tile_size);
             let count = ((size / coarsest.min(size)).ilog2() as usize + 1).min(MAX_LEVELS);
             let levels = (0..count)
                 .map(|l| {
@@ -179,14 +191,14 @@ impl AtlasLayout {
         tile_size: u32,
         page_size: u32,
         max_size: u32,
-        coarsest: u32,
+        coarsest: &[u32],
         max_pages: u64,
     ) -> Result<(Self, u32), AtlasError> {
         let mut sizes: Vec<Option<u32>> = sizes.iter().map(|s| s.map(|s| s.min(max_size))).collect();
         let mut halvings = 0;
         loop {
             let can_halve = sizes.iter().flatten().any(|&s| s > 64);
-            match Self::new(&sizes, tile_size, page_size, max_size, coarsest) {
+            match Self::with_coarsest(&sizes, tile_size, page_size, max_size, coarsest) {
                 Ok(layout) if layout.page_count as u64 <= max_pages || !can_halve => return Ok((layout, halvings)),
                 Err(AtlasError::TooManyPages { .. } | AtlasError::TooManyTiles { .. }) if can_halve => {}
                 Ok(_) => {}
@@ -415,11 +427,20 @@ mod tests {
     }
 
     #[test]
+    fn coarsest_levels_are_per_object_and_at_least_a_tile() {
+        // 256 down to 128: two levels; down to one texel, raised to the tile: 256 .. 8, six.
+        let a = AtlasLayout::with_coarsest(&[Some(256), Some(256), None], 8, 16, 4096, &[128, 1]).unwrap();
+        let levels: Vec<usize> = a.objects.iter().map(|o| o.as_ref().map_or(0, |o| o.levels.len())).collect();
+        assert_eq!(levels, [2, 6, 0]);
+        assert_eq!(a.objects[1].as_ref().unwrap().levels[5].size, 8);
+    }
+
+    #[test]
     fn large_virtual_spaces_are_halved_until_the_page_table_fits() {
         let sizes = [Some(8192), Some(4096), None];
-        let (full, none) = AtlasLayout::fitting(&sizes, 8, 16, 16384, 128, 1 << 30).unwrap();
+        let (full, none) = AtlasLayout::fitting(&sizes, 8, 16, 16384, &[128], 1 << 30).unwrap();
         assert_eq!(none, 0);
-        let (fit, halvings) = AtlasLayout::fitting(&sizes, 8, 16, 16384, 128, full.page_count as u64 / 3).unwrap();
+        let (fit, halvings) = AtlasLayout::fitting(&sizes, 8, 16, 16384, &[128], full.page_count as u64 / 3).unwrap();
         assert_eq!(halvings, 1);
         assert!(fit.page_count as u64 <= full.page_count as u64 / 3);
         assert_eq!(fit.objects[0].as_ref().unwrap().size, 4096);

@@ -91,8 +91,28 @@ pub const PASS_SHADERS: &[ShaderSource] = &[
 pub const MAX_DENSITY_SIZE: u32 = 8192;
 /// Mip chains stop at this side: the procedural scenes' chart gutters are
 /// 1/128 of the square and generated charts have 4 texels at 256 or more, so
-/// below 128 texels neighbouring charts would share texels.
+/// below 128 texels neighbouring charts would share texels (objects charted
+/// as one island go on down to one tile: `coarsest_levels`).
 pub const COARSEST_LEVEL: u32 = 128;
+/// The coarsest level's side per object: [`COARSEST_LEVEL`], or one tile
+/// (the layout raises it to the tile size) for an object whose chart is one
+/// island, a terrain patch say: with no neighbouring chart to share texels
+/// with, its levels may go on down, so that a distant patch covering a few
+/// pixels is not shaded at 128 x 128 texels.
+fn coarsest_levels(scene: &Scene) -> Vec<u32> {
+    let single: Vec<bool> = scene
+        .meshes
+        .iter()
+        .map(|m| {
+            m.uv1.as_ref().is_some_and(|uv| {
+                let islands = crate::charts::islands::triangle_islands(&m.indices, uv);
+                islands.iter().all(|&i| Some(&i) == islands.first())
+            })
+        })
+        .collect();
+    scene.objects.iter().map(|o| if single[o.mesh] { 1 } else { COARSEST_LEVEL }).collect()
+}
+
 /// Default page side of the virtual textures (raised to the tile size).
 /// Pages of one tile: the pages in use hold just the visible texels (on
 /// Sponza at 1920x1080, pages of 16 hold 1.6 times them, 3.0 at 32). The
@@ -516,7 +536,7 @@ impl ObjectSpace {
             config.tile_size,
             page_size,
             atlas::MAX_TEXTURE_SIZE,
-            COARSEST_LEVEL,
+            &coarsest_levels(scene_cpu),
             max_pages,
         )?;
         if virtual_halvings > 0 {

@@ -9,6 +9,7 @@
 mod atrium;
 pub mod builder;
 mod noise;
+pub mod terrain;
 mod voxels;
 
 use glam::{Mat4, Vec3};
@@ -29,6 +30,16 @@ pub fn atrium() -> Scene {
 /// one per 32 x 32-column chunk and block material, at most 4.5k triangles each).
 pub fn voxels() -> Scene {
     voxels::build().scene
+}
+
+/// A 2 km square terrain of 1.18 M triangles in 12 x 12 patches, coloured
+/// in seven bands by height and slope, with roads, a power line and scorch
+/// marks stamped into its material ([`terrain::TerrainSpec::DEFAULT`]);
+/// `small` gives the 256 m one of 8 k triangles for tests
+/// ([`terrain::TerrainSpec::SMALL`]).
+pub fn terrain(small: bool) -> Scene {
+    let spec = if small { terrain::TerrainSpec::SMALL } else { terrain::TerrainSpec::DEFAULT };
+    spec.scene()
 }
 
 /// A generated scene plus the chart layout of each mesh (for tests and reports).

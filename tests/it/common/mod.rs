@@ -85,14 +85,27 @@ pub fn floor_scene() -> (Scene, Camera, Vec<Light>) {
     (scene, camera, lights)
 }
 
-/// Charts `scene` as the CLI does with its default density (uv1 set on every
-/// mesh) and returns it with the shading-texture sizes. Chart generation is
+/// Charts `scene` as the CLI does with `--texel-density 256` (uv1 set on
+/// every mesh) and returns it with the shading-texture sizes. Chart generation is
 /// cached under the test target folder.
 pub fn charted(scene: &Scene) -> (Scene, Vec<Option<u32>>) {
     use shadespace::charts::{self, ChartCache, TextureSizing};
     let cache = ChartCache::in_dir(Path::new(env!("CARGO_TARGET_TMPDIR")).join("charts"));
     let sizing = TextureSizing::Density { texels_per_metre: 256.0, min: 64, max: 8192 };
     let c = charts::chart_scene(scene, &sizing, &cache).unwrap();
+    (c.apply(scene), c.texture_sizes())
+}
+
+/// Charts `scene` as the CLI does by default for `camera` at
+/// `width`x`height`: each object's texture sized for the most pixels per
+/// metre the camera shows it at (generated charts packed as the CLI packs
+/// them), cached as [`charted`] caches.
+pub fn charted_for(scene: &Scene, camera: &Camera, width: u32, height: u32) -> (Scene, Vec<Option<u32>>) {
+    use shadespace::charts::{self, ChartCache, ChartSettings};
+    let cache = ChartCache::in_dir(Path::new(env!("CARGO_TARGET_TMPDIR")).join("charts"));
+    let sizings = charts::screen_sizings(scene, &[*camera], width, height, 64, 8192);
+    let settings = ChartSettings::default();
+    let c = charts::chart_scene_sized(scene, &sizings, &charts::PACKING_SIZING, &settings, &cache).unwrap();
     (c.apply(scene), c.texture_sizes())
 }
 
