@@ -55,14 +55,34 @@ pub fn triangle_distance(p: [Vec2; 3], q: Vec2) -> f32 {
 
 /// Triangle + 1 for texel `texel` of a level `size` texels wide (0 for
 /// none): of the triangles touching the texel's square, the nearest to its
-/// centre; else the nearest touching its 3x3 neighbourhood.
+/// centre; else the nearest touching its 3x3 neighbourhood. A triangle
+/// holding the centre is listed in the centre's cell, so when that cell has
+/// one the other cells are not searched (the shader's shortcut, same answer).
 pub fn covering_triangle(grid: &ChartGrid, uv: &[Vec2], indices: &[u32], size: u32, texel: [u32; 2]) -> u32 {
     let s = size as f32;
     let lo = Vec2::new(texel[0] as f32, texel[1] as f32);
+    let centre = lo + 0.5;
+    let own = nearest(grid.near(centre / s, centre / s), uv, indices, s, lo);
+    if own.0.1 != 0 && own.0.0 == 0.0 {
+        return own.0.1;
+    }
+    let (touching, near) = nearest(grid.near((lo - 1.0) / s, (lo + 2.0) / s), uv, indices, s, lo);
+    if touching.1 != 0 { touching.1 } else { near.1 }
+}
+
+/// Of `triangles`, the nearest (distance, triangle + 1) to the texel at
+/// `lo` touching its square, and touching only its 3x3 neighbourhood.
+fn nearest(
+    triangles: impl Iterator<Item = u32>,
+    uv: &[Vec2],
+    indices: &[u32],
+    s: f32,
+    lo: Vec2,
+) -> ((f32, u32), (f32, u32)) {
     let (ring_lo, ring_hi) = (lo - 1.0, lo + 2.0);
     let centre = lo + 0.5;
     let (mut touching, mut near) = ((f32::MAX, 0u32), (f32::MAX, 0u32));
-    for triangle in grid.near(ring_lo / s, ring_hi / s) {
+    for triangle in triangles {
         let p = [0, 1, 2].map(|k| uv[indices[3 * triangle as usize + k] as usize] * s);
         if !overlaps(p, ring_lo, ring_hi) {
             continue;
@@ -73,7 +93,7 @@ pub fn covering_triangle(grid: &ChartGrid, uv: &[Vec2], indices: &[u32], size: u
             *best = (d, triangle + 1);
         }
     }
-    if touching.1 != 0 { touching.1 } else { near.1 }
+    (touching, near)
 }
 
 #[cfg(test)]
@@ -91,6 +111,48 @@ mod tests {
         assert_eq!(triangle_distance(t, Vec2::new(1.0, 1.0)), 0.0);
         assert!((triangle_distance(t, Vec2::new(3.0, 3.0)) - 2.0f32.sqrt()).abs() < 1e-5);
         assert!((triangle_distance(t, Vec2::new(-1.0, 2.0)) - 1.0).abs() < 1e-6);
+    }
+
+    /// The grid and the centre-cell shortcut find what a search of every
+    /// triangle finds, at every level of a jittered 24 x 24 grid mesh (a
+    /// terrain patch's shape: at coarse levels each texel's ring spans many
+    /// cells), texels on the chart's border and beyond it included.
+    #[test]
+    fn the_grid_and_its_shortcut_find_what_searching_every_triangle_finds() {
+        let n = 24;
+        let jitter = |i: u32, j: u32| ((i * 7 + j * 13) % 5) as f32 * 0.04;
+        let mut uv = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let inner = |k: u32| if k == 0 || k == n { 0.0 } else { 1.0 };
+                let x = (i as f32 + jitter(i, j) * inner(i)) / n as f32;
+                let y = (j as f32 + jitter(j, i) * inner(j)) / n as f32;
+                uv.push(Vec2::new(x, y) * 0.9 + 0.05);
+            }
+        }
+        let mut indices = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let v = j * (n + 1) + i;
+                indices.extend([v, v + 1, v + n + 2, v, v + n + 2, v + n + 1]);
+            }
+        }
+        let grid = ChartGrid::new(&uv, &indices);
+        let all = (indices.len() / 3) as u32;
+        for size in [4, 8, 16, 32, 64, 128] {
+            for y in 0..size {
+                for x in 0..size {
+                    let lo = Vec2::new(x as f32, y as f32);
+                    let (touching, near) = nearest(0..all, &uv, &indices, size as f32, lo);
+                    let want = if touching.1 != 0 { touching.1 } else { near.1 };
+                    assert_eq!(
+                        covering_triangle(&grid, &uv, &indices, size, [x, y]),
+                        want,
+                        "texel ({x}, {y}) of {size}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

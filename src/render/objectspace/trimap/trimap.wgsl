@@ -73,20 +73,20 @@ fn triangle_distance(p: array<vec2f, 3>, q: vec2f) -> f32 {
     return min(segment_distance(q, p[0], p[1]), min(segment_distance(q, p[1], p[2]), segment_distance(q, p[2], p[0])));
 }
 
-// Triangle + 1 for texel `texel` of a level `size` texels wide, 0 for none.
-fn covering_triangle(o: Object, g: ChartGrid, size: u32, texel: vec2u) -> u32 {
-    let s = f32(size);
-    let side = f32(g.side);
-    let lo = vec2f(texel);
+// The nearest triangles to a texel among those listed in cells c0..=c1:
+// touching its square, and touching only its 3x3 neighbourhood.
+struct Nearest {
+    touching: f32,
+    touching_id: u32,
+    near: f32,
+    near_id: u32,
+}
+
+fn search_cells(o: Object, g: ChartGrid, s: f32, lo: vec2f, c0: vec2u, c1: vec2u) -> Nearest {
     let ring_lo = lo - 1.0;
     let ring_hi = lo + 2.0;
-    let c0 = vec2u(clamp(floor(ring_lo / s * side), vec2f(0.0), vec2f(side - 1.0)));
-    let c1 = vec2u(clamp(floor(ring_hi / s * side), vec2f(0.0), vec2f(side - 1.0)));
     let centre = lo + 0.5;
-    var touching = 3.0e38;
-    var touching_id = 0u;
-    var near = 3.0e38;
-    var near_id = 0u;
+    var n = Nearest(3.0e38, 0u, 3.0e38, 0u);
     for (var cy = c0.y; cy <= c1.y; cy++) {
         for (var cx = c0.x; cx <= c1.x; cx++) {
             let cell = g.cell_base + cy * g.side + cx;
@@ -101,18 +101,38 @@ fn covering_triangle(o: Object, g: ChartGrid, size: u32, texel: vec2u) -> u32 {
                 let d = triangle_distance(p, centre);
                 // Ties go to the lower index (a triangle can sit in several cells).
                 if overlaps(p, lo, lo + 1.0) {
-                    if d < touching || (d == touching && triangle + 1u < touching_id) {
-                        touching = d;
-                        touching_id = triangle + 1u;
+                    if d < n.touching || (d == n.touching && triangle + 1u < n.touching_id) {
+                        n.touching = d;
+                        n.touching_id = triangle + 1u;
                     }
-                } else if d < near || (d == near && triangle + 1u < near_id) {
-                    near = d;
-                    near_id = triangle + 1u;
+                } else if d < n.near || (d == n.near && triangle + 1u < n.near_id) {
+                    n.near = d;
+                    n.near_id = triangle + 1u;
                 }
             }
         }
     }
-    return select(near_id, touching_id, touching_id != 0u);
+    return n;
+}
+
+// Triangle + 1 for texel `texel` of a level `size` texels wide, 0 for none.
+fn covering_triangle(o: Object, g: ChartGrid, size: u32, texel: vec2u) -> u32 {
+    let s = f32(size);
+    let side = f32(g.side);
+    let lo = vec2f(texel);
+    // A triangle holding the texel's centre (distance 0, the least) is
+    // listed in the centre's cell: when that cell has one, no other cell can
+    // change the answer. Coarse levels, whose 3x3 rings span many cells,
+    // mostly stop here.
+    let centre_cell = vec2u(clamp(floor((lo + 0.5) / s * side), vec2f(0.0), vec2f(side - 1.0)));
+    let own = search_cells(o, g, s, lo, centre_cell, centre_cell);
+    if own.touching_id != 0u && own.touching == 0.0 {
+        return own.touching_id;
+    }
+    let c0 = vec2u(clamp(floor((lo - 1.0) / s * side), vec2f(0.0), vec2f(side - 1.0)));
+    let c1 = vec2u(clamp(floor((lo + 2.0) / s * side), vec2f(0.0), vec2f(side - 1.0)));
+    let n = search_cells(o, g, s, lo, c0, c1);
+    return select(n.near_id, n.touching_id, n.touching_id != 0u);
 }
 
 @compute @workgroup_size(8, 8)
