@@ -6,7 +6,7 @@
 //! WGSL function per layer kind and per mask kind), so the shading cost
 //! grows with the number of layers that show at a point.
 //!
-//! Layers come from a JSON file ([`file`], `--materials FILE`, schema in
+//! Layers come from a JSON file ([`mod@file`], `--materials FILE`, schema in
 //! `docs/materials.md`) or the preset `layered:K` ([`preset`]), applied to
 //! the scene's materials before any pipeline sees them ([`apply`]); without
 //! either, materials have no layers and every pipeline renders as before.
@@ -224,7 +224,7 @@ impl GpuLayer {
             Mask::Full => g.mask = 0,
             Mask::Texture { texture, channel, scale, threshold, softness } => {
                 g.mask = 1;
-                // Validation ([`file`]) refuses a texture the material
+                // Validation ([`mod@file`]) refuses a texture the material
                 // lacks; a layer built in code without one reads layer 0.
                 g.mask_index = match (texture.of(material), texture.is_color()) {
                     (Some(t), true) => color_layer(t),
@@ -281,7 +281,7 @@ pub enum MaterialsSpec {
     None,
     /// The preset: every material with `K` layers ([`preset::layered`]).
     Layered(usize),
-    /// A material file ([`file`]).
+    /// A material file ([`mod@file`]).
     File(PathBuf),
 }
 

@@ -165,7 +165,6 @@ impl SceneGpu {
                     alpha_cutoff: m.alpha_cutoff.unwrap_or(0.0),
                     layer_first: layer_ranges[o.material].0,
                     layer_count: layer_ranges[o.material].1,
-                    ..Default::default()
                 }
             })
             .collect();
