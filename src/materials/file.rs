@@ -213,9 +213,9 @@ fn parse_mask(value: Value, path: &str, material: &Material) -> Result<Mask, Str
             if up.cross(direction).length() < 1e-6 * up.length() * direction.length() || up.length() < 1e-6 {
                 return Err(format!("{path}.up: must not be parallel to direction"));
             }
-            let size = f.range("size", [1.0, 1.0])?;
-            if size[0] <= 0.0 {
-                return Err(format!("{path}.size: expected two positive lengths"));
+            let size = f.numbers::<2>("size")?.unwrap_or([1.0, 1.0]);
+            if size[0] <= 0.0 || size[1] <= 0.0 {
+                return Err(format!("{path}.size: expected two positive lengths (width, height)"));
             }
             Mask::Decal {
                 center,
@@ -398,6 +398,14 @@ mod tests {
         assert!(matches!(s.materials[0].layers[0].mask, Mask::Noise { octaves: 4, scale: 2.0, .. }));
         assert_eq!(s.materials[1].layers.len(), 2);
         assert_eq!(s.materials[1].layers[1].opacity, 0.5);
+    }
+
+    /// The example of `docs/materials.md` applies to any scene.
+    #[test]
+    fn the_documented_example_applies() {
+        let mut s = scene();
+        apply_json(&mut s, include_str!("../../docs/materials/example.json")).unwrap();
+        assert!(s.materials.iter().all(|m| m.layers.len() == 5));
     }
 
     /// Every bad input names its field.

@@ -7,8 +7,11 @@
 // m_i * (1 - m_{i+1}) * ... * (1 - m_top), and the material's own surface
 // what no layer covers. Lighting is linear in radiance, so the blend can be
 // taken per light (multi-pass, light volumes) or over all lights at once:
-// both give the same image. Layers of weight 0 are not lit; the cost is one
-// lighting evaluation per layer that shows, so it grows with the layer count.
+// both give the same image. Callers walk the layers top down
+// (`layer_count`, `layer_at`, `layer_mask`), keeping the weight not yet
+// given out: a layer of weight 0 is not lit, and an opaque one ends the walk
+// (nothing below it shows). The cost is one lighting evaluation per layer
+// that shows, so it grows with the layer count.
 //
 // A Surface carries its material's layer range (`layer_first`,
 // `layer_count`, 0 for an unlayered material) and its UV0 and texture mip
@@ -16,7 +19,7 @@
 // in the scene) none of this is compiled and every function below is the
 // unlayered lighting.
 #define_import_path shadespace::layers
-#import shadespace::contract::{LAYER_SLOTS, LAYER_BASE, LAYER_PAINTED_METAL, LAYER_BARE_METAL, LAYER_DIRT,
+#import shadespace::contract::{LAYER_BASE, LAYER_PAINTED_METAL, LAYER_BARE_METAL, LAYER_DIRT,
     LAYER_SNOW, LAYER_EMISSIVE, MASK_TEXTURE, MASK_NOISE, MASK_SLOPE_HEIGHT, MASK_DECAL}
 #import shadespace::lighting::{Light, Surface, light_radiance, shininess_from_roughness}
 #import shadespace::scene_bindings::{albedo, albedo_sampler, linear_maps}
@@ -46,12 +49,6 @@ struct Layer {
 }
 
 @group(0) @binding(13) var<storage, read> material_layers: array<Layer>;
-
-// Per slot, the weight of a surface in the blend: slot 0 the material's own
-// surface, slot i > 0 layer i - 1.
-struct LayerStack {
-    weights: array<f32, LAYER_SLOTS>,
-}
 
 // 0 below `edge - width / 2`, 1 above `edge + width / 2`, linear between
 // (a step at `edge` for width 0).
@@ -278,61 +275,49 @@ fn layer_surface(l: Layer, s: Surface) -> Surface {
     return layer_decal(l, s);
 }
 
-// The blend weights of the material's surface and its layers at `s`
-// (`s.layer_count` > 0), top layer first.
-fn layer_stack(s: Surface) -> LayerStack {
-    var stack: LayerStack;
-    var remaining = 1.0;
-    for (var i = s.layer_count; i > 0u; i--) {
-        let m = layer_mask(material_layers[s.layer_first + i - 1u], s);
-        stack.weights[i] = m * remaining;
-        remaining *= 1.0 - m;
-    }
-    stack.weights[0] = remaining;
-    return stack;
-}
-
-// The surface of slot `i` of the stack of `s` (0: `s` itself).
-fn stack_surface(s: Surface, i: u32) -> Surface {
-    if i == 0u {
-        return s;
-    }
-    return layer_surface(material_layers[s.layer_first + i - 1u], s);
+// Layer `i` (1 = the bottom one, `s.layer_count` the top) of the material of `s`.
+fn layer_at(s: Surface, i: u32) -> Layer {
+    return material_layers[s.layer_first + i - 1u];
 }
 
 // What one light reflects from the layered surface `s` towards `to_eye`:
 // for passes that see one light at a time (multi-pass forward, light volumes).
 fn layered_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
 #ifdef LAYERS
-    if s.layer_count != 0u {
-        var stack = layer_stack(s);
-        var color = vec3f(0.0);
-        for (var i = 0u; i <= s.layer_count; i++) {
-            let w = stack.weights[i];
-            if w > 0.0 {
-                color += w * light_radiance(light, stack_surface(s, i), to_eye);
-            }
+    var color = vec3f(0.0);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * light_radiance(light, layer_surface(l, s), to_eye);
         }
-        return color;
     }
-#endif
+    if remaining > 0.0 {
+        color += remaining * light_radiance(light, s, to_eye);
+    }
+    return color;
+#else
     return light_radiance(light, s, to_eye);
+#endif
 }
 
 // The emission of the layered surface `s`.
 fn layered_emission(s: Surface) -> vec3f {
 #ifdef LAYERS
-    if s.layer_count != 0u {
-        var stack = layer_stack(s);
-        var color = vec3f(0.0);
-        for (var i = 0u; i <= s.layer_count; i++) {
-            let w = stack.weights[i];
-            if w > 0.0 {
-                color += w * stack_surface(s, i).emission;
-            }
+    var color = vec3f(0.0);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * layer_surface(l, s).emission;
         }
-        return color;
     }
-#endif
+    return color + remaining * s.emission;
+#else
     return s.emission;
+#endif
 }

@@ -27,7 +27,7 @@ use glam::{Mat4, Vec3, Vec4};
 use crate::scene::{Material, Scene};
 use crate::shaders::gpu_struct;
 
-/// Most layers a material may have (the shaders keep one weight per layer).
+/// Most layers a material may have (a bound on the shading cost of a point).
 pub const MAX_LAYERS: usize = 16;
 
 /// What a layer is made of: each kind is one WGSL function that gives the
@@ -143,7 +143,6 @@ pub fn wgsl_constants() -> Vec<(&'static str, u32)> {
     let mut c: Vec<_> = kinds.iter().enumerate().map(|(i, n)| (*n, i as u32)).collect();
     c.extend([("LAYER_EMISSIVE", 5), ("LAYER_DECAL", 6)]);
     c.extend([("MASK_FULL", 0), ("MASK_TEXTURE", 1), ("MASK_NOISE", 2), ("MASK_SLOPE_HEIGHT", 3), ("MASK_DECAL", 4)]);
-    c.push(("LAYER_SLOTS", MAX_LAYERS as u32 + 1));
     c
 }
 

@@ -23,7 +23,7 @@
 #import shadespace::scene_bindings::{view, lights}
 #import shadespace::surface::emission_and_globals
 #ifdef LAYERS
-#import shadespace::layers::{layer_stack, stack_surface}
+#import shadespace::layers::{layer_at, layer_mask, layer_surface}
 #endif
 #ifdef VISIBILITY_BUFFER
 #import shadespace::visibility_read::{GbufferTexel, gbuffer_depth_at, gbuffer_texel}
@@ -82,19 +82,23 @@ fn tile_frustum(lo: vec2f, hi: vec2f, range: vec2f) -> array<vec4f, 6> {
 fn shade_listed(texel: GbufferTexel, count: u32) -> vec3f {
 #ifdef LAYERS
     let s = texel.surface;
-    if s.layer_count != 0u {
-        var stack = layer_stack(s);
-        var color = vec3f(0.0);
-        for (var k = 0u; k <= s.layer_count; k++) {
-            let w = stack.weights[k];
-            if w > 0.0 {
-                color += w * shade_listed_one(stack_surface(s, k), texel.to_eye, count);
-            }
+    var color = vec3f(0.0);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * shade_listed_one(layer_surface(l, s), texel.to_eye, count);
         }
-        return color;
     }
-#endif
+    if remaining > 0.0 {
+        color += remaining * shade_listed_one(s, texel.to_eye, count);
+    }
+    return color;
+#else
     return shade_listed_one(texel.surface, texel.to_eye, count);
+#endif
 }
 
 // `shade_listed` of one surface (a material or one of its layers).

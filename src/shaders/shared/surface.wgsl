@@ -7,7 +7,7 @@
 #import shadespace::contract::NO_TEXTURE
 #import shadespace::lighting::{Surface, light_radiance, shininess_from_roughness}
 #ifdef LAYERS
-#import shadespace::layers::{layer_stack, stack_surface}
+#import shadespace::layers::{layer_at, layer_mask, layer_surface}
 #endif
 #import shadespace::scene::{Object, vertex_uv0}
 #import shadespace::scene_bindings::{view, vertices, lights, light_indices, albedo, albedo_sampler, linear_maps}
@@ -134,19 +134,23 @@ fn surface_point(o: Object, tri: vec3u, b: vec3f, texture_lod: f32) -> Surface {
 // (`shadespace::layers`).
 fn light_surface(o: Object, s: Surface) -> vec3f {
 #ifdef LAYERS
-    if s.layer_count != 0u {
-        var stack = layer_stack(s);
-        var color = vec3f(0.0);
-        for (var i = 0u; i <= s.layer_count; i++) {
-            let w = stack.weights[i];
-            if w > 0.0 {
-                color += w * light_surface_one(o, stack_surface(s, i));
-            }
+    var color = vec3f(0.0);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * light_surface_one(o, layer_surface(l, s));
         }
-        return color;
     }
-#endif
+    if remaining > 0.0 {
+        color += remaining * light_surface_one(o, s);
+    }
+    return color;
+#else
     return light_surface_one(o, s);
+#endif
 }
 
 // `light_surface` of one surface (a material or one of its layers).
@@ -173,19 +177,26 @@ fn light_globals(s: Surface, to_eye: vec3f) -> vec3f {
 // deferred shading), each layer's with its weight for a layered material.
 fn emission_and_globals(s: Surface, to_eye: vec3f) -> vec3f {
 #ifdef LAYERS
-    if s.layer_count != 0u {
-        var stack = layer_stack(s);
-        var color = vec3f(0.0);
-        for (var i = 0u; i <= s.layer_count; i++) {
-            let w = stack.weights[i];
-            if w > 0.0 {
-                let si = stack_surface(s, i);
-                color += w * (si.emission + light_globals(si, to_eye));
-            }
+    var color = vec3f(0.0);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * emission_and_globals_one(layer_surface(l, s), to_eye);
         }
-        return color;
     }
+    if remaining > 0.0 {
+        color += remaining * emission_and_globals_one(s, to_eye);
+    }
+    return color;
+#else
+    return emission_and_globals_one(s, to_eye);
 #endif
+}
+
+fn emission_and_globals_one(s: Surface, to_eye: vec3f) -> vec3f {
     return s.emission + light_globals(s, to_eye);
 }
 

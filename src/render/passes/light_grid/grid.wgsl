@@ -11,7 +11,7 @@
 #import shadespace::scene_bindings::{view, lights}
 #import shadespace::surface::light_globals
 #ifdef LAYERS
-#import shadespace::layers::{layer_stack, stack_surface}
+#import shadespace::layers::{layer_at, layer_mask, layer_surface}
 #endif
 
 // Mirrors `passes::light_grid::GpuLightGridParams`.
@@ -88,19 +88,23 @@ fn cell_radiance(cell: u32, s: Surface, to_eye: vec3f) -> vec3f {
 // a layered material, each layer's with its weight (`shadespace::layers`).
 fn light_surface_in_cell(o: Object, s: Surface, cell: u32) -> vec3f {
 #ifdef LAYERS
-    if s.layer_count != 0u {
-        var stack = layer_stack(s);
-        var color = vec3f(0.0);
-        for (var i = 0u; i <= s.layer_count; i++) {
-            let w = stack.weights[i];
-            if w > 0.0 {
-                color += w * light_surface_in_cell_one(stack_surface(s, i), cell);
-            }
+    var color = vec3f(0.0);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * light_surface_in_cell_one(layer_surface(l, s), cell);
         }
-        return color;
     }
-#endif
+    if remaining > 0.0 {
+        color += remaining * light_surface_in_cell_one(s, cell);
+    }
+    return color;
+#else
     return light_surface_in_cell_one(s, cell);
+#endif
 }
 
 // `light_surface_in_cell` of one surface (a material or one of its layers).
