@@ -1,6 +1,7 @@
 //! Layered materials (`src/materials/`, issue 26) in every pipeline: a
 //! two-layer floor whose mask splits it in halves shows each layer on its
-//! half; the preset `layered:4` on the atrium agrees with forward within
+//! half; texture-channel and decal masks agree with forward in every
+//! pipeline; the preset `layered:4` on the atrium agrees with forward within
 //! FLIP 0.02 in every pipeline (and visibly changes the image, while
 //! `layered:1` leaves it as it was); a bad material file exits 2 naming the
 //! file and the field.
@@ -48,6 +49,22 @@ fn render(
     image
 }
 
+/// White ambient light and a white point light 3 m over the floor's centre.
+fn white_lights() -> [Light; 2] {
+    let white = |kind, intensity, position| Light {
+        kind,
+        color: Vec3::ONE,
+        intensity,
+        position,
+        direction: Vec3::NEG_Y,
+        radius: 12.0,
+        cos_inner: 0.9,
+        cos_outer: 0.8,
+        casts_shadows: false,
+    };
+    [white(LightKind::Ambient, 0.3, Vec3::ZERO), white(LightKind::Point, 8.0, Vec3::new(0.0, 3.0, 0.0))]
+}
+
 /// Mean RGB of the `2r x 2r` pixels around (`x`, `y`).
 fn mean_rgb(img: &image::RgbaImage, x: u32, y: u32, r: u32) -> Vec3 {
     let mut sum = Vec3::ZERO;
@@ -79,18 +96,7 @@ fn two_layer_floor_shows_each_layer_on_its_half() {
     )
     .unwrap();
     materials::apply(&mut scene, &MaterialsSpec::File(file)).unwrap();
-    let white = |kind, intensity, position| Light {
-        kind,
-        color: Vec3::ONE,
-        intensity,
-        position,
-        direction: Vec3::NEG_Y,
-        radius: 12.0,
-        cos_inner: 0.9,
-        cos_outer: 0.8,
-        casts_shadows: false,
-    };
-    let lights = [white(LightKind::Ambient, 0.3, Vec3::ZERO), white(LightKind::Point, 8.0, Vec3::new(0.0, 3.0, 0.0))];
+    let lights = white_lights();
     let (charted, sizes) = common::charted(&scene);
     let size = (128, 128);
     for pipeline in every_pipeline(sizes) {
@@ -103,6 +109,66 @@ fn two_layer_floor_shows_each_layer_on_its_half() {
             let path = common::out_dir().join(format!("two-halves-{name}.png"));
             img.save(&path).unwrap();
             panic!("{name}: left half {left} should be red, right half {right} blue; image {}", path.display());
+        }
+    }
+}
+
+/// Object space's bound in [`texture_and_decal_masks_agree_across_pipelines`]:
+/// measured 0.028 on lavapipe, plus 25 % (the goldens' rule). Above 0.02
+/// because a texture mask is a threshold: object space thresholds each
+/// texel's sample and then filters the shades in the gather, forward
+/// thresholds each pixel's filtered sample, and at the floor's far rows,
+/// where the checker's cells are a few pixels wide, the two put mask edges
+/// apart (the plain floor is 0.0095 from forward here).
+const OBJECT_SPACE_TEXTURE_MASK_FLIP: f32 = 0.035;
+
+/// Texture-channel and decal-projector masks (which read UV0 and world
+/// positions that deferred shading rebuilds from its G-buffer) agree with
+/// forward in every pipeline (lavapipe: multi-pass 0.0010, clustered 0,
+/// deferred 0.0023, deferred-compute 0.0020; object space 0.028, bound
+/// [`OBJECT_SPACE_TEXTURE_MASK_FLIP`]), and change forward's image.
+#[test]
+fn texture_and_decal_masks_agree_across_pipelines() {
+    let ctx = common::gpu();
+    let (plain, camera, _) = common::floor_scene();
+    let lights = white_lights();
+    let mut scene = plain.clone();
+    // The checker's light cells (1.0 x tint) against its dark ones (0.7 x
+    // tint), in red, once over the floor (8 cells of 1 m).
+    let red = shadespace::scene::checker::object_tint(0).x;
+    let json = format!(
+        r#"{{"materials": [{{"name": "*", "layers": [
+            {{"kind": "decal", "color": [0.9, 0.8, 0.1], "roughness": 0.4,
+             "mask": {{"type": "texture", "texture": "base_color", "channel": "r", "scale": 0.125,
+                       "threshold": {}, "softness": {}}}}},
+            {{"kind": "painted_metal", "paint": [0.1, 0.3, 0.7], "chips": 0.0,
+             "mask": {{"type": "decal", "center": [1.5, 0, 1.5], "direction": [0, -1, 0], "up": [0, 0, 1],
+                       "size": [3, 3], "depth": 0.5, "round": true, "softness": 0.2}}}}
+        ]}}]}}"#,
+        0.85 * red,
+        0.6 * red
+    );
+    materials::file::apply_json(&mut scene, &json).unwrap();
+    let size = (128, 128);
+    let forward = || PipelineConfig::Forward(ForwardConfig::default());
+    let reference = render(&ctx, &scene, &camera, &lights, size, forward());
+    let (e, _) = metrics::compare(&render(&ctx, &plain, &camera, &lights, size, forward()), &reference);
+    assert!(e.flip_mean > 0.05, "the masked layers hardly change the image: {e:?}");
+    let (charted, sizes) = common::charted(&scene);
+    for pipeline in every_pipeline(sizes).into_iter().skip(1) {
+        let name = pipeline.name();
+        let object_space = matches!(pipeline, PipelineConfig::ObjectSpace(_));
+        let s = if object_space { &charted } else { &scene };
+        let img = render(&ctx, s, &camera, &lights, size, pipeline);
+        let (e, map) = metrics::compare(&reference, &img);
+        eprintln!("texture and decal masks, {name} against forward: {e:?}");
+        let bound = if object_space { OBJECT_SPACE_TEXTURE_MASK_FLIP } else { AGREEMENT_FLIP };
+        if e.flip_mean > bound {
+            let out = common::out_dir();
+            img.save(out.join(format!("masks-{name}.png"))).unwrap();
+            map.save(out.join(format!("masks-{name}-flip.png"))).unwrap();
+            reference.save(out.join("masks-forward.png")).unwrap();
+            panic!("masks {name}: FLIP {} > {bound}; images in {}", e.flip_mean, out.display());
         }
     }
 }
