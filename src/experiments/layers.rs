@@ -9,7 +9,9 @@
 //! against the 4x4 supersampled reference (`crate::reference`) of the same
 //! layered scene and against forward's frame (FLIP, PSNR). The report tables
 //! and plots frame time against K per light set, and names, per K and light
-//! set, object space's speed-up over the fastest conventional pipeline.
+//! set, object space's speed-up over the fastest conventional pipeline. A
+//! configuration slower than the grid's cap (`--cap-ms`) at K layers skips
+//! the larger K with that light set.
 
 use std::collections::BTreeMap;
 
@@ -110,9 +112,10 @@ pub struct Row {
     /// The last measured frame against the supersampled reference.
     pub flip_reference: f64,
     pub psnr_reference_db: f64,
-    /// The last measured frame against forward's (per-layer lighting).
-    pub flip_forward: f64,
-    pub psnr_forward_db: f64,
+    /// The last measured frame against forward's (per-layer lighting; none
+    /// for forward itself, or where forward passed the cap).
+    pub flip_forward: Option<f64>,
+    pub psnr_forward_db: Option<f64>,
 }
 
 /// The scene drawn and charted, every material with `k` layers.
@@ -163,6 +166,8 @@ pub(super) fn study(
     let last_frame = grid.first_frame + grid.warmup + grid.frames - 1;
     let last_camera = path.camera_at(last_frame);
     let mut rows = Vec::new();
+    // (configuration, light set) whose median passed the cap: larger K are skipped.
+    let mut capped: BTreeMap<(String, String), usize> = BTreeMap::new();
     for &k in &ks {
         let layered = Layered::new(scene, k);
         for sweep in &grid.sweeps {
@@ -182,6 +187,11 @@ pub(super) fn study(
                 let reference = references.get(&view).map_err(reference_error)?.0.image();
                 let mut forward: Option<RgbaImage> = None;
                 for config in &configs {
+                    let key = (config.label(), spec.to_string());
+                    if capped.contains_key(&key) {
+                        progress.inc(u64::from(grid.warmup + grid.frames));
+                        continue;
+                    }
                     progress.set_message(format!("{} layered:{k} {spec}", config.label()));
                     let conventional = config.shading.is_conventional();
                     let shaded = if conventional { &layered.render } else { &layered.charted };
@@ -208,18 +218,22 @@ pub(super) fn study(
                     if config.shading == Shading::Forward {
                         forward = Some(image);
                     }
+                    let median_ms = quantile(&times, 0.5);
+                    if median_ms.is_some_and(|ms| ms > grid.cap_ms) {
+                        capped.insert(key, k);
+                    }
                     rows.push(Row {
                         layers: k,
                         lights_spec: spec.to_string(),
                         config: config.label(),
                         conventional,
                         frames: grid.frames,
-                        median_ms: quantile(&times, 0.5),
+                        median_ms,
                         p95_ms: quantile(&times, 0.95),
                         flip_reference: f64::from(to_reference.flip_mean),
                         psnr_reference_db: to_reference.psnr_db,
-                        flip_forward: to_forward.as_ref().map_or(0.0, |e| f64::from(e.flip_mean)),
-                        psnr_forward_db: to_forward.as_ref().map_or(f64::INFINITY, |e| e.psnr_db),
+                        flip_forward: to_forward.as_ref().map(|e| f64::from(e.flip_mean)),
+                        psnr_forward_db: to_forward.as_ref().map(|e| e.psnr_db),
                     });
                 }
             }
@@ -230,7 +244,8 @@ pub(super) fn study(
     let text = format!(
         "Scene `{}`, {}x{}, {}; path frames {} to {last_frame} ({} warm-up), median GPU frame time of the \
          measured frames; lights: {} (seed {}); layers: `--materials layered:K` for K in {ks:?}; \
-         configurations: {}. Errors: the last frame against forward's 4x4 supersampled reference of the same \
+         configurations: {}; a configuration whose median passes {} ms at K layers with a light set is not \
+         measured at larger K with it (`-` in the tables{}). Errors: the last frame against forward's 4x4 supersampled reference of the same \
          layered scene (exposure 1, as every configuration), and against forward's last frame. Visibility of \
          object space and deferred-compute: {}.\n",
         scene.name,
@@ -246,6 +261,13 @@ pub(super) fn study(
             .join(", "),
         grid.seed,
         configs.iter().map(Config::label).collect::<Vec<_>>().join(", "),
+        grid.cap_ms,
+        if capped.is_empty() {
+            String::new()
+        } else {
+            let list: Vec<String> = capped.iter().map(|((c, l), k)| format!("{c} with {l} after {k}")).collect();
+            format!(": {}", list.join(", "))
+        },
         visibility.name(),
     );
     let setup = Section { heading: "Setup".into(), text, tables: Vec::new(), figures: Vec::new() };
@@ -362,7 +384,7 @@ fn summarize(
                 r.config.clone(),
                 format!("{:.4}", r.flip_reference),
                 format!("{:.2}", r.psnr_reference_db),
-                format!("{:.4}", r.flip_forward),
+                r.flip_forward.map_or("-".into(), |f| format!("{f:.4}")),
             ]);
         }
         sections.push(Section {
