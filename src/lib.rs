@@ -63,6 +63,7 @@ pub mod color;
 pub mod experiments;
 pub mod gpu;
 pub mod hash;
+pub mod materials;
 pub mod metrics;
 pub mod reference;
 pub mod render;

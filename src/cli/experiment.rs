@@ -52,6 +52,12 @@ light sets) at --size:
                speed-up over forward and over the fastest conventional pipeline, the fixed
                overhead at 0 and 1 light, image error against forward (FLIP, PSNR, SSIM)
 
+  layers       every material with K layers (--materials layered:K, K = 1, 2, 4, 8, 12, 16):
+               every pipeline (per-layer lighting) and object space (reuse 1, 30 Hz of 60 spread,
+               variable rate 1) with 1 and 1000 small lights and 30 shadowed lights; frame time,
+               the last frame's error against a 4x4 supersampled reference and against forward,
+               object space's speed-up over the fastest conventional pipeline
+
 A configuration slower than --cap-ms at a count skips the larger counts of that scenario.
 
 The study's Sponza run: shadespace experiment overshading --scene ../shared/scenes/sponza-thesis \\
@@ -72,6 +78,8 @@ pub enum ExperimentChoice {
     Speedup,
     /// Every pipeline's error and flicker against supersampled references, against its cost (Pareto front).
     Quality,
+    /// Every pipeline's frame time and error (against supersampled references) as every material gets 1 to 16 layers.
+    Layers,
     /// Merge shards (`--shard K/N` runs) given as DIR... into --out: the summary, plots and report of one run.
     Merge,
 }
@@ -169,6 +177,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
         ExperimentChoice::Lights => ExperimentName::Lights,
         ExperimentChoice::Speedup => ExperimentName::Speedup,
         ExperimentChoice::Quality => ExperimentName::Quality,
+        ExperimentChoice::Layers => ExperimentName::Layers,
         ExperimentChoice::Merge => return merge_shards(&a),
     };
     if !a.shards.is_empty() {

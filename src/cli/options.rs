@@ -133,6 +133,12 @@ pub struct SceneArgs {
     /// provoke specular aliasing (normal maps: the file's or --textures detailed).
     #[arg(long, value_enum, default_value = "default")]
     pub gloss: shadespace::scene::gloss::Gloss,
+    /// Layered materials (every pipeline lights each layer and blends them
+    /// by mask): `none` (default: the scene's materials), `layered:K` (every
+    /// material with K layers, 1 to 16) or a JSON material file
+    /// (docs/materials.md).
+    #[arg(long, value_name = "none|layered:K|FILE", default_value = "none")]
+    pub materials: shadespace::materials::MaterialsSpec,
     #[command(flatten)]
     pub free_camera: FreeCameraArgs,
     #[command(flatten)]

@@ -12,6 +12,7 @@
 //! `quality` also judges their images against supersampled references.
 
 pub mod census;
+pub mod layers;
 pub mod lights;
 pub mod marking;
 pub mod overlap;
@@ -64,6 +65,8 @@ pub enum ExperimentName {
     Speedup,
     /// Every pipeline's error and flicker against supersampled references, and its cost.
     Quality,
+    /// Every pipeline's frame time and error as layered materials grow from 1 to 16 layers.
+    Layers,
 }
 
 impl ExperimentName {
@@ -75,13 +78,14 @@ impl ExperimentName {
             Self::Lights => "lights",
             Self::Speedup => "speedup",
             Self::Quality => "quality",
+            Self::Layers => "layers",
         }
     }
 
     /// Whether it measures frame times (its grid is a [`TimingGrid`], its
     /// progress counts frames) rather than tiles (a [`Grid`], views).
     pub fn is_timing(self) -> bool {
-        matches!(self, Self::Lights | Self::Speedup | Self::Quality)
+        matches!(self, Self::Lights | Self::Speedup | Self::Quality | Self::Layers)
     }
 
     /// The timing grid of a timing study, full or quick; `None` for the tile studies.
@@ -90,6 +94,7 @@ impl ExperimentName {
             Self::Lights => Some(lights::grid(quick)),
             Self::Speedup => Some(speedup::grid(quick)),
             Self::Quality => Some(quality::grid(quick)),
+            Self::Layers => Some(layers::grid(quick)),
             Self::Overshading | Self::Overlap | Self::Reuse => None,
         }
     }
@@ -325,6 +330,7 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
             timing_study(ctx, options, &scene, (output, progress), speedup::run, speedup::differences)?
         }
         ExperimentName::Quality => quality::study(ctx, options, &scene, output, progress)?,
+        ExperimentName::Layers => layers::study(ctx, options, &scene, output, progress)?,
     };
     let findings = outcome.findings;
     let headline = findings.results.get("headline").and_then(|h| h.as_str()).unwrap_or_default().to_string();

@@ -59,8 +59,11 @@ gpu_struct! {
         /// Fragments whose alpha (base colour factor times texture) is below
         /// this are cut away (alpha masking); 0 for opaque objects.
         pub alpha_cutoff: f32,
-        pub pad_b: u32,
-        pub pad_c: u32,
+        /// The material's layers: entries `layer_first..layer_first +
+        /// layer_count` of the layer table ([`crate::materials::GpuLayer`],
+        /// binding 13); no layers for a plain material.
+        pub layer_first: u32,
+        pub layer_count: u32,
     }
 }
 

@@ -223,6 +223,9 @@ impl Renderer {
         if scene_gpu.material_textures {
             shaders.define(crate::shaders::MATERIAL_TEXTURES);
         }
+        if scene_gpu.layers {
+            shaders.define(crate::shaders::LAYERS);
+        }
         let targets = Targets::new(&ctx.device, width, height);
         let (device, queue) = (&ctx.device, &ctx.queue);
         let pipeline: Box<dyn Pipeline> = match &options.pipeline {

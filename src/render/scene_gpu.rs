@@ -10,6 +10,7 @@ use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView, NO_TEXTURE};
 use super::passes::shadows::{ShadowAtlas, ShadowPlan};
 use super::passes::{Binding, bind_group_layout_for};
 use crate::charts::islands::triangle_islands;
+use crate::materials::GpuLayer;
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
@@ -79,6 +80,12 @@ pub struct SceneGpu {
     /// Some object has an emissive, metallic-roughness or occlusion texture
     /// (the shaders are composed with [`crate::shaders::MATERIAL_TEXTURES`]).
     pub material_textures: bool,
+    /// Some material has layers (the shaders are composed with
+    /// [`crate::shaders::LAYERS`]).
+    pub layers: bool,
+    /// The layer table of every material ([`crate::materials::GpuLayer`],
+    /// binding 13; one unused entry when no material has layers).
+    layers_buffer: wgpu::Buffer,
     /// Shadow maps of the shadowed lights (bindings 8-11).
     pub shadow_atlas: ShadowAtlas,
     lights: GrowableBuffer,
@@ -118,6 +125,18 @@ impl SceneGpu {
         let (albedo, white_layer, linear_maps, linear_layers) = upload_textures(device, queue, scene);
         let linear_layer = |t: Option<usize>| t.and_then(|t| linear_layers[t]).unwrap_or(NO_TEXTURE);
         let draws: Vec<DrawRange> = scene.objects.iter().map(|o| mesh_ranges[o.mesh]).collect();
+        // The layer table: each material's layers in order; per material its range.
+        let mut layer_table = Vec::new();
+        let mut layer_ranges = Vec::with_capacity(scene.materials.len());
+        for m in &scene.materials {
+            layer_ranges.push((layer_table.len() as u32, m.layers.len() as u32));
+            let color = |t: usize| t as u32;
+            layer_table.extend(m.layers.iter().map(|l| GpuLayer::new(l, m, color, |t| linear_layer(Some(t)))));
+        }
+        let layers = !layer_table.is_empty();
+        if layer_table.is_empty() {
+            layer_table.push(GpuLayer::default());
+        }
         let object_data: Vec<GpuObject> = scene
             .objects
             .iter()
@@ -144,7 +163,8 @@ impl SceneGpu {
                     occlusion_layer: linear_layer(m.occlusion_texture),
                     occlusion_strength: m.occlusion_strength,
                     alpha_cutoff: m.alpha_cutoff.unwrap_or(0.0),
-                    ..Default::default()
+                    layer_first: layer_ranges[o.material].0,
+                    layer_count: layer_ranges[o.material].1,
                 }
             })
             .collect();
@@ -169,6 +189,7 @@ impl SceneGpu {
         }
         let triangle_charts = storage("triangle charts", bytemuck::cast_slice(&islands), wgpu::BufferUsages::empty());
         let objects = storage("objects", bytemuck::cast_slice(&object_data), wgpu::BufferUsages::empty());
+        let layers_buf = storage("material layers", bytemuck::cast_slice(&layer_table), wgpu::BufferUsages::empty());
         let view = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("view"),
             size: size_of::<GpuView>() as u64,
@@ -199,7 +220,7 @@ impl SceneGpu {
         let bind_group = make_bind_group(
             device,
             &layout,
-            [&view, &objects, &vertices_buf, &lights.buffer, &light_indices.buffer, &indices_buf],
+            [&view, &objects, &vertices_buf, &lights.buffer, &light_indices.buffer, &indices_buf, &layers_buf],
             [&albedo_view, &linear_maps_view],
             &sampler,
             &shadow_atlas,
@@ -218,6 +239,8 @@ impl SceneGpu {
             cull_back_faces: scene.cull_back_faces,
             masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),
             material_textures,
+            layers,
+            layers_buffer: layers_buf,
             triangle_charts,
             shadow_atlas,
             lights,
@@ -277,7 +300,15 @@ impl SceneGpu {
         make_bind_group(
             device,
             &self.layout,
-            [view, &self.objects, &self.vertices, &self.lights.buffer, &self.light_indices.buffer, &self.indices],
+            [
+                view,
+                &self.objects,
+                &self.vertices,
+                &self.lights.buffer,
+                &self.light_indices.buffer,
+                &self.indices,
+                &self.layers_buffer,
+            ],
             [&self.albedo_view, &self.linear_maps_view],
             &self.sampler,
             &self.shadow_atlas,
@@ -288,7 +319,15 @@ impl SceneGpu {
         self.bind_group = make_bind_group(
             device,
             &self.layout,
-            [&self.view, &self.objects, &self.vertices, &self.lights.buffer, &self.light_indices.buffer, &self.indices],
+            [
+                &self.view,
+                &self.objects,
+                &self.vertices,
+                &self.lights.buffer,
+                &self.light_indices.buffer,
+                &self.indices,
+                &self.layers_buffer,
+            ],
             [&self.albedo_view, &self.linear_maps_view],
             &self.sampler,
             &self.shadow_atlas,
@@ -330,23 +369,24 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let depth = Binding::Texture { sample: wgpu::TextureSampleType::Depth, dimension: array };
     // Bindings 0-7: view, objects, vertices, lights, light indices, albedo,
     // its sampler, indices; 8-11: shadow atlas, comparison sampler, shadow
-    // faces, sun cascades; 12: linear maps (normal, metallic-roughness, occlusion).
+    // faces, sun cascades; 12: linear maps (normal, metallic-roughness, occlusion);
+    // 13: material layers.
     let bindings = [Binding::Uniform, read, read, read, read, albedo, Binding::Sampler, read];
     let shadows = [depth, Binding::ComparisonSampler, read, depth];
-    bind_group_layout_for(device, "scene", stages, &[bindings.as_slice(), &shadows, &[albedo]].concat())
+    bind_group_layout_for(device, "scene", stages, &[bindings.as_slice(), &shadows, &[albedo, read]].concat())
 }
 
-/// Buffers in binding order 0, 1, 2, 3, 4, 7; the shadow maps are 8-11;
+/// Buffers in binding order 0, 1, 2, 3, 4, 7, 13; the shadow maps are 8-11;
 /// textures: albedo (5) and linear maps (12).
 fn make_bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
-    buffers: [&wgpu::Buffer; 6],
+    buffers: [&wgpu::Buffer; 7],
     textures: [&wgpu::TextureView; 2],
     sampler: &wgpu::Sampler,
     shadows: &ShadowAtlas,
 ) -> wgpu::BindGroup {
-    let [view, objects, vertices, lights, light_indices, indices] = buffers;
+    let [view, objects, vertices, lights, light_indices, indices, layers] = buffers;
     let [albedo, linear_maps] = textures;
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("scene"),
@@ -365,6 +405,7 @@ fn make_bind_group(
             wgpu::BindGroupEntry { binding: 10, resource: shadows.faces_buffer().as_entire_binding() },
             wgpu::BindGroupEntry { binding: 11, resource: wgpu::BindingResource::TextureView(shadows.cascades_view()) },
             wgpu::BindGroupEntry { binding: 12, resource: wgpu::BindingResource::TextureView(linear_maps) },
+            wgpu::BindGroupEntry { binding: 13, resource: layers.as_entire_binding() },
         ],
     })
 }

@@ -43,6 +43,7 @@ pub fn contract_constants() -> Vec<(&'static str, u32)> {
     c.extend(VolumeList::ALL.iter().map(|l| (l.wgsl_name(), *l as u32)));
     c.push(("VOLUME_LISTS", VolumeList::ALL.len() as u32));
     c.extend(deferred_compute::wgsl_constants());
+    c.extend(crate::materials::wgsl_constants());
     c
 }
 
@@ -78,12 +79,13 @@ mod tests {
     use crate::render::passes::light_grid::GpuLightGridParams;
     use crate::render::passes::visibility::compute::{GpuRasterParams, GpuResolveParams};
     use crate::shaders::layout::check;
-    use crate::shaders::{ALPHA_MASK, MATERIAL_TEXTURES};
+    use crate::shaders::{ALPHA_MASK, LAYERS, MATERIAL_TEXTURES};
     use wgpu::naga;
 
-    /// Every pass shader, composed.
+    /// Every pass shader, composed (with layers, so that their structs are in).
     fn modules() -> Vec<naga::Module> {
         let mut library = library().unwrap();
+        library.define(LAYERS);
         pass_shaders().into_iter().map(|s| library.compose(s).unwrap()).collect()
     }
 
@@ -93,10 +95,13 @@ mod tests {
     #[test]
     fn all_shaders_compose_and_validate() {
         let masked = passes::alpha_masked_shaders();
-        for materials in [false, true] {
+        for (materials, layers) in [(false, false), (true, false), (false, true), (true, true)] {
             let mut lib = library().expect("shared modules compose");
             if materials {
                 lib.define(MATERIAL_TEXTURES);
+            }
+            if layers {
+                lib.define(LAYERS);
             }
             let variants =
                 pass_shaders().into_iter().map(|s| (s, &[][..])).chain(masked.iter().map(|s| (*s, &[ALPHA_MASK][..])));
@@ -104,7 +109,9 @@ mod tests {
                 let module = lib.compose_with(shader, extra).unwrap_or_else(|e| panic!("{e}"));
                 naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
                     .validate(&module)
-                    .unwrap_or_else(|e| panic!("{} {extra:?} (material textures: {materials}): {e:?}", shader.file));
+                    .unwrap_or_else(|e| {
+                        panic!("{} {extra:?} (material textures: {materials}, layers: {layers}): {e:?}", shader.file)
+                    });
             }
         }
     }
@@ -128,6 +135,7 @@ mod tests {
         check::<GpuVolumeParams>(&modules);
         check::<GpuRasterParams>(&modules);
         check::<GpuResolveParams>(&modules);
+        check::<crate::materials::GpuLayer>(&modules);
     }
 
     #[test]

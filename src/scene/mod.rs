@@ -225,6 +225,9 @@ pub struct Material {
     /// the base colour texture's is below this, the surface is not there
     /// (not drawn, casts no shadow). `None`: opaque, alpha ignored.
     pub alpha_cutoff: Option<f32>,
+    /// Layers over the material's own surface, bottom first
+    /// ([`crate::materials`]); none for a plain material.
+    pub layers: Vec<crate::materials::Layer>,
 }
 
 impl Default for Material {
@@ -244,6 +247,7 @@ impl Default for Material {
             specular: 0.25,
             shininess: 32.0,
             alpha_cutoff: None,
+            layers: Vec::new(),
         }
     }
 }

@@ -57,6 +57,7 @@ pub const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
     ShaderSource::new("shared/alpha_mask.wgsl", include_str!("shared/alpha_mask.wgsl")),
     ShaderSource::new("shared/normal_map.wgsl", include_str!("shared/normal_map.wgsl")),
+    ShaderSource::new("materials/layers.wgsl", include_str!("../materials/layers.wgsl")),
     ShaderSource::new("shared/surface.wgsl", include_str!("shared/surface.wgsl")),
     ShaderSource::new("shared/pixel_surface.wgsl", include_str!("shared/pixel_surface.wgsl")),
     ShaderSource::new("shared/raster_surface.wgsl", include_str!("shared/raster_surface.wgsl")),
@@ -71,6 +72,13 @@ pub const SHARED: &[ShaderSource] = &[
 /// (measured on the H100: 3-7 % in every pipeline, 20 % in the two that
 /// write the raster G-buffer).
 pub const MATERIAL_TEXTURES: &str = "MATERIAL_TEXTURES";
+
+/// Defined when some material of the scene has layers
+/// ([`crate::materials`]): every pipeline then evaluates each layer's surface
+/// and blends the lit results by mask (`materials/layers.wgsl`), and the
+/// raster G-buffer stores UV0 and its mip. Without it that code is not
+/// compiled, so unlayered scenes render and cost as before.
+pub const LAYERS: &str = "LAYERS";
 
 /// Defined in the variant of a scene raster pass that draws the alpha-masked
 /// objects (`render::passes::ScenePipeline`): its fragment stage

@@ -453,6 +453,29 @@ fn bad_experiment_input_names_the_flag_or_file() {
     assert!(err.contains("summary.json"), "{err}");
 }
 
+/// `layers` quick: every configuration at each layer count, errors against
+/// the reference and forward, and the speed-up table.
+#[test]
+fn layers_quick() {
+    let start = std::time::Instant::now();
+    let (dir, summary) = run_quick(ExperimentName::Layers, "atrium", &[]);
+    eprintln!("layers quick: {:.1} s", start.elapsed().as_secs_f64());
+    let grid = ExperimentName::Layers.timing_grid(true).unwrap();
+    let configs = experiments::layers::configs(&grid);
+    let ks = experiments::layers::layer_counts(true);
+    let csv = std::fs::read_to_string(dir.path().join("data.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + ks.len() * configs.len(), "{csv}");
+    for line in csv.lines().skip(1) {
+        let flip_reference: f64 = line.split(',').nth(7).unwrap().parse().unwrap();
+        assert!(flip_reference > 0.0 && flip_reference < 0.2, "{line}");
+    }
+    assert_eq!(summary["layers"], serde_json::json!(ks));
+    assert_eq!(summary["results"]["speedups"].as_array().unwrap().len(), ks.len());
+    let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(report.contains("Where object space wins"), "{report}");
+    assert!(dir.path().join("layers-small-1.png").exists());
+}
+
 /// The columns of `quality`'s `data.csv`.
 const QUALITY_COLUMNS: [&str; 14] = [
     "cell",

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 /// may use each other.
 const LAYERS: &[&[&str]] = &[
     &["color", "hash", "gpu", "metrics", "shaders"],
-    &["scene"],
+    &["scene", "materials"],
     &["charts"],
     &["render"],
     &["bench", "reference", "stage"],

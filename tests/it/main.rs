@@ -21,6 +21,7 @@ mod forward;
 mod forward_multipass;
 mod fuzz_regressions;
 mod golden;
+mod layered_materials;
 mod layers;
 mod light_grid;
 mod light_sets;

@@ -3,7 +3,7 @@
 // writes every pixel, so it is also the clear that the additive light-volume
 // passes after it build on.
 #import shadespace::scene_bindings::view
-#import shadespace::surface::light_globals
+#import shadespace::surface::emission_and_globals
 #import shadespace::gbuffer::{gbuffer_depth_at, gbuffer_texel}
 
 @group(2) @binding(0) var hdr: texture_storage_2d<rgba16float, write>;
@@ -17,7 +17,7 @@ fn lights_globals(@builtin(global_invocation_id) id: vec3u) {
     var color = vec3f(0.0);
     if depth > 0.0 {
         let t = gbuffer_texel(id.xy, depth);
-        color = t.surface.emission + light_globals(t.surface, t.to_eye);
+        color = emission_and_globals(t.surface, t.to_eye);
     }
     textureStore(hdr, id.xy, vec4f(color, 1.0));
 }

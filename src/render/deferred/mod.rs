@@ -26,7 +26,7 @@ pub mod volumes;
 use serde::Serialize;
 
 use super::frame::Frame;
-use super::passes::gbuffer::{self, GBuffer, GbufferStage, geometry};
+use super::passes::gbuffer::{GBuffer, GbufferStage, geometry};
 use super::passes::{compute_pipeline, hdr_output};
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
@@ -117,10 +117,7 @@ impl Pipeline for Deferred {
         PipelineReport::new(PipelineConfig::Deferred(self.config))
             .memory("gbuffer", self.geometry.gbuffer.bytes())
             .memory("light_volumes", self.volumes.bytes())
-            .setup(
-                "gbuffer_bytes_per_pixel",
-                gbuffer::bytes_per_pixel_with_depth(self.geometry.gbuffer.material_textures),
-            )
+            .setup("gbuffer_bytes_per_pixel", self.geometry.gbuffer.bytes_per_pixel_with_depth())
             .setup("sphere_triangles", sphere)
             .setup("cone_triangles", cone)
     }

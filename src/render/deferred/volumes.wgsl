@@ -7,7 +7,7 @@
 // back faces, untested. The lighting model's own range cut-off decides which
 // covered pixels are lit, so the meshes only need to enclose the light.
 #import shadespace::contract::{VOLUME_POINT_OUTSIDE, VOLUME_POINT_INSIDE, VOLUME_SPOT_OUTSIDE, VOLUME_SPOT_INSIDE}
-#import shadespace::lighting::light_radiance
+#import shadespace::layers::layered_radiance
 #import shadespace::scene_bindings::{view, lights}
 #import shadespace::gbuffer::{gbuffer_depth_at, gbuffer_texel}
 #import shadespace::deferred::{VolumeParams, cone_tan}
@@ -87,5 +87,5 @@ fn fs_light(in: VolumeOut) -> @location(0) vec4f {
         return vec4f(0.0);
     }
     let t = gbuffer_texel(pixel, depth);
-    return vec4f(light_radiance(lights[in.light], t.surface, t.to_eye), 0.0);
+    return vec4f(layered_radiance(lights[in.light], t.surface, t.to_eye), 0.0);
 }

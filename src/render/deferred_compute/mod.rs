@@ -20,7 +20,7 @@
 use serde::Serialize;
 
 use super::frame::Frame;
-use super::passes::gbuffer::{self, GbufferStage, geometry};
+use super::passes::gbuffer::{GbufferStage, geometry};
 use super::passes::visibility::compute::{ComputeVisibility, compute_visibility};
 use super::passes::visibility::{VisibilityBuffer, VisibilityMethod};
 use super::passes::{compute_pipeline, hdr_output};
@@ -157,7 +157,7 @@ impl Pipeline for DeferredCompute {
         let report = match &self.surfaces {
             Surfaces::Gbuffer(stage) => report
                 .memory("gbuffer", stage.gbuffer.bytes())
-                .setup("gbuffer_bytes_per_pixel", gbuffer::bytes_per_pixel_with_depth(stage.gbuffer.material_textures)),
+                .setup("gbuffer_bytes_per_pixel", stage.gbuffer.bytes_per_pixel_with_depth()),
             Surfaces::Visibility { ids, pass } => {
                 report.memory("visibility", ids.bytes()).memory("visibility_raster", pass.bytes())
             }

@@ -18,10 +18,13 @@
 // Pixels come from the G-buffer, or, with VISIBILITY_BUFFER defined, from the
 // compute visibility pass (`shadespace::visibility_read`).
 #import shadespace::contract::{TILED_TILE_SIZE, TILED_CHUNK, TILED_LIST_CAPACITY}
-#import shadespace::lighting::light_radiance
+#import shadespace::lighting::{Surface, light_radiance}
 #import shadespace::light_bounds::{light_bounds, sphere_touches}
 #import shadespace::scene_bindings::{view, lights}
-#import shadespace::surface::light_globals
+#import shadespace::surface::emission_and_globals
+#ifdef LAYERS
+#import shadespace::layers::{layer_at, layer_mask, layer_surface}
+#endif
 #ifdef VISIBILITY_BUFFER
 #import shadespace::visibility_read::{GbufferTexel, gbuffer_depth_at, gbuffer_texel}
 #else
@@ -74,11 +77,35 @@ fn tile_frustum(lo: vec2f, hi: vec2f, range: vec2f) -> array<vec4f, 6> {
     );
 }
 
-// Shades `texel` with the first `count` listed lights.
+// Shades `texel` with the first `count` listed lights; a layered material
+// each of its layers (`shadespace::layers`), layer by layer.
 fn shade_listed(texel: GbufferTexel, count: u32) -> vec3f {
+#ifdef LAYERS
+    let s = texel.surface;
+    var color = vec3f(0.0);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * shade_listed_one(layer_surface(l, s), texel.to_eye, count);
+        }
+    }
+    if remaining > 0.0 {
+        color += remaining * shade_listed_one(s, texel.to_eye, count);
+    }
+    return color;
+#else
+    return shade_listed_one(texel.surface, texel.to_eye, count);
+#endif
+}
+
+// `shade_listed` of one surface (a material or one of its layers).
+fn shade_listed_one(s: Surface, to_eye: vec3f, count: u32) -> vec3f {
     var color = vec3f(0.0);
     for (var i = 0u; i < count; i++) {
-        color += light_radiance(lights[list[i]], texel.surface, texel.to_eye);
+        color += light_radiance(lights[list[i]], s, to_eye);
     }
     return color;
 }
@@ -130,7 +157,7 @@ fn tiled_lighting(
     var color = vec3f(0.0);
     if lit {
         texel = gbuffer_texel(id.xy, depth);
-        color = texel.surface.emission + light_globals(texel.surface, texel.to_eye);
+        color = emission_and_globals(texel.surface, texel.to_eye);
     }
     let word = thread / 32u;
     let bit = 1u << (thread % 32u);

@@ -2,7 +2,7 @@
 // into the HDR target after a depth pre-pass (depth test `Equal`). The draw's
 // instance index is its pair's index (its `first_instance`).
 #import shadespace::contract::PAIR_EMISSION
-#import shadespace::lighting::light_radiance
+#import shadespace::layers::{layered_radiance, layered_emission}
 #import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, sample_material,
     fragment_surface}
 #import shadespace::scene_bindings::{view, objects, lights}
@@ -39,8 +39,8 @@ fn fs_main(in: VertexOut) -> @location(0) vec4f {
     let material = sample_material(o, in);
     let s = fragment_surface(o, in, texel, normal_texel, material);
     if pair.light == PAIR_EMISSION {
-        return vec4f(s.emission, 1.0);
+        return vec4f(layered_emission(s), 1.0);
     }
     let to_eye = normalize(view.camera_position.xyz - s.position);
-    return vec4f(light_radiance(lights[pair.light], s, to_eye), 1.0);
+    return vec4f(layered_radiance(lights[pair.light], s, to_eye), 1.0);
 }

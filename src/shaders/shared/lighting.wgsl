@@ -54,6 +54,20 @@ struct Surface {
     emission: vec3f,
     // Ambient occlusion, 1 for none: scales ambient light only.
     occlusion: f32,
+    // Layered materials only (`shadespace::layers`; zero otherwise): UV0 and
+    // the albedo mip there (for texture masks), and the material's layers.
+    uv: vec2f,
+    uv_lod: f32,
+    layer_first: u32,
+    layer_count: u32,
+}
+
+// The Phong exponent equivalent to a GGX roughness (the Blinn-Phong mapping
+// 2/alpha^2 - 2, halved for the reflection-vector form): the twin of
+// `Material::shininess_from_roughness`.
+fn shininess_from_roughness(roughness: f32) -> f32 {
+    let alpha = max(roughness * roughness, 1e-3);
+    return clamp((2.0 / (alpha * alpha) - 2.0) * 0.25, 1.0, 512.0);
 }
 
 const PI: f32 = 3.14159265;

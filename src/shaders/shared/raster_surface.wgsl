@@ -5,7 +5,7 @@
 #import shadespace::lighting::Surface
 #import shadespace::scene::{Object, vertex_uv0}
 #import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, linear_maps, object_clip_position}
-#import shadespace::surface::{MaterialTexels, object_surface, material_texels_grad}
+#import shadespace::surface::{MaterialTexels, object_surface, material_texels_grad, albedo_lod}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
 
 struct VertexOut {
@@ -55,11 +55,16 @@ fn sample_material(o: Object, in: VertexOut) -> MaterialTexels {
 }
 
 // The surface of object `o` at a fragment whose albedo texel is `texel`,
-// normal-map texel `normal_texel` and material texels `material`.
+// normal-map texel `normal_texel` and material texels `material` (call it
+// in uniform control flow: a layered material takes UV derivatives).
 fn fragment_surface(o: Object, in: VertexOut, texel: vec3f, normal_texel: vec3f, material: MaterialTexels) -> Surface {
     var s = object_surface(o, material);
     s.position = in.world;
     s.normal = mapped_normal(in.normal, in.tangent, normal_texel, o.normal_layer);
     s.albedo = texel * o.base_color.rgb;
+#ifdef LAYERS
+    s.uv = in.uv;
+    s.uv_lod = albedo_lod(dpdx(in.uv), dpdy(in.uv));
+#endif
     return s;
 }

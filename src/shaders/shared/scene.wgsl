@@ -45,8 +45,10 @@ struct Object {
     // Fragments whose alpha (base colour factor times texture) is below this
     // are cut away (alpha masking, `alpha_mask.wgsl`); 0 for opaque objects.
     alpha_cutoff: f32,
-    pad_b: u32,
-    pad_c: u32,
+    // The material's layers: `material_layers[layer_first..][..layer_count]`
+    // (`shadespace::layers`); 0 layers for a plain material.
+    layer_first: u32,
+    layer_count: u32,
 }
 
 struct View {

@@ -5,7 +5,10 @@
 // every pipeline.
 #define_import_path shadespace::surface
 #import shadespace::contract::NO_TEXTURE
-#import shadespace::lighting::{Surface, light_radiance}
+#import shadespace::lighting::{Surface, light_radiance, shininess_from_roughness}
+#ifdef LAYERS
+#import shadespace::layers::{layer_at, layer_mask, layer_surface}
+#endif
 #import shadespace::scene::{Object, vertex_uv0}
 #import shadespace::scene_bindings::{view, vertices, lights, light_indices, albedo, albedo_sampler, linear_maps}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
@@ -66,14 +69,6 @@ fn material_texels_grad(o: Object, uv: vec2f, ddx: vec2f, ddy: vec2f) -> Materia
     return t;
 }
 
-// The Phong exponent equivalent to a GGX roughness (the Blinn-Phong mapping
-// 2/alpha^2 - 2, halved for the reflection-vector form): the twin of
-// `Material::shininess_from_roughness`.
-fn shininess_from_roughness(roughness: f32) -> f32 {
-    let alpha = max(roughness * roughness, 1e-3);
-    return clamp((2.0 / (alpha * alpha) - 2.0) * 0.25, 1.0, 512.0);
-}
-
 // A surface with object `o`'s material, its textures' texels `t` and the
 // view's lighting model (the caller fills in position, normal and albedo).
 // glTF 2.0's rules: emission = emissive factor x emissive texel; metallic and
@@ -89,6 +84,10 @@ fn object_surface(o: Object, t: MaterialTexels) -> Surface {
     s.model = view.shading;
     s.emission = o.emissive;
     s.occlusion = 1.0;
+#ifdef LAYERS
+    s.layer_first = o.layer_first;
+    s.layer_count = o.layer_count;
+#endif
 #ifdef MATERIAL_TEXTURES
     if o.emissive_layer != NO_TEXTURE {
         s.emission = o.emissive * t.emissive;
@@ -123,11 +122,39 @@ fn surface_point(o: Object, tri: vec3u, b: vec3f, texture_lod: f32) -> Surface {
     s.position = world;
     s.normal = mapped_normal((o.normal_model * vec4f(n, 0.0)).xyz, world_t, texel, o.normal_layer);
     s.albedo = textureSampleLevel(albedo, albedo_sampler, uv0, o.albedo_layer, texture_lod).rgb * o.base_color.rgb;
+#ifdef LAYERS
+    s.uv = uv0;
+    s.uv_lod = texture_lod;
+#endif
     return s;
 }
 
-// Emission plus every light the object's list holds, seen from the camera.
+// Emission plus every light the object's list holds, seen from the camera;
+// for a layered material, each layer's with its weight
+// (`shadespace::layers`).
 fn light_surface(o: Object, s: Surface) -> vec3f {
+#ifdef LAYERS
+    var color = vec3f(0.0);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * light_surface_one(o, layer_surface(l, s));
+        }
+    }
+    if remaining > 0.0 {
+        color += remaining * light_surface_one(o, s);
+    }
+    return color;
+#else
+    return light_surface_one(o, s);
+#endif
+}
+
+// `light_surface` of one surface (a material or one of its layers).
+fn light_surface_one(o: Object, s: Surface) -> vec3f {
     let to_eye = normalize(view.camera_position.xyz - s.position);
     var color = s.emission;
     for (var i = 0u; i < o.light_count; i++) {
@@ -144,6 +171,33 @@ fn light_globals(s: Surface, to_eye: vec3f) -> vec3f {
         color += light_radiance(lights[i], s, to_eye);
     }
     return color;
+}
+
+// Emission plus the ambient and directional lights (the full-screen part of
+// deferred shading), each layer's with its weight for a layered material.
+fn emission_and_globals(s: Surface, to_eye: vec3f) -> vec3f {
+#ifdef LAYERS
+    var color = vec3f(0.0);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * emission_and_globals_one(layer_surface(l, s), to_eye);
+        }
+    }
+    if remaining > 0.0 {
+        color += remaining * emission_and_globals_one(s, to_eye);
+    }
+    return color;
+#else
+    return emission_and_globals_one(s, to_eye);
+#endif
+}
+
+fn emission_and_globals_one(s: Surface, to_eye: vec3f) -> vec3f {
+    return s.emission + light_globals(s, to_eye);
 }
 
 // Albedo mip for a footprint whose UV0 derivatives are `d0` and `d1`.

@@ -10,7 +10,7 @@
 #import shadespace::scene::vertex_uv0
 #import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, linear_maps, object_clip_position}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
-#import shadespace::surface::material_texels_grad
+#import shadespace::surface::{material_texels_grad, albedo_lod}
 #ifdef ALPHA_MASK
 #import shadespace::alpha_mask::masked_out
 #endif
@@ -33,6 +33,15 @@ struct GbufferOut {
     @location(3) emission_occlusion: vec4f,
     // The metallic and roughness texels.
     @location(4) metal_rough: vec2f,
+#endif
+#ifdef LAYERS
+    // UV0 and the albedo mip there, for the layers' texture masks (the
+    // target after the others).
+#ifdef MATERIAL_TEXTURES
+    @location(5) uv_lod: vec4f,
+#else
+    @location(3) uv_lod: vec4f,
+#endif
 #endif
 }
 
@@ -65,6 +74,9 @@ fn fs_main(in: VertexOut) -> GbufferOut {
     let material = material_texels_grad(o, in.uv0, dpdx(in.uv0), dpdy(in.uv0));
     out.emission_occlusion = vec4f(material.emissive, material.occlusion);
     out.metal_rough = material.metal_rough;
+#endif
+#ifdef LAYERS
+    out.uv_lod = vec4f(in.uv0, albedo_lod(dpdx(in.uv0), dpdy(in.uv0)), 0.0);
 #endif
     return out;
 }

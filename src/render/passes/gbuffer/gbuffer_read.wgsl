@@ -21,6 +21,8 @@ struct Unproject {
 // Material texels: emissive RGB and occlusion (alpha); metallic, roughness.
 @group(1) @binding(5) var gbuffer_emission_occlusion: texture_2d<f32>;
 @group(1) @binding(6) var gbuffer_metal_rough: texture_2d<f32>;
+// Layered materials: UV0 and the albedo mip there.
+@group(1) @binding(7) var gbuffer_uv_lod: texture_2d<f32>;
 
 // A lit pixel of the G-buffer.
 struct GbufferTexel {
@@ -59,6 +61,13 @@ fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
     t.surface.position = world_position(pixel, depth);
     t.surface.normal = oct_decode(textureLoad(gbuffer_normal, pixel, 0).xy);
     t.surface.albedo = textureLoad(gbuffer_albedo, pixel, 0).rgb;
+#ifdef LAYERS
+    if o.layer_count != 0u {
+        let uv_lod = textureLoad(gbuffer_uv_lod, pixel, 0);
+        t.surface.uv = uv_lod.xy;
+        t.surface.uv_lod = uv_lod.z;
+    }
+#endif
     t.to_eye = normalize(view.camera_position.xyz - t.surface.position);
     return t;
 }

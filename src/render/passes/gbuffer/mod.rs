@@ -11,6 +11,7 @@
 //! | object | `R32Uint` | the object, whose table entry holds specular, shininess, the metallic, roughness, emission and occlusion factors |
 //! | emission, occlusion | `Rgba8UnormSrgb` | the emissive texture's texel (sRGB, as stored) and the occlusion texture's (alpha, linear) |
 //! | metallic, roughness | `Rg8Unorm` | the metallic-roughness texture's blue and green |
+//! | UV0, mip | `Rgba32Float` | in scenes with layered materials ([`crate::materials`]): UV0 and the albedo mip there, so that the lighting passes rebuild every layer's mask and surface and light each layer (16 bytes more) |
 //!
 //! Why these: 10-bit linear albedo costs the 4 bytes of `Rgba8Unorm` and is
 //! finer than 8-bit sRGB above a linear albedo of about 0.02 (up to 9x at
@@ -61,9 +62,12 @@ pub const OBJECT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 pub const EMISSION_OCCLUSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 /// The metallic and roughness texels.
 pub const METAL_ROUGH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unorm;
-/// The G-buffer's own targets, in the order the G-buffer pass writes them.
-const FORMATS: [wgpu::TextureFormat; 5] =
-    [NORMAL_FORMAT, ALBEDO_FORMAT, OBJECT_FORMAT, EMISSION_OCCLUSION_FORMAT, METAL_ROUGH_FORMAT];
+/// UV0 (full precision: it repeats far past 1) and the albedo mip, for
+/// layered materials.
+pub const UV_LOD_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The G-buffer's own targets, in [`GBuffer::views`] order.
+const FORMATS: [wgpu::TextureFormat; 6] =
+    [NORMAL_FORMAT, ALBEDO_FORMAT, OBJECT_FORMAT, EMISSION_OCCLUSION_FORMAT, METAL_ROUGH_FORMAT, UV_LOD_FORMAT];
 /// Bytes per pixel of the G-buffer's own targets: normal, albedo, object,
 /// and with material textures ([`crate::shaders::MATERIAL_TEXTURES`])
 /// emission and occlusion, metallic and roughness.
@@ -74,11 +78,21 @@ pub const fn bytes_per_pixel(material_textures: bool) -> u64 {
 pub const fn bytes_per_pixel_with_depth(material_textures: bool) -> u64 {
     bytes_per_pixel(material_textures) + 4
 }
+/// Bytes per pixel the UV0 and mip target adds for layered materials.
+pub const LAYERS_BYTES_PER_PIXEL: u64 = 16;
 
-/// The targets the G-buffer pass writes: the material ones only for scenes
-/// with material textures.
-fn formats(material_textures: bool) -> &'static [wgpu::TextureFormat] {
-    &FORMATS[..if material_textures { 5 } else { 3 }]
+/// The targets the G-buffer pass writes, as indices into [`FORMATS`]: the
+/// material ones only for scenes with material textures, the UV0 one only
+/// for scenes with layered materials.
+fn written(material_textures: bool, layers: bool) -> Vec<usize> {
+    let mut w = vec![0, 1, 2];
+    if material_textures {
+        w.extend([3, 4]);
+    }
+    if layers {
+        w.push(5);
+    }
+    w
 }
 
 gpu_struct! {
@@ -117,8 +131,10 @@ pub struct GBuffer {
     pub emission_occlusion: wgpu::Texture,
     /// [`METAL_ROUGH_FORMAT`].
     pub metal_rough: wgpu::Texture,
-    /// Views of the five targets, in [`FORMATS`] order.
-    views: [wgpu::TextureView; 5],
+    /// [`UV_LOD_FORMAT`].
+    pub uv_lod: wgpu::Texture,
+    /// Views of the six targets, in [`FORMATS`] order.
+    views: [wgpu::TextureView; 6],
     unproject: wgpu::Buffer,
     /// Group 1 of the lighting passes (`gbuffer_read.wgsl`): depth, normal,
     /// albedo, object, unproject, emission and occlusion, metallic and
@@ -127,13 +143,15 @@ pub struct GBuffer {
     pub read_group: wgpu::BindGroup,
     /// The material targets are written (the scene has material textures).
     pub material_textures: bool,
+    /// The UV0 target is written (the scene has layered materials).
+    pub layers: bool,
 }
 
 impl GBuffer {
     /// Targets of the size of `targets`, read together with its depth. The
     /// material targets are 1x1 placeholders (bound, never read) for scenes
-    /// without material textures.
-    pub fn new(device: &wgpu::Device, targets: &Targets, material_textures: bool) -> Self {
+    /// without material textures, and so is the UV0 target without layers.
+    pub fn new(device: &wgpu::Device, targets: &Targets, material_textures: bool, layers: bool) -> Self {
         let make_sized = |label, format, (width, height)| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -155,7 +173,9 @@ impl GBuffer {
         );
         let emission_occlusion = make_sized("gbuffer emission occlusion", EMISSION_OCCLUSION_FORMAT, material_size);
         let metal_rough = make_sized("gbuffer metal rough", METAL_ROUGH_FORMAT, material_size);
-        let views = [&normal, &albedo, &object, &emission_occlusion, &metal_rough]
+        let layers_size = if layers { (targets.width, targets.height) } else { (1, 1) };
+        let uv_lod = make_sized("gbuffer uv lod", UV_LOD_FORMAT, layers_size);
+        let views = [&normal, &albedo, &object, &emission_occlusion, &metal_rough, &uv_lod]
             .map(|t: &wgpu::Texture| t.create_view(&Default::default()));
         let unproject = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("gbuffer unproject"),
@@ -177,6 +197,7 @@ impl GBuffer {
                 Binding::Uniform,
                 Binding::Texture { sample: float, dimension: d2 },
                 Binding::Texture { sample: float, dimension: d2 },
+                Binding::Texture { sample: float, dimension: d2 },
             ],
         );
         let read_group = bind_group(
@@ -191,6 +212,7 @@ impl GBuffer {
                 unproject.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&views[3]),
                 wgpu::BindingResource::TextureView(&views[4]),
+                wgpu::BindingResource::TextureView(&views[5]),
             ],
         );
         Self {
@@ -199,17 +221,25 @@ impl GBuffer {
             object,
             emission_occlusion,
             metal_rough,
+            uv_lod,
             views,
             unproject,
             read_layout,
             read_group,
             material_textures,
+            layers,
         }
+    }
+
+    /// Bytes per pixel of the targets written, with the frame's depth.
+    pub fn bytes_per_pixel_with_depth(&self) -> u64 {
+        let layers = if self.layers { LAYERS_BYTES_PER_PIXEL } else { 0 };
+        bytes_per_pixel_with_depth(self.material_textures) + layers
     }
 
     /// GPU memory of the G-buffer's own targets (depth belongs to the frame).
     pub fn bytes(&self) -> u64 {
-        self.normal.width() as u64 * self.normal.height() as u64 * bytes_per_pixel(self.material_textures)
+        self.normal.width() as u64 * self.normal.height() as u64 * (self.bytes_per_pixel_with_depth() - 4)
     }
 }
 
@@ -230,10 +260,11 @@ impl GbufferPass {
         after_prepass: bool,
     ) -> Result<Self, ShaderError> {
         let depth = DepthMode::after(after_prepass);
+        let formats: Vec<_> = written(scene.material_textures, scene.layers).into_iter().map(|i| FORMATS[i]).collect();
         let raster = SceneRaster {
             shader: SHADER,
             vertex_entry: "vs_main",
-            fragment: Some(("fs_main", formats(scene.material_textures))),
+            fragment: Some(("fs_main", &formats)),
             depth,
             groups: &[],
             blend: None,
@@ -249,9 +280,10 @@ impl GbufferPass {
 pub fn gbuffer(frame: &mut Frame, pass: &GbufferPass, out: &GBuffer) {
     frame.queue.write_buffer(&out.unproject, 0, bytemuck::bytes_of(&GpuUnproject::new(frame.view)));
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
-    let written = formats(out.material_textures).len();
-    let color: Vec<_> =
-        out.views[..written].iter().map(|view| color_attachment(view, wgpu::Color::TRANSPARENT)).collect();
+    let color: Vec<_> = written(out.material_textures, out.layers)
+        .into_iter()
+        .map(|i| color_attachment(&out.views[i], wgpu::Color::TRANSPARENT))
+        .collect();
     let mut rp = frame.render_pass("gbuffer", &color, Some(depth_attachment(targets, !pass.after_prepass)));
     draw_objects(&mut rp, scene, visible, &pass.pipeline);
 }
@@ -276,7 +308,7 @@ impl GbufferStage {
     ) -> Result<Self, ShaderError> {
         let prepass = depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
         let pass = GbufferPass::new(device, shaders, scene, depth_prepass)?;
-        Ok(Self { prepass, pass, gbuffer: GBuffer::new(device, targets, scene.material_textures) })
+        Ok(Self { prepass, pass, gbuffer: GBuffer::new(device, targets, scene.material_textures, scene.layers) })
     }
 }
 

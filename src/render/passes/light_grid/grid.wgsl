@@ -10,6 +10,9 @@
 #import shadespace::scene::Object
 #import shadespace::scene_bindings::{view, lights}
 #import shadespace::surface::light_globals
+#ifdef LAYERS
+#import shadespace::layers::{layer_at, layer_mask, layer_surface}
+#endif
 
 // Mirrors `passes::light_grid::GpuLightGridParams`.
 struct LightGridParams {
@@ -81,8 +84,31 @@ fn cell_radiance(cell: u32, s: Surface, to_eye: vec3f) -> vec3f {
 }
 
 // Emission, the global lights and the lights of `cell`, seen from the camera
-// (what `surface::light_surface` computes from an object's CPU list).
+// (what `surface::light_surface` computes from an object's CPU list); for
+// a layered material, each layer's with its weight (`shadespace::layers`).
 fn light_surface_in_cell(o: Object, s: Surface, cell: u32) -> vec3f {
+#ifdef LAYERS
+    var color = vec3f(0.0);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * light_surface_in_cell_one(layer_surface(l, s), cell);
+        }
+    }
+    if remaining > 0.0 {
+        color += remaining * light_surface_in_cell_one(s, cell);
+    }
+    return color;
+#else
+    return light_surface_in_cell_one(s, cell);
+#endif
+}
+
+// `light_surface_in_cell` of one surface (a material or one of its layers).
+fn light_surface_in_cell_one(s: Surface, cell: u32) -> vec3f {
     let to_eye = normalize(view.camera_position.xyz - s.position);
     return s.emission + light_globals(s, to_eye) + cell_radiance(cell, s, to_eye);
 }

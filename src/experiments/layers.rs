@@ -1,0 +1,454 @@
+//! Experiment `layers` (issue 26): the shading workload Oxide built object
+//! space for. Every material gets K layers (`--materials layered:K`, the
+//! preset of `crate::materials::preset`), K from 1 to 16, and every
+//! pipeline (forward, multi-pass, clustered, deferred, deferred-compute:
+//! all with per-layer lighting) and object space (reuse 1, shading at 30 Hz
+//! of 60 spread over the frames as `--shade-hz 30` does, variable rate 1)
+//! renders the camera path with one light, 30 shadowed lights and 1,000
+//! small lights: median GPU frame time, and the last measured frame's error
+//! against the 4x4 supersampled reference (`crate::reference`) of the same
+//! layered scene and against forward's frame (FLIP, PSNR). The report tables
+//! and plots frame time against K per light set, and names, per K and light
+//! set, object space's speed-up over the fastest conventional pipeline. A
+//! configuration slower than the grid's cap (`--cap-ms`) at K layers skips
+//! the larger K with that light set.
+
+use std::collections::BTreeMap;
+
+use image::RgbaImage;
+use serde::Serialize;
+
+use super::census::StudyScene;
+use super::plot::{LinePlot, Series};
+use super::report::{Section, Table, f3};
+use super::scenarios::Scenario;
+use super::timing::{Shading, Sweep, TimingGrid};
+use super::{ExperimentError, ExperimentOptions, Findings, Outcome, Output, differences};
+use crate::gpu::GpuContext;
+use crate::materials::{self, MaterialsSpec};
+use crate::metrics;
+use crate::reference::{ReferenceCache, ReferenceSettings, ReferenceView, References};
+use crate::render::{Exposure, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
+use crate::scene::lights::build_lights;
+use crate::scene::path::cameras_for_scene;
+use crate::scene::{Light, Scene};
+
+/// Samples per axis of the references.
+pub const REFERENCE_SAMPLES: u32 = 4;
+
+/// The layer counts: 1, 2, 4, 8, 12, 16 (quick: 1 and 4).
+pub fn layer_counts(quick: bool) -> Vec<usize> {
+    if quick { vec![1, 4] } else { vec![1, 2, 4, 8, 12, 16] }
+}
+
+/// The timing side of the grid: every pipeline and object space's variants
+/// ([`configs`]) at 1920x1080, 5 warm-up and 20 measured path frames, with
+/// 1 and 1,000 small lights and 30 shadowed ones. Quick: forward,
+/// deferred-compute and object space at 96x54, 1 + 2 frames, one small light.
+pub fn grid(quick: bool) -> TimingGrid {
+    if quick {
+        let shadings = vec![Shading::Forward, Shading::DeferredCompute, Shading::OBJECT_SPACE];
+        let sweeps = vec![Sweep { scenario: Scenario::Small, counts: vec![1] }];
+        return TimingGrid { width: 96, height: 54, ..TimingGrid::new(true, shadings, sweeps) };
+    }
+    let mut shadings = Shading::pipelines();
+    shadings.push(Shading::ObjectSpace { reuse: 1, variable_rate: 1.0 });
+    let sweeps = vec![
+        Sweep { scenario: Scenario::Small, counts: vec![1, 1000] },
+        Sweep { scenario: Scenario::Shadowed, counts: vec![30] },
+    ];
+    TimingGrid::new(false, shadings, sweeps)
+}
+
+/// A measured configuration: a shading and, for object space, whether it
+/// re-shades each tile every other frame on its own phase (`--shade-hz 30`
+/// at 60 frames a second).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    pub shading: Shading,
+    pub hz30: bool,
+}
+
+impl Config {
+    /// `objectspace-hz30` for the spread 30 Hz variant, else the shading's label.
+    pub fn label(&self) -> String {
+        if self.hz30 { "objectspace-hz30".into() } else { self.shading.label() }
+    }
+
+    fn pipeline(&self, texture_sizes: &[Option<u32>], visibility: VisibilityMethod) -> PipelineConfig {
+        let mut config = self.shading.config(texture_sizes, visibility);
+        if let PipelineConfig::ObjectSpace(os) = &mut config
+            && self.hz30
+        {
+            os.reuse = 2;
+            os.spread_reshading = true;
+        }
+        config
+    }
+}
+
+/// The grid's shadings, forward first (the others' images are compared
+/// with its), then object space at 30 Hz where object space is measured.
+pub fn configs(grid: &TimingGrid) -> Vec<Config> {
+    let mut all: Vec<Config> = grid.shadings.iter().map(|&shading| Config { shading, hz30: false }).collect();
+    all.sort_by_key(|c| c.shading != Shading::Forward);
+    if grid.shadings.contains(&Shading::OBJECT_SPACE) {
+        all.push(Config { shading: Shading::OBJECT_SPACE, hz30: true });
+    }
+    all
+}
+
+/// A row of `data.csv`: one configuration at one layer count and light set.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub layers: usize,
+    pub lights_spec: String,
+    pub config: String,
+    pub conventional: bool,
+    pub frames: u32,
+    /// GPU frame time over the measured frames (none without timestamps).
+    pub median_ms: Option<f64>,
+    pub p95_ms: Option<f64>,
+    /// The last measured frame against the supersampled reference.
+    pub flip_reference: f64,
+    pub psnr_reference_db: f64,
+    /// The last measured frame against forward's (per-layer lighting; none
+    /// for forward itself, or where forward passed the cap).
+    pub flip_forward: Option<f64>,
+    pub psnr_forward_db: Option<f64>,
+}
+
+/// The scene drawn and charted, every material with `k` layers.
+struct Layered {
+    render: Scene,
+    charted: Scene,
+}
+
+impl Layered {
+    fn new(scene: &StudyScene, k: usize) -> Self {
+        let layered = |s: &Scene| {
+            let mut s = s.clone();
+            materials::apply(&mut s, &MaterialsSpec::Layered(k)).expect("the preset applies to any scene");
+            s
+        };
+        Self { render: layered(&scene.render), charted: layered(scene.charted()) }
+    }
+}
+
+/// The value at `p` of the sorted `values`.
+fn quantile(sorted: &[f64], p: f64) -> Option<f64> {
+    let last = sorted.len().checked_sub(1)?;
+    Some(sorted[((last as f64) * p).round() as usize])
+}
+
+/// `shadespace experiment layers`.
+pub(super) fn study(
+    ctx: &GpuContext,
+    options: &ExperimentOptions,
+    scene: &StudyScene,
+    output: Output,
+    progress: &indicatif::ProgressBar,
+) -> Result<Outcome, ExperimentError> {
+    let grid = options.timing.as_ref().ok_or(ExperimentError::NoTimingGrid("layers"))?;
+    let ks = layer_counts(options.quick);
+    let configs = configs(grid);
+    let frames_per_point = u64::from(grid.warmup + grid.frames);
+    progress.set_length((ks.len() * grid.points() * configs.len()) as u64 * frames_per_point);
+    let aspect = grid.width as f32 / grid.height as f32;
+    let cameras = cameras_for_scene(&options.scene, &scene.render, aspect)?;
+    let region = cameras.light_region(&scene.render.bounds());
+    let path = &cameras.path;
+    let visibility = VisibilityMethod::preferred(ctx.device.features());
+    let cache = options
+        .chart_cache
+        .as_ref()
+        .map_or_else(ReferenceCache::from_env, |d| ReferenceCache::in_dir(d.join("references")));
+    let last_frame = grid.first_frame + grid.warmup + grid.frames - 1;
+    let last_camera = path.camera_at(last_frame);
+    let mut rows = Vec::new();
+    // (configuration, light set) whose median passed the cap: larger K are skipped.
+    let mut capped: BTreeMap<(String, String), usize> = BTreeMap::new();
+    for &k in &ks {
+        let layered = Layered::new(scene, k);
+        for sweep in &grid.sweeps {
+            for &count in &sweep.counts {
+                let spec = sweep.scenario.spec(count);
+                let lights: Vec<Light> = build_lights(&spec, &region, &path.camera_at(0), aspect, grid.seed)?;
+                progress.set_message(format!("reference layered:{k} {spec}"));
+                let settings = ReferenceSettings {
+                    width: grid.width,
+                    height: grid.height,
+                    shading: Default::default(),
+                    sun_shadow: false,
+                    exposure: Exposure::default(),
+                };
+                let mut references = References::new(ctx, &layered.render, settings, cache.clone());
+                let view = ReferenceView { camera: &last_camera, lights: &lights, samples: REFERENCE_SAMPLES };
+                let reference = references.get(&view).map_err(reference_error)?.0.image();
+                let mut forward: Option<RgbaImage> = None;
+                for config in &configs {
+                    let key = (config.label(), spec.to_string());
+                    if capped.contains_key(&key) {
+                        progress.inc(u64::from(grid.warmup + grid.frames));
+                        continue;
+                    }
+                    progress.set_message(format!("{} layered:{k} {spec}", config.label()));
+                    let conventional = config.shading.is_conventional();
+                    let shaded = if conventional { &layered.render } else { &layered.charted };
+                    let render_options = RenderOptions {
+                        width: grid.width,
+                        height: grid.height,
+                        pipeline: config.pipeline(&scene.density_sizes, visibility),
+                    };
+                    let mut renderer = Renderer::new(ctx, shaded, &render_options)?;
+                    for i in 0..grid.warmup + grid.frames {
+                        renderer.render(ctx, &path.camera_at(grid.first_frame + i), &lights, u64::from(i))?;
+                        progress.inc(1);
+                    }
+                    let image = renderer.read_image(ctx)?;
+                    let mut times: Vec<f64> = renderer
+                        .collect_timings(ctx, true)
+                        .into_iter()
+                        .filter(|t| t.frame >= u64::from(grid.warmup))
+                        .map(|t| t.total_ms)
+                        .collect();
+                    times.sort_by(f64::total_cmp);
+                    let (to_reference, _) = metrics::compare(&reference, &image);
+                    let to_forward = forward.as_ref().map(|f| metrics::compare(f, &image).0);
+                    if config.shading == Shading::Forward {
+                        forward = Some(image);
+                    }
+                    let median_ms = quantile(&times, 0.5);
+                    if median_ms.is_some_and(|ms| ms > grid.cap_ms) {
+                        capped.insert(key, k);
+                    }
+                    rows.push(Row {
+                        layers: k,
+                        lights_spec: spec.to_string(),
+                        config: config.label(),
+                        conventional,
+                        frames: grid.frames,
+                        median_ms,
+                        p95_ms: quantile(&times, 0.95),
+                        flip_reference: f64::from(to_reference.flip_mean),
+                        psnr_reference_db: to_reference.psnr_db,
+                        flip_forward: to_forward.as_ref().map(|e| f64::from(e.flip_mean)),
+                        psnr_forward_db: to_forward.as_ref().map(|e| e.psnr_db),
+                    });
+                }
+            }
+        }
+    }
+    output.write_rows(&rows)?;
+    let findings = summarize(grid, &ks, &configs, &rows, output)?;
+    let text = format!(
+        "Scene `{}`, {}x{}, {}; path frames {} to {last_frame} ({} warm-up), median GPU frame time of the \
+         measured frames; lights: {} (seed {}); layers: `--materials layered:K` for K in {ks:?}; \
+         configurations: {}; a configuration whose median passes {} ms at K layers with a light set is not \
+         measured at larger K with it (`-` in the tables{}). Errors: the last frame against forward's 4x4 supersampled reference of the same \
+         layered scene (exposure 1, as every configuration), and against forward's last frame. Visibility of \
+         object space and deferred-compute: {}.\n",
+        scene.name,
+        grid.width,
+        grid.height,
+        if options.quick { "quick mode (a reduced grid)" } else { "the full grid" },
+        grid.first_frame,
+        grid.warmup,
+        grid.sweeps
+            .iter()
+            .flat_map(|s| s.counts.iter().map(|&n| s.scenario.spec(n).to_string()))
+            .collect::<Vec<_>>()
+            .join(", "),
+        grid.seed,
+        configs.iter().map(Config::label).collect::<Vec<_>>().join(", "),
+        grid.cap_ms,
+        if capped.is_empty() {
+            String::new()
+        } else {
+            let list: Vec<String> = capped.iter().map(|((c, l), k)| format!("{c} with {l} after {k}")).collect();
+            format!(": {}", list.join(", "))
+        },
+        visibility.name(),
+    );
+    let setup = Section { heading: "Setup".into(), text, tables: Vec::new(), figures: Vec::new() };
+    let own = [
+        "Layers come from the preset (`layered:K`, `src/materials/preset.rs`), not an artist's materials: \
+         world-space noise masks at opacity 0.7 over the material itself, so most points show several layers."
+            .to_string(),
+        "Deferred and deferred-compute light every layer from a G-buffer that stores UV0 and its mip \
+         (per-layer lighting, no blended-parameter shortcut)."
+            .to_string(),
+    ];
+    Ok(Outcome {
+        summary: serde_json::json!({
+            "grid": grid,
+            "layers": ks,
+            "visibility": visibility.name(),
+            "camera_source": cameras.source.to_string(),
+        }),
+        sections: vec![setup, differences(&own)],
+        findings,
+    })
+}
+
+fn reference_error(e: crate::reference::ReferenceError) -> ExperimentError {
+    match e {
+        crate::reference::ReferenceError::Render(r) => ExperimentError::Render(r),
+        other => ExperimentError::Output { path: "reference".into(), message: other.to_string() },
+    }
+}
+
+/// Object space's speed-up over the fastest conventional pipeline at one point.
+#[derive(Clone, Debug, Serialize)]
+pub struct Speedup {
+    pub layers: usize,
+    pub lights_spec: String,
+    pub fastest_conventional: String,
+    pub conventional_ms: f64,
+    pub object_space: String,
+    pub object_space_ms: f64,
+    /// Conventional over object space (above 1: object space is faster).
+    pub speedup: f64,
+    pub object_space_flip_reference: f64,
+    pub conventional_flip_reference: f64,
+}
+
+fn summarize(
+    grid: &TimingGrid,
+    ks: &[usize],
+    configs: &[Config],
+    rows: &[Row],
+    output: Output,
+) -> Result<Findings, ExperimentError> {
+    let specs: Vec<String> =
+        grid.sweeps.iter().flat_map(|s| s.counts.iter().map(|&n| s.scenario.spec(n).to_string())).collect();
+    let labels: Vec<String> = configs.iter().map(Config::label).collect();
+    let find = |k: usize, spec: &str, label: &str| {
+        rows.iter().find(|r| r.layers == k && r.lights_spec == spec && r.config == label)
+    };
+    let mut sections = Vec::new();
+    let mut speedups = Vec::new();
+    for spec in &specs {
+        let mut header = vec!["layers"];
+        header.extend(labels.iter().map(String::as_str));
+        let mut table = Table::new(&header);
+        for &k in ks {
+            let mut row = vec![k.to_string()];
+            for label in &labels {
+                row.push(find(k, spec, label).and_then(|r| r.median_ms).map_or("-".into(), f3));
+            }
+            table.rows.push(row);
+            let best = |conventional: bool| {
+                rows.iter()
+                    .filter(|r| r.layers == k && &r.lights_spec == spec && r.conventional == conventional)
+                    .filter_map(|r| r.median_ms.map(|ms| (r, ms)))
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+            };
+            if let (Some((c, c_ms)), Some((o, o_ms))) = (best(true), best(false)) {
+                speedups.push(Speedup {
+                    layers: k,
+                    lights_spec: spec.clone(),
+                    fastest_conventional: c.config.clone(),
+                    conventional_ms: c_ms,
+                    object_space: o.config.clone(),
+                    object_space_ms: o_ms,
+                    speedup: c_ms / o_ms,
+                    object_space_flip_reference: o.flip_reference,
+                    conventional_flip_reference: c.flip_reference,
+                });
+            }
+        }
+        let series = labels
+            .iter()
+            .map(|label| Series {
+                label: label.clone(),
+                points: ks
+                    .iter()
+                    .filter_map(|&k| find(k, spec, label).and_then(|r| r.median_ms).map(|ms| (k as f64, ms)))
+                    .collect(),
+            })
+            .collect();
+        let plot = LinePlot {
+            title: format!("{spec}, {}x{}: GPU frame time against layers", grid.width, grid.height),
+            x_label: "layers per material".into(),
+            y_label: "median GPU frame time (ms)".into(),
+            series,
+        };
+        let stem = format!("layers-{}", spec.replace([':', '+'], "-"));
+        let figure = output.figure(&stem, &plot)?;
+        let mut errors =
+            Table::new(&["layers", "configuration", "FLIP vs reference", "PSNR vs reference (dB)", "FLIP vs forward"]);
+        for r in rows.iter().filter(|r| &r.lights_spec == spec) {
+            errors.rows.push(vec![
+                r.layers.to_string(),
+                r.config.clone(),
+                format!("{:.4}", r.flip_reference),
+                format!("{:.2}", r.psnr_reference_db),
+                r.flip_forward.map_or("-".into(), |f| format!("{f:.4}")),
+            ]);
+        }
+        sections.push(Section {
+            heading: format!("Frame time and error: {spec}"),
+            text: format!("Median GPU frame time in ms of each configuration against the layer count, with `{spec}`."),
+            tables: vec![(String::new(), table), ("Image error of the last frame:".into(), errors)],
+            figures: vec![(format!("{spec}: frame time against layers"), figure)],
+        });
+    }
+    let mut table =
+        Table::new(&["layers", "lights", "fastest conventional", "ms", "fastest object space", "ms", "speed-up"]);
+    for s in &speedups {
+        table.rows.push(vec![
+            s.layers.to_string(),
+            s.lights_spec.clone(),
+            s.fastest_conventional.clone(),
+            f3(s.conventional_ms),
+            s.object_space.clone(),
+            f3(s.object_space_ms),
+            format!("{:.2}x", s.speedup),
+        ]);
+    }
+    // Where object space starts to win: the fewest layers at which it is faster, per light set.
+    let mut wins: BTreeMap<&str, usize> = BTreeMap::new();
+    for s in speedups.iter().filter(|s| s.speedup > 1.0) {
+        let k = wins.entry(s.lights_spec.as_str()).or_insert(s.layers);
+        *k = (*k).min(s.layers);
+    }
+    let headline = if wins.is_empty() {
+        "object space is faster at no measured layer count".to_string()
+    } else {
+        wins.iter()
+            .map(|(spec, k)| format!("{spec}: object space faster from {k} layers"))
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    sections.push(Section {
+        heading: "Where object space wins".into(),
+        text: format!(
+            "Per layer count and light set, the fastest conventional pipeline (all light every layer) against the \
+             fastest object-space configuration; speed-up = conventional / object space. {headline}."
+        ),
+        tables: vec![(String::new(), table)],
+        figures: Vec::new(),
+    });
+    Ok(Findings {
+        results: serde_json::json!({ "headline": headline, "speedups": speedups, "rows": rows.len() }),
+        sections,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn configs_put_forward_first_and_add_object_space_at_30_hz() {
+        let c = configs(&grid(false));
+        assert_eq!(c[0].shading, Shading::Forward);
+        assert_eq!(c.last().unwrap().label(), "objectspace-hz30");
+        let PipelineConfig::ObjectSpace(os) = c.last().unwrap().pipeline(&[], VisibilityMethod::Raster) else {
+            panic!("object space")
+        };
+        assert!(os.reuse == 2 && os.spread_reshading);
+        assert_eq!(c.len(), 8, "five conventional pipelines, object space at reuse 1, variable rate 1 and 30 Hz");
+    }
+}
