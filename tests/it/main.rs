@@ -30,6 +30,7 @@ mod reference;
 mod seams;
 mod shadows;
 mod sponza;
+mod stability;
 mod stage_twins;
 mod trimap;
 mod viewer;
