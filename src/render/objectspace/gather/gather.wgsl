@@ -103,11 +103,15 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
         textureStore(hdr, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
         return;
     }
-    let p = sample_pixel(id.xy, ids);
+    textureStore(hdr, id.xy, gather_surface(sample_pixel(id.xy, ids)));
+}
+
+// The shade of one surface point: its object's shades filtered (or a debug
+// view's colour), or shaded here when the object or its page is not in the atlas.
+fn gather_surface(p: PixelSample) -> vec4f {
     let e = atlas_entries[p.object];
     if e.size == 0u {
-        textureStore(hdr, id.xy, shade_forward(p));
-        return;
+        return shade_forward(p);
     }
     let f = chart_footprint(p);
     let levels = select_levels(e, p, f);
@@ -142,7 +146,7 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
         default: {
             // The levels around the footprint, blended by the coarser one's
             // weight (one level where the weight is 0 or 1).
-            let own = island(p.object, ids.y);
+            let own = island(p.object, p.triangle);
             var c = vec3f(0.0);
             var backed = true;
             if levels.t < 1.0 {
@@ -157,11 +161,10 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
             }
             if !backed {
                 // The atlas was full this frame: shade the pixel forward.
-                textureStore(hdr, id.xy, shade_forward(p));
-                return;
+                return shade_forward(p);
             }
             out = vec4f(c, 1.0);
         }
     }
-    textureStore(hdr, id.xy, out);
+    return out;
 }

@@ -9,7 +9,7 @@
 // tiles once paging has backed the page.
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_PAGES_USED, COUNT_PAGES_REQUESTED, COUNT_PAGES_FAILED,
     COUNT_PAGES_BACKED, COUNT_VIEW_TILES, COUNT_BACKED_TILES, COUNT_ATLAS_PIXELS, COUNT_UNDER_SHADED_PIXELS}
-#import shadespace::pixel_surface::sample_pixel
+#import shadespace::pixel_surface::{sample_pixel, PixelSample}
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
@@ -173,7 +173,12 @@ fn mark_pixel(pixel: vec2u) -> u32 {
     if ids.x == 0u {
         return PIXEL_NOT_IN_ATLAS;
     }
-    let p = sample_pixel(pixel, ids);
+    return mark_surface(sample_pixel(pixel, ids));
+}
+
+// Marks the tiles of one surface point's footprint; returns what kind of
+// pixel it makes.
+fn mark_surface(p: PixelSample) -> u32 {
     let e = atlas_entries[p.object];
     if e.size == 0u {
         return PIXEL_NOT_IN_ATLAS; // shaded forward, in the gather
