@@ -213,6 +213,12 @@ pub struct ObjectSpaceArgs {
     /// triangle's normals do not vary (0 = off; at most 16).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse::variable_rate)]
     pub variable_rate: f32,
+    /// Blend the two mip levels around each pixel's footprint over a band
+    /// this wide (in levels) around each level switch, shading both: 0
+    /// reads the nearest level alone (its shade jumps where the level
+    /// changes), 1 is trilinear. 0 to 1.
+    #[arg(long, default_value_t = 0.0, value_parser = parse::level_blend)]
+    pub level_blend: f32,
     /// Most texels of the physical atlas, in Mi (12 bytes each with the
     /// triangle maps): the pages that back the objects' virtual textures
     /// where visible tiles need them. The atlas starts at this size, then

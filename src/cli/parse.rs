@@ -154,6 +154,11 @@ pub fn variable_rate(s: &str) -> Result<f32, String> {
     finite_in(s, 0.0..=16.0, "a strength from 0 to 16 levels")
 }
 
+/// `--level-blend`: 0 to 1 levels.
+pub fn level_blend(s: &str) -> Result<f32, String> {
+    finite_in(s, 0.0..=1.0, "a band from 0 to 1 levels")
+}
+
 /// `--cap-ms`: a frame time above 0.
 pub fn cap_ms(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {

@@ -159,6 +159,7 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             mip_bias: a.objectspace.mip_bias,
             shade_budget_texels: a.objectspace.shade_budget.map(|m| (m * 1.0e6) as u64),
             variable_rate: a.objectspace.variable_rate,
+            level_blend: a.objectspace.level_blend,
             view,
             texture_sizes: s.texture_sizes.clone().unwrap_or_default(),
             extra_views: s.extra_views.clone(),

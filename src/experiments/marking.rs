@@ -165,7 +165,7 @@ impl StudyLayout {
 
 /// Our marking's parameters: no bias, no variable rate (the renderer's defaults).
 const OUR_MARKING: MarkParams =
-    MarkParams { stamp: 1, reuse: 1, view_since: 1, tile_size: 8, mip_bias: 0.0, variable_rate: 0.0 };
+    MarkParams { stamp: 1, reuse: 1, view_since: 1, tile_size: 8, mip_bias: 0.0, variable_rate: 0.0, level_blend: 0.0 };
 
 /// The atlas tiles our marking gives a pixel of an object (entry `e`) with
 /// footprint `f`: the tiles of its bilinear footprint at its rounded level,

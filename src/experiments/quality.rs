@@ -70,14 +70,17 @@ pub struct Config {
     pub spread: bool,
     /// Object space: `--mip-bias`.
     pub mip_bias: f32,
+    /// Object space: `--level-blend`.
+    pub level_blend: f32,
 }
 
 impl Config {
     fn plain(shading: Shading) -> Self {
-        Self { shading, spread: false, mip_bias: 0.0 }
+        Self { shading, spread: false, mip_bias: 0.0, level_blend: 0.0 }
     }
 
-    /// `objectspace-hz30` (shading at 30 Hz of 60, spread), `objectspace-bias1`, ...
+    /// `objectspace-hz30` (shading at 30 Hz of 60, spread), `objectspace-bias1`,
+    /// `objectspace-blend1` (level blend 1: trilinear), ...
     pub fn label(&self) -> String {
         match self.shading {
             Shading::ObjectSpace { reuse, variable_rate } if self.spread => {
@@ -91,6 +94,7 @@ impl Config {
         }
         .to_string()
             + &if self.mip_bias != 0.0 { format!("-bias{}", self.mip_bias) } else { String::new() }
+            + &if self.level_blend != 0.0 { format!("-blend{}", self.level_blend) } else { String::new() }
     }
 
     /// The pipeline's name (a curve of the cost-error plot).
@@ -103,6 +107,7 @@ impl Config {
         if let PipelineConfig::ObjectSpace(os) = &mut config {
             os.spread_reshading = self.spread;
             os.mip_bias = self.mip_bias;
+            os.level_blend = self.level_blend;
         }
         config
     }
@@ -120,13 +125,15 @@ pub struct Axes {
 }
 
 /// The configurations of a grid: its shadings, then object space at 30 Hz
-/// (reuse 2, spread over the frames) and, but in quick mode, with mip bias 1.
+/// (reuse 2, spread over the frames) and, but in quick mode, with mip bias 1
+/// and with level blend 1 (trilinear gathering).
 pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
     let mut all: Vec<Config> = grid.shadings.iter().map(|&s| Config::plain(s)).collect();
     if grid.shadings.iter().any(|s| !s.is_conventional()) {
         all.push(Config { spread: true, ..Config::plain(Shading::ObjectSpace { reuse: 2, variable_rate: 0.0 }) });
         if !quick {
             all.push(Config { mip_bias: 1.0, ..Config::plain(Shading::OBJECT_SPACE) });
+            all.push(Config { level_blend: 1.0, ..Config::plain(Shading::OBJECT_SPACE) });
         }
     }
     all
@@ -727,12 +734,13 @@ mod tests {
                 "objectspace-reuse2",
                 "objectspace-vr1",
                 "objectspace-hz30",
-                "objectspace-bias1"
+                "objectspace-bias1",
+                "objectspace-blend1"
             ]
         );
         let all = cells(&full, false);
         assert_eq!(all.len(), labels.len() * 2 * 2, "full: two textures, two gloss settings, one light set");
-        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 5 * 4);
+        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 6 * 4);
         let quick = grid(true);
         let labels: Vec<String> = configs(&quick, true).iter().map(Config::label).collect();
         assert_eq!(labels, ["forward", "deferred-compute", "objectspace", "objectspace-hz30"]);

@@ -81,7 +81,7 @@ fn bad_options_say_what_is_wrong() {
 /// texture sizes are refused with the flag and the accepted range.
 #[test]
 fn numeric_flags_must_be_finite_and_in_range() {
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 9] = [
         (&["--mip-bias", "nan"], "-16 to 16"),
         (&["--mip-bias", "inf"], "-16 to 16"),
         (&["--exposure", "inf"], "positive finite"),
@@ -89,6 +89,8 @@ fn numeric_flags_must_be_finite_and_in_range() {
         (&["--atlas-budget", "0"], "--atlas-budget"),
         (&["--texel-density", "1e30"], "at most 65536"),
         (&["--variable-rate", "-1"], "0 to 16"),
+        (&["--level-blend", "1.5"], "from 0 to 1"),
+        (&["--level-blend", "nan"], "from 0 to 1"),
     ];
     for (flags, expected) in cases {
         let mut args = vec!["render", "--pipeline", "objectspace"];

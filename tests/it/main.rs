@@ -32,6 +32,7 @@ mod reference;
 mod seams;
 mod shadows;
 mod sponza;
+mod stability;
 mod stage_twins;
 mod terrain;
 mod trimap;

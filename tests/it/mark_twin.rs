@@ -24,6 +24,8 @@ struct Run<'a> {
     height: u32,
     reuse: u32,
     variable_rate: f32,
+    /// `ObjectSpaceConfig::level_blend`.
+    level_blend: f32,
     /// How the visibility buffer the twin reads is filled.
     visibility: VisibilityMethod,
     /// One camera per frame.
@@ -64,6 +66,7 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
     let objectspace = ObjectSpaceConfig {
         reuse: run.reuse,
         variable_rate: run.variable_rate,
+        level_blend: run.level_blend,
         visibility: run.visibility,
         texture_sizes: run.texture_sizes.clone(),
         ..Default::default()
@@ -195,6 +198,7 @@ fn static_floor_reuses_shades_until_they_age_and_the_camera_moves_or_the_lights_
             height: 96,
             reuse: 3,
             variable_rate: 0.0,
+            level_blend: 0.0,
             visibility: VisibilityMethod::Raster,
             cameras,
             lights,
@@ -224,6 +228,7 @@ fn moving_floor_marks_new_tiles() {
                 height: 120,
                 reuse,
                 variable_rate,
+                level_blend: 0.0,
                 visibility: VisibilityMethod::Raster,
                 // Low over the floor and nearing it: finer levels come into view.
                 cameras: floor_cameras(Vec3::new(0.0, 2.5, 5.0), Vec3::new(0.3, -0.2, -0.5), 5),
@@ -250,11 +255,13 @@ fn atrium_along_its_camera_path() {
     let lights = lights::build_lights(&spec, &bounds, &cameras[0], width as f32 / height as f32, 7).unwrap();
     let (scene, texture_sizes) = common::charted(&scene);
     let runs = [
-        ("atrium, reuse 1", 1, 0.0, VisibilityMethod::Raster),
-        ("atrium, reuse 3, variable rate 1", 3, 1.0, VisibilityMethod::Raster),
-        ("atrium, reuse 2, compute visibility", 2, 0.0, VisibilityMethod::Compute),
+        ("atrium, reuse 1", 1, 0.0, 0.0, VisibilityMethod::Raster),
+        ("atrium, reuse 3, variable rate 1", 3, 1.0, 0.0, VisibilityMethod::Raster),
+        ("atrium, reuse 2, compute visibility", 2, 0.0, 0.0, VisibilityMethod::Compute),
+        // Two levels per pixel between levels: both marked.
+        ("atrium, reuse 2, level blend 1", 2, 0.0, 1.0, VisibilityMethod::Raster),
     ];
-    for (name, reuse, variable_rate, visibility) in runs {
+    for (name, reuse, variable_rate, level_blend, visibility) in runs {
         check(
             &ctx,
             Run {
@@ -265,6 +272,7 @@ fn atrium_along_its_camera_path() {
                 height,
                 reuse,
                 variable_rate,
+                level_blend,
                 visibility,
                 cameras: cameras.clone(),
                 lights: lights.clone(),

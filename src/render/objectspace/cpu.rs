@@ -56,6 +56,8 @@ pub struct MarkParams {
     pub tile_size: u32,
     pub mip_bias: f32,
     pub variable_rate: f32,
+    /// Width of the band over which a pixel blends two levels (0: none).
+    pub level_blend: f32,
 }
 
 /// Everything the marking pass reads besides the visibility buffer.
@@ -174,6 +176,45 @@ pub fn select_level(lod: f32, level_count: u32) -> u32 {
     lod.round_ties_even().clamp(0.0, (level_count - 1) as f32) as u32
 }
 
+/// Mirrors `LevelPair`: the levels a pixel reads, `lo` and `hi` (lo + 1,
+/// or lo at the last level) with `hi`'s weight `t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LevelPair {
+    pub lo: u32,
+    pub hi: u32,
+    pub t: f32,
+}
+
+impl LevelPair {
+    /// The levels marked and gathered: `lo` where t < 1, `hi` where t > 0.
+    pub fn levels(&self) -> Vec<u32> {
+        let mut out = Vec::new();
+        if self.t < 1.0 {
+            out.push(self.lo);
+        }
+        if self.t > 0.0 {
+            out.push(self.hi);
+        }
+        out
+    }
+}
+
+/// Mirrors `select_levels` for unrounded level `lod`: with `blend` 0 the
+/// rounded level alone ([`select_level`]); else the coarser level's weight
+/// rises from 0 to 1 over the `blend` levels around each x.5.
+pub fn select_levels(lod: f32, level_count: u32, blend: f32) -> LevelPair {
+    if blend <= 0.0 {
+        let level = select_level(lod, level_count);
+        return LevelPair { lo: level, hi: level, t: 0.0 };
+    }
+    let clamped = lod.clamp(0.0, (level_count - 1) as f32);
+    let base = clamped.floor();
+    let lo = base as u32;
+    let hi = (lo + 1).min(level_count - 1);
+    let t = if hi == lo { 0.0 } else { ((clamped - base - 0.5) / blend + 0.5).clamp(0.0, 1.0) };
+    LevelPair { lo, hi, t }
+}
+
 /// Mirrors `Bilinear`: the footprint of a bilinear lookup in a level.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bilinear {
@@ -258,11 +299,19 @@ pub fn f16_ulp(x: f32) -> f32 {
     if x < 2f32.powi(-14) { 2f32.powi(-24) } else { 2f32.powi(x.log2().floor() as i32 - 10) }
 }
 
-/// The levels a pixel of unrounded level `lod` may select on the GPU
-/// (lowest, highest): both sides of a rounding boundary within
-/// [`LOD_TOLERANCE`].
-pub fn level_candidates(lod: f32, level_count: u32) -> (u32, u32) {
-    (select_level(lod - LOD_TOLERANCE, level_count), select_level(lod + LOD_TOLERANCE, level_count))
+/// The level pairs a pixel of unrounded level `lod` may select on the GPU:
+/// [`select_levels`] at `lod` and [`LOD_TOLERANCE`] either side of it, each
+/// distinct set of levels read once (both sides of a rounding boundary, or
+/// of a blend band's edge).
+pub fn level_choices(lod: f32, level_count: u32, blend: f32) -> Vec<LevelPair> {
+    let mut out: Vec<LevelPair> = Vec::new();
+    for x in [lod - LOD_TOLERANCE, lod, lod + LOD_TOLERANCE] {
+        let pair = select_levels(x, level_count, blend);
+        if !out.iter().any(|p| p.levels() == pair.levels()) {
+            out.push(pair);
+        }
+    }
+    out
 }
 
 /// The tiles one pixel marks.
@@ -287,24 +336,37 @@ pub fn pixel_tiles(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Option<P
     let normals = &inputs.scene.meshes[inputs.scene.objects[p.object].mesh].normals;
     let bias = variable_rate_bias(inputs.params.variable_rate, p.tri.map(|v| normals[v]));
     let lod = level_of_detail(e, &inputs.params, &f, bias);
-    let (lowest, highest) = level_candidates(lod, e.level_count);
-    let mut outcomes: Vec<Vec<u32>> = Vec::new();
-    for level in lowest..=highest {
+    let choices = level_choices(lod, e.level_count, inputs.params.level_blend);
+    // Tiles of different levels differ: a tile is marked in every outcome
+    // when every choice reads its level and every floor of the bilinear
+    // coordinate in that level marks it.
+    let mut must = Vec::new();
+    let mut may = Vec::new();
+    let mut levels: Vec<u32> = choices.iter().flat_map(LevelPair::levels).collect();
+    levels.sort_unstable();
+    levels.dedup();
+    for level in levels {
         let l = &e.levels[level as usize];
         // `t` as in `bilinear`, floored both ways when near an integer.
         let t = f.uv * l.size as f32 - 0.5;
         let tolerance = l.size as f32 * TEXEL_TOLERANCE;
+        let mut outcomes: Vec<Vec<u32>> = Vec::new();
         for x in floor_candidates(t.x, tolerance) {
             for y in floor_candidates(t.y, tolerance) {
                 let (texel, texel_hi) = bilinear_taps(l.size, IVec2::new(x, y));
                 outcomes.push(footprint_tiles(l, inputs.params.tile_size, texel, texel_hi));
             }
         }
+        let in_level: Vec<u32> = outcomes.concat();
+        if choices.iter().all(|c| c.levels().contains(&level)) {
+            must.extend(in_level.iter().copied().filter(|t| outcomes.iter().all(|o| o.contains(t))));
+        }
+        may.extend(in_level);
     }
-    let mut may: Vec<u32> = outcomes.concat();
     may.sort_unstable();
     may.dedup();
-    let must = may.iter().copied().filter(|t| outcomes.iter().all(|o| o.contains(t))).collect();
+    must.sort_unstable();
+    must.dedup();
     Some(PixelTiles { must, may })
 }
 
@@ -465,7 +527,7 @@ mod tests {
     }
 
     fn params(mip_bias: f32, variable_rate: f32) -> MarkParams {
-        MarkParams { stamp: 1, reuse: 1, view_since: 1, tile_size: 8, mip_bias, variable_rate }
+        MarkParams { stamp: 1, reuse: 1, view_since: 1, tile_size: 8, mip_bias, variable_rate, level_blend: 0.0 }
     }
 
     /// One object of texture side 256 in tiles of 8, levels 256 down to 32.
@@ -588,6 +650,36 @@ mod tests {
         assert_eq!(pixel_tiles_with(0.5), PixelTiles { must: vec![], may: vec![level2, level3] });
         // Level 2.9: level 3 only.
         assert_eq!(pixel_tiles_with(0.9), PixelTiles { must: vec![level3], may: vec![level3] });
+        // Level 2.5 blended (level blend 1): both levels, certainly.
+        let params = MarkParams { level_blend: 1.0, ..params(0.5, 0.0) };
+        let inputs = MarkInputs { scene: &scene, view: &v, entries: &entries, params };
+        let both = vec![level2, level3];
+        assert_eq!(
+            pixel_tiles(&inputs, UVec2::new(10, 20), [1, 0]).unwrap(),
+            PixelTiles { must: both.clone(), may: both }
+        );
+    }
+
+    #[test]
+    fn level_blend_weighs_the_coarser_level_across_its_band() {
+        // No blend: the rounded level alone.
+        assert_eq!(select_levels(2.6, 5, 0.0), LevelPair { lo: 3, hi: 3, t: 0.0 });
+        // Trilinear: the coarser level weighs the level's fraction.
+        let p = select_levels(2.25, 5, 1.0);
+        assert_eq!((p.lo, p.hi, p.t, p.levels()), (2, 3, 0.25, vec![2, 3]));
+        // A band of 0.5 levels: level 2 alone below 2.25, level 3 alone above 2.75.
+        assert_eq!(select_levels(2.2, 5, 0.5).levels(), vec![2]);
+        assert_eq!(select_levels(2.5, 5, 0.5).t, 0.5);
+        assert_eq!(select_levels(2.8, 5, 0.5).levels(), vec![3]);
+        // No jump across an integer level: level 3 alone on both sides.
+        assert_eq!(select_levels(2.99, 5, 0.5).levels(), vec![3]);
+        assert_eq!(select_levels(3.01, 5, 0.5).levels(), vec![3]);
+        // Clamped to the levels there are: one level at either end.
+        assert_eq!(select_levels(7.0, 5, 1.0).levels(), vec![4]);
+        assert_eq!(select_levels(-1.0, 5, 1.0).levels(), vec![0]);
+        // Near a band's edge the GPU may read one level or both.
+        let choices: Vec<Vec<u32>> = level_choices(2.25, 5, 0.5).iter().map(LevelPair::levels).collect();
+        assert_eq!(choices, [vec![2], vec![2, 3]]);
     }
 
     #[test]
@@ -647,7 +739,15 @@ mod tests {
             visible: (0..24).map(|t| [0, 2, 1, 1][t % 4]).collect(),
             shaded: (0..24).map(|t| [0, 2, 1, 2][t % 4]).collect(),
         };
-        let params = MarkParams { stamp: 3, reuse: 2, view_since: 3, tile_size: 8, mip_bias: 0.0, variable_rate: 0.0 };
+        let params = MarkParams {
+            stamp: 3,
+            reuse: 2,
+            view_since: 3,
+            tile_size: 8,
+            mip_bias: 0.0,
+            variable_rate: 0.0,
+            level_blend: 0.0,
+        };
         let visible: BTreeSet<u32> = [0, 1, 2, 3, 21].into();
         let marks = mark_frame(&previous, &visible, &params, &entries);
         assert_eq!(marks.new, [0, 2, 3].into());

@@ -141,6 +141,7 @@ impl ObjectSpace {
             tile_size: o.tile_size,
             mip_bias: o.mip_bias,
             variable_rate: o.variable_rate,
+            level_blend: o.level_blend,
         }
     }
 

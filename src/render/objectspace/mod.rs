@@ -366,6 +366,12 @@ pub struct ObjectSpaceConfig {
     /// Strength of the per-pixel variable-rate bias (0 = off): up to this
     /// many levels coarser where a triangle's normals do not vary.
     pub variable_rate: f32,
+    /// Width, in levels, of the band around each level switch over which a
+    /// pixel blends the two levels around its footprint (both are marked
+    /// and shaded): 0 reads the rounded level alone, so a pixel's shade
+    /// jumps where its level changes between frames; 1 is trilinear
+    /// filtering (every pixel between two levels reads both). 0 to 1.
+    pub level_blend: f32,
     pub view: DebugView,
     /// Virtual shading-texture side per scene object; `None` shades the
     /// object forward (per pixel, in the gather). Reported per object instead.
@@ -406,6 +412,7 @@ impl Default for ObjectSpaceConfig {
             spread_reshading: false,
             mip_bias: 0.0,
             variable_rate: 0.0,
+            level_blend: 0.0,
             view: DebugView::Shade,
             texture_sizes: Vec::new(),
             page_size: DEFAULT_PAGE_SIZE,
@@ -431,6 +438,8 @@ pub enum ObjectSpaceError {
     BadReuse(u32),
     #[error("mip bias and variable rate must be finite (got {0} and {1})")]
     BadBias(f32, f32),
+    #[error("the level blend must be from 0 to 1 (got {0})")]
+    BadLevelBlend(f32),
     #[error("the object-space pipeline needs the PRIMITIVE_INDEX feature, which {0} lacks")]
     NoPrimitiveIndex(String),
     #[error("{0} texture sizes given for {1} objects")]
@@ -520,6 +529,9 @@ impl ObjectSpace {
         }
         if !config.mip_bias.is_finite() || !config.variable_rate.is_finite() {
             return Err(ObjectSpaceError::BadBias(config.mip_bias, config.variable_rate));
+        }
+        if !(0.0..=1.0).contains(&config.level_blend) {
+            return Err(ObjectSpaceError::BadLevelBlend(config.level_blend));
         }
         if !device.features().contains(wgpu::Features::PRIMITIVE_INDEX) {
             return Err(ObjectSpaceError::NoPrimitiveIndex(ctx.info.name.clone()));

@@ -56,6 +56,9 @@ struct Params {
     // Stamp of the first frame with this frame's view (camera): with reuse
     // above 1, a tile shaded since then keeps its shade (it would be the same).
     view_since: u32,
+    // Width of the band of levels over which a pixel blends the two levels
+    // around its footprint (0: the rounded level alone; 1: trilinear).
+    level_blend: f32,
 }
 
 @group(1) @binding(0) var<uniform> params: Params;
@@ -305,6 +308,40 @@ fn footprint_level(e: AtlasEntry, f: ChartFootprint) -> f32 {
 fn select_level(e: AtlasEntry, p: PixelSample, f: ChartFootprint) -> u32 {
     let lod = footprint_level(e, f) + params.mip_bias + e.mip_bias + variable_rate_bias(p);
     return u32(clamp(round(lod), 0.0, f32(e.level_count - 1u)));
+}
+
+// The levels a pixel shades at and gathers from: `lo`, and `hi` (lo + 1, or
+// lo at the last level) with weight `t`. A pixel uses `lo` where t < 1 and
+// `hi` where t > 0: marking and gathering must agree on both.
+struct LevelPair {
+    lo: u32,
+    hi: u32,
+    t: f32,
+}
+
+// With no blend, the rounded level alone (`select_level`): where a pixel's
+// level crosses x.5 between frames its shade jumps to a level twice as
+// coarse or fine. With blend width w, the weight of the coarser level rises
+// from 0 to 1 over the w levels around x.5 (w = 1: trilinear, the weight is
+// the level's fraction), so the shade changes smoothly.
+fn select_levels(e: AtlasEntry, p: PixelSample, f: ChartFootprint) -> LevelPair {
+    var out: LevelPair;
+    if params.level_blend <= 0.0 {
+        out.lo = select_level(e, p, f);
+        out.hi = out.lo;
+        out.t = 0.0;
+        return out;
+    }
+    let lod = footprint_level(e, f) + params.mip_bias + e.mip_bias + variable_rate_bias(p);
+    let clamped = clamp(lod, 0.0, f32(e.level_count - 1u));
+    let base = floor(clamped);
+    out.lo = u32(base);
+    out.hi = min(out.lo + 1u, e.level_count - 1u);
+    out.t = clamp((clamped - base - 0.5) / params.level_blend + 0.5, 0.0, 1.0);
+    if out.hi == out.lo {
+        out.t = 0.0;
+    }
+    return out;
 }
 
 // Level `level` of object `object`'s atlas entry, read through the storage

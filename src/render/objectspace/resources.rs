@@ -45,6 +45,8 @@ gpu_struct! {
         /// reuse above 1, a tile shaded since then is not shaded again by
         /// age, since it would get the same shade.
         pub view_since: u32,
+        /// [`ObjectSpaceConfig::level_blend`].
+        pub level_blend: f32,
     }
 }
 
@@ -448,6 +450,7 @@ impl Resources {
             table_chunks: self.chunk_count(),
             request_capacity: self.budget_pages,
             view_since,
+            level_blend: config.level_blend,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(&self.counters, 0, None);

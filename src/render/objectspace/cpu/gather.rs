@@ -1,21 +1,22 @@
 //! CPU twin of shade gathering (`gather/gather.wgsl`): for a pixel of the
-//! visibility buffer, the level marking chose, the bilinear taps in it, their
-//! weights, the taps kept (those in the pixel's chart island) and the colour
-//! filtered from the shades the GPU holds ([`LevelTexels`]), in `f32` and in
-//! the WGSL's order.
+//! visibility buffer, the levels marking chose (one, or two blended), the
+//! bilinear taps in each, their weights, the taps kept (those in the pixel's
+//! chart island) and the colour filtered from the shades the GPU holds
+//! ([`LevelTexels`]), in `f32` and in the WGSL's order.
 //!
 //! As for marking, the GPU may round a near-boundary decision the other way;
 //! [`gather_pixel`] returns every outcome (level within [`LOD_TOLERANCE`] of a
-//! rounding boundary, bilinear coordinate within [`TEXEL_TOLERANCE`] of an
-//! integer), each with how far its colour may be from the GPU's.
+//! rounding boundary or a blend band's edge, bilinear coordinate within
+//! [`TEXEL_TOLERANCE`] of an integer), each with how far its colour may be
+//! from the GPU's.
 //!
 //! [`LOD_TOLERANCE`]: super::LOD_TOLERANCE
 
 use glam::{IVec2, UVec2, Vec2, Vec3};
 
 use super::{
-    LevelTexels, MarkInputs, TEXEL_TOLERANCE, bilinear_taps, chart_footprint, floor_candidates, level_candidates,
-    level_of_detail, sample_pixel, variable_rate_bias,
+    LOD_TOLERANCE, LevelPair, LevelTexels, MarkInputs, TEXEL_TOLERANCE, bilinear_taps, chart_footprint,
+    floor_candidates, level_choices, level_of_detail, sample_pixel, variable_rate_bias,
 };
 
 /// Bound on a gathered colour channel besides the weights' error, in
@@ -70,6 +71,66 @@ impl GatherTaps {
     }
 }
 
+/// One way the GPU may gather a pixel from its levels: the finer level's
+/// filter where `pair.t < 1`, the coarser's where `pair.t > 0`, blended
+/// `(1 - t) fine + t coarse`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GatherOutcome {
+    pub pair: LevelPair,
+    pub fine: Option<GatherTaps>,
+    pub coarse: Option<GatherTaps>,
+    /// How far `t` may be from the GPU's: the level's rounding
+    /// ([`LOD_TOLERANCE`]) over the blend band's width, inside the band.
+    pub blend_tolerance: f32,
+}
+
+impl GatherOutcome {
+    /// The levels' filters that this outcome reads.
+    pub fn taps(&self) -> impl Iterator<Item = &GatherTaps> {
+        self.fine.iter().chain(&self.coarse)
+    }
+
+    /// The blended colour; `None` when a level's tap has no physical page.
+    pub fn color(&self) -> Option<Vec3> {
+        let t = self.pair.t;
+        let fine = self.fine.as_ref().map_or(Some(Vec3::ZERO), |g| g.color.map(|c| c * (1.0 - t)))?;
+        let coarse = self.coarse.as_ref().map_or(Some(Vec3::ZERO), |g| g.color.map(|c| c * t))?;
+        Some(fine + coarse)
+    }
+
+    /// A level's kept taps weigh too little to check (see [`GatherTaps::fragile`]).
+    pub fn fragile(&self) -> bool {
+        self.taps().any(|g| g.fragile)
+    }
+
+    /// Whether the GPU's colour `gpu` is what this outcome gathers, within
+    /// the bounds. Fragile outcomes and those with no colour match nothing.
+    pub fn matches(&self, gpu: Vec3) -> bool {
+        self.bound_used(gpu) <= 1.0
+    }
+
+    /// The largest share of its bound that a channel of the GPU's colour
+    /// `gpu` uses (1: at the bound); infinite for fragile outcomes and
+    /// those with no colour. The levels' weight tolerances count by their
+    /// weights, and the two levels' difference by how far `t` may move.
+    pub fn bound_used(&self, gpu: Vec3) -> f32 {
+        let Some(c) = self.color().filter(|_| !self.fragile()) else { return f32::INFINITY };
+        let t = self.pair.t;
+        let weights = self.fine.as_ref().map_or(0.0, |g| g.weight_tolerance * (1.0 - t))
+            + self.coarse.as_ref().map_or(0.0, |g| g.weight_tolerance * t);
+        let spread = match (&self.fine, &self.coarse) {
+            (Some(f), Some(g)) => (f.color.expect("checked") - g.color.expect("checked")).abs(),
+            _ => Vec3::ZERO,
+        };
+        (0..3)
+            .map(|i| {
+                let bound = COLOR_ULPS * super::f16_ulp(c[i]) + weights + spread[i] * self.blend_tolerance;
+                (gpu[i] - c[i]).abs() / bound
+            })
+            .fold(0.0, f32::max)
+    }
+}
+
 /// What the gather writes for a pixel.
 #[derive(Clone, Debug, PartialEq)]
 pub enum PixelGather {
@@ -78,7 +139,7 @@ pub enum PixelGather {
     /// An object outside the atlas, shaded forward in the gather (not twinned).
     Forward,
     /// Filtered from the atlas: every outcome the GPU may take.
-    Atlas(Vec<GatherTaps>),
+    Atlas(Vec<GatherOutcome>),
 }
 
 /// The levels (object, level) [`gather_pixel`] may read for a pixel
@@ -92,8 +153,13 @@ pub fn pixel_levels(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Vec<(us
     if e.size == 0 {
         return Vec::new();
     }
-    let (lowest, highest) = level_candidates(pixel_lod(inputs, ids, pixel), e.level_count);
-    (lowest..=highest).map(|l| (p.object, l)).collect()
+    let mut levels: Vec<u32> = level_choices(pixel_lod(inputs, ids, pixel), e.level_count, inputs.params.level_blend)
+        .iter()
+        .flat_map(LevelPair::levels)
+        .collect();
+    levels.sort_unstable();
+    levels.dedup();
+    levels.into_iter().map(|l| (p.object, l)).collect()
 }
 
 /// The unrounded level of the pixel (as marking computes it).
@@ -175,24 +241,39 @@ pub fn gather_pixel<'a>(
         return PixelGather::Forward;
     }
     let f = chart_footprint(inputs.scene, &p);
-    let (lowest, highest) = level_candidates(pixel_lod(inputs, ids, pixel), e.level_count);
     let islands = &islands[p.object];
     let own = islands[p.triangle];
-    let mut outcomes = Vec::new();
-    for level_index in lowest..=highest {
+    // Every outcome of one level's filter (its bilinear coordinate floored
+    // both ways when near an integer).
+    let filters = |level_index: u32| -> Vec<GatherTaps> {
         let texels = level(p.object, level_index);
         let size = e.levels[level_index as usize].size;
         assert_eq!(texels.size, size, "object {} level {level_index}: texels of another size", p.object);
-        // `t` and its floor as in `bilinear`, floored both ways when near an integer.
         let t = f.uv * size as f32 - 0.5;
         let tolerance = size as f32 * TEXEL_TOLERANCE;
+        let mut out = Vec::new();
         for x in floor_candidates(t.x, tolerance) {
             for y in floor_candidates(t.y, tolerance) {
                 let base = IVec2::new(x, y);
                 let (lo, hi) = bilinear_taps(size, base);
                 let taps = [lo, IVec2::new(hi.x, lo.y), IVec2::new(lo.x, hi.y), hi];
                 let weights = tap_weights(t - base.as_vec2());
-                outcomes.push(filter_taps(texels, own, islands, level_index, taps, weights));
+                out.push(filter_taps(texels, own, islands, level_index, taps, weights));
+            }
+        }
+        out
+    };
+    let blend = inputs.params.level_blend;
+    let mut outcomes = Vec::new();
+    for pair in level_choices(pixel_lod(inputs, ids, pixel), e.level_count, blend) {
+        let fine: Vec<Option<GatherTaps>> =
+            if pair.t < 1.0 { filters(pair.lo).into_iter().map(Some).collect() } else { vec![None] };
+        let coarse: Vec<Option<GatherTaps>> =
+            if pair.t > 0.0 { filters(pair.hi).into_iter().map(Some).collect() } else { vec![None] };
+        let blend_tolerance = if pair.t > 0.0 && pair.t < 1.0 { LOD_TOLERANCE / blend } else { 0.0 };
+        for fine in &fine {
+            for coarse in &coarse {
+                outcomes.push(GatherOutcome { pair, fine: fine.clone(), coarse: coarse.clone(), blend_tolerance });
             }
         }
     }

@@ -1,14 +1,15 @@
 // Shade gathering, in compute over the visibility buffer: each pixel selects
-// the same mip level as tile marking did and filters the object's shades
-// bilinearly (by hand, with taps clamped inside the level's square, so no tap
-// reads a neighbour in the atlas, and only taps in the pixel's chart island). Objects outside the atlas (forward-only)
-// are shaded here per pixel, with the world grid's lights. Debug views replace
+// the same mip levels as tile marking did (one, or two blended) and filters
+// the object's shades bilinearly in each (by hand, with taps clamped inside
+// the level's square, so no tap reads a neighbour in the atlas, and only taps
+// in the pixel's chart island). Objects outside the atlas (forward-only) are
+// shaded here per pixel, with the world grid's lights. Debug views replace
 // the shade.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
-#import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_level,
+#import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_levels,
     bilinear, AtlasTexel, triangle_charts, locate, physical_page, virtual_page, physical_tile,
     NOT_BACKED}
 
@@ -53,6 +54,44 @@ fn shade_forward(p: PixelSample) -> vec4f {
     return vec4f(light_surface_in_cell(objects[p.object], s, world_cell_of(s.position)), 1.0);
 }
 
+// The shade of chart point `uv` in level `level_index`, filtered bilinearly
+// over the taps in chart island `own` (a tap on a neighbouring chart's
+// texel, closer than a texel at coarse levels, would bleed its colour across
+// the border; with no tap in the island, a sliver thinner than the level's
+// texels, all four are kept). Alpha -1 when a tap's page has no physical
+// page (the atlas was full this frame).
+fn filter_level(object: u32, own: u32, level_index: u32, uv: vec2f) -> vec4f {
+    let l = entry_level(object, level_index);
+    let b = bilinear(l, uv);
+    let taps = array<AtlasTexel, 4>(
+        locate(l, b.texel),
+        locate(l, vec2i(b.texel_hi.x, b.texel.y)),
+        locate(l, vec2i(b.texel.x, b.texel_hi.y)),
+        locate(l, b.texel_hi),
+    );
+    if taps[0].layer == NOT_BACKED || taps[1].layer == NOT_BACKED || taps[2].layer == NOT_BACKED
+        || taps[3].layer == NOT_BACKED {
+        return vec4f(0.0, 0.0, 0.0, -1.0);
+    }
+    var w = vec4f(
+        (1.0 - b.weight.x) * (1.0 - b.weight.y),
+        b.weight.x * (1.0 - b.weight.y),
+        (1.0 - b.weight.x) * b.weight.y,
+        b.weight.x * b.weight.y,
+    );
+    let keep = vec4f(
+        in_island(object, own, taps[0]),
+        in_island(object, own, taps[1]),
+        in_island(object, own, taps[2]),
+        in_island(object, own, taps[3]),
+    );
+    let kept = dot(w, keep);
+    if kept > 0.0 {
+        w = w * keep / kept;
+    }
+    return vec4f(fetch(taps[0]) * w.x + fetch(taps[1]) * w.y + fetch(taps[2]) * w.z + fetch(taps[3]) * w.w, 1.0);
+}
+
 @compute @workgroup_size(8, 8)
 fn gather(@builtin(global_invocation_id) id: vec3u) {
     let size = textureDimensions(visibility);
@@ -64,14 +103,20 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
         textureStore(hdr, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
         return;
     }
-    let p = sample_pixel(id.xy, ids);
+    textureStore(hdr, id.xy, gather_surface(sample_pixel(id.xy, ids)));
+}
+
+// The shade of one surface point: its object's shades filtered (or a debug
+// view's colour), or shaded here when the object or its page is not in the atlas.
+fn gather_surface(p: PixelSample) -> vec4f {
     let e = atlas_entries[p.object];
     if e.size == 0u {
-        textureStore(hdr, id.xy, shade_forward(p));
-        return;
+        return shade_forward(p);
     }
     let f = chart_footprint(p);
-    let level_index = select_level(e, p, f);
+    let levels = select_levels(e, p, f);
+    // The debug views show the level of the larger weight.
+    let level_index = select(levels.lo, levels.hi, levels.t >= 0.5);
     let l = entry_level(p.object, level_index);
     let b = bilinear(l, f.uv);
     var out: vec4f;
@@ -99,43 +144,27 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
             }
         }
         default: {
-            // Bilinear over the taps in the pixel's own chart island: a tap
-            // on a neighbouring chart's texel (closer than a texel at coarse
-            // levels) would bleed its colour across the border. With no tap
-            // in the island (a sliver thinner than the level's texels), all
-            // four are kept.
-            let taps = array<AtlasTexel, 4>(
-                locate(l, b.texel),
-                locate(l, vec2i(b.texel_hi.x, b.texel.y)),
-                locate(l, vec2i(b.texel.x, b.texel_hi.y)),
-                locate(l, b.texel_hi),
-            );
-            if taps[0].layer == NOT_BACKED || taps[1].layer == NOT_BACKED || taps[2].layer == NOT_BACKED
-                || taps[3].layer == NOT_BACKED {
+            // The levels around the footprint, blended by the coarser one's
+            // weight (one level where the weight is 0 or 1).
+            let own = island(p.object, p.triangle);
+            var c = vec3f(0.0);
+            var backed = true;
+            if levels.t < 1.0 {
+                let fine = filter_level(p.object, own, levels.lo, f.uv);
+                backed = fine.w >= 0.0;
+                c = fine.rgb * (1.0 - levels.t);
+            }
+            if levels.t > 0.0 {
+                let coarse = filter_level(p.object, own, levels.hi, f.uv);
+                backed = backed && coarse.w >= 0.0;
+                c += coarse.rgb * levels.t;
+            }
+            if !backed {
                 // The atlas was full this frame: shade the pixel forward.
-                textureStore(hdr, id.xy, shade_forward(p));
-                return;
+                return shade_forward(p);
             }
-            let own = island(p.object, ids.y);
-            var w = vec4f(
-                (1.0 - b.weight.x) * (1.0 - b.weight.y),
-                b.weight.x * (1.0 - b.weight.y),
-                (1.0 - b.weight.x) * b.weight.y,
-                b.weight.x * b.weight.y,
-            );
-            let keep = vec4f(
-                in_island(p.object, own, taps[0]),
-                in_island(p.object, own, taps[1]),
-                in_island(p.object, own, taps[2]),
-                in_island(p.object, own, taps[3]),
-            );
-            let kept = dot(w, keep);
-            if kept > 0.0 {
-                w = w * keep / kept;
-            }
-            let c = fetch(taps[0]) * w.x + fetch(taps[1]) * w.y + fetch(taps[2]) * w.z + fetch(taps[3]) * w.w;
             out = vec4f(c, 1.0);
         }
     }
-    textureStore(hdr, id.xy, out);
+    return out;
 }

@@ -9,10 +9,10 @@
 // tiles once paging has backed the page.
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_PAGES_USED, COUNT_PAGES_REQUESTED, COUNT_PAGES_FAILED,
     COUNT_PAGES_BACKED, COUNT_VIEW_TILES, COUNT_BACKED_TILES, COUNT_ATLAS_PIXELS, COUNT_UNDER_SHADED_PIXELS}
-#import shadespace::pixel_surface::sample_pixel
+#import shadespace::pixel_surface::{sample_pixel, PixelSample}
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
-    chart_footprint, select_level, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
+    chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
     page_request_bit, tile_request_bit, page_tile_origin, forget_request}
 
@@ -143,6 +143,26 @@ fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_inde
     }
 }
 
+// Marks the tiles of the bilinear footprint of chart point `uv` in level
+// `level_index` of `object`.
+fn mark_footprint(object: u32, level_index: u32, valid_since: u32, uv: vec2f) {
+    let l = entry_level(object, level_index);
+    let b = bilinear(l, uv);
+    mark_tile(object, level_index, l, valid_since, b.texel);
+    // The other taps only add a tile when they cross a tile edge.
+    let lo = vec2u(b.texel) / params.tile_size;
+    let hi = vec2u(b.texel_hi) / params.tile_size;
+    if hi.x != lo.x {
+        mark_tile(object, level_index, l, valid_since, vec2i(b.texel_hi.x, b.texel.y));
+    }
+    if hi.y != lo.y {
+        mark_tile(object, level_index, l, valid_since, vec2i(b.texel.x, b.texel_hi.y));
+    }
+    if hi.x != lo.x && hi.y != lo.y {
+        mark_tile(object, level_index, l, valid_since, b.texel_hi);
+    }
+}
+
 // Marks one pixel's tiles; returns what kind of pixel it is.
 fn mark_pixel(pixel: vec2u) -> u32 {
     let size = textureDimensions(visibility);
@@ -153,28 +173,26 @@ fn mark_pixel(pixel: vec2u) -> u32 {
     if ids.x == 0u {
         return PIXEL_NOT_IN_ATLAS;
     }
-    let p = sample_pixel(pixel, ids);
+    return mark_surface(sample_pixel(pixel, ids));
+}
+
+// Marks the tiles of one surface point's footprint; returns what kind of
+// pixel it makes.
+fn mark_surface(p: PixelSample) -> u32 {
     let e = atlas_entries[p.object];
     if e.size == 0u {
         return PIXEL_NOT_IN_ATLAS; // shaded forward, in the gather
     }
     let f = chart_footprint(p);
-    let level_index = select_level(e, p, f);
-    let kind = select(PIXEL_SHADED, PIXEL_UNDER_SHADED, f32(level_index) > footprint_level(e, f));
-    let l = entry_level(p.object, level_index);
-    let b = bilinear(l, f.uv);
-    mark_tile(p.object, level_index, l, e.valid_since, b.texel);
-    // The other taps only add a tile when they cross a tile edge.
-    let lo = vec2u(b.texel) / params.tile_size;
-    let hi = vec2u(b.texel_hi) / params.tile_size;
-    if hi.x != lo.x {
-        mark_tile(p.object, level_index, l, e.valid_since, vec2i(b.texel_hi.x, b.texel.y));
+    let levels = select_levels(e, p, f);
+    // The finer of the levels it reads decides whether it is under-shaded.
+    let finest = select(levels.lo, levels.hi, levels.t >= 1.0);
+    let kind = select(PIXEL_SHADED, PIXEL_UNDER_SHADED, f32(finest) > footprint_level(e, f));
+    if levels.t < 1.0 {
+        mark_footprint(p.object, levels.lo, e.valid_since, f.uv);
     }
-    if hi.y != lo.y {
-        mark_tile(p.object, level_index, l, e.valid_since, vec2i(b.texel.x, b.texel_hi.y));
-    }
-    if hi.x != lo.x && hi.y != lo.y {
-        mark_tile(p.object, level_index, l, e.valid_since, b.texel_hi);
+    if levels.t > 0.0 {
+        mark_footprint(p.object, levels.hi, e.valid_since, f.uv);
     }
     return kind;
 }
