@@ -43,6 +43,12 @@ pub struct SceneArgs {
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = parse::size)]
     pub size: (u32, u32),
+    /// MSAA samples per pixel: 1 (default, none), 2, 4 or 8, at the standard
+    /// sample positions, resolved (averaged in linear HDR) before exposure,
+    /// bloom and tone mapping. Forward, forward-multipass and clustered;
+    /// a count the adapter cannot render exits with status 2.
+    #[arg(long, default_value_t = 1, value_parser = parse::msaa)]
+    pub msaa: u32,
     /// `path`: the scene's camera path (from cameras.json beside a shared
     /// scene; an orbit for atrium and voxels; for other scenes the file's
     /// first camera, or else a turntable framing the whole scene), `fixed:K`

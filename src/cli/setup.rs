@@ -168,7 +168,7 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             count_visibility: a.count_visibility,
         }),
     };
-    RenderOptions { width: a.size.0, height: a.size.1, pipeline }
+    RenderOptions { width: a.size.0, height: a.size.1, pipeline, samples: a.msaa }
 }
 
 /// The texture sizing the options ask for.
@@ -195,6 +195,13 @@ pub fn chart(scene: &Scene, a: &ObjectSpaceArgs) -> Result<(Scene, SceneCharts),
 /// The GPU `--adapter` names (or the fastest one).
 pub fn open_gpu(a: &GpuArgs) -> Result<GpuContext, Failure> {
     Ok(GpuContext::new(&GpuOptions { adapter: a.adapter.clone() })?)
+}
+
+/// The renderer for `options`; an option the adapter or pipeline cannot do
+/// (`--msaa` included) is the input's fault (exit status 2).
+pub fn new_renderer(ctx: &GpuContext, scene: &Scene, options: &RenderOptions) -> Result<Renderer, Failure> {
+    Renderer::new(ctx, scene, options)
+        .map_err(|e| if e.is_bad_option() { Failure::Input(e.into()) } else { Failure::Other(e.into()) })
 }
 
 /// The renderer settings the scene options choose (besides the pipeline).

@@ -40,8 +40,9 @@ pub const REFERENCE_SAMPLES: u32 = 4;
 /// The timing side of the grid (size, frames, light sets, the pipelines):
 /// every pipeline, object space with reuse 2 and variable rate 1; the
 /// quality axes are in [`axes`]. Full: 1920x1080, 30 shadowed lights, 4
-/// warm-up and 30 measured consecutive path frames. Quick: forward,
-/// deferred-compute and object space only, 96x54, 8 small lights, 1 + 3 frames.
+/// warm-up and 30 measured consecutive path frames, MSAA 1, 4 and 8 samples
+/// per pixel. Quick: forward, deferred-compute and object space only, 96x54,
+/// 8 small lights, 1 + 3 frames, MSAA 1 and 4.
 pub fn grid(quick: bool) -> TimingGrid {
     let mut shadings = Shading::pipelines();
     shadings.push(Shading::ObjectSpace { reuse: 2, variable_rate: 0.0 });
@@ -53,10 +54,18 @@ pub fn grid(quick: bool) -> TimingGrid {
     }
     let (sweep, grid) = if quick {
         let sweep = Sweep { scenario: Scenario::Small, counts: vec![8] };
-        (sweep, TimingGrid { width: 96, height: 54, warmup: 1, frames: 3, ..TimingGrid::new(true, vec![], vec![]) })
+        let quick = TimingGrid {
+            width: 96,
+            height: 54,
+            warmup: 1,
+            frames: 3,
+            msaa: vec![1, 4],
+            ..TimingGrid::new(true, vec![], vec![])
+        };
+        (sweep, quick)
     } else {
         let sweep = Sweep { scenario: Scenario::Shadowed, counts: vec![30] };
-        (sweep, TimingGrid { warmup: 4, frames: 30, ..TimingGrid::new(false, vec![], vec![]) })
+        (sweep, TimingGrid { warmup: 4, frames: 30, msaa: vec![1, 4, 8], ..TimingGrid::new(false, vec![], vec![]) })
     };
     TimingGrid { shadings, sweeps: vec![sweep], ..grid }
 }
@@ -93,6 +102,11 @@ impl Config {
             + &if self.mip_bias != 0.0 { format!("-bias{}", self.mip_bias) } else { String::new() }
     }
 
+    /// Whether its pipeline renders with MSAA.
+    pub fn has_msaa(&self) -> bool {
+        self.shading.config(&[], VisibilityMethod::Raster).has_msaa()
+    }
+
     /// The pipeline's name (a curve of the cost-error plot).
     pub fn pipeline(&self) -> &'static str {
         self.shading.config(&[], VisibilityMethod::Raster).name()
@@ -114,7 +128,7 @@ pub struct Axes {
     /// `file` (the scene's textures) and/or `detailed` (`--textures detailed`).
     pub textures: Vec<&'static str>,
     pub gloss: Vec<Gloss>,
-    /// MSAA samples per pixel (1 only until the pipelines have MSAA).
+    /// MSAA samples per pixel (the grid's [`TimingGrid::msaa`]).
     pub msaa: Vec<u32>,
     pub configs: Vec<String>,
 }
@@ -137,7 +151,7 @@ pub fn axes(grid: &TimingGrid, quick: bool) -> Axes {
     Axes {
         textures: if quick { vec!["detailed"] } else { vec!["file", "detailed"] },
         gloss: vec![Gloss::Default, Gloss::High],
-        msaa: vec![1],
+        msaa: grid.msaa.clone(),
         configs: configs(grid, quick).iter().map(Config::label).collect(),
     }
 }
@@ -153,7 +167,8 @@ pub struct Cell {
     pub config: Config,
 }
 
-/// Every cell, in a fixed order (the order shards are cut from).
+/// Every cell, in a fixed order (the order shards are cut from). Pipelines
+/// without MSAA ([`PipelineConfig::has_msaa`]) get cells at one sample only.
 pub fn cells(grid: &TimingGrid, quick: bool) -> Vec<Cell> {
     let a = axes(grid, quick);
     let mut out = Vec::new();
@@ -163,6 +178,9 @@ pub fn cells(grid: &TimingGrid, quick: bool) -> Vec<Cell> {
                 for &lights in &sweep.counts {
                     for &msaa in &a.msaa {
                         for config in configs(grid, quick) {
+                            if msaa > 1 && !config.has_msaa() {
+                                continue;
+                            }
                             out.push(Cell { textures, gloss, scenario: sweep.scenario, lights, msaa, config });
                         }
                     }
@@ -274,6 +292,7 @@ pub fn measure(
             width: grid.width,
             height: grid.height,
             pipeline: cell.config.render_config(&scene.density_sizes, visibility),
+            samples: cell.msaa,
         };
         let mut renderer = Renderer::new(ctx, shaded, &render_options)?;
         let mut images = Vec::new();
@@ -538,6 +557,10 @@ pub(super) fn study(
     progress: &indicatif::ProgressBar,
 ) -> Result<Outcome, ExperimentError> {
     let grid = options.timing.as_ref().ok_or(ExperimentError::NoTimingGrid("quality"))?;
+    // A sample count the adapter lacks fails before any cell is measured.
+    for &samples in &grid.msaa {
+        crate::render::check_samples(ctx, samples)?;
+    }
     let cells: Vec<(usize, Cell)> = cells(grid, options.quick)
         .into_iter()
         .enumerate()
@@ -582,7 +605,10 @@ fn outcome(setup: &Setup, findings: Findings) -> Outcome {
         setup.visibility,
     );
     let items = vec![
-        "MSAA: the pipelines have no MSAA yet; the sample count is an axis of the grid with 1 only.".to_string(),
+        "MSAA: forward, forward-multipass and clustered resolve hardware MSAA at the standard sample positions; \
+         deferred, deferred-compute and object space have no MSAA yet and are measured at one sample per pixel \
+         only."
+            .to_string(),
         "Reference textures: the reference's sub-pixel frames sample textures at the level of a whole pixel's \
          footprint, as one sample per pixel does; it resolves geometry, shading and specular aliasing, not \
          texture filtering."
@@ -731,13 +757,23 @@ mod tests {
             ]
         );
         let all = cells(&full, false);
-        assert_eq!(all.len(), labels.len() * 2 * 2, "full: two textures, two gloss settings, one light set");
+        // Forward, forward-multipass and clustered also at 4 and 8 samples.
+        let with_msaa = 3;
+        assert_eq!(
+            all.len(),
+            (labels.len() + with_msaa * 2) * 2 * 2,
+            "full: two textures, two gloss settings, one light set, MSAA 1, 4, 8 where the pipeline has it"
+        );
         assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 5 * 4);
+        assert_eq!(all.iter().filter(|c| c.msaa == 8).count(), with_msaa * 4);
+        assert!(all.iter().filter(|c| c.msaa > 1).all(|c| c.config.has_msaa()));
         let quick = grid(true);
         let labels: Vec<String> = configs(&quick, true).iter().map(Config::label).collect();
         assert_eq!(labels, ["forward", "deferred-compute", "objectspace", "objectspace-hz30"]);
         let cells = cells(&quick, true);
-        assert_eq!(cells.len(), 4 * 2, "quick: detailed textures, two gloss settings, one light set");
-        assert!(cells.iter().all(|c| c.msaa == 1 && c.textures == "detailed"));
+        assert_eq!(cells.len(), (4 + 1) * 2, "quick: detailed textures, two gloss settings, one light set");
+        assert!(cells.iter().all(|c| c.textures == "detailed"));
+        let msaa: Vec<&str> = cells.iter().filter(|c| c.msaa == 4).map(|c| c.config.pipeline()).collect();
+        assert_eq!(msaa, ["forward", "forward"], "quick: forward alone also at 4 samples");
     }
 }

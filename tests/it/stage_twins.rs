@@ -78,8 +78,12 @@ fn describe(t: &GatherTaps) -> String {
 fn check(ctx: &GpuContext, case: Case) -> Report {
     let objectspace =
         ObjectSpaceConfig { texture_sizes: case.texture_sizes.clone(), mip_bias: case.mip_bias, ..Default::default() };
-    let options =
-        RenderOptions { width: case.width, height: case.height, pipeline: PipelineConfig::ObjectSpace(objectspace) };
+    let options = RenderOptions {
+        width: case.width,
+        height: case.height,
+        pipeline: PipelineConfig::ObjectSpace(objectspace),
+        samples: 1,
+    };
     let mut renderer = Renderer::new(ctx, case.scene, &options).unwrap();
     renderer.render(ctx, &case.camera, &case.lights, 0).unwrap();
     let os = renderer.pipeline::<ObjectSpace>().unwrap();

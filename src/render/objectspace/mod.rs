@@ -546,7 +546,7 @@ impl ObjectSpace {
         let mut res = Resources::new(device, &layout, pool, &scene.triangle_charts, targets, view_count);
         let visibility = match config.visibility {
             VisibilityMethod::Raster => Visibility::Raster {
-                prepass: config.visibility_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?,
+                prepass: config.visibility_prepass.then(|| DepthPrepass::new(device, shaders, scene, 1)).transpose()?,
                 ids: VisibilityPass::new(device, shaders, scene, config.visibility_prepass)?,
             },
             VisibilityMethod::Compute => {

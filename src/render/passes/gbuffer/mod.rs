@@ -237,6 +237,7 @@ impl GbufferPass {
             depth,
             groups: &[],
             blend: None,
+            samples: 1,
         };
         let pipeline = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
         Ok(Self { pipeline, after_prepass })
@@ -274,7 +275,7 @@ impl GbufferStage {
         targets: &Targets,
         depth_prepass: bool,
     ) -> Result<Self, ShaderError> {
-        let prepass = depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
+        let prepass = depth_prepass.then(|| DepthPrepass::new(device, shaders, scene, 1)).transpose()?;
         let pass = GbufferPass::new(device, shaders, scene, depth_prepass)?;
         Ok(Self { prepass, pass, gbuffer: GBuffer::new(device, targets, scene.material_textures) })
     }

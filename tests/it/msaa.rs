@@ -1,0 +1,146 @@
+//! MSAA (`--msaa`): on the thin-edged fence scene (`scene::generate::fence`)
+//! the error against a supersampled reference falls from 1 to 4 samples per
+//! pixel in every pipeline that has MSAA, with no validation error (the
+//! renderer turns one into an error); pipelines without it, counts MSAA
+//! does not have and counts the adapter cannot render are refused, on the
+//! command line with exit status 2 and the reason.
+
+use std::process::Command;
+
+use glam::Vec3;
+use shadespace::gpu::{GpuContext, readback};
+use shadespace::reference::{ReferenceCache, ReferenceSettings, ReferenceView, References};
+use shadespace::render::targets::SAMPLE_COUNTS;
+use shadespace::render::{Exposure, PipelineConfig, RenderError, RenderOptions, Renderer, ShadingModel, check_samples};
+use shadespace::scene::{Camera, Light, LightKind, Scene};
+
+use crate::common;
+
+const SIZE: u32 = 128;
+
+/// The fence seen from 3 m, lit by a dim ambient light and a sun from the
+/// front, so that the dark bars stand out against the lit wall.
+fn fence() -> (Scene, Camera, Vec<Light>) {
+    let eye = Vec3::new(0.0, 0.0, 3.0);
+    let camera = Camera {
+        position: eye,
+        forward: -eye.normalize(),
+        up: Vec3::Y,
+        fov_y: 60f32.to_radians(),
+        near: 0.1,
+        far: 20.0,
+    };
+    let sun = Light {
+        kind: LightKind::Directional,
+        color: Vec3::ONE,
+        intensity: 1.5,
+        position: Vec3::ZERO,
+        direction: Vec3::new(0.2, -0.3, -1.0).normalize(),
+        radius: 0.0,
+        cos_inner: 1.0,
+        cos_outer: 1.0,
+        casts_shadows: false,
+    };
+    let ambient = Light { kind: LightKind::Ambient, intensity: 0.2, ..sun };
+    (shadespace::scene::generate::fence(), camera, vec![ambient, sun])
+}
+
+/// Mean absolute difference of two linear RGB images.
+fn mean_abs(a: &[f32], b: &[f32]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).map(|(x, y)| f64::from((x - y).abs())).sum::<f64>() / a.len() as f64
+}
+
+/// `pipeline`'s resolved HDR frame (linear RGB) at `samples` per pixel; its
+/// image is written to the tests' image folder as `msaa-NAME-N.png`.
+fn render(
+    ctx: &GpuContext,
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    pipeline: PipelineConfig,
+    samples: u32,
+) -> Vec<f32> {
+    let options = RenderOptions { width: SIZE, height: SIZE, pipeline, samples };
+    let mut r = Renderer::new(ctx, scene, &options).unwrap();
+    r.render(ctx, camera, lights, 0).unwrap();
+    let png = common::out_dir().join(format!("msaa-{}-{samples}.png", r.pipeline_name()));
+    r.read_image(ctx).unwrap().save(png).unwrap();
+    let bytes = readback::read_texture(ctx, &r.targets.hdr, 8).unwrap();
+    bytes
+        .chunks_exact(8)
+        .flat_map(|t| (0..3).map(move |k| half::f16::from_le_bytes([t[2 * k], t[2 * k + 1]]).to_f32()))
+        .collect()
+}
+
+/// Forward, forward-multipass and clustered at 4 samples are at most half as
+/// far from the 4x4 reference as at one (lavapipe, 128x128: 0.0504 -> 0.0149
+/// in all three), and the bars
+/// alias at one sample (the error is not that of a blank frame). Deferred,
+/// deferred-compute and object space have no MSAA yet and refuse it.
+#[test]
+fn thin_edges_resolve_with_four_samples() {
+    let ctx = common::gpu();
+    if check_samples(&ctx, 4).is_err() {
+        eprintln!("skipped: {} cannot render 4 samples per pixel", ctx.info.name);
+        return;
+    }
+    let (scene, camera, lights) = fence();
+    let settings = ReferenceSettings {
+        width: SIZE,
+        height: SIZE,
+        shading: ShadingModel::Phong,
+        sun_shadow: false,
+        exposure: Exposure::Fixed(1.0),
+    };
+    let mut refs = References::new(&ctx, &scene, settings, ReferenceCache::disabled());
+    let reference = refs.render(&ReferenceView { camera: &camera, lights: &lights, samples: 4 }).unwrap();
+    reference.image().save(common::out_dir().join("msaa-reference-4x4.png")).unwrap();
+    let mut measured = 0;
+    for name in PipelineConfig::NAMES {
+        let pipeline = PipelineConfig::from_name(name).unwrap();
+        if !pipeline.has_msaa() {
+            let options = RenderOptions { width: SIZE, height: SIZE, pipeline, samples: 4 };
+            let err = Renderer::new(&ctx, &scene, &options).err();
+            assert!(matches!(err, Some(RenderError::SamplesNotImplemented { samples: 4, .. })), "{name}: {err:?}");
+            continue;
+        }
+        let one = mean_abs(&render(&ctx, &scene, &camera, &lights, pipeline.clone(), 1), &reference.hdr);
+        let four = mean_abs(&render(&ctx, &scene, &camera, &lights, pipeline, 4), &reference.hdr);
+        eprintln!("{name}: mean |HDR - 4x4 reference| {one:.4} at 1 sample, {four:.4} at 4");
+        assert!(one > 0.005, "{name}: the bars should alias at one sample ({one})");
+        assert!(four < 0.5 * one, "{name}: 4 samples {four} against 1 sample {one}");
+        measured += 1;
+    }
+    assert_eq!(measured, 3, "forward, forward-multipass and clustered have MSAA");
+}
+
+/// Every count the adapter lacks is refused with the count, the format and
+/// what it offers, by the renderer and by `render --msaa` (exit status 2);
+/// counts MSAA does not have are refused before the adapter is asked.
+#[test]
+fn counts_the_adapter_or_msaa_lacks_are_refused() {
+    let ctx = common::gpu();
+    assert!(matches!(check_samples(&ctx, 3), Err(RenderError::BadSamples(3))));
+    assert!(matches!(check_samples(&ctx, 16), Err(RenderError::BadSamples(16))));
+    assert!(check_samples(&ctx, 1).is_ok());
+    let lacking: Vec<u32> = SAMPLE_COUNTS.into_iter().filter(|&n| check_samples(&ctx, n).is_err()).collect();
+    let Some(&n) = lacking.first() else {
+        eprintln!("{} renders every count: no refusal to check on the command line", ctx.info.name);
+        return;
+    };
+    let message = check_samples(&ctx, n).unwrap_err().to_string();
+    assert!(message.contains(&format!("--msaa {n}")) && message.contains("offers"), "{message}");
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("msaa.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_shadespace"))
+        .args(["render", "--size", "16x16", "--lights", "none", "--msaa", &n.to_string()])
+        .arg("--out")
+        .arg(&png)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains(&message) && !stderr.contains("panicked"), "{stderr}");
+    assert!(!png.exists());
+}
