@@ -125,7 +125,8 @@ pub struct SceneArgs {
     /// rasterizer with 64-bit atomics; surfaces rebuilt from triangle ids) or
     /// `auto` (default: compute where the adapter has 64-bit atomics, which
     /// on the H100 is 1.7x (object space) to 2.2x (deferred-compute) faster
-    /// at 1920x1080, else raster).
+    /// at 1920x1080, else raster; raster under --msaa above 1, since the
+    /// compute rasterizer writes one sample per pixel).
     #[arg(long, default_value = "auto", value_parser = parse::visibility)]
     pub visibility: VisibilityChoice,
     /// Compute visibility: count the rasterizer's work every frame

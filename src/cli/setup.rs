@@ -137,7 +137,7 @@ impl Setup {
 /// Renderer options from the command line, for object space the texture
 /// sizes the charts gave, and for `--visibility auto` the adapter's features.
 pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu::Features) -> RenderOptions {
-    let visibility = a.visibility.0.unwrap_or_else(|| VisibilityMethod::preferred(features));
+    let visibility = a.visibility.0.unwrap_or_else(|| VisibilityMethod::preferred_for(features, a.msaa));
     let pipeline = match a.pipeline {
         PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::ForwardMultipass => PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),

@@ -248,7 +248,7 @@ pub fn measure(
     let cameras = cameras_for_scene(&options.scene, &scene.render, aspect)?;
     let region = cameras.light_region(&scene.render.bounds());
     let path = &cameras.path;
-    let visibility = VisibilityMethod::preferred(ctx.device.features());
+    let features = ctx.device.features();
     let cache = options
         .chart_cache
         .as_ref()
@@ -291,7 +291,10 @@ pub fn measure(
         let render_options = RenderOptions {
             width: grid.width,
             height: grid.height,
-            pipeline: cell.config.render_config(&scene.density_sizes, visibility),
+            // As `--visibility auto` picks it: raster under MSAA.
+            pipeline: cell
+                .config
+                .render_config(&scene.density_sizes, VisibilityMethod::preferred_for(features, cell.msaa)),
             samples: cell.msaa,
         };
         let mut renderer = Renderer::new(ctx, shaded, &render_options)?;
@@ -606,8 +609,9 @@ fn outcome(setup: &Setup, findings: Findings) -> Outcome {
     );
     let items = vec![
         "MSAA: forward, forward-multipass and clustered resolve hardware MSAA at the standard sample positions; \
-         deferred, deferred-compute and object space have no MSAA yet and are measured at one sample per pixel \
-         only."
+         deferred-compute lights a multisampled G-buffer (raster visibility under MSAA), each pixel once or, on \
+         edges, sample by sample; deferred and object space have no MSAA yet and are measured at one sample per \
+         pixel only."
             .to_string(),
         "Reference textures: the reference's sub-pixel frames sample textures at the level of a whole pixel's \
          footprint, as one sample per pixel does; it resolves geometry, shading and specular aliasing, not \
@@ -757,8 +761,8 @@ mod tests {
             ]
         );
         let all = cells(&full, false);
-        // Forward, forward-multipass and clustered also at 4 and 8 samples.
-        let with_msaa = 3;
+        // Forward, forward-multipass, clustered and deferred-compute also at 4 and 8 samples.
+        let with_msaa = 4;
         assert_eq!(
             all.len(),
             (labels.len() + with_msaa * 2) * 2 * 2,
@@ -771,9 +775,10 @@ mod tests {
         let labels: Vec<String> = configs(&quick, true).iter().map(Config::label).collect();
         assert_eq!(labels, ["forward", "deferred-compute", "objectspace", "objectspace-hz30"]);
         let cells = cells(&quick, true);
-        assert_eq!(cells.len(), (4 + 1) * 2, "quick: detailed textures, two gloss settings, one light set");
+        assert_eq!(cells.len(), (4 + 2) * 2, "quick: detailed textures, two gloss settings, one light set");
         assert!(cells.iter().all(|c| c.textures == "detailed"));
         let msaa: Vec<&str> = cells.iter().filter(|c| c.msaa == 4).map(|c| c.config.pipeline()).collect();
-        assert_eq!(msaa, ["forward", "forward"], "quick: forward alone also at 4 samples");
+        let with_msaa = ["forward", "deferred-compute"];
+        assert_eq!(msaa, [with_msaa, with_msaa].concat(), "quick: forward and deferred-compute also at 4 samples");
     }
 }

@@ -62,7 +62,7 @@ impl VisibilityRenderer {
         let targets = resolutions
             .iter()
             .map(|&(w, h)| -> Result<Target, RenderError> {
-                let targets = Targets::new(device, w, h, 1);
+                let targets = Targets::new(device, w, h, 1, false);
                 let buffer = VisibilityBuffer::new(device, &targets);
                 let pass = match method {
                     VisibilityMethod::Raster => {

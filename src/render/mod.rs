@@ -99,8 +99,15 @@ impl PipelineConfig {
     }
 
     /// Whether the pipeline renders with MSAA ([`RenderOptions::samples`]
-    /// above 1): the forward family so far.
+    /// above 1): the forward family and deferred-compute so far.
     pub fn has_msaa(&self) -> bool {
+        matches!(self, Self::Forward(_) | Self::ForwardMultipass(_) | Self::Clustered(_) | Self::DeferredCompute(_))
+    }
+
+    /// Whether under MSAA the pipeline draws into the multisampled HDR
+    /// colour and resolves it ([`targets::Targets::hdr_msaa_view`]), as the
+    /// forward family does; deferred-compute resolves in its lighting pass.
+    fn resolves_msaa_colour(&self) -> bool {
         matches!(self, Self::Forward(_) | Self::ForwardMultipass(_) | Self::Clustered(_))
     }
 
@@ -139,11 +146,16 @@ impl RenderOptions {
 /// have, or a target format the adapter cannot multisample that often.
 /// `Ok` for a count every target of the renderer can have.
 pub fn check_samples(ctx: &GpuContext, samples: u32) -> Result<(), RenderError> {
+    check_sample_formats(ctx, samples, &[targets::HDR_FORMAT, targets::DEPTH_FORMAT])
+}
+
+/// [`check_samples`] for render targets of `formats`.
+fn check_sample_formats(ctx: &GpuContext, samples: u32, formats: &[wgpu::TextureFormat]) -> Result<(), RenderError> {
     if !targets::SAMPLE_COUNTS.contains(&samples) {
         return Err(RenderError::BadSamples(samples));
     }
     let adapter_specific = ctx.features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
-    for format in [targets::HDR_FORMAT, targets::DEPTH_FORMAT] {
+    for &format in formats {
         // Without adapter-specific format features the device allows only
         // what WebGPU guarantees (1 and 4 samples).
         let flags = if adapter_specific {
@@ -233,9 +245,13 @@ pub enum RenderError {
     )]
     SamplesUnsupported { samples: u32, format: String, adapter: String, offered: String },
     #[error(
-        "--msaa {samples}: the {pipeline} pipeline has no MSAA yet (only forward, forward-multipass and clustered)"
+        "--msaa {samples}: the {pipeline} pipeline has no MSAA yet (only forward, forward-multipass, clustered and deferred-compute)"
     )]
     SamplesNotImplemented { samples: u32, pipeline: &'static str },
+    #[error(
+        "--msaa {0}: the compute rasterizer writes one sample per pixel; deferred-compute takes MSAA with --visibility raster (which --visibility auto picks under MSAA)"
+    )]
+    SamplesNeedRasterVisibility(u32),
 }
 
 impl RenderError {
@@ -250,6 +266,7 @@ impl RenderError {
                 | Self::BadSamples(_)
                 | Self::SamplesUnsupported { .. }
                 | Self::SamplesNotImplemented { .. }
+                | Self::SamplesNeedRasterVisibility(_)
         )
     }
 }
@@ -307,12 +324,20 @@ impl Renderer {
         if samples > 1 && !options.pipeline.has_msaa() {
             return Err(RenderError::SamplesNotImplemented { samples, pipeline: options.pipeline.name() });
         }
+        if let PipelineConfig::DeferredCompute(c) = &options.pipeline
+            && samples > 1
+        {
+            if c.visibility == VisibilityMethod::Compute {
+                return Err(RenderError::SamplesNeedRasterVisibility(samples));
+            }
+            check_sample_formats(ctx, samples, &passes::gbuffer::FORMATS)?;
+        }
         let mut shaders = crate::render::shader_set::library()?;
         let scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
         if scene_gpu.material_textures {
             shaders.define(crate::shaders::MATERIAL_TEXTURES);
         }
-        let targets = Targets::new(&ctx.device, width, height, samples);
+        let targets = Targets::new(&ctx.device, width, height, samples, options.pipeline.resolves_msaa_colour());
         let (device, queue) = (&ctx.device, &ctx.queue);
         let pipeline: Box<dyn Pipeline> = match &options.pipeline {
             PipelineConfig::Forward(c) => {

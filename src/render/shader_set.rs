@@ -59,7 +59,12 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
     all.push(clustered::SHADER);
-    all.extend([passes::gbuffer::SHADER, deferred_compute::SHADER, deferred_compute::SHADER_VISIBILITY]);
+    all.extend([
+        passes::gbuffer::SHADER,
+        deferred_compute::SHADER,
+        deferred_compute::SHADER_VISIBILITY,
+        deferred_compute::SHADER_MSAA,
+    ]);
     all.extend_from_slice(deferred::PASS_SHADERS);
     all
 }

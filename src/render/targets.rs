@@ -21,7 +21,8 @@ pub struct Targets {
     pub hdr_view: wgpu::TextureView,
     /// Under MSAA (`samples > 1`): the multisampled HDR colour raster
     /// pipelines draw into and resolve into `hdr` (see
-    /// [`super::passes::hdr_attachment`]); `None` at one sample.
+    /// [`super::passes::hdr_attachment`]); `None` at one sample and for
+    /// pipelines that resolve in compute.
     pub hdr_msaa_view: Option<wgpu::TextureView>,
     /// Depth with `samples` samples per pixel.
     pub depth: wgpu::Texture,
@@ -54,14 +55,15 @@ fn texture(
 impl Targets {
     /// Targets of `width` x `height` with `samples` samples per pixel (one of
     /// [`SAMPLE_COUNTS`], which the adapter must support for [`HDR_FORMAT`]
-    /// and [`DEPTH_FORMAT`]: [`super::check_samples`]).
-    pub fn new(device: &wgpu::Device, width: u32, height: u32, samples: u32) -> Self {
+    /// and [`DEPTH_FORMAT`]: [`super::check_samples`]); the multisampled
+    /// colour only with `msaa_colour` (for pipelines that resolve it).
+    pub fn new(device: &wgpu::Device, width: u32, height: u32, samples: u32, msaa_colour: bool) -> Self {
         use wgpu::TextureUsages as U;
         let hdr = Self::hdr_texture(device, width, height);
         let depth =
             texture(device, "depth", DEPTH_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING, (width, height, samples));
         let ldr = texture(device, "ldr", LDR_FORMAT, U::STORAGE_BINDING | U::COPY_SRC, (width, height, 1));
-        let hdr_msaa = (samples > 1)
+        let hdr_msaa = (samples > 1 && msaa_colour)
             .then(|| texture(device, "hdr msaa", HDR_FORMAT, U::RENDER_ATTACHMENT, (width, height, samples)));
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         Self {
@@ -92,6 +94,7 @@ impl Targets {
             return 0;
         }
         // Rgba16Float (8 bytes) and Depth32Float (4) per sample.
-        u64::from(self.width) * u64::from(self.height) * u64::from(self.samples) * (8 + 4)
+        let colour = if self.hdr_msaa_view.is_some() { 8 } else { 0 };
+        u64::from(self.width) * u64::from(self.height) * u64::from(self.samples) * (colour + 4)
     }
 }

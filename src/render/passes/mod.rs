@@ -317,6 +317,10 @@ pub enum Binding {
         sample: wgpu::TextureSampleType,
         dimension: wgpu::TextureViewDimension,
     },
+    /// A multisampled 2D texture (read with `textureLoad` per sample).
+    MultisampledTexture {
+        sample: wgpu::TextureSampleType,
+    },
     /// A write-only storage texture.
     StorageTexture {
         format: wgpu::TextureFormat,
@@ -364,6 +368,11 @@ pub fn bind_group_layout_for(
                 Binding::Texture { sample, dimension } => {
                     wgpu::BindingType::Texture { sample_type: sample, view_dimension: dimension, multisampled: false }
                 }
+                Binding::MultisampledTexture { sample } => wgpu::BindingType::Texture {
+                    sample_type: sample,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: true,
+                },
                 Binding::StorageTexture { format, dimension } => wgpu::BindingType::StorageTexture {
                     access: wgpu::StorageTextureAccess::WriteOnly,
                     format,

@@ -1,6 +1,8 @@
 // Reading the G-buffer (group 1 of every deferred lighting pass; mirrors
 // `render::passes::gbuffer::GBuffer::read_layout`): the surface at a pixel,
-// its position rebuilt from depth with the inverse view-projection.
+// its position rebuilt from depth with the inverse view-projection. With MSAA
+// defined the targets are multisampled: `gbuffer_texel` reads sample 0 at the
+// pixel centre, and `gbuffer_pixel` / `gbuffer_sample_texel` read the samples.
 #define_import_path shadespace::gbuffer
 #import shadespace::lighting::Surface
 #import shadespace::octahedral::oct_decode
@@ -13,14 +15,26 @@ struct Unproject {
     inv_view_proj: mat4x4f,
 }
 
+#ifdef MSAA
+@group(1) @binding(0) var gbuffer_depth: texture_depth_multisampled_2d;
+@group(1) @binding(1) var gbuffer_normal: texture_multisampled_2d<f32>;
+@group(1) @binding(2) var gbuffer_albedo: texture_multisampled_2d<f32>;
+@group(1) @binding(3) var gbuffer_object: texture_multisampled_2d<u32>;
+#else
 @group(1) @binding(0) var gbuffer_depth: texture_depth_2d;
 @group(1) @binding(1) var gbuffer_normal: texture_2d<f32>;
 @group(1) @binding(2) var gbuffer_albedo: texture_2d<f32>;
 @group(1) @binding(3) var gbuffer_object: texture_2d<u32>;
+#endif
 @group(1) @binding(4) var<uniform> unproject: Unproject;
 // Material texels: emissive RGB and occlusion (alpha); metallic, roughness.
+#ifdef MSAA
+@group(1) @binding(5) var gbuffer_emission_occlusion: texture_multisampled_2d<f32>;
+@group(1) @binding(6) var gbuffer_metal_rough: texture_multisampled_2d<f32>;
+#else
 @group(1) @binding(5) var gbuffer_emission_occlusion: texture_2d<f32>;
 @group(1) @binding(6) var gbuffer_metal_rough: texture_2d<f32>;
+#endif
 
 // A lit pixel of the G-buffer.
 struct GbufferTexel {
@@ -29,36 +43,152 @@ struct GbufferTexel {
     to_eye: vec3f,
 }
 
-// Device depth of a pixel; 0 (the cleared far plane, reversed Z) is background.
-fn gbuffer_depth_at(pixel: vec2u) -> f32 {
+// Device depth of sample `s` of a pixel (without MSAA: of the pixel); 0
+// (the cleared far plane, reversed Z) is background.
+fn gbuffer_depth_sample(pixel: vec2u, s: u32) -> f32 {
+#ifdef MSAA
+    return textureLoad(gbuffer_depth, pixel, s);
+#else
     return textureLoad(gbuffer_depth, pixel, 0);
+#endif
 }
 
-// World position of the centre of `pixel` at device depth `depth`.
-fn world_position(pixel: vec2u, depth: f32) -> vec3f {
-    let uv = (vec2f(pixel) + 0.5) * view.viewport.zw;
+// Device depth of a pixel (under MSAA: of its sample 0).
+fn gbuffer_depth_at(pixel: vec2u) -> f32 {
+    return gbuffer_depth_sample(pixel, 0u);
+}
+
+// World position of the point `xy` (pixels from the image's top-left
+// corner) at device depth `depth`.
+fn world_position_at(xy: vec2f, depth: f32) -> vec3f {
+    let uv = xy * view.viewport.zw;
     let ndc = vec4f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
     let p = unproject.inv_view_proj * ndc;
     return p.xyz / p.w;
 }
 
-// The surface at `pixel`, whose depth `depth` is not background.
-fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
-    let object = textureLoad(gbuffer_object, pixel, 0).x;
+// World position of the centre of `pixel` at device depth `depth`.
+fn world_position(pixel: vec2u, depth: f32) -> vec3f {
+    return world_position_at(vec2f(pixel) + 0.5, depth);
+}
+
+// The surface of sample `s` of `pixel` (without MSAA: of the pixel) at
+// world position `position`.
+fn gbuffer_texel_at(pixel: vec2u, s: u32, position: vec3f) -> GbufferTexel {
+#ifdef MSAA
+    let i = s;
+#else
+    let i = 0u;
+#endif
+    let object = textureLoad(gbuffer_object, pixel, i).x;
     let o = objects[object];
     var t: GbufferTexel;
     var material = no_material_texels();
 #ifdef MATERIAL_TEXTURES
     if o.emissive_layer != NO_TEXTURE || o.metal_rough_layer != NO_TEXTURE || o.occlusion_layer != NO_TEXTURE {
         // Objects without material textures skip the loads.
-        let e = textureLoad(gbuffer_emission_occlusion, pixel, 0);
-        material = MaterialTexels(e.rgb, textureLoad(gbuffer_metal_rough, pixel, 0).xy, e.a);
+        let e = textureLoad(gbuffer_emission_occlusion, pixel, i);
+        material = MaterialTexels(e.rgb, textureLoad(gbuffer_metal_rough, pixel, i).xy, e.a);
     }
 #endif
     t.surface = object_surface(o, material);
-    t.surface.position = world_position(pixel, depth);
-    t.surface.normal = oct_decode(textureLoad(gbuffer_normal, pixel, 0).xy);
-    t.surface.albedo = textureLoad(gbuffer_albedo, pixel, 0).rgb;
+    t.surface.position = position;
+    t.surface.normal = oct_decode(textureLoad(gbuffer_normal, pixel, i).xy);
+    t.surface.albedo = textureLoad(gbuffer_albedo, pixel, i).rgb;
     t.to_eye = normalize(view.camera_position.xyz - t.surface.position);
     return t;
 }
+
+// The surface at `pixel`, whose depth `depth` is not background.
+fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
+    return gbuffer_texel_at(pixel, 0u, world_position(pixel, depth));
+}
+
+#ifdef MSAA
+// Vulkan's standard sample positions (pixels from the top-left corner) of
+// 2, 4 and 8 samples, the positions the hardware rasterizer covered.
+const SAMPLES_2 = array<vec2f, 2>(vec2f(0.75, 0.75), vec2f(0.25, 0.25));
+const SAMPLES_4 = array<vec2f, 4>(vec2f(0.375, 0.125), vec2f(0.875, 0.375), vec2f(0.125, 0.625), vec2f(0.625, 0.875));
+const SAMPLES_8 = array<vec2f, 8>(
+    vec2f(0.5625, 0.3125), vec2f(0.4375, 0.6875), vec2f(0.8125, 0.5625), vec2f(0.3125, 0.1875),
+    vec2f(0.1875, 0.8125), vec2f(0.0625, 0.4375), vec2f(0.6875, 0.9375), vec2f(0.9375, 0.0625),
+);
+
+// Samples per pixel of the G-buffer.
+fn gbuffer_samples() -> u32 {
+    return textureNumSamples(gbuffer_depth);
+}
+
+// Where sample `s` lies in its pixel (0..1 from the top-left corner).
+fn sample_position(s: u32) -> vec2f {
+    // Copied into variables: arrays are indexed at run time through memory.
+    switch gbuffer_samples() {
+        case 2u: {
+            var positions = SAMPLES_2;
+            return positions[s];
+        }
+        case 4u: {
+            var positions = SAMPLES_4;
+            return positions[s];
+        }
+        case 8u: {
+            var positions = SAMPLES_8;
+            return positions[s];
+        }
+        default: {
+            return vec2f(0.5);
+        }
+    }
+}
+
+// The surface of sample `s` of `pixel` at its own position and depth `depth`.
+fn gbuffer_sample_texel(pixel: vec2u, s: u32, depth: f32) -> GbufferTexel {
+    return gbuffer_texel_at(pixel, s, world_position_at(vec2f(pixel) + sample_position(s), depth));
+}
+
+// Samples of one pixel, compared: an edge pixel's samples see different
+// surfaces (some background and some not, or another object, a normal
+// more than 8 degrees apart, or a depth more than 1 % apart), and are
+// shaded one by one; the others are shaded once for the pixel.
+struct PixelSamples {
+    edge: bool,
+    // Some sample sees a surface.
+    lit: bool,
+    // Smallest and largest device depth of the samples that see one.
+    depth_min: f32,
+    depth_max: f32,
+    // Mean device depth: at the pixel centre for a plane through the
+    // samples (device depth is affine in screen space and the standard
+    // positions average to the centre).
+    depth_mean: f32,
+}
+
+fn gbuffer_pixel(pixel: vec2u) -> PixelSamples {
+    let n = gbuffer_samples();
+    let d0 = textureLoad(gbuffer_depth, pixel, 0);
+    let o0 = textureLoad(gbuffer_object, pixel, 0).x;
+    let n0 = oct_decode(textureLoad(gbuffer_normal, pixel, 0).xy);
+    var p = PixelSamples(false, d0 > 0.0, d0, d0, d0);
+    if d0 <= 0.0 {
+        p.depth_min = 1.0;
+    }
+    for (var s = 1u; s < n; s++) {
+        let d = textureLoad(gbuffer_depth, pixel, s);
+        p.depth_mean += d;
+        if d > 0.0 {
+            p.lit = true;
+            p.depth_min = min(p.depth_min, d);
+            p.depth_max = max(p.depth_max, d);
+        }
+        if (d > 0.0) != (d0 > 0.0) {
+            p.edge = true;
+        } else if d > 0.0 && !p.edge {
+            let normal = oct_decode(textureLoad(gbuffer_normal, pixel, s).xy);
+            p.edge = textureLoad(gbuffer_object, pixel, s).x != o0 || dot(normal, n0) < 0.99
+                || abs(d - d0) > 0.01 * max(d, d0);
+        }
+    }
+    p.depth_mean /= f32(n);
+    return p;
+}
+#endif

@@ -31,6 +31,11 @@
 //! floats keep the encoded normal within 0.06 degrees (tested); `Rg16Snorm`
 //! would be finer but needs an optional feature. The lighting passes read
 //! it through `gbuffer_read.wgsl` (`shadespace::gbuffer`, bind group 1).
+//!
+//! Under MSAA every target has the frame's samples per pixel: the G-buffer
+//! pass writes each fragment's values to the samples it covers, and the
+//! lighting pass (`gbuffer_read.wgsl` with `MSAA`) compares a pixel's
+//! samples to shade it once or sample by sample.
 
 pub mod octahedral;
 
@@ -62,7 +67,7 @@ pub const EMISSION_OCCLUSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::
 /// The metallic and roughness texels.
 pub const METAL_ROUGH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unorm;
 /// The G-buffer's own targets, in the order the G-buffer pass writes them.
-const FORMATS: [wgpu::TextureFormat; 5] =
+pub const FORMATS: [wgpu::TextureFormat; 5] =
     [NORMAL_FORMAT, ALBEDO_FORMAT, OBJECT_FORMAT, EMISSION_OCCLUSION_FORMAT, METAL_ROUGH_FORMAT];
 /// Bytes per pixel of the G-buffer's own targets: normal, albedo, object,
 /// and with material textures ([`crate::shaders::MATERIAL_TEXTURES`])
@@ -130,16 +135,17 @@ pub struct GBuffer {
 }
 
 impl GBuffer {
-    /// Targets of the size of `targets`, read together with its depth. The
-    /// material targets are 1x1 placeholders (bound, never read) for scenes
-    /// without material textures.
+    /// Targets of the size and samples per pixel of `targets`, read
+    /// together with its depth. The material targets are 1x1 placeholders
+    /// (bound, never read) for scenes without material textures.
     pub fn new(device: &wgpu::Device, targets: &Targets, material_textures: bool) -> Self {
+        let samples = targets.samples;
         let make_sized = |label, format, (width, height)| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
                 mip_level_count: 1,
-                sample_count: 1,
+                sample_count: samples,
                 dimension: wgpu::TextureDimension::D2,
                 format,
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
@@ -165,18 +171,25 @@ impl GBuffer {
         });
         let d2 = wgpu::TextureViewDimension::D2;
         let float = wgpu::TextureSampleType::Float { filterable: false };
+        let texture = |sample| {
+            if samples > 1 {
+                Binding::MultisampledTexture { sample }
+            } else {
+                Binding::Texture { sample, dimension: d2 }
+            }
+        };
         let read_layout = bind_group_layout_for(
             device,
             "gbuffer read",
             wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
             &[
-                Binding::Texture { sample: wgpu::TextureSampleType::Depth, dimension: d2 },
-                Binding::Texture { sample: float, dimension: d2 },
-                Binding::Texture { sample: float, dimension: d2 },
-                Binding::Texture { sample: wgpu::TextureSampleType::Uint, dimension: d2 },
+                texture(wgpu::TextureSampleType::Depth),
+                texture(float),
+                texture(float),
+                texture(wgpu::TextureSampleType::Uint),
                 Binding::Uniform,
-                Binding::Texture { sample: float, dimension: d2 },
-                Binding::Texture { sample: float, dimension: d2 },
+                texture(float),
+                texture(float),
             ],
         );
         let read_group = bind_group(
@@ -207,9 +220,11 @@ impl GBuffer {
         }
     }
 
-    /// GPU memory of the G-buffer's own targets (depth belongs to the frame).
+    /// GPU memory of the G-buffer's own targets, every sample (depth belongs
+    /// to the frame).
     pub fn bytes(&self) -> u64 {
-        self.normal.width() as u64 * self.normal.height() as u64 * bytes_per_pixel(self.material_textures)
+        let samples = u64::from(self.normal.sample_count());
+        self.normal.width() as u64 * self.normal.height() as u64 * samples * bytes_per_pixel(self.material_textures)
     }
 }
 
@@ -222,12 +237,13 @@ pub struct GbufferPass {
 impl GbufferPass {
     /// `after_prepass`: the depth target already holds the scene's depth
     /// (test `Equal`: each pixel's fragment runs once); otherwise the pass
-    /// clears and writes depth itself.
+    /// clears and writes depth itself. `samples`: per pixel of the targets.
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         after_prepass: bool,
+        samples: u32,
     ) -> Result<Self, ShaderError> {
         let depth = DepthMode::after(after_prepass);
         let raster = SceneRaster {
@@ -237,7 +253,7 @@ impl GbufferPass {
             depth,
             groups: &[],
             blend: None,
-            samples: 1,
+            samples,
         };
         let pipeline = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
         Ok(Self { pipeline, after_prepass })
@@ -267,7 +283,7 @@ pub struct GbufferStage {
 
 impl GbufferStage {
     /// With `depth_prepass`, depth is laid down first and the G-buffer pass
-    /// runs one fragment per pixel.
+    /// runs one fragment per pixel. As many samples per pixel as `targets`.
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
@@ -275,8 +291,9 @@ impl GbufferStage {
         targets: &Targets,
         depth_prepass: bool,
     ) -> Result<Self, ShaderError> {
-        let prepass = depth_prepass.then(|| DepthPrepass::new(device, shaders, scene, 1)).transpose()?;
-        let pass = GbufferPass::new(device, shaders, scene, depth_prepass)?;
+        let samples = targets.samples;
+        let prepass = depth_prepass.then(|| DepthPrepass::new(device, shaders, scene, samples)).transpose()?;
+        let pass = GbufferPass::new(device, shaders, scene, depth_prepass, samples)?;
         Ok(Self { prepass, pass, gbuffer: GBuffer::new(device, targets, scene.material_textures) })
     }
 }

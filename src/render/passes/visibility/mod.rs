@@ -40,6 +40,12 @@ impl VisibilityMethod {
         if features.contains(compute::FEATURES) { Self::Compute } else { Self::Raster }
     }
 
+    /// [`VisibilityMethod::preferred`] at `samples` per pixel: under MSAA
+    /// raster, since the compute rasterizer writes one sample per pixel.
+    pub fn preferred_for(features: wgpu::Features, samples: u32) -> Self {
+        if samples > 1 { Self::Raster } else { Self::preferred(features) }
+    }
+
     /// The name `--visibility` takes.
     pub fn name(self) -> &'static str {
         match self {
