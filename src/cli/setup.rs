@@ -50,6 +50,12 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     if os.views.is_some() && a.visibility.0 == Some(VisibilityMethod::Raster) {
         return input(Err(anyhow::anyhow!("--views needs compute visibility, not --visibility raster")));
     }
+    if os.views.is_some() && a.msaa > 1 {
+        return input(Err(anyhow::anyhow!(
+            "--views needs compute visibility, which has one sample per pixel: not with --msaa {}",
+            a.msaa
+        )));
+    }
     let mut scene = input(scene::load(&a.scene))?;
     scene.cull_back_faces = a.cull_back_faces;
     if a.textures == TextureChoice::Detailed {

@@ -66,7 +66,7 @@ impl VisibilityRenderer {
                 let buffer = VisibilityBuffer::new(device, &targets);
                 let pass = match method {
                     VisibilityMethod::Raster => {
-                        Pass::Raster(VisibilityPass::new(device, &mut shaders, &scene_gpu, false)?)
+                        Pass::Raster(VisibilityPass::new(device, &mut shaders, &scene_gpu, false, 1)?)
                     }
                     VisibilityMethod::Compute => {
                         let pass = ComputeVisibility::new(device, &mut shaders, &scene_gpu, &targets, &buffer, false)?;

@@ -99,9 +99,9 @@ impl PipelineConfig {
     }
 
     /// Whether the pipeline renders with MSAA ([`RenderOptions::samples`]
-    /// above 1): the forward family and deferred-compute so far.
+    /// above 1): every pipeline but deferred (light volumes) so far.
     pub fn has_msaa(&self) -> bool {
-        matches!(self, Self::Forward(_) | Self::ForwardMultipass(_) | Self::Clustered(_) | Self::DeferredCompute(_))
+        !matches!(self, Self::Deferred(_))
     }
 
     /// Whether under MSAA the pipeline draws into the multisampled HDR
@@ -245,13 +245,13 @@ pub enum RenderError {
     )]
     SamplesUnsupported { samples: u32, format: String, adapter: String, offered: String },
     #[error(
-        "--msaa {samples}: the {pipeline} pipeline has no MSAA yet (only forward, forward-multipass, clustered and deferred-compute)"
+        "--msaa {samples}: the {pipeline} pipeline has no MSAA yet (the others have: forward, forward-multipass, clustered, deferred-compute, objectspace)"
     )]
     SamplesNotImplemented { samples: u32, pipeline: &'static str },
     #[error(
-        "--msaa {0}: the compute rasterizer writes one sample per pixel; deferred-compute takes MSAA with --visibility raster (which --visibility auto picks under MSAA)"
+        "--msaa {samples}: the compute rasterizer writes one sample per pixel; {pipeline} takes MSAA with --visibility raster (which --visibility auto picks under MSAA)"
     )]
-    SamplesNeedRasterVisibility(u32),
+    SamplesNeedRasterVisibility { samples: u32, pipeline: &'static str },
 }
 
 impl RenderError {
@@ -266,7 +266,7 @@ impl RenderError {
                 | Self::BadSamples(_)
                 | Self::SamplesUnsupported { .. }
                 | Self::SamplesNotImplemented { .. }
-                | Self::SamplesNeedRasterVisibility(_)
+                | Self::SamplesNeedRasterVisibility { .. }
         )
     }
 }
@@ -324,18 +324,26 @@ impl Renderer {
         if samples > 1 && !options.pipeline.has_msaa() {
             return Err(RenderError::SamplesNotImplemented { samples, pipeline: options.pipeline.name() });
         }
-        if let PipelineConfig::DeferredCompute(c) = &options.pipeline
-            && samples > 1
-        {
-            if c.visibility == VisibilityMethod::Compute {
-                return Err(RenderError::SamplesNeedRasterVisibility(samples));
+        if samples > 1 {
+            let (visibility, formats): (_, &[wgpu::TextureFormat]) = match &options.pipeline {
+                PipelineConfig::DeferredCompute(c) => (c.visibility, &passes::gbuffer::FORMATS),
+                PipelineConfig::ObjectSpace(c) => (c.visibility, &[passes::visibility::FORMAT]),
+                _ => (VisibilityMethod::Raster, &[]),
+            };
+            if visibility == VisibilityMethod::Compute {
+                let pipeline = options.pipeline.name();
+                return Err(RenderError::SamplesNeedRasterVisibility { samples, pipeline });
             }
-            check_sample_formats(ctx, samples, &passes::gbuffer::FORMATS)?;
+            check_sample_formats(ctx, samples, formats)?;
         }
         let mut shaders = crate::render::shader_set::library()?;
         let scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
         if scene_gpu.material_textures {
             shaders.define(crate::shaders::MATERIAL_TEXTURES);
+        }
+        if samples > 1 {
+            // The passes reading ids or the G-buffer read every sample.
+            shaders.define(crate::shaders::MSAA);
         }
         let targets = Targets::new(&ctx.device, width, height, samples, options.pipeline.resolves_msaa_colour());
         let (device, queue) = (&ctx.device, &ctx.queue);

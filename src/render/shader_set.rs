@@ -65,6 +65,10 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         deferred_compute::SHADER_VISIBILITY,
         deferred_compute::SHADER_MSAA,
     ]);
+    all.extend([
+        objectspace::mark::SHADER.with_defs(&[crate::shaders::MSAA]),
+        objectspace::gather::SHADER.with_defs(&[crate::shaders::MSAA]),
+    ]);
     all.extend_from_slice(deferred::PASS_SHADERS);
     all
 }

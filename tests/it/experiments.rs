@@ -496,7 +496,7 @@ fn quality_quick() {
     // The gloss override reaches the pipelines: forward's error changes with it.
     assert_ne!(row("forward", "default", "1")["flip_mean"], row("forward", "high", "1")["flip_mean"]);
     // MSAA reaches the pipelines that have it: 4 samples are nearer the reference than one.
-    for config in ["forward", "deferred-compute"] {
+    for config in ["forward", "deferred-compute", "objectspace", "objectspace-hz30"] {
         for gloss in ["default", "high"] {
             let (one, four) = (num(row(config, gloss, "1"), "psnr_db"), num(row(config, gloss, "4"), "psnr_db"));
             eprintln!("quality quick, {config}, gloss {gloss}: PSNR {one:.2} dB at 1 sample, {four:.2} dB at 4");

@@ -44,7 +44,7 @@ pub const SHADER: ShaderSource = ShaderSource::new("tiled.wgsl", include_str!("t
 /// `tiled.wgsl` reading the compute visibility pass instead of the G-buffer.
 pub const SHADER_VISIBILITY: ShaderSource = SHADER.with_defs(&["VISIBILITY_BUFFER"]);
 /// `tiled.wgsl` reading a multisampled G-buffer.
-pub const SHADER_MSAA: ShaderSource = SHADER.with_defs(&["MSAA"]);
+pub const SHADER_MSAA: ShaderSource = SHADER.with_defs(&[crate::shaders::MSAA]);
 
 /// Tile side in pixels (one workgroup of `TILE_SIZE`² threads per tile).
 pub const TILE_SIZE: u32 = 16;

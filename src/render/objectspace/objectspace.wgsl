@@ -68,8 +68,13 @@ struct Params {
 @group(1) @binding(4) var<storage, read_write> queue: array<vec2u>;
 // Indexed by the `COUNT_*` constants.
 @group(1) @binding(5) var<storage, read_write> counters: array<atomic<u32>, TILE_COUNTER_SLOTS>;
-// Visibility buffer: (object + 1, triangle); 0 = background.
+// Visibility buffer: (object + 1, triangle); 0 = background. Under MSAA one
+// per sample (`textureLoad`'s last argument is then the sample).
+#ifdef MSAA
+@group(1) @binding(6) var visibility: texture_multisampled_2d<u32>;
+#else
 @group(1) @binding(6) var visibility: texture_2d<u32>;
+#endif
 // Per triangle of the scene's index buffer: its chart island (a number
 // shared by the triangles of one island of its mesh's chart UVs).
 @group(1) @binding(7) var<storage, read> triangle_charts: array<u32>;

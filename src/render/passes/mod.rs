@@ -74,26 +74,10 @@ pub fn alpha_masked_shaders() -> Vec<ShaderSource> {
 }
 
 /// A raster pipeline over the scene bind group (group 0): vertices pulled
-/// from storage (no vertex buffers), no face culling, a reversed-Z depth
-/// test, and a fragment stage writing `color` when given (none: depth only);
-/// one sample per pixel.
-pub fn scene_raster_pipeline(
-    device: &wgpu::Device,
-    shaders: &mut ShaderLibrary,
-    shader: ShaderSource,
-    scene: &SceneGpu,
-    vertex_entry: &str,
-    fragment: Option<(&str, wgpu::TextureFormat)>,
-    depth: DepthMode,
-) -> Result<ScenePipeline, ShaderError> {
-    let fragment = fragment.as_ref().map(|(entry, format)| (*entry, std::slice::from_ref(format)));
-    let raster = SceneRaster { shader, vertex_entry, fragment, depth, groups: &[], blend: None, samples: 1 };
-    scene_raster_pipeline_from(device, shaders, scene, &raster)
-}
-
-/// A scene raster pipeline with more than [`scene_raster_pipeline`]'s
-/// defaults: several colour targets (a G-buffer), bind groups after the
-/// scene's, blending, and multisampling.
+/// from storage (no vertex buffers), no face culling (unless the scene culls
+/// back faces), a reversed-Z depth test, and a fragment stage writing its
+/// colour targets (several: a G-buffer; none: depth only), with bind groups
+/// after the scene's, blending, and multisampling.
 #[derive(Clone, Copy)]
 pub struct SceneRaster<'a> {
     pub shader: ShaderSource,
@@ -110,7 +94,7 @@ pub struct SceneRaster<'a> {
     pub samples: u32,
 }
 
-/// The raster pipelines `raster` describes (see [`scene_raster_pipeline`]).
+/// The raster pipelines `raster` describes ([`SceneRaster`]).
 pub fn scene_raster_pipeline_from(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,

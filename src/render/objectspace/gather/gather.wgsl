@@ -3,10 +3,15 @@
 // bilinearly (by hand, with taps clamped inside the level's square, so no tap
 // reads a neighbour in the atlas, and only taps in the pixel's chart island). Objects outside the atlas (forward-only)
 // are shaded here per pixel, with the world grid's lights. Debug views replace
-// the shade.
+// the shade. Under MSAA a pixel whose samples see different triangles
+// gathers each sample at its own position and writes their mean (background
+// samples black): the resolve, in linear HDR; the others gather once.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
+#ifdef MSAA
+#import shadespace::pixel_surface::{sample_pixel_at, standard_sample_position}
+#endif
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_level,
     bilinear, AtlasTexel, triangle_charts, locate, physical_page, virtual_page, physical_tile,
@@ -60,15 +65,37 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     let ids = textureLoad(visibility, id.xy, 0).xy;
+#ifdef MSAA
+    let n = textureNumSamples(visibility);
+    var edge = false;
+    for (var s = 1u; s < n; s++) {
+        edge = edge || any(textureLoad(visibility, id.xy, s).xy != ids);
+    }
+    if edge {
+        var sum = vec3f(0.0);
+        for (var s = 0u; s < n; s++) {
+            let sample_ids = textureLoad(visibility, id.xy, s).xy;
+            if sample_ids.x != 0u {
+                sum += gather_surface(sample_pixel_at(id.xy, standard_sample_position(n, s), sample_ids)).rgb;
+            }
+        }
+        textureStore(hdr, id.xy, vec4f(sum / f32(n), 1.0));
+        return;
+    }
+#endif
     if ids.x == 0u {
         textureStore(hdr, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
         return;
     }
-    let p = sample_pixel(id.xy, ids);
+    textureStore(hdr, id.xy, gather_surface(sample_pixel(id.xy, ids)));
+}
+
+// The shade of one surface point: its object's shades filtered (or a debug
+// view's colour), or shaded here when the object or its page is not in the atlas.
+fn gather_surface(p: PixelSample) -> vec4f {
     let e = atlas_entries[p.object];
     if e.size == 0u {
-        textureStore(hdr, id.xy, shade_forward(p));
-        return;
+        return shade_forward(p);
     }
     let f = chart_footprint(p);
     let level_index = select_level(e, p, f);
@@ -113,10 +140,9 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
             if taps[0].layer == NOT_BACKED || taps[1].layer == NOT_BACKED || taps[2].layer == NOT_BACKED
                 || taps[3].layer == NOT_BACKED {
                 // The atlas was full this frame: shade the pixel forward.
-                textureStore(hdr, id.xy, shade_forward(p));
-                return;
+                return shade_forward(p);
             }
-            let own = island(p.object, ids.y);
+            let own = island(p.object, p.triangle);
             var w = vec4f(
                 (1.0 - b.weight.x) * (1.0 - b.weight.y),
                 b.weight.x * (1.0 - b.weight.y),
@@ -137,5 +163,5 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
             out = vec4f(c, 1.0);
         }
     }
-    textureStore(hdr, id.xy, out);
+    return out;
 }

@@ -9,7 +9,10 @@
 // tiles once paging has backed the page.
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_PAGES_USED, COUNT_PAGES_REQUESTED, COUNT_PAGES_FAILED,
     COUNT_PAGES_BACKED, COUNT_VIEW_TILES, COUNT_BACKED_TILES, COUNT_ATLAS_PIXELS, COUNT_UNDER_SHADED_PIXELS}
-#import shadespace::pixel_surface::sample_pixel
+#import shadespace::pixel_surface::{sample_pixel, PixelSample}
+#ifdef MSAA
+#import shadespace::pixel_surface::{sample_pixel_at, standard_sample_position}
+#endif
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_level, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
@@ -150,10 +153,34 @@ fn mark_pixel(pixel: vec2u) -> u32 {
         return PIXEL_NOT_IN_ATLAS;
     }
     let ids = textureLoad(visibility, pixel, 0).xy;
+#ifdef MSAA
+    // A pixel whose samples see different triangles marks each sample's
+    // footprint at its own position, where the gather reads it.
+    let n = textureNumSamples(visibility);
+    var edge = false;
+    for (var s = 1u; s < n; s++) {
+        edge = edge || any(textureLoad(visibility, pixel, s).xy != ids);
+    }
+    if edge {
+        var kind = PIXEL_NOT_IN_ATLAS;
+        for (var s = 0u; s < n; s++) {
+            let sample_ids = textureLoad(visibility, pixel, s).xy;
+            if sample_ids.x != 0u {
+                kind = max(kind, mark_surface(sample_pixel_at(pixel, standard_sample_position(n, s), sample_ids)));
+            }
+        }
+        return kind;
+    }
+#endif
     if ids.x == 0u {
         return PIXEL_NOT_IN_ATLAS;
     }
-    let p = sample_pixel(pixel, ids);
+    return mark_surface(sample_pixel(pixel, ids));
+}
+
+// Marks the tiles of one surface point's footprint; returns what kind of
+// pixel it makes.
+fn mark_surface(p: PixelSample) -> u32 {
     let e = atlas_entries[p.object];
     if e.size == 0u {
         return PIXEL_NOT_IN_ATLAS; // shaded forward, in the gather

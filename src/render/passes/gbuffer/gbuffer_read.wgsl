@@ -9,6 +9,7 @@
 #import shadespace::scene_bindings::{view, objects}
 #import shadespace::contract::NO_TEXTURE
 #import shadespace::surface::{MaterialTexels, object_surface, no_material_texels}
+#import shadespace::pixel_surface::standard_sample_position
 
 // Mirrors `render::passes::gbuffer::GpuUnproject`.
 struct Unproject {
@@ -105,45 +106,15 @@ fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
 }
 
 #ifdef MSAA
-// Vulkan's standard sample positions (pixels from the top-left corner) of
-// 2, 4 and 8 samples, the positions the hardware rasterizer covered.
-const SAMPLES_2 = array<vec2f, 2>(vec2f(0.75, 0.75), vec2f(0.25, 0.25));
-const SAMPLES_4 = array<vec2f, 4>(vec2f(0.375, 0.125), vec2f(0.875, 0.375), vec2f(0.125, 0.625), vec2f(0.625, 0.875));
-const SAMPLES_8 = array<vec2f, 8>(
-    vec2f(0.5625, 0.3125), vec2f(0.4375, 0.6875), vec2f(0.8125, 0.5625), vec2f(0.3125, 0.1875),
-    vec2f(0.1875, 0.8125), vec2f(0.0625, 0.4375), vec2f(0.6875, 0.9375), vec2f(0.9375, 0.0625),
-);
-
 // Samples per pixel of the G-buffer.
 fn gbuffer_samples() -> u32 {
     return textureNumSamples(gbuffer_depth);
 }
 
-// Where sample `s` lies in its pixel (0..1 from the top-left corner).
-fn sample_position(s: u32) -> vec2f {
-    // Copied into variables: arrays are indexed at run time through memory.
-    switch gbuffer_samples() {
-        case 2u: {
-            var positions = SAMPLES_2;
-            return positions[s];
-        }
-        case 4u: {
-            var positions = SAMPLES_4;
-            return positions[s];
-        }
-        case 8u: {
-            var positions = SAMPLES_8;
-            return positions[s];
-        }
-        default: {
-            return vec2f(0.5);
-        }
-    }
-}
-
 // The surface of sample `s` of `pixel` at its own position and depth `depth`.
 fn gbuffer_sample_texel(pixel: vec2u, s: u32, depth: f32) -> GbufferTexel {
-    return gbuffer_texel_at(pixel, s, world_position_at(vec2f(pixel) + sample_position(s), depth));
+    let at = standard_sample_position(gbuffer_samples(), s);
+    return gbuffer_texel_at(pixel, s, world_position_at(vec2f(pixel) + at, depth));
 }
 
 // Samples of one pixel, compared: an edge pixel's samples see different
