@@ -45,9 +45,9 @@ pub struct SceneArgs {
     pub size: (u32, u32),
     /// MSAA samples per pixel: 1 (default, none), 2, 4 or 8, at the standard
     /// sample positions, resolved (averaged in linear HDR) before exposure,
-    /// bloom and tone mapping. Every pipeline but deferred (light volumes);
-    /// deferred-compute and object space with raster visibility. A count the
-    /// adapter cannot render exits with status 2.
+    /// bloom and tone mapping, in every pipeline (deferred-compute and object
+    /// space with raster visibility). A count the adapter cannot render exits
+    /// with status 2.
     #[arg(long, default_value_t = 1, value_parser = parse::msaa)]
     pub msaa: u32,
     /// `path`: the scene's camera path (from cameras.json beside a shared

@@ -102,11 +102,6 @@ impl Config {
             + &if self.mip_bias != 0.0 { format!("-bias{}", self.mip_bias) } else { String::new() }
     }
 
-    /// Whether its pipeline renders with MSAA.
-    pub fn has_msaa(&self) -> bool {
-        self.shading.config(&[], VisibilityMethod::Raster).has_msaa()
-    }
-
     /// The pipeline's name (a curve of the cost-error plot).
     pub fn pipeline(&self) -> &'static str {
         self.shading.config(&[], VisibilityMethod::Raster).name()
@@ -167,8 +162,7 @@ pub struct Cell {
     pub config: Config,
 }
 
-/// Every cell, in a fixed order (the order shards are cut from). Pipelines
-/// without MSAA ([`PipelineConfig::has_msaa`]) get cells at one sample only.
+/// Every cell, in a fixed order (the order shards are cut from).
 pub fn cells(grid: &TimingGrid, quick: bool) -> Vec<Cell> {
     let a = axes(grid, quick);
     let mut out = Vec::new();
@@ -178,9 +172,6 @@ pub fn cells(grid: &TimingGrid, quick: bool) -> Vec<Cell> {
                 for &lights in &sweep.counts {
                     for &msaa in &a.msaa {
                         for config in configs(grid, quick) {
-                            if msaa > 1 && !config.has_msaa() {
-                                continue;
-                            }
                             out.push(Cell { textures, gloss, scenario: sweep.scenario, lights, msaa, config });
                         }
                     }
@@ -609,10 +600,10 @@ fn outcome(setup: &Setup, findings: Findings) -> Outcome {
     );
     let items = vec![
         "MSAA: forward, forward-multipass and clustered resolve hardware MSAA at the standard sample positions; \
-         deferred-compute lights a multisampled G-buffer, each pixel once or, on edges, sample by sample; object \
-         space marks tiles per pixel footprint (and per sample on edges) and gathers per sample on edges, so its \
-         shading does not grow with the samples; both use raster visibility under MSAA. Deferred (light \
-         volumes) has no MSAA yet and is measured at one sample per pixel only."
+         deferred and deferred-compute light a multisampled G-buffer, each pixel once or, on edges, sample by \
+         sample (deferred's light volumes test each sample's depth in the shader); object space marks tiles per \
+         pixel footprint (and per sample on edges) and gathers per sample on edges, so its shading does not grow \
+         with the samples. Under MSAA, deferred-compute and object space use raster visibility."
             .to_string(),
         "Reference textures: the reference's sub-pixel frames sample textures at the level of a whole pixel's \
          footprint, as one sample per pixel does; it resolves geometry, shading and specular aliasing, not \
@@ -762,16 +753,13 @@ mod tests {
             ]
         );
         let all = cells(&full, false);
-        // Every configuration but deferred's also at 4 and 8 samples.
-        let with_msaa = labels.len() - 1;
         assert_eq!(
             all.len(),
-            (labels.len() + with_msaa * 2) * 2 * 2,
-            "full: two textures, two gloss settings, one light set, MSAA 1, 4, 8 where the pipeline has it"
+            labels.len() * 3 * 2 * 2,
+            "full: two textures, two gloss settings, one light set, MSAA 1, 4, 8"
         );
         assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 5 * 4 * 3);
-        assert_eq!(all.iter().filter(|c| c.msaa == 8).count(), with_msaa * 4);
-        assert!(all.iter().filter(|c| c.msaa > 1).all(|c| c.config.has_msaa()));
+        assert_eq!(all.iter().filter(|c| c.msaa == 8).count(), labels.len() * 4);
         let quick = grid(true);
         let labels: Vec<String> = configs(&quick, true).iter().map(Config::label).collect();
         assert_eq!(labels, ["forward", "deferred-compute", "objectspace", "objectspace-hz30"]);

@@ -98,12 +98,6 @@ impl PipelineConfig {
         })
     }
 
-    /// Whether the pipeline renders with MSAA ([`RenderOptions::samples`]
-    /// above 1): every pipeline but deferred (light volumes) so far.
-    pub fn has_msaa(&self) -> bool {
-        !matches!(self, Self::Deferred(_))
-    }
-
     /// Whether under MSAA the pipeline draws into the multisampled HDR
     /// colour and resolves it ([`targets::Targets::hdr_msaa_view`]), as the
     /// forward family does; deferred-compute resolves in its lighting pass.
@@ -245,10 +239,6 @@ pub enum RenderError {
     )]
     SamplesUnsupported { samples: u32, format: String, adapter: String, offered: String },
     #[error(
-        "--msaa {samples}: the {pipeline} pipeline has no MSAA yet (the others have: forward, forward-multipass, clustered, deferred-compute, objectspace)"
-    )]
-    SamplesNotImplemented { samples: u32, pipeline: &'static str },
-    #[error(
         "--msaa {samples}: the compute rasterizer writes one sample per pixel; {pipeline} takes MSAA with --visibility raster (which --visibility auto picks under MSAA)"
     )]
     SamplesNeedRasterVisibility { samples: u32, pipeline: &'static str },
@@ -265,7 +255,6 @@ impl RenderError {
                 | Self::BloomUnsupported(_)
                 | Self::BadSamples(_)
                 | Self::SamplesUnsupported { .. }
-                | Self::SamplesNotImplemented { .. }
                 | Self::SamplesNeedRasterVisibility { .. }
         )
     }
@@ -321,12 +310,10 @@ impl Renderer {
         }
         let samples = options.samples;
         check_samples(ctx, samples)?;
-        if samples > 1 && !options.pipeline.has_msaa() {
-            return Err(RenderError::SamplesNotImplemented { samples, pipeline: options.pipeline.name() });
-        }
         if samples > 1 {
             let (visibility, formats): (_, &[wgpu::TextureFormat]) = match &options.pipeline {
                 PipelineConfig::DeferredCompute(c) => (c.visibility, &passes::gbuffer::FORMATS),
+                PipelineConfig::Deferred(_) => (VisibilityMethod::Raster, &passes::gbuffer::FORMATS),
                 PipelineConfig::ObjectSpace(c) => (c.visibility, &[passes::visibility::FORMAT]),
                 _ => (VisibilityMethod::Raster, &[]),
             };

@@ -68,6 +68,8 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     all.extend([
         objectspace::mark::SHADER.with_defs(&[crate::shaders::MSAA]),
         objectspace::gather::SHADER.with_defs(&[crate::shaders::MSAA]),
+        deferred::GLOBALS_SHADER.with_defs(&[crate::shaders::MSAA]),
+        deferred::volumes::VOLUMES_SHADER.with_defs(&[crate::shaders::MSAA]),
     ]);
     all.extend_from_slice(deferred::PASS_SHADERS);
     all
