@@ -3,14 +3,16 @@
 // bilinearly (by hand, with taps clamped inside the level's square, so no tap
 // reads a neighbour in the atlas, and only taps in the pixel's chart island). Objects outside the atlas (forward-only)
 // are shaded here per pixel, with the world grid's lights. Debug views replace
-// the shade. Under MSAA a pixel whose samples see different triangles
-// gathers each sample at its own position and writes their mean (background
-// samples black): the resolve, in linear HDR; the others gather once.
+// the shade. Under MSAA a pixel whose samples see different chart surfaces
+// (`same_chart_surface`) gathers each sample at its own position and writes
+// their mean (background samples black): the resolve, in linear HDR; the
+// others gather once.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
 #ifdef MSAA
 #import shadespace::pixel_surface::{sample_pixel_at, standard_sample_position}
+#import shadespace::objectspace::same_chart_surface
 #endif
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_level,
@@ -69,7 +71,7 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
     let n = textureNumSamples(visibility);
     var edge = false;
     for (var s = 1u; s < n; s++) {
-        edge = edge || any(textureLoad(visibility, id.xy, s).xy != ids);
+        edge = edge || !same_chart_surface(textureLoad(visibility, id.xy, s).xy, ids);
     }
     if edge {
         var sum = vec3f(0.0);

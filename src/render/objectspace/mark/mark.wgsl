@@ -18,6 +18,9 @@
     chart_footprint, select_level, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
     page_request_bit, tile_request_bit, page_tile_origin, forget_request}
+#ifdef MSAA
+#import shadespace::objectspace::same_chart_surface
+#endif
 
 // A small integer hash (PCG's output permutation) for tile phases.
 fn hash(x: u32) -> u32 {
@@ -154,12 +157,12 @@ fn mark_pixel(pixel: vec2u) -> u32 {
     }
     let ids = textureLoad(visibility, pixel, 0).xy;
 #ifdef MSAA
-    // A pixel whose samples see different triangles marks each sample's
-    // footprint at its own position, where the gather reads it.
+    // A pixel whose samples see different chart surfaces marks each
+    // sample's footprint at its own position, where the gather reads it.
     let n = textureNumSamples(visibility);
     var edge = false;
     for (var s = 1u; s < n; s++) {
-        edge = edge || any(textureLoad(visibility, pixel, s).xy != ids);
+        edge = edge || !same_chart_surface(textureLoad(visibility, pixel, s).xy, ids);
     }
     if edge {
         var kind = PIXEL_NOT_IN_ATLAS;
