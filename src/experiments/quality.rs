@@ -551,9 +551,14 @@ pub(super) fn study(
     progress: &indicatif::ProgressBar,
 ) -> Result<Outcome, ExperimentError> {
     let grid = options.timing.as_ref().ok_or(ExperimentError::NoTimingGrid("quality"))?;
-    // A sample count the adapter lacks fails before any cell is measured.
+    // A sample count the adapter lacks for some pipeline's targets fails
+    // before any cell is measured.
+    let features = ctx.device.features();
     for &samples in &grid.msaa {
-        crate::render::check_samples(ctx, samples)?;
+        for config in configs(grid, options.quick) {
+            let pipeline = config.render_config(&[], VisibilityMethod::preferred_for(features, samples));
+            crate::render::check_samples_for(ctx, samples, &pipeline)?;
+        }
     }
     let cells: Vec<(usize, Cell)> = cells(grid, options.quick)
         .into_iter()

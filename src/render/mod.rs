@@ -143,6 +143,26 @@ pub fn check_samples(ctx: &GpuContext, samples: u32) -> Result<(), RenderError> 
     check_sample_formats(ctx, samples, &[targets::HDR_FORMAT, targets::DEPTH_FORMAT])
 }
 
+/// [`check_samples`] for a renderer of `pipeline`: also its own targets'
+/// formats (the G-buffer's, the visibility buffer's), and under MSAA raster
+/// visibility (the compute rasterizer writes one sample per pixel).
+pub fn check_samples_for(ctx: &GpuContext, samples: u32, pipeline: &PipelineConfig) -> Result<(), RenderError> {
+    check_samples(ctx, samples)?;
+    if samples == 1 {
+        return Ok(());
+    }
+    let (visibility, formats): (_, &[wgpu::TextureFormat]) = match pipeline {
+        PipelineConfig::DeferredCompute(c) => (c.visibility, &passes::gbuffer::FORMATS),
+        PipelineConfig::Deferred(_) => (VisibilityMethod::Raster, &passes::gbuffer::FORMATS),
+        PipelineConfig::ObjectSpace(c) => (c.visibility, &[passes::visibility::FORMAT]),
+        _ => (VisibilityMethod::Raster, &[]),
+    };
+    if visibility == VisibilityMethod::Compute {
+        return Err(RenderError::SamplesNeedRasterVisibility { samples, pipeline: pipeline.name() });
+    }
+    check_sample_formats(ctx, samples, formats)
+}
+
 /// [`check_samples`] for render targets of `formats`.
 fn check_sample_formats(ctx: &GpuContext, samples: u32, formats: &[wgpu::TextureFormat]) -> Result<(), RenderError> {
     if !targets::SAMPLE_COUNTS.contains(&samples) {
@@ -309,20 +329,7 @@ impl Renderer {
             return Err(RenderError::BadSize(width, height, max));
         }
         let samples = options.samples;
-        check_samples(ctx, samples)?;
-        if samples > 1 {
-            let (visibility, formats): (_, &[wgpu::TextureFormat]) = match &options.pipeline {
-                PipelineConfig::DeferredCompute(c) => (c.visibility, &passes::gbuffer::FORMATS),
-                PipelineConfig::Deferred(_) => (VisibilityMethod::Raster, &passes::gbuffer::FORMATS),
-                PipelineConfig::ObjectSpace(c) => (c.visibility, &[passes::visibility::FORMAT]),
-                _ => (VisibilityMethod::Raster, &[]),
-            };
-            if visibility == VisibilityMethod::Compute {
-                let pipeline = options.pipeline.name();
-                return Err(RenderError::SamplesNeedRasterVisibility { samples, pipeline });
-            }
-            check_sample_formats(ctx, samples, formats)?;
-        }
+        check_samples_for(ctx, samples, &options.pipeline)?;
         let mut shaders = crate::render::shader_set::library()?;
         let scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
         if scene_gpu.material_textures {
