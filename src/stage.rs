@@ -22,6 +22,8 @@ pub struct Stage {
     pub cameras: SceneCameras,
     pub width: u32,
     pub height: u32,
+    /// MSAA samples per pixel of [`Stage::renderer`]'s renderers (default 1).
+    pub samples: u32,
 }
 
 /// Why a scene cannot be staged or rendered.
@@ -53,7 +55,7 @@ impl Stage {
     /// other name is framed automatically).
     pub fn new(name: &str, scene: Scene, width: u32, height: u32) -> Result<Self, StageError> {
         let cameras = scene::path::cameras_for_scene(name, &scene, width as f32 / height.max(1) as f32)?;
-        Ok(Self { scene, cameras, width, height })
+        Ok(Self { scene, cameras, width, height, samples: 1 })
     }
 
     /// The camera of the scene's path (`--camera path`) at `frame`.
@@ -84,7 +86,7 @@ impl Stage {
     /// from elsewhere charts the scene itself with
     /// [`charts::screen_sizings`] for its cameras).
     pub fn renderer(&self, ctx: &GpuContext, pipeline: PipelineConfig) -> Result<Renderer, StageError> {
-        let mut options = RenderOptions { width: self.width, height: self.height, pipeline };
+        let mut options = RenderOptions { width: self.width, height: self.height, pipeline, samples: self.samples };
         let mut renderer = match &mut options.pipeline {
             PipelineConfig::ObjectSpace(c) if c.texture_sizes.is_empty() => {
                 let views = charts::path_cameras(&self.cameras.path);

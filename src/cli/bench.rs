@@ -6,13 +6,12 @@ use std::path::PathBuf;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use shadespace::bench::{self, BenchPlan};
-use shadespace::render::Renderer;
 use shadespace::render::objectspace::DebugView;
 
 use super::Failure;
 use super::options::SceneArgs;
 use super::output::write_report;
-use super::setup::{configure, open_gpu, render_options, setup};
+use super::setup::{configure, new_renderer, open_gpu, render_options, setup};
 
 /// `bench`'s options: the scene's, then the frames and the output.
 #[derive(Args)]
@@ -44,7 +43,7 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
     let mut renderer =
-        Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s, DebugView::Shade, ctx.device.features()))?;
+        new_renderer(&ctx, &s.scene, &render_options(&a.scene, &s, DebugView::Shade, ctx.device.features()))?;
     configure(&mut renderer, &a.scene, &s);
     if !renderer.timing_enabled() {
         tracing::warn!("{} has no timestamp queries: the result has CPU times only", ctx.info.name);

@@ -166,6 +166,10 @@ pub struct TimingArgs {
     /// count skips the larger counts of that scenario (default 200; quick: 10000).
     #[arg(long, value_parser = parse::cap_ms)]
     pub cap_ms: Option<f64>,
+    /// `quality`: MSAA samples per pixel, comma-separated (1, 2, 4, 8;
+    /// default 1,4,8; quick: 1,4). Pipelines without MSAA are measured at 1 only.
+    #[arg(long, value_delimiter = ',', value_parser = parse::msaa)]
+    pub msaa: Vec<u32>,
 }
 
 /// Runs the experiment and prints its headline and report path.
@@ -200,6 +204,9 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
     }
     if let Some(step) = a.frame_step {
         grid.sample_frames(step);
+    }
+    if !a.timing.msaa.is_empty() && name != ExperimentName::Quality {
+        return input(Err(anyhow::anyhow!("--msaa: only the quality experiment has an MSAA axis")));
     }
     let timing = name.timing_grid(a.quick).map(|g| timing_grid(g, &a.timing));
     let options = ExperimentOptions {
@@ -265,6 +272,12 @@ fn timing_grid(mut grid: TimingGrid, a: &TimingArgs) -> TimingGrid {
         };
         grid.sweeps =
             a.scenarios.iter().map(|&s| Sweep { scenario: s, counts: counts(s).unwrap_or_default() }).collect();
+    }
+    if !a.msaa.is_empty() {
+        let mut msaa = a.msaa.clone();
+        msaa.sort_unstable();
+        msaa.dedup();
+        grid.msaa = msaa;
     }
     if !a.counts.is_empty() {
         let mut counts = a.counts.clone();

@@ -43,6 +43,13 @@ pub struct SceneArgs {
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = parse::size)]
     pub size: (u32, u32),
+    /// MSAA samples per pixel: 1 (default, none), 2, 4 or 8, at the standard
+    /// sample positions, resolved (averaged in linear HDR) before exposure,
+    /// bloom and tone mapping, in every pipeline (deferred-compute and object
+    /// space with raster visibility). A count the adapter cannot render exits
+    /// with status 2.
+    #[arg(long, default_value_t = 1, value_parser = parse::msaa)]
+    pub msaa: u32,
     /// `path`: the scene's camera path (from cameras.json beside a shared
     /// scene; an orbit for atrium and voxels; for other scenes the file's
     /// first camera, or else a turntable framing the whole scene), `fixed:K`
@@ -119,7 +126,8 @@ pub struct SceneArgs {
     /// rasterizer with 64-bit atomics; surfaces rebuilt from triangle ids) or
     /// `auto` (default: compute where the adapter has 64-bit atomics, which
     /// on the H100 is 1.7x (object space) to 2.2x (deferred-compute) faster
-    /// at 1920x1080, else raster).
+    /// at 1920x1080, else raster; raster under --msaa above 1, since the
+    /// compute rasterizer writes one sample per pixel).
     #[arg(long, default_value = "auto", value_parser = parse::visibility)]
     pub visibility: VisibilityChoice,
     /// Compute visibility: count the rasterizer's work every frame

@@ -4,6 +4,7 @@
 use std::str::FromStr;
 
 use glam::Vec3;
+use shadespace::render::targets::SAMPLE_COUNTS;
 use shadespace::render::{Exposure, VisibilityMethod};
 
 /// A finite number in `range`, for a flag whose meaning needs one.
@@ -172,6 +173,15 @@ pub fn tile_size(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
         Ok(t @ (8 | 16 | 32 | 64)) => Ok(t),
         _ => Err(format!("'{s}' is not one of 8, 16, 32, 64")),
+    }
+}
+
+/// `--msaa`: samples per pixel, 1, 2, 4 or 8 (the counts with standard
+/// sample positions).
+pub fn msaa(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(n) if SAMPLE_COUNTS.contains(&n) => Ok(n),
+        _ => Err(format!("'{s}' is not one of 1, 2, 4, 8 (samples per pixel)")),
     }
 }
 

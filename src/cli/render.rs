@@ -6,13 +6,13 @@ use std::str::FromStr;
 
 use clap::Args;
 use shadespace::bench::{self, BenchPlan, FrameReport};
+use shadespace::render::Exposure;
 use shadespace::render::objectspace::atlas_view::AtlasPages;
 use shadespace::render::objectspace::{DebugView, ObjectSpace};
-use shadespace::render::{Exposure, Renderer};
 
 use super::options::{PipelineName, SceneArgs};
 use super::output::{save_png, write_report, write_trace};
-use super::setup::{configure, open_gpu, render_options, setup};
+use super::setup::{configure, new_renderer, open_gpu, render_options, setup};
 use super::{Failure, input};
 
 /// `render`'s options: the scene's, then the frame and the outputs.
@@ -72,7 +72,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let s = setup(&a.scene)?;
     let ctx = open_gpu(&a.scene.gpu)?;
     let (w, h) = a.scene.size;
-    let mut renderer = Renderer::new(&ctx, &s.scene, &render_options(&a.scene, &s, a.view, ctx.device.features()))?;
+    let mut renderer = new_renderer(&ctx, &s.scene, &render_options(&a.scene, &s, a.view, ctx.device.features()))?;
     configure(&mut renderer, &a.scene, &s);
     if a.atlas_out.is_some() || a.view == DebugView::AtlasPages {
         let Some(os) = renderer.pipeline_mut::<ObjectSpace>() else {
@@ -101,7 +101,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         write_trace(&renderer, path)?;
     }
     println!(
-        "{}: {} ({} objects, {} triangles), {} lights, {}x{}, {} -> {}",
+        "{}: {} ({} objects, {} triangles), {} lights, {}x{}{}, {} -> {}",
         renderer.pipeline_name(),
         s.scene.name,
         s.scene.objects.len(),
@@ -109,6 +109,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         s.lights.len(),
         w,
         h,
+        if a.scene.msaa > 1 { format!(" with {}x MSAA", a.scene.msaa) } else { String::new() },
         ctx.info.name,
         a.out.display()
     );

@@ -50,6 +50,12 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     if os.views.is_some() && a.visibility.0 == Some(VisibilityMethod::Raster) {
         return input(Err(anyhow::anyhow!("--views needs compute visibility, not --visibility raster")));
     }
+    if os.views.is_some() && a.msaa > 1 {
+        return input(Err(anyhow::anyhow!(
+            "--views needs compute visibility, which has one sample per pixel: not with --msaa {}",
+            a.msaa
+        )));
+    }
     let mut scene = input(scene::load(&a.scene))?;
     scene.cull_back_faces = a.cull_back_faces;
     if a.textures == TextureChoice::Detailed {
@@ -143,7 +149,7 @@ impl Setup {
 /// Renderer options from the command line, for object space the texture
 /// sizes the charts gave, and for `--visibility auto` the adapter's features.
 pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu::Features) -> RenderOptions {
-    let visibility = a.visibility.0.unwrap_or_else(|| VisibilityMethod::preferred(features));
+    let visibility = a.visibility.0.unwrap_or_else(|| VisibilityMethod::preferred_for(features, a.msaa));
     let pipeline = match a.pipeline {
         PipelineName::Forward => PipelineConfig::Forward(ForwardConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::ForwardMultipass => PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
@@ -175,7 +181,7 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             count_visibility: a.count_visibility,
         }),
     };
-    RenderOptions { width: a.size.0, height: a.size.1, pipeline }
+    RenderOptions { width: a.size.0, height: a.size.1, pipeline, samples: a.msaa }
 }
 
 /// The texture sizing per object the options ask for: `--texture-size`,
@@ -221,6 +227,13 @@ pub fn chart(
 /// The GPU `--adapter` names (or the fastest one).
 pub fn open_gpu(a: &GpuArgs) -> Result<GpuContext, Failure> {
     Ok(GpuContext::new(&GpuOptions { adapter: a.adapter.clone() })?)
+}
+
+/// The renderer for `options`; an option the adapter or pipeline cannot do
+/// (`--msaa` included) is the input's fault (exit status 2).
+pub fn new_renderer(ctx: &GpuContext, scene: &Scene, options: &RenderOptions) -> Result<Renderer, Failure> {
+    Renderer::new(ctx, scene, options)
+        .map_err(|e| if e.is_bad_option() { Failure::Input(e.into()) } else { Failure::Other(e.into()) })
 }
 
 /// The renderer settings the scene options choose (besides the pipeline).

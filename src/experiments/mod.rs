@@ -219,7 +219,8 @@ impl ExperimentError {
             | Self::Lights(_)
             | Self::NotSharded(_)
             | Self::TooFewFrames(_) => true,
-            Self::Atlas(_) | Self::Render(_) | Self::Plot(_) | Self::NoTimestamps(_) | Self::NoTimingGrid(_) => false,
+            Self::Render(e) => e.is_bad_option(),
+            Self::Atlas(_) | Self::Plot(_) | Self::NoTimestamps(_) | Self::NoTimingGrid(_) => false,
         }
     }
 

@@ -40,8 +40,9 @@ pub const REFERENCE_SAMPLES: u32 = 4;
 /// The timing side of the grid (size, frames, light sets, the pipelines):
 /// every pipeline, object space with reuse 2 and variable rate 1; the
 /// quality axes are in [`axes`]. Full: 1920x1080, 30 shadowed lights, 4
-/// warm-up and 30 measured consecutive path frames. Quick: forward,
-/// deferred-compute and object space only, 96x54, 8 small lights, 1 + 3 frames.
+/// warm-up and 30 measured consecutive path frames, MSAA 1, 4 and 8 samples
+/// per pixel. Quick: forward, deferred-compute and object space only, 96x54,
+/// 8 small lights, 1 + 3 frames, MSAA 1 and 4.
 pub fn grid(quick: bool) -> TimingGrid {
     let mut shadings = Shading::pipelines();
     shadings.push(Shading::ObjectSpace { reuse: 2, variable_rate: 0.0 });
@@ -53,10 +54,18 @@ pub fn grid(quick: bool) -> TimingGrid {
     }
     let (sweep, grid) = if quick {
         let sweep = Sweep { scenario: Scenario::Small, counts: vec![8] };
-        (sweep, TimingGrid { width: 96, height: 54, warmup: 1, frames: 3, ..TimingGrid::new(true, vec![], vec![]) })
+        let quick = TimingGrid {
+            width: 96,
+            height: 54,
+            warmup: 1,
+            frames: 3,
+            msaa: vec![1, 4],
+            ..TimingGrid::new(true, vec![], vec![])
+        };
+        (sweep, quick)
     } else {
         let sweep = Sweep { scenario: Scenario::Shadowed, counts: vec![30] };
-        (sweep, TimingGrid { warmup: 4, frames: 30, ..TimingGrid::new(false, vec![], vec![]) })
+        (sweep, TimingGrid { warmup: 4, frames: 30, msaa: vec![1, 4, 8], ..TimingGrid::new(false, vec![], vec![]) })
     };
     TimingGrid { shadings, sweeps: vec![sweep], ..grid }
 }
@@ -119,7 +128,7 @@ pub struct Axes {
     /// `file` (the scene's textures) and/or `detailed` (`--textures detailed`).
     pub textures: Vec<&'static str>,
     pub gloss: Vec<Gloss>,
-    /// MSAA samples per pixel (1 only until the pipelines have MSAA).
+    /// MSAA samples per pixel (the grid's [`TimingGrid::msaa`]).
     pub msaa: Vec<u32>,
     pub configs: Vec<String>,
 }
@@ -144,7 +153,7 @@ pub fn axes(grid: &TimingGrid, quick: bool) -> Axes {
     Axes {
         textures: if quick { vec!["detailed"] } else { vec!["file", "detailed"] },
         gloss: vec![Gloss::Default, Gloss::High],
-        msaa: vec![1],
+        msaa: grid.msaa.clone(),
         configs: configs(grid, quick).iter().map(Config::label).collect(),
     }
 }
@@ -237,7 +246,7 @@ pub fn measure(
     let cameras = cameras_for_scene(&options.scene, &scene.render, aspect)?;
     let region = cameras.light_region(&scene.render.bounds());
     let path = &cameras.path;
-    let visibility = VisibilityMethod::preferred(ctx.device.features());
+    let features = ctx.device.features();
     let cache = options
         .chart_cache
         .as_ref()
@@ -280,7 +289,11 @@ pub fn measure(
         let render_options = RenderOptions {
             width: grid.width,
             height: grid.height,
-            pipeline: cell.config.render_config(&scene.density_sizes, visibility),
+            // As `--visibility auto` picks it: raster under MSAA.
+            pipeline: cell
+                .config
+                .render_config(&scene.density_sizes, VisibilityMethod::preferred_for(features, cell.msaa)),
+            samples: cell.msaa,
         };
         let mut renderer = Renderer::new(ctx, shaded, &render_options)?;
         let mut images = Vec::new();
@@ -545,6 +558,15 @@ pub(super) fn study(
     progress: &indicatif::ProgressBar,
 ) -> Result<Outcome, ExperimentError> {
     let grid = options.timing.as_ref().ok_or(ExperimentError::NoTimingGrid("quality"))?;
+    // A sample count the adapter lacks for some pipeline's targets fails
+    // before any cell is measured.
+    let features = ctx.device.features();
+    for &samples in &grid.msaa {
+        for config in configs(grid, options.quick) {
+            let pipeline = config.render_config(&[], VisibilityMethod::preferred_for(features, samples));
+            crate::render::check_samples_for(ctx, samples, &pipeline)?;
+        }
+    }
     let cells: Vec<(usize, Cell)> = cells(grid, options.quick)
         .into_iter()
         .enumerate()
@@ -589,7 +611,12 @@ fn outcome(setup: &Setup, findings: Findings) -> Outcome {
         setup.visibility,
     );
     let items = vec![
-        "MSAA: the pipelines have no MSAA yet; the sample count is an axis of the grid with 1 only.".to_string(),
+        "MSAA: forward, forward-multipass and clustered resolve hardware MSAA at the standard sample positions; \
+         deferred and deferred-compute light a multisampled G-buffer, each pixel once or, on edges, sample by \
+         sample (deferred's light volumes test each sample's depth in the shader); object space marks tiles per \
+         pixel footprint (and per sample on edges) and gathers per sample on edges, so its shading does not grow \
+         with the samples. Under MSAA, deferred-compute and object space use raster visibility."
+            .to_string(),
         "Reference textures: the reference's sub-pixel frames sample textures at the level of a whole pixel's \
          footprint, as one sample per pixel does; it resolves geometry, shading and specular aliasing, not \
          texture filtering."
@@ -739,13 +766,18 @@ mod tests {
             ]
         );
         let all = cells(&full, false);
-        assert_eq!(all.len(), labels.len() * 2 * 2, "full: two textures, two gloss settings, one light set");
-        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 6 * 4);
+        assert_eq!(
+            all.len(),
+            labels.len() * 3 * 2 * 2,
+            "full: two textures, two gloss settings, one light set, MSAA 1, 4, 8"
+        );
+        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 6 * 4 * 3);
+        assert_eq!(all.iter().filter(|c| c.msaa == 8).count(), labels.len() * 4);
         let quick = grid(true);
         let labels: Vec<String> = configs(&quick, true).iter().map(Config::label).collect();
         assert_eq!(labels, ["forward", "deferred-compute", "objectspace", "objectspace-hz30"]);
         let cells = cells(&quick, true);
-        assert_eq!(cells.len(), 4 * 2, "quick: detailed textures, two gloss settings, one light set");
-        assert!(cells.iter().all(|c| c.msaa == 1 && c.textures == "detailed"));
+        assert_eq!(cells.len(), 4 * 2 * 2, "quick: detailed textures, two gloss settings, one light set, MSAA 1, 4");
+        assert!(cells.iter().all(|c| c.textures == "detailed"));
     }
 }

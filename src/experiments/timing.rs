@@ -134,6 +134,9 @@ pub struct TimingGrid {
     pub seed: u64,
     pub shadings: Vec<Shading>,
     pub sweeps: Vec<Sweep>,
+    /// MSAA samples per pixel, an axis of the quality experiment's grid
+    /// (the other timing studies render one sample per pixel).
+    pub msaa: Vec<u32>,
 }
 
 impl TimingGrid {
@@ -145,7 +148,7 @@ impl TimingGrid {
     pub fn new(quick: bool, shadings: Vec<Shading>, sweeps: Vec<Sweep>) -> Self {
         let ((width, height), warmup, frames, cap_ms) =
             if quick { ((160, 90), 1, 2, 10_000.0) } else { ((1920, 1080), 5, 20, 200.0) };
-        Self { width, height, warmup, frames, first_frame: 0, cap_ms, seed: 1, shadings, sweeps }
+        Self { width, height, warmup, frames, first_frame: 0, cap_ms, seed: 1, shadings, sweeps, msaa: vec![1] }
     }
 
     /// Points per configuration.
@@ -294,11 +297,7 @@ impl<'a> Bench<'a> {
     fn renderer(&self, shading: Shading) -> Result<Renderer, ExperimentError> {
         let g = self.grid;
         let scene = if shading.is_conventional() { &self.scene.render } else { self.scene.charted() };
-        let options = RenderOptions {
-            width: g.width,
-            height: g.height,
-            pipeline: shading.config(&self.scene.density_sizes, self.visibility),
-        };
+        let options = RenderOptions::new(g.width, g.height, shading.config(&self.scene.density_sizes, self.visibility));
         let renderer = Renderer::new(self.ctx, scene, &options)?;
         if !renderer.timing_enabled() {
             return Err(ExperimentError::NoTimestamps(self.ctx.info.name.clone()));

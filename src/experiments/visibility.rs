@@ -62,11 +62,11 @@ impl VisibilityRenderer {
         let targets = resolutions
             .iter()
             .map(|&(w, h)| -> Result<Target, RenderError> {
-                let targets = Targets::new(device, w, h);
+                let targets = Targets::new(device, w, h, 1, false);
                 let buffer = VisibilityBuffer::new(device, &targets);
                 let pass = match method {
                     VisibilityMethod::Raster => {
-                        Pass::Raster(VisibilityPass::new(device, &mut shaders, &scene_gpu, false)?)
+                        Pass::Raster(VisibilityPass::new(device, &mut shaders, &scene_gpu, false, 1)?)
                     }
                     VisibilityMethod::Compute => {
                         let pass = ComputeVisibility::new(device, &mut shaders, &scene_gpu, &targets, &buffer, false)?;

@@ -155,11 +155,9 @@ impl<'a> References<'a> {
         let renderer = match &mut self.renderer {
             Some(r) => r,
             None => {
-                let options = RenderOptions {
-                    width: s.width,
-                    height: s.height,
-                    pipeline: PipelineConfig::Forward(ForwardConfig::default()),
-                };
+                let forward = PipelineConfig::Forward(ForwardConfig::default());
+                // One sample per pixel: the grid of shifted frames is the supersampling.
+                let options = RenderOptions::new(s.width, s.height, forward);
                 let mut r = Renderer::new(ctx, self.scene, &options)?;
                 r.shading = s.shading;
                 r.sun_shadow = s.sun_shadow;

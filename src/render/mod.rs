@@ -98,6 +98,13 @@ impl PipelineConfig {
         })
     }
 
+    /// Whether under MSAA the pipeline draws into the multisampled HDR
+    /// colour and resolves it ([`targets::Targets::hdr_msaa_view`]), as the
+    /// forward family does; deferred-compute resolves in its lighting pass.
+    fn resolves_msaa_colour(&self) -> bool {
+        matches!(self, Self::Forward(_) | Self::ForwardMultipass(_) | Self::Clustered(_))
+    }
+
     /// The name `--pipeline` takes and reports carry.
     pub fn name(&self) -> &'static str {
         match self {
@@ -117,6 +124,83 @@ pub struct RenderOptions {
     pub width: u32,
     pub height: u32,
     pub pipeline: PipelineConfig,
+    /// MSAA samples per pixel (`--msaa`): one of [`targets::SAMPLE_COUNTS`];
+    /// 1 is no MSAA.
+    pub samples: u32,
+}
+
+impl RenderOptions {
+    /// Options for `pipeline` at `width` x `height`, one sample per pixel.
+    pub fn new(width: u32, height: u32, pipeline: PipelineConfig) -> Self {
+        Self { width, height, pipeline, samples: 1 }
+    }
+}
+
+/// Why a renderer cannot take `samples` per pixel: a count MSAA does not
+/// have, or a target format the adapter cannot multisample that often.
+/// `Ok` for a count every target of the renderer can have.
+pub fn check_samples(ctx: &GpuContext, samples: u32) -> Result<(), RenderError> {
+    check_sample_formats(ctx, samples, &[targets::HDR_FORMAT, targets::DEPTH_FORMAT])
+}
+
+/// [`check_samples`] for a renderer of `pipeline`: also its own targets'
+/// formats (the G-buffer's, the visibility buffer's), and under MSAA raster
+/// visibility (the compute rasterizer writes one sample per pixel).
+pub fn check_samples_for(ctx: &GpuContext, samples: u32, pipeline: &PipelineConfig) -> Result<(), RenderError> {
+    check_samples(ctx, samples)?;
+    if samples == 1 {
+        return Ok(());
+    }
+    let (visibility, formats): (_, &[wgpu::TextureFormat]) = match pipeline {
+        PipelineConfig::DeferredCompute(c) => (c.visibility, &passes::gbuffer::BASE_FORMATS),
+        PipelineConfig::Deferred(_) => (VisibilityMethod::Raster, &passes::gbuffer::BASE_FORMATS),
+        PipelineConfig::ObjectSpace(c) => (c.visibility, &[passes::visibility::FORMAT]),
+        _ => (VisibilityMethod::Raster, &[]),
+    };
+    if visibility == VisibilityMethod::Compute {
+        return Err(RenderError::SamplesNeedRasterVisibility { samples, pipeline: pipeline.name() });
+    }
+    check_sample_formats(ctx, samples, formats)
+}
+
+/// [`check_samples`] for render targets of `formats`.
+fn check_sample_formats(ctx: &GpuContext, samples: u32, formats: &[wgpu::TextureFormat]) -> Result<(), RenderError> {
+    if !targets::SAMPLE_COUNTS.contains(&samples) {
+        return Err(RenderError::BadSamples(samples));
+    }
+    let adapter_specific = ctx.features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+    for &format in formats {
+        // Without adapter-specific format features the device allows only
+        // what WebGPU guarantees (1 and 4 samples).
+        let flags = if adapter_specific {
+            ctx.adapter.get_texture_format_features(format).flags
+        } else {
+            format.guaranteed_format_features(ctx.features).flags
+        };
+        unsupported_samples(flags, samples, format, &ctx.info.name)?;
+    }
+    Ok(())
+}
+
+/// [`RenderError::SamplesUnsupported`] when `flags` (a format's features on
+/// adapter `adapter`) lack `samples` per pixel.
+fn unsupported_samples(
+    flags: wgpu::TextureFormatFeatureFlags,
+    samples: u32,
+    format: wgpu::TextureFormat,
+    adapter: &str,
+) -> Result<(), RenderError> {
+    if flags.sample_count_supported(samples) {
+        return Ok(());
+    }
+    let offered: Vec<String> =
+        targets::SAMPLE_COUNTS.iter().filter(|&&n| flags.sample_count_supported(n)).map(|n| n.to_string()).collect();
+    Err(RenderError::SamplesUnsupported {
+        samples,
+        format: format!("{format:?}"),
+        adapter: adapter.to_string(),
+        offered: offered.join(", "),
+    })
 }
 
 /// A shading pipeline: records the passes that fill `targets.hdr` (and depth).
@@ -168,6 +252,32 @@ pub enum RenderError {
     BadBloom(f32),
     #[error("bloom needs read-write Rgba16Float storage textures, which {0} does not offer")]
     BloomUnsupported(String),
+    #[error("--msaa {0}: MSAA takes 1, 2, 4 or 8 samples per pixel")]
+    BadSamples(u32),
+    #[error(
+        "--msaa {samples}: {adapter} cannot render {format} targets with {samples} samples per pixel (it offers {offered})"
+    )]
+    SamplesUnsupported { samples: u32, format: String, adapter: String, offered: String },
+    #[error(
+        "--msaa {samples}: the compute rasterizer writes one sample per pixel; {pipeline} takes MSAA with --visibility raster (which --visibility auto picks under MSAA)"
+    )]
+    SamplesNeedRasterVisibility { samples: u32, pipeline: &'static str },
+}
+
+impl RenderError {
+    /// Whether the error is the options' fault (a size, sample count or
+    /// bloom the adapter or pipeline cannot do), not the program's.
+    pub fn is_bad_option(&self) -> bool {
+        matches!(
+            self,
+            Self::BadSize(..)
+                | Self::BadBloom(_)
+                | Self::BloomUnsupported(_)
+                | Self::BadSamples(_)
+                | Self::SamplesUnsupported { .. }
+                | Self::SamplesNeedRasterVisibility { .. }
+        )
+    }
 }
 
 /// Renders frames of one scene at one size with one pipeline.
@@ -218,6 +328,8 @@ impl Renderer {
         if width == 0 || height == 0 || width > max || height > max {
             return Err(RenderError::BadSize(width, height, max));
         }
+        let samples = options.samples;
+        check_samples_for(ctx, samples, &options.pipeline)?;
         let mut shaders = crate::render::shader_set::library()?;
         let scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
         if scene_gpu.material_textures {
@@ -225,19 +337,31 @@ impl Renderer {
         }
         if scene_gpu.layers {
             shaders.define(crate::shaders::LAYERS);
+            // The G-buffer then holds UV0 too, at every sample.
+            if samples > 1 && matches!(options.pipeline, PipelineConfig::Deferred(_) | PipelineConfig::DeferredCompute(_)) {
+                check_sample_formats(ctx, samples, &[passes::gbuffer::UV_LOD_FORMAT])?;
+            }
         }
-        let targets = Targets::new(&ctx.device, width, height);
+        if samples > 1 {
+            // The passes reading ids or the G-buffer read every sample.
+            shaders.define(crate::shaders::MSAA);
+        }
+        let targets = Targets::new(&ctx.device, width, height, samples, options.pipeline.resolves_msaa_colour());
         let (device, queue) = (&ctx.device, &ctx.queue);
         let pipeline: Box<dyn Pipeline> = match &options.pipeline {
-            PipelineConfig::Forward(c) => Box::new(forward::Forward::new(device, &mut shaders, &scene_gpu, *c)?),
+            PipelineConfig::Forward(c) => {
+                Box::new(forward::Forward::new(device, &mut shaders, &scene_gpu, *c, samples)?)
+            }
             PipelineConfig::ForwardMultipass(c) => {
-                Box::new(forward_multipass::ForwardMultipass::new(device, &mut shaders, &scene_gpu, *c)?)
+                Box::new(forward_multipass::ForwardMultipass::new(device, &mut shaders, &scene_gpu, *c, samples)?)
             }
             PipelineConfig::ObjectSpace(c) => {
                 let os = objectspace::ObjectSpace::new(ctx, &mut shaders, scene, &scene_gpu, &targets, c.clone())?;
                 Box::new(os)
             }
-            PipelineConfig::Clustered(c) => Box::new(clustered::Clustered::new(device, &mut shaders, &scene_gpu, *c)?),
+            PipelineConfig::Clustered(c) => {
+                Box::new(clustered::Clustered::new(device, &mut shaders, &scene_gpu, *c, samples)?)
+            }
             PipelineConfig::Deferred(c) => {
                 Box::new(deferred::Deferred::new(device, &mut shaders, &scene_gpu, &targets, *c)?)
             }
@@ -415,7 +539,8 @@ impl Renderer {
     /// holds for every pipeline: the shadow maps (`shadow_maps` bytes,
     /// `shadow_faces`, the faces of the last frame's lights (the sun's
     /// cascades included), `shadow_refresh_every_frame` and `sun_shadow`,
-    /// 1 when set).
+    /// 1 when set), and MSAA (`msaa_samples`, and `msaa_targets`: the bytes
+    /// of the multisampled colour and depth, 0 at one sample).
     pub fn report(&self) -> PipelineReport {
         let every_frame = self.shadow_refresh == ShadowRefresh::EveryFrame;
         self.pipeline
@@ -424,6 +549,8 @@ impl Renderer {
             .setup("shadow_faces", self.shadows.faces() as u64)
             .setup("shadow_refresh_every_frame", every_frame as u64)
             .setup("sun_shadow", self.sun_shadow as u64)
+            .setup("msaa_samples", u64::from(self.targets.samples))
+            .memory("msaa_targets", self.targets.msaa_bytes())
     }
 
     /// Whether the adapter can time passes.
@@ -454,7 +581,27 @@ impl Renderer {
 
 #[cfg(test)]
 mod tests {
-    use super::PipelineConfig;
+    use super::{PipelineConfig, RenderError, unsupported_samples};
+
+    /// A format with 4 samples only refuses 2 and 8, naming the count, the
+    /// format, the adapter and the counts it has.
+    #[test]
+    fn sample_counts_the_format_lacks_are_named() {
+        let flags = wgpu::TextureFormatFeatureFlags::MULTISAMPLE_X4;
+        let format = wgpu::TextureFormat::Rgba16Float;
+        assert!(unsupported_samples(flags, 1, format, "gpu").is_ok());
+        assert!(unsupported_samples(flags, 4, format, "gpu").is_ok());
+        for n in [2, 8] {
+            let e = unsupported_samples(flags, n, format, "gpu").unwrap_err();
+            assert!(matches!(e, RenderError::SamplesUnsupported { samples, .. } if samples == n));
+            assert_eq!(
+                e.to_string(),
+                format!(
+                    "--msaa {n}: gpu cannot render Rgba16Float targets with {n} samples per pixel (it offers 1, 4)"
+                )
+            );
+        }
+    }
 
     #[test]
     fn every_pipeline_name_builds_its_config() {

@@ -60,7 +60,18 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
     all.push(clustered::SHADER);
-    all.extend([passes::gbuffer::SHADER, deferred_compute::SHADER, deferred_compute::SHADER_VISIBILITY]);
+    all.extend([
+        passes::gbuffer::SHADER,
+        deferred_compute::SHADER,
+        deferred_compute::SHADER_VISIBILITY,
+        deferred_compute::SHADER_MSAA,
+    ]);
+    all.extend([
+        objectspace::mark::SHADER.with_defs(&[crate::shaders::MSAA]),
+        objectspace::gather::SHADER.with_defs(&[crate::shaders::MSAA]),
+        deferred::GLOBALS_SHADER.with_defs(&[crate::shaders::MSAA]),
+        deferred::volumes::VOLUMES_SHADER.with_defs(&[crate::shaders::MSAA]),
+    ]);
     all.extend_from_slice(deferred::PASS_SHADERS);
     all
 }

@@ -80,6 +80,11 @@ pub const MATERIAL_TEXTURES: &str = "MATERIAL_TEXTURES";
 /// compiled, so unlayered scenes render and cost as before.
 pub const LAYERS: &str = "LAYERS";
 
+/// Defined when the renderer has MSAA (more than one sample per pixel,
+/// [`ShaderLibrary::define`]): the G-buffer and object space's visibility
+/// buffer are multisampled, and the passes reading them read every sample.
+pub const MSAA: &str = "MSAA";
+
 /// Defined in the variant of a scene raster pass that draws the alpha-masked
 /// objects (`render::passes::ScenePipeline`): its fragment stage
 /// discards their cut-away fragments (`shared/alpha_mask.wgsl`); a depth-only

@@ -57,7 +57,8 @@ fn render(
     sun: bool,
     pipeline: PipelineConfig,
 ) -> image::RgbaImage {
-    let mut r = Renderer::new(ctx, &frame.scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    let mut r = Renderer::new(ctx, &frame.scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline, samples: 1 })
+        .unwrap();
     r.sun_shadow = sun;
     r.render(ctx, &frame.camera, &frame.lights, 0).unwrap();
     let image = r.read_image(ctx).unwrap();

@@ -36,7 +36,8 @@ fn bloom_spreads_a_bright_light_and_strength_zero_is_off() {
     // background lies right behind it on screen).
     lights.push(Light { position: Vec3::new(0.0, 0.2, -3.7), intensity: 400.0, radius: 1.5, ..lights[1] });
     let pipeline = PipelineConfig::Forward(ForwardConfig::default());
-    let mut r = Renderer::new(&ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    let mut r =
+        Renderer::new(&ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline, samples: 1 }).unwrap();
     assert_eq!(r.bloom, 0.0, "bloom is off by default");
     let (plain, plain_hdr) = frame(&ctx, &mut r, &lights);
 

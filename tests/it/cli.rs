@@ -51,6 +51,14 @@ fn bad_options_say_what_is_wrong() {
     let (code, err) = run(&["render", "--camera", "fixed:99"]);
     assert_eq!(code, 2);
     assert!(err.contains("fixed:99"), "{err}");
+    for bad in ["3", "16", "0"] {
+        let (code, err) = run(&["render", "--msaa", bad]);
+        assert_eq!(code, 2);
+        assert!(err.contains("is not one of 1, 2, 4, 8"), "{err}");
+    }
+    let (code, err) = run(&["experiment", "lights", "--quick", "--msaa", "4"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("only the quality experiment has an MSAA axis"), "{err}");
     let (code, err) = run(&["render", "--size", "12x"]);
     assert_eq!(code, 2);
     assert!(err.contains("12x"), "{err}");

@@ -37,7 +37,8 @@ fn ids_with(
     let mut texture_sizes = vec![None; scene.objects.len()];
     texture_sizes[0] = Some(128);
     let objectspace = ObjectSpaceConfig { texture_sizes, visibility: method, visibility_prepass, ..Default::default() };
-    let options = RenderOptions { width: size.0, height: size.1, pipeline: PipelineConfig::ObjectSpace(objectspace) };
+    let options =
+        RenderOptions { width: size.0, height: size.1, pipeline: PipelineConfig::ObjectSpace(objectspace), samples: 1 };
     let mut renderer = Renderer::new(ctx, scene, &options).unwrap();
     renderer.render(ctx, camera, &[], 0).unwrap();
     renderer.pipeline::<ObjectSpace>().unwrap().read_mark_state(ctx).unwrap().visibility
@@ -253,7 +254,7 @@ fn counts_add_up_on_a_floor_filling_the_view() {
             count_visibility: true,
             ..Default::default()
         };
-        let options = RenderOptions { width, height, pipeline: PipelineConfig::ObjectSpace(objectspace) };
+        let options = RenderOptions { width, height, pipeline: PipelineConfig::ObjectSpace(objectspace), samples: 1 };
         let mut renderer = Renderer::new(&ctx, scene, &options).unwrap();
         renderer.render(&ctx, &camera, &[], 0).unwrap();
         let mut counts = std::collections::BTreeMap::new();

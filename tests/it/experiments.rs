@@ -513,9 +513,19 @@ fn quality_quick() {
         let flicker = num(r, "flicker_mean");
         assert!(flicker >= 0.0 && (num(r, "flicker_sum") - flicker * f64::from(grid.frames - 1)).abs() < 1e-6, "{r:?}");
     }
+    let row = |config: &str, gloss: &str, msaa: &str| {
+        rows.iter().find(|r| r["config"] == config && r["gloss"] == gloss && r["msaa"] == msaa).unwrap()
+    };
     // The gloss override reaches the pipelines: forward's error changes with it.
-    let forward = |gloss: &str| rows.iter().find(|r| r["config"] == "forward" && r["gloss"] == gloss).unwrap();
-    assert_ne!(forward("default")["flip_mean"], forward("high")["flip_mean"]);
+    assert_ne!(row("forward", "default", "1")["flip_mean"], row("forward", "high", "1")["flip_mean"]);
+    // MSAA reaches the pipelines that have it: 4 samples are nearer the reference than one.
+    for config in ["forward", "deferred-compute", "objectspace", "objectspace-hz30"] {
+        for gloss in ["default", "high"] {
+            let (one, four) = (num(row(config, gloss, "1"), "psnr_db"), num(row(config, gloss, "4"), "psnr_db"));
+            eprintln!("quality quick, {config}, gloss {gloss}: PSNR {one:.2} dB at 1 sample, {four:.2} dB at 4");
+            assert!(four > one, "{config}, gloss {gloss}: {four} dB at 4 samples against {one} dB at 1");
+        }
+    }
     for group in summary["results"]["pareto"].as_array().unwrap() {
         let front = group["front"].as_array().unwrap();
         assert!(!front.is_empty(), "{group}");

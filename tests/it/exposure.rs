@@ -16,8 +16,12 @@ const STOPS: f32 = 0.1;
 
 /// Renders `scene` from `camera` at SIZE x SIZE with `exposure`.
 fn render(ctx: &GpuContext, scene: &Scene, camera: &Camera, lights: &[Light], exposure: Exposure) -> Renderer {
-    let options =
-        RenderOptions { width: SIZE, height: SIZE, pipeline: PipelineConfig::Forward(ForwardConfig::default()) };
+    let options = RenderOptions {
+        width: SIZE,
+        height: SIZE,
+        pipeline: PipelineConfig::Forward(ForwardConfig::default()),
+        samples: 1,
+    };
     let mut r = Renderer::new(ctx, scene, &options).unwrap();
     r.exposure = exposure;
     r.render(ctx, camera, lights, 0).unwrap();

@@ -8,7 +8,12 @@ use shadespace::render::{ForwardConfig, PipelineConfig, RenderOptions, Renderer}
 fn forward_renders_lit_floor() {
     let ctx = common::gpu();
     let (scene, camera, lights) = common::floor_scene();
-    let options = RenderOptions { width: 128, height: 96, pipeline: PipelineConfig::Forward(ForwardConfig::default()) };
+    let options = RenderOptions {
+        width: 128,
+        height: 96,
+        pipeline: PipelineConfig::Forward(ForwardConfig::default()),
+        samples: 1,
+    };
     let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
     r.render(&ctx, &camera, &lights, 0).unwrap();
     let img = r.read_image(&ctx).unwrap();

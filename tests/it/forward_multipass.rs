@@ -30,7 +30,8 @@ fn ten_thousand_lights_match_forward() {
         }
     }));
     let render = |pipeline, lights: &[Light]| {
-        let mut r = Renderer::new(&ctx, &scene, &RenderOptions { width: 64, height: 40, pipeline }).unwrap();
+        let mut r =
+            Renderer::new(&ctx, &scene, &RenderOptions { width: 64, height: 40, pipeline, samples: 1 }).unwrap();
         r.render(&ctx, &camera, lights, 0).unwrap();
         let image = r.read_image(&ctx).unwrap();
         (image, r.collect_counters(&ctx, true))
@@ -60,7 +61,8 @@ fn emission_is_added_once() {
     let (mut scene, camera, lights) = common::floor_scene();
     scene.materials[0].emissive = Vec3::new(0.3, 0.15, 0.05);
     let render = |pipeline, lights: &[Light]| {
-        let mut r = Renderer::new(&ctx, &scene, &RenderOptions { width: 64, height: 40, pipeline }).unwrap();
+        let mut r =
+            Renderer::new(&ctx, &scene, &RenderOptions { width: 64, height: 40, pipeline, samples: 1 }).unwrap();
         r.render(&ctx, &camera, lights, 0).unwrap();
         (r.read_image(&ctx).unwrap(), r.collect_counters(&ctx, true))
     };

@@ -80,7 +80,7 @@ fn render_at(
             PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes, visibility, ..Default::default() })
         }
     };
-    let options = RenderOptions { width, height, pipeline };
+    let options = RenderOptions { width, height, pipeline, samples: 1 };
     let image = render_with(ctx, &scene, &options, &camera, &lights);
     assert_eq!(image.dimensions(), (width, height));
     image

@@ -241,7 +241,8 @@ fn clusters_hold_every_light_that_reaches_them() {
     let (scene, camera) = atrium();
     let sets = light_sets(&scene, &camera);
     let pipeline = PipelineConfig::Clustered(ClusteredConfig::default());
-    let mut r = Renderer::new(&ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    let mut r =
+        Renderer::new(&ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline, samples: 1 }).unwrap();
     check(&ctx, Grid::Clusters, &mut r, &camera, &sets);
 }
 
@@ -252,7 +253,8 @@ fn world_grid_holds_every_light_that_reaches_it() {
     let sets = light_sets(&scene, &camera);
     let (charted, texture_sizes) = common::charted(&scene);
     let pipeline = PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes, ..Default::default() });
-    let mut r = Renderer::new(&ctx, &charted, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    let mut r =
+        Renderer::new(&ctx, &charted, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline, samples: 1 }).unwrap();
     check(&ctx, Grid::World, &mut r, &camera, &sets);
 }
 
@@ -265,7 +267,7 @@ fn the_world_grid_is_built_again_only_when_the_lights_change() {
     let ctx = common::gpu();
     let (scene, camera, mut lights) = common::floor_scene();
     let config = ObjectSpaceConfig { texture_sizes: vec![Some(256)], ..Default::default() };
-    let options = RenderOptions { width: 64, height: 64, pipeline: PipelineConfig::ObjectSpace(config) };
+    let options = RenderOptions { width: 64, height: 64, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
     let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
     let builds = |r: &Renderer| r.pipeline::<ObjectSpace>().unwrap().light_grid().builds();
     let moved_camera = Camera { position: camera.position + Vec3::X, ..camera };

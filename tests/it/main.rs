@@ -27,6 +27,7 @@ mod light_grid;
 mod light_sets;
 mod mark_twin;
 mod materials;
+mod msaa;
 mod objectspace;
 mod reference;
 mod seams;

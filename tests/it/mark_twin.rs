@@ -71,8 +71,12 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
         texture_sizes: run.texture_sizes.clone(),
         ..Default::default()
     };
-    let options =
-        RenderOptions { width: run.width, height: run.height, pipeline: PipelineConfig::ObjectSpace(objectspace) };
+    let options = RenderOptions {
+        width: run.width,
+        height: run.height,
+        pipeline: PipelineConfig::ObjectSpace(objectspace),
+        samples: 1,
+    };
     let mut renderer = Renderer::new(ctx, run.scene, &options).unwrap();
     let mut lights = run.lights.clone();
     let mut before = TileState::new(renderer.pipeline::<ObjectSpace>().unwrap().layout.tile_count as usize);

@@ -33,7 +33,8 @@ fn render(
     shading: ShadingModel,
     pipeline: PipelineConfig,
 ) -> (image::RgbaImage, Renderer) {
-    let mut r = Renderer::new(ctx, scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    let mut r =
+        Renderer::new(ctx, scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline, samples: 1 }).unwrap();
     r.shading = shading;
     r.render(ctx, &frame.camera, &frame.lights, 0).unwrap();
     let image = r.read_image(ctx).unwrap();
@@ -343,7 +344,8 @@ fn render_floor(
     pipeline: PipelineConfig,
 ) -> image::RgbaImage {
     use textured_floor::{HEIGHT, WIDTH, camera, lights};
-    let mut r = Renderer::new(ctx, scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    let mut r =
+        Renderer::new(ctx, scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline, samples: 1 }).unwrap();
     r.shading = shading;
     r.render(ctx, &camera(), &lights(), 0).unwrap();
     let image = r.read_image(ctx).unwrap();
@@ -565,7 +567,8 @@ fn alpha_mask_cuts_surfaces_and_shadows_in_every_pipeline() {
     ];
     let ctx = common::gpu();
     let render = |scene: &Scene, pipeline: PipelineConfig| -> image::RgbaImage {
-        let mut r = Renderer::new(&ctx, scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+        let mut r =
+            Renderer::new(&ctx, scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline, samples: 1 }).unwrap();
         r.render(&ctx, &camera(), &lights, 0).unwrap();
         let image = r.read_image(&ctx).unwrap();
         ctx.check_errors().unwrap();

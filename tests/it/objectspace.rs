@@ -11,12 +11,12 @@ use shadespace::render::passes::visibility::VisibilityMethod;
 use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 
 fn forward() -> RenderOptions {
-    RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::Forward(ForwardConfig::default()) }
+    RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::Forward(ForwardConfig::default()), samples: 1 }
 }
 
 fn objectspace(reuse: u32) -> RenderOptions {
     let config = ObjectSpaceConfig { reuse, texture_sizes: vec![Some(512)], ..Default::default() };
-    RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config) }
+    RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 }
 }
 
 /// `camera` a millimetre nearer what it looks at (another view, the same tiles).
@@ -95,7 +95,7 @@ fn objectspace_with_every_object_forward_only_matches_forward() {
     let mut fwd = Renderer::new(&ctx, &scene, &forward()).unwrap();
     fwd.render(&ctx, &camera, &lights, 0).unwrap();
     let config = ObjectSpaceConfig { texture_sizes: vec![None], ..Default::default() };
-    let options = RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config) };
+    let options = RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
     let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
     os.render(&ctx, &camera, &lights, 0).unwrap();
     let (err, _) = metrics::compare(&fwd.read_image(&ctx).unwrap(), &os.read_image(&ctx).unwrap());
@@ -116,7 +116,8 @@ fn shade_budget_biases_levels_until_the_shading_fits() {
             ObjectSpaceConfig { texture_sizes: vec![Some(4096)], shade_budget_texels: budget, ..Default::default() };
         // Large enough that a budget 4x under the need lies above what the
         // coarsest level (128 texels, about 16k visible) shades.
-        let options = RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config) };
+        let options =
+            RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
         let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
         let mut counters = Vec::new();
         for frame in 0..24 {
@@ -161,7 +162,8 @@ fn an_atlas_ten_times_over_budget_biases_until_the_pages_fit() {
             atlas_budget_texels: atlas,
             ..Default::default()
         };
-        let options = RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config) };
+        let options =
+            RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
         let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
         let mut counters = Vec::new();
         for frame in 0..24 {
@@ -202,7 +204,7 @@ fn spread_reshading_shades_a_share_of_the_tiles_each_frame() {
     let (scene, camera, lights) = common::floor_scene();
     let config =
         ObjectSpaceConfig { texture_sizes: vec![Some(512)], reuse: 4, spread_reshading: true, ..Default::default() };
-    let options = RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config) };
+    let options = RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
     let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
     let mut counters = Vec::new();
     // The camera moves back and forth by a millimetre (a static one would
@@ -258,7 +260,7 @@ fn a_shrinking_atlas_keeps_the_pages_in_use() {
     // 128 texels a metre: finer than the pixels, so each corner needs about
     // a tenth of the budget, and the atlas's layers are finer than that.
     let config = ObjectSpaceConfig { texture_sizes: vec![Some(1024)], reuse: 1000, ..Default::default() };
-    let options = RenderOptions { width: 320, height: 240, pipeline: PipelineConfig::ObjectSpace(config) };
+    let options = RenderOptions { width: 320, height: 240, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
     let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
     let mut counters = Vec::new();
     const FRAMES: u64 = 16;
@@ -302,7 +304,7 @@ fn a_stereo_pair_shares_one_atlas() {
             extra_views,
             ..Default::default()
         };
-        RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config) }
+        RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 }
     };
     let stereo = ExtraViews::Stereo { eye_distance };
     let right = stereo.camera(0, &camera);
@@ -345,7 +347,7 @@ fn the_page_table_follows_pages_evicted_along_a_path() {
     let (scene, texture_sizes) = common::charted(&scene);
     let config =
         ObjectSpaceConfig { texture_sizes, page_size: 8, atlas_budget_texels: Some(160 * 1024), ..Default::default() };
-    let options = RenderOptions { width, height, pipeline: PipelineConfig::ObjectSpace(config) };
+    let options = RenderOptions { width, height, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
     let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
     let (mut chunk_sets, mut backed, mut pages) = (Vec::new(), 0.0, 0);
     for frame in 0..12u32 {
@@ -389,7 +391,7 @@ fn the_atlas_shrinks_and_grows_with_the_pages_the_frames_need() {
     let budget = 1 << 20;
     let config =
         ObjectSpaceConfig { texture_sizes: vec![Some(4096)], atlas_budget_texels: Some(budget), ..Default::default() };
-    let options = RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config) };
+    let options = RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
     let layer = PagePool::new(8, budget, 16384).layer_page_count() as f64;
     let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
     let mut counters = Vec::new();
@@ -436,7 +438,8 @@ fn atlas_page_view_shows_the_page_tables_backed_pages() {
     let side = 256;
     let config =
         ObjectSpaceConfig { texture_sizes: vec![Some(512)], view: DebugView::AtlasPages, ..Default::default() };
-    let options = RenderOptions { width: side, height: side, pipeline: PipelineConfig::ObjectSpace(config) };
+    let options =
+        RenderOptions { width: side, height: side, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
     let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
     let levels = r.pipeline::<ObjectSpace>().unwrap().layout.objects[0].as_ref().unwrap().levels.clone();
     let checker = [reinhard_srgb8(0.04), reinhard_srgb8(0.125)];

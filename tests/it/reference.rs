@@ -16,7 +16,8 @@ fn settings(width: u32, height: u32) -> ReferenceSettings {
 
 /// Forward's frame of `f` at `w`x`h`: its linear HDR (RGB) and its image.
 fn forward(ctx: &GpuContext, f: &common::PathFrame, w: u32, h: u32) -> (Vec<f32>, image::RgbaImage) {
-    let options = RenderOptions { width: w, height: h, pipeline: PipelineConfig::Forward(ForwardConfig::default()) };
+    let options =
+        RenderOptions { width: w, height: h, pipeline: PipelineConfig::Forward(ForwardConfig::default()), samples: 1 };
     let mut r = Renderer::new(ctx, &f.scene, &options).unwrap();
     r.render(ctx, &f.camera, &f.lights, 0).unwrap();
     let bytes = readback::read_texture(ctx, &r.targets.hdr, 8).unwrap();

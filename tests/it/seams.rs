@@ -55,7 +55,8 @@ fn seams(name: &str, mip_bias: f32) -> (f64, f64, usize) {
     let frame = common::path_frame(name, LIGHTS, WIDTH, HEIGHT);
     let (scene, texture_sizes) = common::charted(&frame.scene);
     let render = |pipeline| {
-        let mut r = Renderer::new(&ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+        let mut r =
+            Renderer::new(&ctx, &scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline, samples: 1 }).unwrap();
         r.render(&ctx, &frame.camera, &frame.lights, 0).unwrap();
         let image = r.read_image(&ctx).unwrap();
         let ids = r.pipeline::<ObjectSpace>().map(|os| os.read_mark_state(&ctx).unwrap().visibility);

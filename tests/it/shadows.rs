@@ -80,7 +80,7 @@ fn render(
     pipeline: PipelineConfig,
     lights: &[Light],
 ) -> image::RgbaImage {
-    let mut r = Renderer::new(ctx, scene, &RenderOptions { width: SIZE, height: SIZE, pipeline }).unwrap();
+    let mut r = Renderer::new(ctx, scene, &RenderOptions { width: SIZE, height: SIZE, pipeline, samples: 1 }).unwrap();
     r.sun_shadow = lights.iter().any(|l| l.kind == LightKind::Directional && l.casts_shadows);
     r.render(ctx, camera, lights, 0).unwrap();
     let image = r.read_image(ctx).unwrap();
@@ -146,7 +146,7 @@ fn sun_shadow_objectspace() {
 fn faces_rendered(refresh: ShadowRefresh, frames: u64, move_from: u64) -> Vec<(usize, usize)> {
     let ctx = common::gpu();
     let (scene, camera) = occluder_scene();
-    let options = RenderOptions { width: 32, height: 32, pipeline: forward() };
+    let options = RenderOptions { width: 32, height: 32, pipeline: forward(), samples: 1 };
     let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
     assert!(r.timing_enabled(), "the test adapter times passes");
     r.shadow_refresh = refresh;
@@ -180,7 +180,7 @@ fn static_shadows_render_once_on_change_and_every_frame_when_asked() {
 fn report_counts_shadow_map_memory() {
     let ctx = common::gpu();
     let (scene, camera) = occluder_scene();
-    let options = RenderOptions { width: 32, height: 32, pipeline: forward() };
+    let options = RenderOptions { width: 32, height: 32, pipeline: forward(), samples: 1 };
     let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
     r.render(&ctx, &camera, &lights(LightKind::Point, true), 0).unwrap();
     let report = r.report();

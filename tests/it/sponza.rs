@@ -32,7 +32,7 @@ fn sponza_forward_and_objectspace_agree() {
     let mut images = Vec::new();
     for pipeline in [PipelineConfig::Forward(ForwardConfig::default()), PipelineConfig::ObjectSpace(objectspace)] {
         let name = pipeline.name();
-        let options = RenderOptions { width: w, height: h, pipeline };
+        let options = RenderOptions { width: w, height: h, pipeline, samples: 1 };
         let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
         r.render(&ctx, &camera, &lights, 0).unwrap();
         let image = r.read_image(&ctx).unwrap();

@@ -91,8 +91,12 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
         level_blend: case.level_blend,
         ..Default::default()
     };
-    let options =
-        RenderOptions { width: case.width, height: case.height, pipeline: PipelineConfig::ObjectSpace(objectspace) };
+    let options = RenderOptions {
+        width: case.width,
+        height: case.height,
+        pipeline: PipelineConfig::ObjectSpace(objectspace),
+        samples: 1,
+    };
     let mut renderer = Renderer::new(ctx, case.scene, &options).unwrap();
     renderer.render(ctx, &case.camera, &case.lights, 0).unwrap();
     let os = renderer.pipeline::<ObjectSpace>().unwrap();

@@ -111,7 +111,7 @@ fn every_texel_a_triangle_touches_is_covered() {
         far: 10.0,
     };
     let config = ObjectSpaceConfig { texture_sizes: vec![Some(SIZE)], ..Default::default() };
-    let options = RenderOptions { width: 256, height: 256, pipeline: PipelineConfig::ObjectSpace(config) };
+    let options = RenderOptions { width: 256, height: 256, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
     let mut renderer = Renderer::new(&ctx, &scene, &options).unwrap();
     let light = Light {
         kind: LightKind::Ambient,

@@ -10,7 +10,7 @@ use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::light_grid::clusters::{ClusterDims, Clusters, build_clusters};
 use super::passes::light_grid::{LightGrid, READ_GROUP};
 use super::passes::{
-    DepthMode, ScenePipeline, SceneRaster, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline_from,
+    DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_objects, hdr_attachment, scene_raster_pipeline_from,
 };
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
@@ -39,8 +39,9 @@ impl Clustered {
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         config: ClusteredConfig,
+        samples: u32,
     ) -> Result<Self, RenderError> {
-        let prepass = DepthPrepass::new(device, shaders, scene)?;
+        let prepass = DepthPrepass::new(device, shaders, scene, samples)?;
         let clusters = Clusters::new(device, shaders, scene, config.clusters)?;
         let mut groups = vec![None; READ_GROUP as usize];
         groups[READ_GROUP as usize - 1] = Some(&clusters.grid.layout);
@@ -51,6 +52,7 @@ impl Clustered {
             depth: DepthMode::EqualAfterPrepass,
             groups: &groups,
             blend: None,
+            samples,
         };
         let shade = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
         Ok(Self { config, prepass, clusters, shade })
@@ -88,10 +90,10 @@ impl Pipeline for Clustered {
 }
 
 /// Reads: the scene, its lights, the clusters and the depth target. Writes:
-/// `targets.hdr` (cleared first).
+/// `targets.hdr` (cleared first; under MSAA resolved from the samples).
 fn clustered_shade(frame: &mut Frame, pipeline: &ScenePipeline, grid: &LightGrid) {
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
-    let color = [color_attachment(&targets.hdr_view, wgpu::Color::BLACK)];
+    let color = [hdr_attachment(targets)];
     let mut rp = frame.render_pass("clustered shade", &color, Some(depth_attachment(targets, false)));
     rp.set_bind_group(READ_GROUP, grid.bind_group(), &[]);
     draw_objects(&mut rp, scene, visible, pipeline);

@@ -15,6 +15,13 @@
 //!    blended additively. From outside a volume, front faces tested against
 //!    the scene's depth; from inside, back faces, untested.
 //!
+//! Under MSAA the G-buffer is multisampled; the full-screen pass shades a
+//! pixel once where its samples see one surface, else per sample, and the
+//! volumes are drawn without a depth attachment (the HDR target has one
+//! sample, the depth N), each fragment testing its samples' depths against
+//! the face itself (`volumes.wgsl`), so volumes cost their fragments even
+//! behind walls there.
+//!
 //! Simplified: no stencil marking of the pixels inside a volume (the
 //! lighting model's range cut-off leaves pixels in front of or behind the
 //! lit region unlit, at the cost of shading them); no shadows (the lighting

@@ -291,7 +291,9 @@ impl LightVolumes {
             bind_group_layouts: &[Some(&scene.layout), Some(&gbuffer.read_layout), Some(&draw_layout)],
             immediate_size: 0,
         });
-        let pipelines = VolumeList::ALL.iter().map(|l| volume_pipeline(device, &module, &layout, *l)).collect();
+        let samples = gbuffer.normal.sample_count();
+        let pipelines =
+            VolumeList::ALL.iter().map(|l| volume_pipeline(device, &module, &layout, *l, samples)).collect();
         let (classify_group, draw_group) =
             Self::bind_groups(device, [&classify_layout, &draw_layout], [&params, &lists, &draws, &mesh_vertices]);
         Ok(Self {
@@ -379,11 +381,14 @@ impl LightVolumes {
 /// The raster pipeline of one list: additive blending, no depth writes;
 /// from outside, front faces tested `GreaterEqual` (the volume's surface in
 /// front of the scene's, reversed Z); from inside, back faces untested.
+/// Under MSAA (`samples` > 1: the G-buffer's depth is multisampled, the HDR
+/// target not) no depth attachment: the fragment tests each sample itself.
 fn volume_pipeline(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
     layout: &wgpu::PipelineLayout,
     list: VolumeList,
+    samples: u32,
 ) -> wgpu::RenderPipeline {
     let add = wgpu::BlendComponent {
         src_factor: wgpu::BlendFactor::One,
@@ -416,12 +421,12 @@ fn volume_pipeline(
         },
         fragment: Some(wgpu::FragmentState {
             module,
-            entry_point: Some("fs_light"),
+            entry_point: Some(if samples > 1 && list.inside() { "fs_light_inside" } else { "fs_light" }),
             compilation_options: Default::default(),
             targets: &[Some(target)],
         }),
         primitive: wgpu::PrimitiveState { cull_mode: Some(cull), ..Default::default() },
-        depth_stencil: Some(wgpu::DepthStencilState {
+        depth_stencil: (samples == 1).then_some(wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
             depth_write_enabled: Some(false),
             depth_compare: Some(compare),
@@ -469,8 +474,9 @@ pub fn draw_volumes(frame: &mut Frame, volumes: &LightVolumes, gbuffer: &GBuffer
         resolve_target: None,
         ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
     })];
-    let depth = depth_attachment_read_only(targets);
-    let mut rp = frame.render_pass(label, &color, Some(depth));
+    // Under MSAA the shader tests the multisampled depth itself.
+    let depth = (targets.samples == 1).then(|| depth_attachment_read_only(targets));
+    let mut rp = frame.render_pass(label, &color, depth);
     rp.set_bind_group(0, scene.bind_group(), &[]);
     rp.set_bind_group(1, &gbuffer.read_group, &[]);
     rp.set_bind_group(2, &volumes.draw_group, &[]);

@@ -6,10 +6,17 @@
 // against the scene (volumes behind walls cost nothing); seen from inside,
 // back faces, untested. The lighting model's own range cut-off decides which
 // covered pixels are lit, so the meshes only need to enclose the light.
+// Under MSAA the G-buffer's depth is multisampled and the volumes are drawn
+// into the resolved HDR target without a depth attachment: the fragment
+// tests each sample's depth itself and adds the mean of its samples' light
+// (per pixel where the samples see one surface, else per sample).
 #import shadespace::contract::{VOLUME_POINT_OUTSIDE, VOLUME_POINT_INSIDE, VOLUME_SPOT_OUTSIDE, VOLUME_SPOT_INSIDE}
 #import shadespace::layers::layered_radiance
 #import shadespace::scene_bindings::{view, lights}
 #import shadespace::gbuffer::{gbuffer_depth_at, gbuffer_texel}
+#ifdef MSAA
+#import shadespace::gbuffer::{gbuffer_pixel, gbuffer_samples, gbuffer_depth_sample, gbuffer_sample_texel, gbuffer_texel_at, world_position}
+#endif
 #import shadespace::deferred::{VolumeParams, cone_tan}
 
 @group(2) @binding(0) var<uniform> params: VolumeParams;
@@ -79,6 +86,47 @@ fn vs_spot_inside(@builtin(vertex_index) vi: u32, @builtin(instance_index) i: u3
     return spot_volume(vi, listed(VOLUME_SPOT_INSIDE, i), true);
 }
 
+#ifdef MSAA
+// The light on the samples of `pixel` whose surface is not in front of
+// device depth `front` (the volume's face from outside; beyond every depth
+// from inside), averaged over all samples.
+fn light_samples(pixel: vec2u, light: u32, front: f32) -> vec3f {
+    let p = gbuffer_pixel(pixel);
+    if !p.lit {
+        return vec3f(0.0);
+    }
+    if !p.edge {
+        if front < p.depth_mean {
+            return vec3f(0.0);
+        }
+        let t = gbuffer_texel_at(pixel, 0u, world_position(pixel, p.depth_mean));
+        return light_radiance(lights[light], t.surface, t.to_eye);
+    }
+    let n = gbuffer_samples();
+    var sum = vec3f(0.0);
+    for (var s = 0u; s < n; s++) {
+        let d = gbuffer_depth_sample(pixel, s);
+        if d > 0.0 && front >= d {
+            let t = gbuffer_sample_texel(pixel, s, d);
+            sum += light_radiance(lights[light], t.surface, t.to_eye);
+        }
+    }
+    return sum / f32(n);
+}
+
+// From outside: the samples behind the volume's front face (reversed Z: a
+// depth at most the face's), as the depth test `GreaterEqual` passes them.
+@fragment
+fn fs_light(in: VolumeOut) -> @location(0) vec4f {
+    return vec4f(light_samples(vec2u(in.clip.xy), in.light, in.clip.z), 0.0);
+}
+
+// From inside: every sample (the back faces are not tested).
+@fragment
+fn fs_light_inside(in: VolumeOut) -> @location(0) vec4f {
+    return vec4f(light_samples(vec2u(in.clip.xy), in.light, 2.0), 0.0);
+}
+#else
 @fragment
 fn fs_light(in: VolumeOut) -> @location(0) vec4f {
     let pixel = vec2u(in.clip.xy);
@@ -89,3 +137,4 @@ fn fs_light(in: VolumeOut) -> @location(0) vec4f {
     let t = gbuffer_texel(pixel, depth);
     return vec4f(layered_radiance(lights[in.light], t.surface, t.to_eye), 0.0);
 }
+#endif

@@ -12,6 +12,14 @@
 //! visibility pass, and each pixel's surface is rebuilt from its triangle
 //! ids (`shadespace::visibility_read`), as object space rebuilds it.
 //!
+//! Under MSAA the G-buffer is multisampled (the compute rasterizer has one
+//! sample per pixel, so MSAA takes the G-buffer pass) and the lighting pass
+//! shades a pixel once where all its samples see one surface (same object,
+//! normals within 8 degrees, depths within 1 %), else each sample at its own
+//! position, and writes their mean: the resolve, in linear HDR. It counts
+//! the frame's lit and edge pixels (counters `msaa_lit_pixels`,
+//! `msaa_edge_pixels`, `msaa_edge_share`).
+//!
 //! Simplified: lights are culled by bounding spheres (a spot light by its
 //! sector's), not by exact cone tests; one depth range per tile (no 2.5D
 //! depth masks or clusters), so tiles across depth discontinuities keep
@@ -23,17 +31,20 @@ use super::frame::Frame;
 use super::passes::gbuffer::{GbufferStage, geometry};
 use super::passes::visibility::compute::{ComputeVisibility, compute_visibility};
 use super::passes::visibility::{VisibilityBuffer, VisibilityMethod};
-use super::passes::{compute_pipeline, hdr_output};
+use super::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, hdr_output};
 use super::report::Counters;
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
 use super::targets::Targets;
 use super::{Pipeline, PipelineConfig, RenderError};
+use crate::gpu::readback::ReadbackRing;
 use crate::shaders::{ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("tiled.wgsl", include_str!("tiled.wgsl"));
 /// `tiled.wgsl` reading the compute visibility pass instead of the G-buffer.
 pub const SHADER_VISIBILITY: ShaderSource = SHADER.with_defs(&["VISIBILITY_BUFFER"]);
+/// `tiled.wgsl` reading a multisampled G-buffer.
+pub const SHADER_MSAA: ShaderSource = SHADER.with_defs(&[crate::shaders::MSAA]);
 
 /// Tile side in pixels (one workgroup of `TILE_SIZE`² threads per tile).
 pub const TILE_SIZE: u32 = 16;
@@ -77,17 +88,29 @@ enum Surfaces {
     Visibility { ids: VisibilityBuffer, pass: Box<ComputeVisibility> },
 }
 
+/// Under MSAA: the lighting pass's count of lit and edge pixels (two
+/// `u32`s, cleared every frame) and its read-back.
+struct EdgeCounts {
+    buffer: wgpu::Buffer,
+    readback: ReadbackRing<u64>,
+}
+
+/// Bytes of [`EdgeCounts::buffer`].
+const EDGE_COUNTS_BYTES: u64 = 8;
+
 /// The tiled deferred pipeline.
 pub struct DeferredCompute {
     config: DeferredComputeConfig,
     surfaces: Surfaces,
     lighting: wgpu::ComputePipeline,
-    /// The HDR target, written.
+    /// The HDR target, written (and under MSAA the edge counts).
     output: wgpu::BindGroup,
+    edge_counts: Option<EdgeCounts>,
 }
 
 impl DeferredCompute {
-    /// Builds its passes for `scene` and `targets`.
+    /// Builds its passes for `scene` and `targets` (under MSAA, with raster
+    /// visibility only: the renderer refuses compute).
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
@@ -95,6 +118,7 @@ impl DeferredCompute {
         targets: &Targets,
         config: DeferredComputeConfig,
     ) -> Result<Self, RenderError> {
+        let msaa = targets.samples > 1;
         let surfaces = match config.visibility {
             VisibilityMethod::Raster => {
                 Surfaces::Gbuffer(Box::new(GbufferStage::new(device, shaders, scene, targets, config.depth_prepass)?))
@@ -105,14 +129,38 @@ impl DeferredCompute {
                 Surfaces::Visibility { ids, pass: Box::new(pass) }
             }
         };
-        let (layout, output) = hdr_output(device, targets, "tiled lighting output");
+        let (layout, output, edge_counts) = if msaa {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("msaa edge counts"),
+                size: EDGE_COUNTS_BYTES,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let dimension = wgpu::TextureViewDimension::D2;
+            let layout = bind_group_layout(
+                device,
+                "tiled lighting output",
+                &[
+                    Binding::StorageTexture { format: super::targets::HDR_FORMAT, dimension },
+                    Binding::Storage { read_only: false },
+                ],
+            );
+            let resources = [wgpu::BindingResource::TextureView(&targets.hdr_view), buffer.as_entire_binding()];
+            let output = bind_group(device, "tiled lighting output", &layout, &resources);
+            let readback = ReadbackRing::new("msaa edge counts", EDGE_COUNTS_BYTES);
+            (layout, output, Some(EdgeCounts { buffer, readback }))
+        } else {
+            let (layout, output) = hdr_output(device, targets, "tiled lighting output");
+            (layout, output, None)
+        };
         let (shader, read_layout) = match &surfaces {
+            Surfaces::Gbuffer(stage) if msaa => (SHADER_MSAA, &stage.gbuffer.read_layout),
             Surfaces::Gbuffer(stage) => (SHADER, &stage.gbuffer.read_layout),
             Surfaces::Visibility { pass, .. } => (SHADER_VISIBILITY, &pass.read_layout),
         };
         let groups = [&scene.layout, read_layout, &layout];
         let lighting = compute_pipeline(device, shaders, shader, "tiled_lighting", &groups)?;
-        Ok(Self { config, surfaces, lighting, output })
+        Ok(Self { config, surfaces, lighting, output, edge_counts })
     }
 }
 
@@ -128,7 +176,13 @@ impl Pipeline for DeferredCompute {
                 &pass.read_group
             }
         };
+        if let Some(counts) = &self.edge_counts {
+            frame.encoder.clear_buffer(&counts.buffer, 0, None);
+        }
         tiled_lighting(frame, &self.lighting, read, &self.output);
+        if let Some(counts) = &mut self.edge_counts {
+            counts.readback.copy(frame.device, frame.encoder, &counts.buffer, EDGE_COUNTS_BYTES, frame.number);
+        }
     }
 
     /// Lights come from the tiles' own lists, not the CPU's per-object ones.
@@ -140,10 +194,33 @@ impl Pipeline for DeferredCompute {
         if let Surfaces::Visibility { pass, .. } = &mut self.surfaces {
             pass.after_submit();
         }
+        if let Some(counts) = &mut self.edge_counts {
+            counts.readback.after_submit();
+        }
     }
 
-    /// With `count_visibility`, the compute rasterizer's counts.
+    /// With `count_visibility`, the compute rasterizer's counts; under MSAA
+    /// the lit pixels, the edge pixels and their share of the lit ones.
     fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        if let Some(counts) = &mut self.edge_counts {
+            return counts
+                .readback
+                .collect(device, wait)
+                .into_iter()
+                .map(|(frame, bytes)| {
+                    let [lit, edges]: [u32; 2] = bytemuck::pod_read_unaligned(&bytes);
+                    let (lit, edges) = (f64::from(lit), f64::from(edges));
+                    let share = if lit > 0.0 { edges / lit } else { 0.0 };
+                    let counters: Counters = [
+                        ("msaa_lit_pixels".to_string(), lit),
+                        ("msaa_edge_pixels".to_string(), edges),
+                        ("msaa_edge_share".to_string(), share),
+                    ]
+                    .into();
+                    (frame, counters)
+                })
+                .collect();
+        }
         match &mut self.surfaces {
             Surfaces::Visibility { pass, .. } => pass.collect_counts(device, wait),
             Surfaces::Gbuffer(_) => Vec::new(),

@@ -16,7 +16,11 @@
 //    emptied: so no light is ever dropped, however many reach a tile;
 // 5. each pixel adds emission and the ambient and directional lights.
 // Pixels come from the G-buffer, or, with VISIBILITY_BUFFER defined, from the
-// compute visibility pass (`shadespace::visibility_read`).
+// compute visibility pass (`shadespace::visibility_read`). With MSAA defined
+// the G-buffer is multisampled: the depth range spans every sample, a pixel
+// whose samples see one surface is shaded once at its centre, an edge pixel
+// (`gbuffer_pixel`) sample by sample and averaged, and the frame's lit and
+// edge pixels are counted.
 #import shadespace::contract::{TILED_TILE_SIZE, TILED_CHUNK, TILED_LIST_CAPACITY}
 #import shadespace::lighting::{Surface, light_radiance}
 #import shadespace::light_bounds::{light_bounds, sphere_touches}
@@ -28,10 +32,20 @@
 #ifdef VISIBILITY_BUFFER
 #import shadespace::visibility_read::{GbufferTexel, gbuffer_depth_at, gbuffer_texel}
 #else
+#ifdef MSAA
+#import shadespace::gbuffer::{GbufferTexel, PixelSamples, gbuffer_pixel, gbuffer_samples, gbuffer_depth_sample, gbuffer_sample_texel, gbuffer_texel_at, world_position}
+#else
 #import shadespace::gbuffer::{GbufferTexel, gbuffer_depth_at, gbuffer_texel}
+#endif
 #endif
 
 @group(2) @binding(0) var hdr: texture_storage_2d<rgba16float, write>;
+#ifdef MSAA
+// The frame's lit pixels and, of those, edge pixels (cleared every frame).
+@group(2) @binding(1) var<storage, read_write> edge_counts: array<atomic<u32>, 2>;
+var<workgroup> tile_lit: atomic<u32>;
+var<workgroup> tile_edges: atomic<u32>;
+#endif
 
 // Bit patterns of the tile's smallest and largest non-background depth
 // (positive floats order like their bits).
@@ -110,6 +124,35 @@ fn shade_listed_one(s: Surface, to_eye: vec3f, count: u32) -> vec3f {
     return color;
 }
 
+#ifdef MSAA
+// A texel's shade: with `globals` its emission and the ambient and
+// directional lights, else the first `count` listed lights.
+fn shade_texel(texel: GbufferTexel, count: u32, globals: bool) -> vec3f {
+    if globals {
+        return texel.surface.emission + light_globals(texel.surface, texel.to_eye);
+    }
+    return shade_listed(texel, count);
+}
+
+// A pixel's `shade_texel`: once at its centre where its samples see one
+// surface, else the mean over its samples, each shaded at its own position
+// (background samples black, as forward's cleared samples are).
+fn shade_msaa(pixel: vec2u, samples: PixelSamples, count: u32, globals: bool) -> vec3f {
+    if !samples.edge {
+        return shade_texel(gbuffer_texel_at(pixel, 0u, world_position(pixel, samples.depth_mean)), count, globals);
+    }
+    let n = gbuffer_samples();
+    var sum = vec3f(0.0);
+    for (var s = 0u; s < n; s++) {
+        let d = gbuffer_depth_sample(pixel, s);
+        if d > 0.0 {
+            sum += shade_texel(gbuffer_sample_texel(pixel, s, d), count, globals);
+        }
+    }
+    return sum / f32(n);
+}
+#endif
+
 @compute @workgroup_size(TILED_TILE_SIZE, TILED_TILE_SIZE)
 fn tiled_lighting(
     @builtin(global_invocation_id) id: vec3u,
@@ -122,11 +165,30 @@ fn tiled_lighting(
         atomicStore(&depth_min_bits, 0xffffffffu);
         atomicStore(&depth_max_bits, 0u);
         list_count = 0u;
+#ifdef MSAA
+        atomicStore(&tile_lit, 0u);
+        atomicStore(&tile_edges, 0u);
+#endif
     }
     if thread < 8u {
         atomicStore(&chunk_bits[thread], 0u);
     }
     workgroupBarrier();
+#ifdef MSAA
+    var samples = PixelSamples(false, false, 1.0, 0.0, 0.0);
+    if in_image {
+        samples = gbuffer_pixel(id.xy);
+    }
+    let lit = samples.lit;
+    if lit {
+        atomicMin(&depth_min_bits, bitcast<u32>(samples.depth_min));
+        atomicMax(&depth_max_bits, bitcast<u32>(samples.depth_max));
+        atomicAdd(&tile_lit, 1u);
+        if samples.edge {
+            atomicAdd(&tile_edges, 1u);
+        }
+    }
+#else
     var depth = 0.0;
     if in_image {
         depth = gbuffer_depth_at(id.xy);
@@ -136,8 +198,13 @@ fn tiled_lighting(
         atomicMin(&depth_min_bits, bitcast<u32>(depth));
         atomicMax(&depth_max_bits, bitcast<u32>(depth));
     }
+#endif
     workgroupBarrier();
     if thread == 0u {
+#ifdef MSAA
+        atomicAdd(&edge_counts[0], atomicLoad(&tile_lit));
+        atomicAdd(&edge_counts[1], atomicLoad(&tile_edges));
+#endif
         tile_range = vec2f(bitcast<f32>(atomicLoad(&depth_min_bits)), bitcast<f32>(atomicLoad(&depth_max_bits)));
         if atomicLoad(&depth_max_bits) == 0u {
             tile_range = vec2f(1.0, 0.0);
@@ -153,12 +220,18 @@ fn tiled_lighting(
     let lo = vec2f(tile.xy * TILED_TILE_SIZE);
     let hi = vec2f(min((tile.xy + 1u) * TILED_TILE_SIZE, size));
     let frustum = tile_frustum(lo, hi, range);
-    var texel: GbufferTexel;
     var color = vec3f(0.0);
+#ifdef MSAA
+    if lit {
+        color = shade_msaa(id.xy, samples, 0u, true);
+    }
+#else
+    var texel: GbufferTexel;
     if lit {
         texel = gbuffer_texel(id.xy, depth);
         color = emission_and_globals(texel.surface, texel.to_eye);
     }
+#endif
     let word = thread / 32u;
     let bit = 1u << (thread % 32u);
     let count = view.light_count;
@@ -201,7 +274,11 @@ fn tiled_lighting(
         let last = first + TILED_CHUNK >= count;
         if filled > TILED_LIST_CAPACITY - TILED_CHUNK || (last && filled > 0u) {
             if lit {
+#ifdef MSAA
+                color += shade_msaa(id.xy, samples, filled, false);
+#else
                 color += shade_listed(texel, filled);
+#endif
             }
             // Everyone has read the list before the next chunk writes it:
             // the next `workgroupUniformLoad` is a barrier.

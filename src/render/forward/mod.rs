@@ -7,7 +7,7 @@ use serde::Serialize;
 use super::frame::Frame;
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::{
-    DepthMode, ScenePipeline, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline,
+    DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_objects, hdr_attachment, scene_raster_pipeline_from,
 };
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
@@ -43,11 +43,19 @@ impl Forward {
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         config: ForwardConfig,
+        samples: u32,
     ) -> Result<Self, RenderError> {
-        let prepass = config.depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
-        let depth = DepthMode::after(config.depth_prepass);
-        let fragment = Some(("fs_main", HDR_FORMAT));
-        let shade = scene_raster_pipeline(device, shaders, SHADER, scene, "vs_main", fragment, depth)?;
+        let prepass = config.depth_prepass.then(|| DepthPrepass::new(device, shaders, scene, samples)).transpose()?;
+        let raster = SceneRaster {
+            shader: SHADER,
+            vertex_entry: "vs_main",
+            fragment: Some(("fs_main", &[HDR_FORMAT])),
+            depth: DepthMode::after(config.depth_prepass),
+            groups: &[],
+            blend: None,
+            samples,
+        };
+        let shade = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
         Ok(Self { config, prepass, shade })
     }
 }
@@ -66,10 +74,11 @@ impl Pipeline for Forward {
 }
 
 /// Reads: the scene, its lights and per-object light lists, and the depth
-/// target unless `clear_depth`. Writes: `targets.hdr` (cleared first) and depth.
+/// target unless `clear_depth`. Writes: `targets.hdr` (cleared first;
+/// under MSAA resolved from the samples) and depth.
 fn forward_shade(frame: &mut Frame, pipeline: &ScenePipeline, clear_depth: bool) {
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
-    let color = [color_attachment(&targets.hdr_view, wgpu::Color::BLACK)];
+    let color = [hdr_attachment(targets)];
     let mut rp = frame.render_pass("forward shade", &color, Some(depth_attachment(targets, clear_depth)));
     draw_objects(&mut rp, scene, visible, pipeline);
 }

@@ -18,7 +18,7 @@ use super::culling;
 use super::frame::Frame;
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::{
-    Binding, DepthMode, SceneRaster, bind_group, bind_group_layout_for, color_attachment, depth_attachment,
+    Binding, DepthMode, SceneRaster, bind_group, bind_group_layout_for, depth_attachment, hdr_attachment,
     scene_raster_pipeline_from,
 };
 use super::report::{Counters, PipelineReport};
@@ -71,8 +71,9 @@ impl ForwardMultipass {
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         config: ForwardMultipassConfig,
+        samples: u32,
     ) -> Result<Self, RenderError> {
-        let prepass = DepthPrepass::new(device, shaders, scene)?;
+        let prepass = DepthPrepass::new(device, shaders, scene, samples)?;
         let pairs_layout = bind_group_layout_for(
             device,
             "light pairs",
@@ -91,6 +92,7 @@ impl ForwardMultipass {
             depth: DepthMode::EqualAfterPrepass,
             groups: &[Some(&pairs_layout)],
             blend: Some(wgpu::BlendState { color: additive, alpha: wgpu::BlendComponent::REPLACE }),
+            samples,
         };
         let shade = scene_raster_pipeline_from(device, shaders, scene, &raster)?.for_every_object();
         let pairs_buffer = GrowableBuffer::new(device, "light pairs", 64 * 1024);
@@ -143,7 +145,8 @@ impl Pipeline for ForwardMultipass {
 /// Reads: the depth target (from the pre-pass), the scene and its lights,
 /// and `pairs` (already uploaded to the buffer of `pairs_group`). Writes:
 /// `targets.hdr`, cleared, then one additive draw per pair, each light's
-/// draws scissored to the screen rectangle its volume covers.
+/// draws scissored to the screen rectangle its volume covers (under MSAA
+/// into the samples, which the one pass resolves at its end).
 fn light_passes(
     frame: &mut Frame,
     pipeline: &wgpu::RenderPipeline,
@@ -153,7 +156,7 @@ fn light_passes(
     let (scene, targets, lights) = (frame.scene, frame.targets, frame.lights);
     let size = (targets.width, targets.height);
     let view_proj = frame.view.view_proj;
-    let color = [color_attachment(&targets.hdr_view, wgpu::Color::BLACK)];
+    let color = [hdr_attachment(targets)];
     let mut rp = frame.render_pass("light passes", &color, Some(depth_attachment(targets, false)));
     rp.set_pipeline(pipeline);
     rp.set_bind_group(0, scene.bind_group(), &[]);

@@ -578,8 +578,11 @@ impl ObjectSpace {
         let mut res = Resources::new(device, &layout, pool, &scene.triangle_charts, targets, view_count);
         let visibility = match config.visibility {
             VisibilityMethod::Raster => Visibility::Raster {
-                prepass: config.visibility_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?,
-                ids: VisibilityPass::new(device, shaders, scene, config.visibility_prepass)?,
+                prepass: config
+                    .visibility_prepass
+                    .then(|| DepthPrepass::new(device, shaders, scene, targets.samples))
+                    .transpose()?,
+                ids: VisibilityPass::new(device, shaders, scene, config.visibility_prepass, targets.samples)?,
             },
             VisibilityMethod::Compute => {
                 let counting = config.count_visibility;

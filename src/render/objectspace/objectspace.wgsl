@@ -3,7 +3,7 @@
 // gathering must compute identically.
 #define_import_path shadespace::objectspace
 #import shadespace::contract::{MAX_LEVELS, TILE_COUNTER_SLOTS, BLOCK_SIDE, AGE_BUCKETS}
-#import shadespace::scene_bindings::vertices
+#import shadespace::scene_bindings::{vertices, objects}
 #import shadespace::pixel_surface::{PixelSample, interpolate2}
 
 struct AtlasLevel {
@@ -71,8 +71,13 @@ struct Params {
 @group(1) @binding(4) var<storage, read_write> queue: array<vec2u>;
 // Indexed by the `COUNT_*` constants.
 @group(1) @binding(5) var<storage, read_write> counters: array<atomic<u32>, TILE_COUNTER_SLOTS>;
-// Visibility buffer: (object + 1, triangle); 0 = background.
+// Visibility buffer: (object + 1, triangle); 0 = background. Under MSAA one
+// per sample (`textureLoad`'s last argument is then the sample).
+#ifdef MSAA
+@group(1) @binding(6) var visibility: texture_multisampled_2d<u32>;
+#else
 @group(1) @binding(6) var visibility: texture_2d<u32>;
+#endif
 // Per triangle of the scene's index buffer: its chart island (a number
 // shared by the triangles of one island of its mesh's chart UVs).
 @group(1) @binding(7) var<storage, read> triangle_charts: array<u32>;
@@ -382,4 +387,19 @@ fn locate(l: AtlasLevel, texel: vec2i) -> AtlasTexel {
         return out;
     }
     return atlas_texel(page, t);
+}
+
+// Whether two visibility-buffer ids (object + 1, triangle) see one chart
+// surface: both background, or one object's triangles in one chart island
+// (whose shades are continuous, so a pixel whose samples all do is marked
+// and gathered once under MSAA).
+fn same_chart_surface(a: vec2u, b: vec2u) -> bool {
+    if a.x != b.x {
+        return false;
+    }
+    if a.x == 0u || a.y == b.y {
+        return true;
+    }
+    let first = objects[a.x - 1u].first_index / 3u;
+    return triangle_charts[first + a.y] == triangle_charts[first + b.y];
 }

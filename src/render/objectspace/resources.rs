@@ -257,7 +257,12 @@ impl Resources {
                 rw,
                 rw,
                 rw,
-                Binding::Texture { sample: uint, dimension: wgpu::TextureViewDimension::D2 },
+                // Under MSAA one id pair per sample (`MSAA` in the shaders).
+                if targets.samples > 1 {
+                    Binding::MultisampledTexture { sample: uint }
+                } else {
+                    Binding::Texture { sample: uint, dimension: wgpu::TextureViewDimension::D2 }
+                },
                 Binding::Storage { read_only: true },
                 rw,
                 rw,

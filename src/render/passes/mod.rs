@@ -74,25 +74,10 @@ pub fn alpha_masked_shaders() -> Vec<ShaderSource> {
 }
 
 /// A raster pipeline over the scene bind group (group 0): vertices pulled
-/// from storage (no vertex buffers), no face culling, a reversed-Z depth
-/// test, and a fragment stage writing `color` when given (none: depth only).
-pub fn scene_raster_pipeline(
-    device: &wgpu::Device,
-    shaders: &mut ShaderLibrary,
-    shader: ShaderSource,
-    scene: &SceneGpu,
-    vertex_entry: &str,
-    fragment: Option<(&str, wgpu::TextureFormat)>,
-    depth: DepthMode,
-) -> Result<ScenePipeline, ShaderError> {
-    let fragment = fragment.as_ref().map(|(entry, format)| (*entry, std::slice::from_ref(format)));
-    let raster = SceneRaster { shader, vertex_entry, fragment, depth, groups: &[], blend: None };
-    scene_raster_pipeline_from(device, shaders, scene, &raster)
-}
-
-/// A scene raster pipeline with more than [`scene_raster_pipeline`]'s
-/// defaults: several colour targets (a G-buffer), bind groups after the
-/// scene's, and blending.
+/// from storage (no vertex buffers), no face culling (unless the scene culls
+/// back faces), a reversed-Z depth test, and a fragment stage writing its
+/// colour targets (several: a G-buffer; none: depth only), with bind groups
+/// after the scene's, blending, and multisampling.
 #[derive(Clone, Copy)]
 pub struct SceneRaster<'a> {
     pub shader: ShaderSource,
@@ -105,9 +90,11 @@ pub struct SceneRaster<'a> {
     pub groups: &'a [Option<&'a wgpu::BindGroupLayout>],
     /// Blending into every colour target (none: replace).
     pub blend: Option<wgpu::BlendState>,
+    /// Samples per pixel of the targets it draws into ([`Targets::samples`]).
+    pub samples: u32,
 }
 
-/// The raster pipelines `raster` describes (see [`scene_raster_pipeline`]).
+/// The raster pipelines `raster` describes ([`SceneRaster`]).
 pub fn scene_raster_pipeline_from(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,
@@ -179,7 +166,8 @@ fn raster_pipeline(
             stencil: Default::default(),
             bias: Default::default(),
         }),
-        multisample: Default::default(),
+        // The standard sample positions (the only ones wgpu offers).
+        multisample: wgpu::MultisampleState { count: raster.samples, ..Default::default() },
         multiview_mask: None,
         cache: None,
     }))
@@ -233,6 +221,29 @@ pub fn color_attachment(view: &wgpu::TextureView, clear: wgpu::Color) -> Option<
         depth_slice: None,
         resolve_target: None,
         ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
+    })
+}
+
+/// The HDR target as the colour attachment of a pipeline's one shading
+/// pass, cleared to black. Under MSAA it is the multisampled colour,
+/// resolved into `targets.hdr` at the end of the pass (the mean of the
+/// samples, in linear HDR, before exposure, bloom and tone mapping) and
+/// then discarded: the pass must be the pipeline's only one into it.
+pub fn hdr_attachment(targets: &Targets) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+    let clear = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
+    Some(match &targets.hdr_msaa_view {
+        None => wgpu::RenderPassColorAttachment {
+            view: &targets.hdr_view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: clear, store: wgpu::StoreOp::Store },
+        },
+        Some(msaa) => wgpu::RenderPassColorAttachment {
+            view: msaa,
+            depth_slice: None,
+            resolve_target: Some(&targets.hdr_view),
+            ops: wgpu::Operations { load: clear, store: wgpu::StoreOp::Discard },
+        },
     })
 }
 
@@ -290,6 +301,10 @@ pub enum Binding {
         sample: wgpu::TextureSampleType,
         dimension: wgpu::TextureViewDimension,
     },
+    /// A multisampled 2D texture (read with `textureLoad` per sample).
+    MultisampledTexture {
+        sample: wgpu::TextureSampleType,
+    },
     /// A write-only storage texture.
     StorageTexture {
         format: wgpu::TextureFormat,
@@ -337,6 +352,11 @@ pub fn bind_group_layout_for(
                 Binding::Texture { sample, dimension } => {
                     wgpu::BindingType::Texture { sample_type: sample, view_dimension: dimension, multisampled: false }
                 }
+                Binding::MultisampledTexture { sample } => wgpu::BindingType::Texture {
+                    sample_type: sample,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: true,
+                },
                 Binding::StorageTexture { format, dimension } => wgpu::BindingType::StorageTexture {
                     access: wgpu::StorageTextureAccess::WriteOnly,
                     format,

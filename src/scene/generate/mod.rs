@@ -1,5 +1,6 @@
 //! Procedural scenes, built in code and deterministic: `atrium` (a Sponza-like
-//! courtyard, the default scene) and `voxels` (a block world).
+//! courtyard, the default scene), `voxels` (a block world) and, for tests of
+//! anti-aliasing, [`fence`] (thin tilted bars before a wall).
 //!
 //! Both are in metres, right-handed, +y up, with the floor at y = 0. Every
 //! object has its own Phong material with a UV-checker albedo sampled through
@@ -16,7 +17,8 @@ use glam::{Mat4, Vec3};
 
 use self::builder::{ChartLayout, MeshBuilder};
 use super::checker::uv_checker;
-use super::{Material, Object, Scene};
+use super::{Material, Object, Scene, Texture};
+use crate::color::linear_to_srgb8;
 
 /// The default scene: a Sponza-like courtyard of 30 x 13 x 15 m with two
 /// storeys of arcades around a central court and six hanging banners (106k
@@ -40,6 +42,32 @@ pub fn voxels() -> Scene {
 pub fn terrain(small: bool) -> Scene {
     let spec = if small { terrain::TerrainSpec::SMALL } else { terrain::TerrainSpec::DEFAULT };
     spec.scene()
+}
+
+/// A thin-edged scene for anti-aliasing tests: fourteen dark bars 2 cm wide
+/// and 2.4 m long, 25 cm apart, tilted 20 degrees from vertical, in the
+/// plane z = 0 in front of a light wall (4 x 3 m at z = -1, facing +z), both
+/// flat-coloured so that the bars' edges, not texture, make the aliasing.
+/// Seen from 3 m in front of the origin with a 60-degree field of view, a
+/// bar is under a pixel wide at 128 pixels of height. Two objects (wall,
+/// bars), each with a unique chart layout; no lights (the caller's).
+pub fn fence() -> Scene {
+    let mut a = Assembler::new("fence");
+    let wall_look = a.flat_look("fence wall", Vec3::new(0.85, 0.8, 0.7));
+    let bar_look = a.flat_look("fence bars", Vec3::new(0.06, 0.06, 0.08));
+    let mut wall = MeshBuilder::new();
+    wall.rect(Vec3::new(-2.0, -1.5, -1.0), Vec3::X * 4.0, Vec3::Y * 3.0, 1.0, 1.0);
+    a.add("wall", wall, wall_look);
+    let (s, c) = 20f32.to_radians().sin_cos();
+    let (along, across) = (Vec3::new(s, c, 0.0), Vec3::new(c, -s, 0.0));
+    let mut bars = MeshBuilder::new();
+    for i in 0..14 {
+        let centre = Vec3::new(-1.625 + 0.25 * i as f32, 0.0, 0.0);
+        // across x along is +z: the bars face the camera.
+        bars.rect(centre - along * 1.2 - across * 0.01, across * 0.02, along * 2.4, 0.5, 1.0);
+    }
+    a.add("bars", bars, bar_look);
+    a.finish().scene
 }
 
 /// A generated scene plus the chart layout of each mesh (for tests and reports).
@@ -74,6 +102,16 @@ impl Assembler {
         let textures = &mut self.generated.scene.textures;
         textures.push(uv_checker(name, tint, 256, cells));
         Look { texture: textures.len() - 1, specular, shininess }
+    }
+
+    /// Adds a 4x4 texture of one linear colour `tint` and returns its look
+    /// (dull: specular 0.2, exponent 8).
+    fn flat_look(&mut self, name: &str, tint: Vec3) -> Look {
+        let texel = [linear_to_srgb8(tint.x), linear_to_srgb8(tint.y), linear_to_srgb8(tint.z), 255];
+        let rgba8 = texel.repeat(16);
+        let textures = &mut self.generated.scene.textures;
+        textures.push(Texture { name: name.to_string(), width: 4, height: 4, rgba8 });
+        Look { texture: textures.len() - 1, specular: 0.2, shininess: 8.0 }
     }
 
     /// Finishes `builder` into a mesh and adds it as an object with its own material.
@@ -189,6 +227,23 @@ mod tests {
         // Blocks are 1 m: every vertex is on the integer grid.
         for m in &g.scene.meshes {
             assert!(m.positions.iter().all(|p| *p == p.round()), "{}", m.name);
+        }
+    }
+
+    #[test]
+    fn fence_is_valid_with_thin_tilted_bars() {
+        let g = fence();
+        g.validate().unwrap();
+        assert_eq!(g.objects.len(), 2);
+        let bars = &g.meshes[g.objects[1].mesh];
+        assert_eq!(bars.triangle_count(), 14 * 2 * 5, "14 bars of 5 quads (2.4 m in cells of 0.5 m)");
+        // Each bar is 2 cm across: every bar vertex lies within 1 cm of its
+        // bar's centre line, which leans 20 degrees from vertical.
+        let normal = Vec3::new(20f32.to_radians().cos(), -20f32.to_radians().sin(), 0.0);
+        for p in &bars.positions {
+            let offset = (p.dot(normal) + 1.625 * normal.x) / 0.25 / normal.x;
+            let nearest_bar_distance = (offset - offset.round()).abs() * 0.25 * normal.x;
+            assert!(nearest_bar_distance <= 0.0101, "{p}: {nearest_bar_distance} m from a bar's centre line");
         }
     }
 

@@ -29,13 +29,51 @@ fn barycentrics(c0: vec3f, c1: vec3f, c2: vec3f, q: vec2f) -> vec3f {
     return e / (e.x + e.y + e.z);
 }
 
-fn pixel_ndc(pixel: vec2f) -> vec2f {
-    let uv = (pixel + 0.5) * view.viewport.zw;
+// NDC of the point `xy` pixels from the image's top-left corner.
+fn point_ndc(xy: vec2f) -> vec2f {
+    let uv = xy * view.viewport.zw;
     return vec2f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+}
+
+// Vulkan's standard sample positions (0..1 from the pixel's top-left
+// corner) of 2, 4 and 8 samples per pixel, where the hardware rasterizer
+// covers them; the pixel centre for any other count.
+const SAMPLES_2 = array<vec2f, 2>(vec2f(0.75, 0.75), vec2f(0.25, 0.25));
+const SAMPLES_4 = array<vec2f, 4>(vec2f(0.375, 0.125), vec2f(0.875, 0.375), vec2f(0.125, 0.625), vec2f(0.625, 0.875));
+const SAMPLES_8 = array<vec2f, 8>(
+    vec2f(0.5625, 0.3125), vec2f(0.4375, 0.6875), vec2f(0.8125, 0.5625), vec2f(0.3125, 0.1875),
+    vec2f(0.1875, 0.8125), vec2f(0.0625, 0.4375), vec2f(0.6875, 0.9375), vec2f(0.9375, 0.0625),
+);
+
+fn standard_sample_position(count: u32, s: u32) -> vec2f {
+    // Copied into variables: arrays are indexed at run time through memory.
+    switch count {
+        case 2u: {
+            var positions = SAMPLES_2;
+            return positions[s];
+        }
+        case 4u: {
+            var positions = SAMPLES_4;
+            return positions[s];
+        }
+        case 8u: {
+            var positions = SAMPLES_8;
+            return positions[s];
+        }
+        default: {
+            return vec2f(0.5);
+        }
+    }
 }
 
 // Rebuilds a visibility-buffer pixel; `ids` = (object + 1, triangle), non-zero.
 fn sample_pixel(pixel: vec2u, ids: vec2u) -> PixelSample {
+    return sample_pixel_at(pixel, vec2f(0.5), ids);
+}
+
+// `sample_pixel` at the point `at` of the pixel (0..1 from its top-left
+// corner; an MSAA sample's position), derivatives one pixel apart.
+fn sample_pixel_at(pixel: vec2u, at: vec2f, ids: vec2u) -> PixelSample {
     var p: PixelSample;
     p.object = ids.x - 1u;
     p.triangle = ids.y;
@@ -48,7 +86,7 @@ fn sample_pixel(pixel: vec2u, ids: vec2u) -> PixelSample {
     let c0 = h0.xyw;
     let c1 = h1.xyw;
     let c2 = h2.xyw;
-    let q = pixel_ndc(vec2f(pixel));
+    let q = point_ndc(vec2f(pixel) + at);
     let step = 2.0 * view.viewport.zw;
     p.b = barycentrics(c0, c1, c2, q);
     p.b_dx = barycentrics(c0, c1, c2, q + vec2f(step.x, 0.0));

@@ -5,9 +5,17 @@
 // in the pixel's chart island). Objects outside the atlas (forward-only) are
 // shaded here per pixel, with the world grid's lights. Debug views replace
 // the shade.
+// Under MSAA a pixel whose samples see different chart surfaces
+// (`same_chart_surface`) gathers each sample at its own position and writes
+// their mean (background samples black): the resolve, in linear HDR; the
+// others gather once.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
+#ifdef MSAA
+#import shadespace::pixel_surface::{sample_pixel_at, standard_sample_position}
+#import shadespace::objectspace::same_chart_surface
+#endif
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_levels,
     bilinear, AtlasTexel, triangle_charts, locate, physical_page, virtual_page, physical_tile,
@@ -99,6 +107,24 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     let ids = textureLoad(visibility, id.xy, 0).xy;
+#ifdef MSAA
+    let n = textureNumSamples(visibility);
+    var edge = false;
+    for (var s = 1u; s < n; s++) {
+        edge = edge || !same_chart_surface(textureLoad(visibility, id.xy, s).xy, ids);
+    }
+    if edge {
+        var sum = vec3f(0.0);
+        for (var s = 0u; s < n; s++) {
+            let sample_ids = textureLoad(visibility, id.xy, s).xy;
+            if sample_ids.x != 0u {
+                sum += gather_surface(sample_pixel_at(id.xy, standard_sample_position(n, s), sample_ids)).rgb;
+            }
+        }
+        textureStore(hdr, id.xy, vec4f(sum / f32(n), 1.0));
+        return;
+    }
+#endif
     if ids.x == 0u {
         textureStore(hdr, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
         return;

@@ -10,11 +10,17 @@
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_PAGES_USED, COUNT_PAGES_REQUESTED, COUNT_PAGES_FAILED,
     COUNT_PAGES_BACKED, COUNT_VIEW_TILES, COUNT_BACKED_TILES, COUNT_ATLAS_PIXELS, COUNT_UNDER_SHADED_PIXELS}
 #import shadespace::pixel_surface::{sample_pixel, PixelSample}
+#ifdef MSAA
+#import shadespace::pixel_surface::{sample_pixel_at, standard_sample_position}
+#endif
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
     page_request_bit, tile_request_bit, page_tile_origin, forget_request}
+#ifdef MSAA
+#import shadespace::objectspace::same_chart_surface
+#endif
 
 // A small integer hash (PCG's output permutation) for tile phases.
 fn hash(x: u32) -> u32 {
@@ -170,6 +176,25 @@ fn mark_pixel(pixel: vec2u) -> u32 {
         return PIXEL_NOT_IN_ATLAS;
     }
     let ids = textureLoad(visibility, pixel, 0).xy;
+#ifdef MSAA
+    // A pixel whose samples see different chart surfaces marks each
+    // sample's footprint at its own position, where the gather reads it.
+    let n = textureNumSamples(visibility);
+    var edge = false;
+    for (var s = 1u; s < n; s++) {
+        edge = edge || !same_chart_surface(textureLoad(visibility, pixel, s).xy, ids);
+    }
+    if edge {
+        var kind = PIXEL_NOT_IN_ATLAS;
+        for (var s = 0u; s < n; s++) {
+            let sample_ids = textureLoad(visibility, pixel, s).xy;
+            if sample_ids.x != 0u {
+                kind = max(kind, mark_surface(sample_pixel_at(pixel, standard_sample_position(n, s), sample_ids)));
+            }
+        }
+        return kind;
+    }
+#endif
     if ids.x == 0u {
         return PIXEL_NOT_IN_ATLAS;
     }

@@ -2,7 +2,7 @@
 //! (forward shading, the visibility ids) tests `Equal` and runs one fragment
 //! per pixel.
 
-use super::{DepthMode, ScenePipeline, depth_attachment, draw_objects, scene_raster_pipeline};
+use super::{DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_objects, scene_raster_pipeline_from};
 use crate::render::frame::Frame;
 use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
@@ -14,9 +14,23 @@ pub struct DepthPrepass {
 }
 
 impl DepthPrepass {
-    pub fn new(device: &wgpu::Device, shaders: &mut ShaderLibrary, scene: &SceneGpu) -> Result<Self, ShaderError> {
-        let pipeline = scene_raster_pipeline(device, shaders, SHADER, scene, "vs_depth", None, DepthMode::Write)?;
-        Ok(Self { pipeline })
+    /// The pre-pass into a depth target of `samples` samples per pixel.
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        samples: u32,
+    ) -> Result<Self, ShaderError> {
+        let raster = SceneRaster {
+            shader: SHADER,
+            vertex_entry: "vs_depth",
+            fragment: None,
+            depth: DepthMode::Write,
+            groups: &[],
+            blend: None,
+            samples,
+        };
+        Ok(Self { pipeline: scene_raster_pipeline_from(device, shaders, scene, &raster)? })
     }
 }
 

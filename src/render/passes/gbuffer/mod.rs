@@ -32,6 +32,11 @@
 //! floats keep the encoded normal within 0.06 degrees (tested); `Rg16Snorm`
 //! would be finer but needs an optional feature. The lighting passes read
 //! it through `gbuffer_read.wgsl` (`shadespace::gbuffer`, bind group 1).
+//!
+//! Under MSAA every target has the frame's samples per pixel: the G-buffer
+//! pass writes each fragment's values to the samples it covers, and the
+//! lighting pass (`gbuffer_read.wgsl` with `MSAA`) compares a pixel's
+//! samples to shade it once or sample by sample.
 
 pub mod octahedral;
 
@@ -65,9 +70,14 @@ pub const METAL_ROUGH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unor
 /// UV0 (full precision: it repeats far past 1) and the albedo mip, for
 /// layered materials.
 pub const UV_LOD_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The targets every G-buffer has (the material ones as 1x1 placeholders in
+/// scenes without material textures), all with the frame's samples per
+/// pixel; with layered materials [`UV_LOD_FORMAT`] follows.
+pub const BASE_FORMATS: [wgpu::TextureFormat; 5] =
+    [NORMAL_FORMAT, ALBEDO_FORMAT, OBJECT_FORMAT, EMISSION_OCCLUSION_FORMAT, METAL_ROUGH_FORMAT];
 /// The G-buffer's own targets, in [`GBuffer::views`] order.
 const FORMATS: [wgpu::TextureFormat; 6] =
-    [NORMAL_FORMAT, ALBEDO_FORMAT, OBJECT_FORMAT, EMISSION_OCCLUSION_FORMAT, METAL_ROUGH_FORMAT, UV_LOD_FORMAT];
+    [BASE_FORMATS[0], BASE_FORMATS[1], BASE_FORMATS[2], BASE_FORMATS[3], BASE_FORMATS[4], UV_LOD_FORMAT];
 /// Bytes per pixel of the G-buffer's own targets: normal, albedo, object,
 /// and with material textures ([`crate::shaders::MATERIAL_TEXTURES`])
 /// emission and occlusion, metallic and roughness.
@@ -148,22 +158,27 @@ pub struct GBuffer {
 }
 
 impl GBuffer {
-    /// Targets of the size of `targets`, read together with its depth. The
-    /// material targets are 1x1 placeholders (bound, never read) for scenes
-    /// without material textures, and so is the UV0 target without layers.
+    /// Targets of the size and samples per pixel of `targets`, read
+    /// together with its depth. The material targets are 1x1 placeholders
+    /// (bound, never read) for scenes without material textures; without
+    /// layers the UV0 target is a 1x1 single-sample placeholder that is not
+    /// bound at all (binding 7 exists only with `LAYERS`), so that scenes
+    /// without layers never ask the adapter to multisample its format.
     pub fn new(device: &wgpu::Device, targets: &Targets, material_textures: bool, layers: bool) -> Self {
-        let make_sized = |label, format, (width, height)| {
+        let make_with = |label, format, (width, height), samples| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
                 mip_level_count: 1,
-                sample_count: 1,
+                sample_count: samples,
                 dimension: wgpu::TextureDimension::D2,
                 format,
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             })
         };
+        let samples = targets.samples;
+        let make_sized = |label, format, size| make_with(label, format, size, samples);
         let make = |label, format| make_sized(label, format, (targets.width, targets.height));
         let material_size = if material_textures { (targets.width, targets.height) } else { (1, 1) };
         let (normal, albedo, object) = (
@@ -173,8 +188,11 @@ impl GBuffer {
         );
         let emission_occlusion = make_sized("gbuffer emission occlusion", EMISSION_OCCLUSION_FORMAT, material_size);
         let metal_rough = make_sized("gbuffer metal rough", METAL_ROUGH_FORMAT, material_size);
-        let layers_size = if layers { (targets.width, targets.height) } else { (1, 1) };
-        let uv_lod = make_sized("gbuffer uv lod", UV_LOD_FORMAT, layers_size);
+        let uv_lod = if layers {
+            make("gbuffer uv lod", UV_LOD_FORMAT)
+        } else {
+            make_with("gbuffer uv lod", UV_LOD_FORMAT, (1, 1), 1)
+        };
         let views = [&normal, &albedo, &object, &emission_occlusion, &metal_rough, &uv_lod]
             .map(|t: &wgpu::Texture| t.create_view(&Default::default()));
         let unproject = device.create_buffer(&wgpu::BufferDescriptor {
@@ -185,36 +203,42 @@ impl GBuffer {
         });
         let d2 = wgpu::TextureViewDimension::D2;
         let float = wgpu::TextureSampleType::Float { filterable: false };
+        let texture = |sample| {
+            if samples > 1 {
+                Binding::MultisampledTexture { sample }
+            } else {
+                Binding::Texture { sample, dimension: d2 }
+            }
+        };
+        let mut entries = vec![
+            texture(wgpu::TextureSampleType::Depth),
+            texture(float),
+            texture(float),
+            texture(wgpu::TextureSampleType::Uint),
+            Binding::Uniform,
+            texture(float),
+            texture(float),
+        ];
+        let mut resources = vec![
+            wgpu::BindingResource::TextureView(&targets.depth_view),
+            wgpu::BindingResource::TextureView(&views[0]),
+            wgpu::BindingResource::TextureView(&views[1]),
+            wgpu::BindingResource::TextureView(&views[2]),
+            unproject.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&views[3]),
+            wgpu::BindingResource::TextureView(&views[4]),
+        ];
+        if layers {
+            entries.push(texture(float));
+            resources.push(wgpu::BindingResource::TextureView(&views[5]));
+        }
         let read_layout = bind_group_layout_for(
             device,
             "gbuffer read",
             wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
-            &[
-                Binding::Texture { sample: wgpu::TextureSampleType::Depth, dimension: d2 },
-                Binding::Texture { sample: float, dimension: d2 },
-                Binding::Texture { sample: float, dimension: d2 },
-                Binding::Texture { sample: wgpu::TextureSampleType::Uint, dimension: d2 },
-                Binding::Uniform,
-                Binding::Texture { sample: float, dimension: d2 },
-                Binding::Texture { sample: float, dimension: d2 },
-                Binding::Texture { sample: float, dimension: d2 },
-            ],
+            &entries,
         );
-        let read_group = bind_group(
-            device,
-            "gbuffer read",
-            &read_layout,
-            &[
-                wgpu::BindingResource::TextureView(&targets.depth_view),
-                wgpu::BindingResource::TextureView(&views[0]),
-                wgpu::BindingResource::TextureView(&views[1]),
-                wgpu::BindingResource::TextureView(&views[2]),
-                unproject.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&views[3]),
-                wgpu::BindingResource::TextureView(&views[4]),
-                wgpu::BindingResource::TextureView(&views[5]),
-            ],
-        );
+        let read_group = bind_group(device, "gbuffer read", &read_layout, &resources);
         Self {
             normal,
             albedo,
@@ -231,15 +255,18 @@ impl GBuffer {
         }
     }
 
-    /// Bytes per pixel of the targets written, with the frame's depth.
+    /// Bytes per pixel of the targets written, with the frame's depth (per
+    /// sample under MSAA).
     pub fn bytes_per_pixel_with_depth(&self) -> u64 {
         let layers = if self.layers { LAYERS_BYTES_PER_PIXEL } else { 0 };
         bytes_per_pixel_with_depth(self.material_textures) + layers
     }
 
-    /// GPU memory of the G-buffer's own targets (depth belongs to the frame).
+    /// GPU memory of the G-buffer's own targets, every sample (depth belongs
+    /// to the frame).
     pub fn bytes(&self) -> u64 {
-        self.normal.width() as u64 * self.normal.height() as u64 * (self.bytes_per_pixel_with_depth() - 4)
+        let samples = u64::from(self.normal.sample_count());
+        self.normal.width() as u64 * self.normal.height() as u64 * samples * (self.bytes_per_pixel_with_depth() - 4)
     }
 }
 
@@ -252,12 +279,13 @@ pub struct GbufferPass {
 impl GbufferPass {
     /// `after_prepass`: the depth target already holds the scene's depth
     /// (test `Equal`: each pixel's fragment runs once); otherwise the pass
-    /// clears and writes depth itself.
+    /// clears and writes depth itself. `samples`: per pixel of the targets.
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         after_prepass: bool,
+        samples: u32,
     ) -> Result<Self, ShaderError> {
         let depth = DepthMode::after(after_prepass);
         let formats: Vec<_> = written(scene.material_textures, scene.layers).into_iter().map(|i| FORMATS[i]).collect();
@@ -268,6 +296,7 @@ impl GbufferPass {
             depth,
             groups: &[],
             blend: None,
+            samples,
         };
         let pipeline = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
         Ok(Self { pipeline, after_prepass })
@@ -298,7 +327,7 @@ pub struct GbufferStage {
 
 impl GbufferStage {
     /// With `depth_prepass`, depth is laid down first and the G-buffer pass
-    /// runs one fragment per pixel.
+    /// runs one fragment per pixel. As many samples per pixel as `targets`.
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
@@ -306,8 +335,9 @@ impl GbufferStage {
         targets: &Targets,
         depth_prepass: bool,
     ) -> Result<Self, ShaderError> {
-        let prepass = depth_prepass.then(|| DepthPrepass::new(device, shaders, scene)).transpose()?;
-        let pass = GbufferPass::new(device, shaders, scene, depth_prepass)?;
+        let samples = targets.samples;
+        let prepass = depth_prepass.then(|| DepthPrepass::new(device, shaders, scene, samples)).transpose()?;
+        let pass = GbufferPass::new(device, shaders, scene, depth_prepass, samples)?;
         Ok(Self { prepass, pass, gbuffer: GBuffer::new(device, targets, scene.material_textures, scene.layers) })
     }
 }

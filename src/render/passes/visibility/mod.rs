@@ -9,7 +9,9 @@ use std::str::FromStr;
 
 use serde::Serialize;
 
-use super::{DepthMode, ScenePipeline, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline};
+use super::{
+    DepthMode, ScenePipeline, SceneRaster, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline_from,
+};
 use crate::render::frame::Frame;
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::targets::Targets;
@@ -40,6 +42,12 @@ impl VisibilityMethod {
         if features.contains(compute::FEATURES) { Self::Compute } else { Self::Raster }
     }
 
+    /// [`VisibilityMethod::preferred`] at `samples` per pixel: under MSAA
+    /// raster, since the compute rasterizer writes one sample per pixel.
+    pub fn preferred_for(features: wgpu::Features, samples: u32) -> Self {
+        if samples > 1 { Self::Raster } else { Self::preferred(features) }
+    }
+
     /// The name `--visibility` takes.
     pub fn name(self) -> &'static str {
         match self {
@@ -60,7 +68,8 @@ impl FromStr for VisibilityMethod {
 /// Per pixel: (object + 1, triangle); (0, 0) is background.
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 
-/// The visibility buffer, one texel per pixel of the targets.
+/// The visibility buffer, one texel per pixel of the targets (under MSAA one
+/// per sample: written by the raster pass only, not copied).
 pub struct VisibilityBuffer {
     pub texture: wgpu::Texture,
     pub view: wgpu::TextureView,
@@ -72,14 +81,19 @@ impl VisibilityBuffer {
             label: Some("visibility"),
             size: wgpu::Extent3d { width: targets.width, height: targets.height, depth_or_array_layers: 1 },
             mip_level_count: 1,
-            sample_count: 1,
+            sample_count: targets.samples,
             dimension: wgpu::TextureDimension::D2,
             format: FORMAT,
-            // STORAGE_BINDING: the compute rasterizer's resolve writes it.
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
+            // STORAGE_BINDING: the compute rasterizer's resolve writes it
+            // (multisampled textures can be neither storage nor copied).
+            usage: if targets.samples > 1 {
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING
+            } else {
+                wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC
+            },
             view_formats: &[],
         });
         let view = texture.create_view(&Default::default());
@@ -87,7 +101,7 @@ impl VisibilityBuffer {
     }
 
     pub fn bytes(&self) -> u64 {
-        self.texture.width() as u64 * self.texture.height() as u64 * 8
+        self.texture.width() as u64 * self.texture.height() as u64 * u64::from(self.texture.sample_count()) * 8
     }
 }
 
@@ -99,16 +113,24 @@ pub struct VisibilityPass {
 impl VisibilityPass {
     /// `after_prepass`: the depth target already holds the scene's depth
     /// (test `Equal`, each pixel's ids written once); otherwise the pass
-    /// clears and writes depth itself.
+    /// clears and writes depth itself. `samples`: per pixel of the targets.
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         after_prepass: bool,
+        samples: u32,
     ) -> Result<Self, ShaderError> {
-        let fragment = Some(("fs_main", FORMAT));
-        let depth = DepthMode::after(after_prepass);
-        let pipeline = scene_raster_pipeline(device, shaders, SHADER, scene, "vs_main", fragment, depth)?;
+        let raster = SceneRaster {
+            shader: SHADER,
+            vertex_entry: "vs_main",
+            fragment: Some(("fs_main", &[FORMAT])),
+            depth: DepthMode::after(after_prepass),
+            groups: &[],
+            blend: None,
+            samples,
+        };
+        let pipeline = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
         Ok(Self { pipeline, after_prepass })
     }
 }
