@@ -115,7 +115,7 @@ fn main() -> anyhow::Result<()> {
         };
         let is_os = matches!(pipeline, PipelineConfig::ObjectSpace(_));
         let scene = if is_os { &charted } else { &render_scene };
-        let mut r = Renderer::new(&ctx, scene, &RenderOptions { width, height, pipeline })?;
+        let mut r = Renderer::new(&ctx, scene, &RenderOptions::new(width, height, pipeline))?;
         r.shading = shading;
         let mut images = Vec::new();
         // One warm-up frame before the first measured one (FIRST >= 1).

@@ -195,11 +195,8 @@ pub(super) fn study(
                     progress.set_message(format!("{} layered:{k} {spec}", config.label()));
                     let conventional = config.shading.is_conventional();
                     let shaded = if conventional { &layered.render } else { &layered.charted };
-                    let render_options = RenderOptions {
-                        width: grid.width,
-                        height: grid.height,
-                        pipeline: config.pipeline(&scene.density_sizes, visibility),
-                    };
+                    let render_options =
+                        RenderOptions::new(grid.width, grid.height, config.pipeline(&scene.density_sizes, visibility));
                     let mut renderer = Renderer::new(ctx, shaded, &render_options)?;
                     for i in 0..grid.warmup + grid.frames {
                         renderer.render(ctx, &path.camera_at(grid.first_frame + i), &lights, u64::from(i))?;

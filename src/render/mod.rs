@@ -338,7 +338,9 @@ impl Renderer {
         if scene_gpu.layers {
             shaders.define(crate::shaders::LAYERS);
             // The G-buffer then holds UV0 too, at every sample.
-            if samples > 1 && matches!(options.pipeline, PipelineConfig::Deferred(_) | PipelineConfig::DeferredCompute(_)) {
+            if samples > 1
+                && matches!(options.pipeline, PipelineConfig::Deferred(_) | PipelineConfig::DeferredCompute(_))
+            {
                 check_sample_formats(ctx, samples, &[passes::gbuffer::UV_LOD_FORMAT])?;
             }
         }

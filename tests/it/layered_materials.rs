@@ -41,7 +41,7 @@ fn render(
     size: (u32, u32),
     pipeline: PipelineConfig,
 ) -> image::RgbaImage {
-    let options = RenderOptions { width: size.0, height: size.1, pipeline };
+    let options = RenderOptions::new(size.0, size.1, pipeline);
     let mut r = Renderer::new(ctx, scene, &options).unwrap();
     r.render(ctx, camera, lights, 0).unwrap();
     let image = r.read_image(ctx).unwrap();

@@ -29,7 +29,7 @@ fn flicker(
     lights: &[shadespace::Light],
     reference: &[image::RgbaImage],
 ) -> (f64, f64) {
-    let mut r = Renderer::new(ctx, scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    let mut r = Renderer::new(ctx, scene, &RenderOptions::new(WIDTH, HEIGHT, pipeline)).unwrap();
     let mut images = Vec::new();
     for (i, f) in (FRAMES.start - 1..FRAMES.end).enumerate() {
         r.render(ctx, &cameras.camera_at(f), lights, i as u64).unwrap();

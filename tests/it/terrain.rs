@@ -48,7 +48,7 @@ fn render(
         }),
         other => other,
     };
-    let mut r = Renderer::new(&ctx, scene, &RenderOptions { width: WIDTH, height: HEIGHT, pipeline }).unwrap();
+    let mut r = Renderer::new(&ctx, scene, &RenderOptions::new(WIDTH, HEIGHT, pipeline)).unwrap();
     r.render(&ctx, camera, lights, 0).unwrap();
     let image = r.read_image(&ctx).unwrap();
     let ids = r.pipeline::<ObjectSpace>().map(|os| os.read_mark_state(&ctx).unwrap().visibility);
