@@ -9,8 +9,10 @@
 #ifdef MSAA
 #import shadespace::gbuffer::{GbufferTexel, gbuffer_pixel, gbuffer_samples, gbuffer_depth_sample, gbuffer_sample_texel, gbuffer_texel_at, world_position}
 
+// Emission and the ambient and directional lights (every layer's, with
+// layers) of one surface of the G-buffer.
 fn globals(t: GbufferTexel) -> vec3f {
-    return t.surface.emission + light_globals(t.surface, t.to_eye);
+    return emission_and_globals(t.surface, t.to_eye);
 }
 #endif
 

@@ -100,7 +100,7 @@ fn light_samples(pixel: vec2u, light: u32, front: f32) -> vec3f {
             return vec3f(0.0);
         }
         let t = gbuffer_texel_at(pixel, 0u, world_position(pixel, p.depth_mean));
-        return light_radiance(lights[light], t.surface, t.to_eye);
+        return layered_radiance(lights[light], t.surface, t.to_eye);
     }
     let n = gbuffer_samples();
     var sum = vec3f(0.0);
@@ -108,7 +108,7 @@ fn light_samples(pixel: vec2u, light: u32, front: f32) -> vec3f {
         let d = gbuffer_depth_sample(pixel, s);
         if d > 0.0 && front >= d {
             let t = gbuffer_sample_texel(pixel, s, d);
-            sum += light_radiance(lights[light], t.surface, t.to_eye);
+            sum += layered_radiance(lights[light], t.surface, t.to_eye);
         }
     }
     return sum / f32(n);

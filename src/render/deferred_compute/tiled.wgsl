@@ -129,7 +129,7 @@ fn shade_listed_one(s: Surface, to_eye: vec3f, count: u32) -> vec3f {
 // directional lights, else the first `count` listed lights.
 fn shade_texel(texel: GbufferTexel, count: u32, globals: bool) -> vec3f {
     if globals {
-        return texel.surface.emission + light_globals(texel.surface, texel.to_eye);
+        return emission_and_globals(texel.surface, texel.to_eye);
     }
     return shade_listed(texel, count);
 }
