@@ -10,7 +10,7 @@ use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView, NO_TEXTURE};
 use super::passes::shadows::{ShadowAtlas, ShadowPlan};
 use super::passes::{Binding, bind_group_layout_for};
 use crate::charts::islands::triangle_islands;
-use crate::materials::GpuLayer;
+use crate::materials::{GpuLayer, LayerKind};
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
@@ -77,6 +77,10 @@ pub struct SceneGpu {
     /// Per object: whether its material is alpha-masked
     /// ([`crate::scene::Material::alpha_cutoff`]).
     pub masked: Vec<bool>,
+    /// Per object: whether it emits light, through its material's emissive
+    /// factor or an emissive layer (multi-pass forward gives it an emission
+    /// pass).
+    pub emits: Vec<bool>,
     /// Some object has an emissive, metallic-roughness or occlusion texture
     /// (the shaders are composed with [`crate::shaders::MATERIAL_TEXTURES`]).
     pub material_textures: bool,
@@ -238,6 +242,17 @@ impl SceneGpu {
             triangle_count: scene.triangle_count() as u64,
             cull_back_faces: scene.cull_back_faces,
             masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),
+            emits: scene
+                .objects
+                .iter()
+                .map(|o| {
+                    let m = &scene.materials[o.material];
+                    m.emissive.max_element() > 0.0
+                        || m.layers.iter().any(
+                            |l| matches!(l.kind, LayerKind::Emissive { emission, .. } if emission.max_element() > 0.0),
+                        )
+                })
+                .collect(),
             material_textures,
             layers,
             layers_buffer: layers_buf,

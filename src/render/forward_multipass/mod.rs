@@ -97,7 +97,7 @@ impl ForwardMultipass {
         let shade = scene_raster_pipeline_from(device, shaders, scene, &raster)?.for_every_object();
         let pairs_buffer = GrowableBuffer::new(device, "light pairs", 64 * 1024);
         let pairs_group = bind_group(device, "light pairs", &pairs_layout, &[pairs_buffer.buffer.as_entire_binding()]);
-        let emissive = scene.object_data.iter().map(|o| o.emissive.max_element() > 0.0).collect();
+        let emissive = scene.emits.clone();
         Ok(Self {
             config,
             prepass,
