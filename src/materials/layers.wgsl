@@ -280,52 +280,22 @@ fn layer_at(s: Surface, i: u32) -> Layer {
     return material_layers[s.layer_first + i - 1u];
 }
 
-// A walk over a layered surface, top layer first: each step is a surface
-// that shows and its weight (layers whose mask leaves them nothing are
-// skipped, an opaque layer ends the walk), the material's own surface last
-// with the weight the layers left; a step of weight 0 ends it. Every
-// layered shading function sums `weight * its lighting of surface`.
-struct LayerWalk {
-    base: Surface,
-    // The next layer to look at (counting down; 0: none left).
-    next: u32,
-    // The weight not yet given out.
-    remaining: f32,
-}
-
-struct LayerStep {
-    surface: Surface,
-    weight: f32,
-}
-
-fn layer_walk(s: Surface) -> LayerWalk {
-    return LayerWalk(s, s.layer_count, 1.0);
-}
-
-fn layer_step(walk: ptr<function, LayerWalk>) -> LayerStep {
-    while (*walk).next > 0u && (*walk).remaining > 0.0 {
-        let l = layer_at((*walk).base, (*walk).next);
-        (*walk).next -= 1u;
-        let w = layer_mask(l, (*walk).base) * (*walk).remaining;
-        (*walk).remaining -= w;
-        if w > 0.0 {
-            return LayerStep(layer_surface(l, (*walk).base), w);
-        }
-    }
-    let w = (*walk).remaining;
-    (*walk).next = 0u;
-    (*walk).remaining = 0.0;
-    return LayerStep((*walk).base, w);
-}
-
 // What one light reflects from the layered surface `s` towards `to_eye`:
 // for passes that see one light at a time (multi-pass forward, light volumes).
 fn layered_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
 #ifdef LAYERS
     var color = vec3f(0.0);
-    var walk = layer_walk(s);
-    for (var step = layer_step(&walk); step.weight > 0.0; step = layer_step(&walk)) {
-        color += step.weight * light_radiance(light, step.surface, to_eye);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * light_radiance(light, layer_surface(l, s), to_eye);
+        }
+    }
+    if remaining > 0.0 {
+        color += remaining * light_radiance(light, s, to_eye);
     }
     return color;
 #else
@@ -337,11 +307,16 @@ fn layered_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
 fn layered_emission(s: Surface) -> vec3f {
 #ifdef LAYERS
     var color = vec3f(0.0);
-    var walk = layer_walk(s);
-    for (var step = layer_step(&walk); step.weight > 0.0; step = layer_step(&walk)) {
-        color += step.weight * step.surface.emission;
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * layer_surface(l, s).emission;
+        }
     }
-    return color;
+    return color + remaining * s.emission;
 #else
     return s.emission;
 #endif

@@ -27,7 +27,7 @@
 #import shadespace::scene_bindings::{view, lights}
 #import shadespace::surface::emission_and_globals
 #ifdef LAYERS
-#import shadespace::layers::{layer_walk, layer_step}
+#import shadespace::layers::{layer_at, layer_mask, layer_surface}
 #endif
 #ifdef VISIBILITY_BUFFER
 #import shadespace::visibility_read::{GbufferTexel, gbuffer_depth_at, gbuffer_texel}
@@ -97,9 +97,17 @@ fn shade_listed(texel: GbufferTexel, count: u32) -> vec3f {
 #ifdef LAYERS
     let s = texel.surface;
     var color = vec3f(0.0);
-    var walk = layer_walk(s);
-    for (var step = layer_step(&walk); step.weight > 0.0; step = layer_step(&walk)) {
-        color += step.weight * shade_listed_one(step.surface, texel.to_eye, count);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * shade_listed_one(layer_surface(l, s), texel.to_eye, count);
+        }
+    }
+    if remaining > 0.0 {
+        color += remaining * shade_listed_one(s, texel.to_eye, count);
     }
     return color;
 #else

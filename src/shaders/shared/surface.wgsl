@@ -7,7 +7,7 @@
 #import shadespace::contract::NO_TEXTURE
 #import shadespace::lighting::{Surface, light_radiance, shininess_from_roughness}
 #ifdef LAYERS
-#import shadespace::layers::{layer_walk, layer_step}
+#import shadespace::layers::{layer_at, layer_mask, layer_surface}
 #endif
 #import shadespace::scene::{Object, vertex_uv0}
 #import shadespace::scene_bindings::{view, vertices, lights, light_indices, albedo, albedo_sampler, linear_maps}
@@ -135,9 +135,17 @@ fn surface_point(o: Object, tri: vec3u, b: vec3f, texture_lod: f32) -> Surface {
 fn light_surface(o: Object, s: Surface) -> vec3f {
 #ifdef LAYERS
     var color = vec3f(0.0);
-    var walk = layer_walk(s);
-    for (var step = layer_step(&walk); step.weight > 0.0; step = layer_step(&walk)) {
-        color += step.weight * light_surface_one(o, step.surface);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * light_surface_one(o, layer_surface(l, s));
+        }
+    }
+    if remaining > 0.0 {
+        color += remaining * light_surface_one(o, s);
     }
     return color;
 #else
@@ -170,9 +178,17 @@ fn light_globals(s: Surface, to_eye: vec3f) -> vec3f {
 fn emission_and_globals(s: Surface, to_eye: vec3f) -> vec3f {
 #ifdef LAYERS
     var color = vec3f(0.0);
-    var walk = layer_walk(s);
-    for (var step = layer_step(&walk); step.weight > 0.0; step = layer_step(&walk)) {
-        color += step.weight * emission_and_globals_one(step.surface, to_eye);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * emission_and_globals_one(layer_surface(l, s), to_eye);
+        }
+    }
+    if remaining > 0.0 {
+        color += remaining * emission_and_globals_one(s, to_eye);
     }
     return color;
 #else

@@ -11,7 +11,7 @@
 #import shadespace::scene_bindings::{view, lights}
 #import shadespace::surface::light_globals
 #ifdef LAYERS
-#import shadespace::layers::{layer_walk, layer_step}
+#import shadespace::layers::{layer_at, layer_mask, layer_surface}
 #endif
 
 // Mirrors `passes::light_grid::GpuLightGridParams`.
@@ -89,9 +89,17 @@ fn cell_radiance(cell: u32, s: Surface, to_eye: vec3f) -> vec3f {
 fn light_surface_in_cell(o: Object, s: Surface, cell: u32) -> vec3f {
 #ifdef LAYERS
     var color = vec3f(0.0);
-    var walk = layer_walk(s);
-    for (var step = layer_step(&walk); step.weight > 0.0; step = layer_step(&walk)) {
-        color += step.weight * light_surface_in_cell_one(step.surface, cell);
+    var remaining = 1.0;
+    for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
+        let l = layer_at(s, i);
+        let w = layer_mask(l, s) * remaining;
+        remaining -= w;
+        if w > 0.0 {
+            color += w * light_surface_in_cell_one(layer_surface(l, s), cell);
+        }
+    }
+    if remaining > 0.0 {
+        color += remaining * light_surface_in_cell_one(s, cell);
     }
     return color;
 #else
