@@ -280,6 +280,13 @@ fn layer_at(s: Surface, i: u32) -> Layer {
     return material_layers[s.layer_first + i - 1u];
 }
 
+// Every layered shading function (here, `surface::light_surface` and
+// `emission_and_globals`, the light grid's and the tiled pass's) spells out
+// the same top-down walk over the layers. One shared walk, a struct stepped
+// through a pointer, gave the same images but cost object space 7 % and
+// deferred-compute 2 % more on the H100 (Sponza, 8 layers, 30 shadowed
+// lights: 2.604 against 2.428 ms, 2.898 against 2.841), so the loop stays
+// written out where it is used.
 // What one light reflects from the layered surface `s` towards `to_eye`:
 // for passes that see one light at a time (multi-pass forward, light volumes).
 fn layered_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
