@@ -111,7 +111,9 @@ fn objectspace_with_every_object_forward_only_matches_forward() {
 fn shade_budget_biases_levels_until_the_shading_fits() {
     let ctx = common::gpu();
     let (scene, camera, lights) = common::floor_scene();
-    let shaded_with = |budget: Option<u64>| {
+    // The controller settles within 8 frames here (it settled by frame 7 when
+    // measured); the free and roomy runs shade the same every frame.
+    let shaded_with = |budget: Option<u64>, frames: u64| {
         let config =
             ObjectSpaceConfig { texture_sizes: vec![Some(4096)], shade_budget_texels: budget, ..Default::default() };
         // Large enough that a budget 4x under the need lies above what the
@@ -120,7 +122,7 @@ fn shade_budget_biases_levels_until_the_shading_fits() {
             RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
         let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
         let mut counters = Vec::new();
-        for frame in 0..24 {
+        for frame in 0..frames {
             os.render(&ctx, &camera, &lights, frame).unwrap();
             // Waiting makes each frame's count reach the controller before
             // the next frame (in the frame loop they arrive a few frames late).
@@ -128,22 +130,22 @@ fn shade_budget_biases_levels_until_the_shading_fits() {
         }
         (counters, os.read_image(&ctx).unwrap())
     };
-    let (free, reference) = shaded_with(None);
-    let need = counter(&free, "shaded_texels")[23];
+    let (free, reference) = shaded_with(None, 2);
+    let need = *counter(&free, "shaded_texels").last().unwrap();
     assert!(need > 0.0);
     let budget = (need / 4.0) as u64;
-    let (limited, image) = shaded_with(Some(budget));
+    let (limited, image) = shaded_with(Some(budget), 12);
     let shaded = counter(&limited, "shaded_texels");
     let bias = counter(&limited, "budget_bias");
     eprintln!("need {need}, budget {budget}: shaded {shaded:?}, bias {bias:?}");
     assert_eq!(shaded[0], need, "the first frame, before any count arrived, shades everything");
-    assert!(shaded[23] <= budget as f64, "the last frame shades {} texels over a budget of {budget}", shaded[23]);
-    assert!(bias[23] > 0.5 && bias[23] <= 2.5, "bias {} levels for a budget 4x under the need", bias[23]);
+    assert!(shaded[11] <= budget as f64, "the last frame shades {} texels over a budget of {budget}", shaded[11]);
+    assert!(bias[11] > 0.5 && bias[11] <= 2.5, "bias {} levels for a budget 4x under the need", bias[11]);
     let (err, _) = metrics::compare(&reference, &image);
     assert!(err.flip_mean < 0.05, "coarser shading under the budget: {err:?}");
-    let (roomy, _) = shaded_with(Some((need * 2.0) as u64));
+    let (roomy, _) = shaded_with(Some((need * 2.0) as u64), 4);
     assert!(counter(&roomy, "budget_bias").iter().all(|&b| b == 0.0));
-    assert_eq!(counter(&roomy, "shaded_texels")[23], need);
+    assert_eq!(counter(&roomy, "shaded_texels")[3], need);
 }
 
 /// A frame that asks for ten times the pages the physical atlas holds (a mip
@@ -155,7 +157,9 @@ fn shade_budget_biases_levels_until_the_shading_fits() {
 fn an_atlas_ten_times_over_budget_biases_until_the_pages_fit() {
     let ctx = common::gpu();
     let (scene, camera, lights) = common::floor_scene();
-    let run = |mip_bias: f32, atlas: Option<u64>| {
+    // The controller settles within 4 frames here (measured); the free run
+    // asks for the same pages every frame.
+    let run = |mip_bias: f32, atlas: Option<u64>, frames: u64| {
         let config = ObjectSpaceConfig {
             texture_sizes: vec![Some(4096)],
             mip_bias,
@@ -166,25 +170,25 @@ fn an_atlas_ten_times_over_budget_biases_until_the_pages_fit() {
             RenderOptions { width: 480, height: 360, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
         let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
         let mut counters = Vec::new();
-        for frame in 0..24 {
+        for frame in 0..frames {
             os.render(&ctx, &camera, &lights, frame).unwrap();
             counters.extend(os.collect_counters(&ctx, true));
         }
         ctx.check_errors().unwrap();
         (counters, os.read_image(&ctx).unwrap())
     };
-    let (free, reference) = run(0.0, None);
-    assert_eq!(counter(&free, "pages_failed")[23], 0.0);
-    let need = counter(&free, "page_texels")[23];
+    let (free, reference) = run(0.0, None, 2);
+    assert_eq!(counter(&free, "pages_failed")[1], 0.0);
+    let need = counter(&free, "page_texels")[1];
     // Room for what the unbiased frame needs (the budget fills 95 % of it), no more.
     let atlas = (need / 0.95 * 1.1) as u64;
-    let (small, image) = run(-(10f32.ln() / 4f32.ln()), Some(atlas));
+    let (small, image) = run(-(10f32.ln() / 4f32.ln()), Some(atlas), 8);
     let (failed, bias) = (counter(&small, "pages_failed"), counter(&small, "budget_bias"));
     let asked = counter(&small, "page_texels");
     eprintln!("need {need} texels of pages, atlas {atlas}: failed {failed:?}, bias {bias:?}, pages {asked:?}");
     assert!(failed[0] > 0.0, "the first frame needs more pages than the atlas holds");
-    assert_eq!(failed[23], 0.0, "the last frame still finds no page for some tiles");
-    assert!((1.0..=2.5).contains(&bias[23]), "bias {} levels for pages 10x over the atlas", bias[23]);
+    assert_eq!(failed[7], 0.0, "the last frame still finds no page for some tiles");
+    assert!((1.0..=2.5).contains(&bias[7]), "bias {} levels for pages 10x over the atlas", bias[7]);
     let (err, _) = metrics::compare(&reference, &image);
     assert!(err.flip_mean < 0.05, "coarser shading in a small atlas: {err:?}");
 }
