@@ -40,8 +40,10 @@ use std::str::FromStr;
 use serde::Serialize;
 
 use super::culling::Frustum;
+use super::forward;
 use super::frame::Frame;
 use super::gpu_types::GpuView;
+use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::light_grid::LightGrid;
 use super::passes::light_grid::world::{WorldGrid, build_world_grid};
@@ -497,6 +499,8 @@ pub struct ObjectSpace {
     residency: Residency,
     virtual_halvings: u32,
     extra_views: Vec<ExtraView>,
+    /// For scenes with alpha-blended objects: drawn over the gathered frame.
+    blended: Option<BlendedPass>,
     /// What each frame still in flight was rendered with.
     in_flight: std::collections::BTreeMap<u64, InFlight>,
 }
@@ -613,8 +617,14 @@ impl ObjectSpace {
             let visibility = Box::new(ComputeVisibility::new(device, shaders, scene, targets, &ids, false)?);
             extra_views.push(ExtraView { uniform, visibility, hdr });
         }
+        // Blended surfaces are lit forward, over the gathered frame (they are
+        // not in the visibility buffer); the compute rasterizer leaves the
+        // depth target to them.
+        let lay_depth = config.visibility == VisibilityMethod::Compute;
+        let blended = BlendedPass::new(device, shaders, scene, targets, forward::SHADER, &[], lay_depth)?;
         Ok(Self {
             extra_views,
+            blended,
             visibility,
             mark: MarkPass::new(device, shaders, scene, &res)?,
             paging: PagingPass::new(device, shaders, scene, &res)?,
@@ -778,6 +788,9 @@ impl Pipeline for ObjectSpace {
         for (k, group) in views.iter().enumerate() {
             let mut view = frame.with_scene_group(group);
             gather(&mut view, &self.gather, &self.res, &self.grid.grid, k + 1);
+        }
+        if let Some(blended) = &self.blended {
+            blended_pass(frame, blended, &[]);
         }
         if let Some(pass) = &self.atlas_view {
             draw_atlas_pages(frame, pass, &self.res, self.atlas_pages);
