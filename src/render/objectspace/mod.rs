@@ -19,10 +19,12 @@
 //! the global lights and the lights of their cell of the world grid (Oxide's
 //! light matrix), built on the GPU before shading; no CPU light culling. No
 //! CPU read-back inside the frame: the counters are copied out and read a few
-//! frames later.
+//! frames later. Alpha-blended objects, which are not in the visibility
+//! buffer, are marked and gathered by raster passes over them ([`blended`]).
 
 pub mod atlas;
 pub mod atlas_view;
+pub mod blended;
 pub mod budget;
 pub mod cpu;
 pub mod debug;
@@ -34,16 +36,15 @@ pub mod resources;
 pub mod shade;
 pub mod trimap;
 
+use blended::{BlendedObjects, gather_blended, mark_blended};
 use budget::Budget;
 use std::str::FromStr;
 
 use serde::Serialize;
 
 use super::culling::Frustum;
-use super::forward;
 use super::frame::Frame;
 use super::gpu_types::GpuView;
-use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::light_grid::LightGrid;
 use super::passes::light_grid::world::{WorldGrid, build_world_grid};
@@ -499,8 +500,8 @@ pub struct ObjectSpace {
     residency: Residency,
     virtual_halvings: u32,
     extra_views: Vec<ExtraView>,
-    /// For scenes with alpha-blended objects: drawn over the gathered frame.
-    blended: Option<BlendedPass>,
+    /// For scenes with alpha-blended objects: their marking and gathering.
+    blended: Option<BlendedObjects>,
     /// What each frame still in flight was rendered with.
     in_flight: std::collections::BTreeMap<u64, InFlight>,
 }
@@ -617,11 +618,9 @@ impl ObjectSpace {
             let visibility = Box::new(ComputeVisibility::new(device, shaders, scene, targets, &ids, false)?);
             extra_views.push(ExtraView { uniform, visibility, hdr });
         }
-        // Blended surfaces are lit forward, over the gathered frame (they are
-        // not in the visibility buffer); the compute rasterizer leaves the
-        // depth target to them.
+        // The compute rasterizer leaves the depth target to the blended passes.
         let lay_depth = config.visibility == VisibilityMethod::Compute;
-        let blended = BlendedPass::new(device, shaders, scene, targets, forward::SHADER, &[], lay_depth)?;
+        let blended = BlendedObjects::new(device, shaders, scene, &res, targets, &grid.grid, lay_depth)?;
         Ok(Self {
             extra_views,
             blended,
@@ -709,6 +708,9 @@ impl ObjectSpace {
         copy_pages(frame, &self.resize, &self.res, &old, old_pages, moves.as_ref());
         self.shade.rebind(frame.device, &self.res);
         self.gather.rebind(frame.device, &self.res);
+        if let Some(blended) = &mut self.blended {
+            blended.rebind(frame.device, &self.res);
+        }
         self.trimap.rebind(frame.device, &self.res);
         if let Some(view) = &mut self.atlas_view {
             view.rebind(frame.device, &self.res);
@@ -774,6 +776,9 @@ impl Pipeline for ObjectSpace {
             Visibility::Compute(pass) => compute_visibility(frame, pass),
         }
         mark_tiles(frame, &self.mark, &self.res, 0);
+        if let Some(blended) = &self.blended {
+            mark_blended(frame, blended, &self.res);
+        }
         let views = self.mark_extra_views(frame);
         if !quiet {
             back_pages(frame, &self.paging, &self.res);
@@ -790,7 +795,7 @@ impl Pipeline for ObjectSpace {
             gather(&mut view, &self.gather, &self.res, &self.grid.grid, k + 1);
         }
         if let Some(blended) = &self.blended {
-            blended_pass(frame, blended, &[]);
+            gather_blended(frame, blended, &self.res, &self.grid.grid);
         }
         if let Some(pass) = &self.atlas_view {
             draw_atlas_pages(frame, pass, &self.res, self.atlas_pages);

@@ -117,7 +117,7 @@ pub fn scene_raster_pipeline_from(
 
 /// One pipeline of [`scene_raster_pipeline_from`]: the shader's
 /// [`ALPHA_MASK`] variant when `alpha_mask`.
-fn raster_pipeline(
+pub(crate) fn raster_pipeline(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,
     scene: &SceneGpu,

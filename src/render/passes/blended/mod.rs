@@ -82,6 +82,9 @@ pub struct BlendedPass {
     /// visibility): the depth pre-pass of the opaque objects.
     depth: Option<DepthPrepass>,
     layer: Option<Layer>,
+    /// Draw through the index buffer (else vertex `k` of an object's draw
+    /// is its `k`-th index, which the shader looks up itself).
+    indexed: bool,
 }
 
 impl BlendedPass {
@@ -103,10 +106,25 @@ impl BlendedPass {
         }
         let pipeline = blended_pipeline(device, shaders, scene, targets, shader, groups, OVER)?;
         let depth = lay_depth.then(|| DepthPrepass::new(device, shaders, scene, targets.samples)).transpose()?;
+        let mut pass = Self::with_pipeline(device, shaders, targets, pipeline, true)?;
+        pass.depth = depth;
+        Ok(Some(pass))
+    }
+
+    /// The pass drawing the blended objects with `pipeline` (its blend
+    /// [`OVER`], its depth [`DepthMode::TestOnly`]), through the index
+    /// buffer or not (`indexed`), over a depth target the opaque frame wrote.
+    pub fn with_pipeline(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        targets: &Targets,
+        pipeline: wgpu::RenderPipeline,
+        indexed: bool,
+    ) -> Result<Self, ShaderError> {
         let layer = (targets.samples > 1 && targets.hdr_msaa_view.is_none())
             .then(|| Layer::new(device, shaders, targets))
             .transpose()?;
-        Ok(Some(Self { pipeline, depth, layer }))
+        Ok(Self { pipeline, depth: None, layer, indexed })
     }
 }
 
@@ -219,11 +237,16 @@ pub fn over_frame_attachment(targets: &Targets) -> Option<wgpu::RenderPassColorA
 }
 
 /// One draw per object of `order`, with the bound pipeline (the instance
-/// index is the object, as [`super::draw_objects`] draws).
-pub fn draw_in_order(pass: &mut wgpu::RenderPass, scene: &SceneGpu, order: &[u32]) {
+/// index is the object, as [`super::draw_objects`] draws), through the
+/// index buffer or, unless `indexed`, one vertex per index.
+pub fn draw_in_order(pass: &mut wgpu::RenderPass, scene: &SceneGpu, order: &[u32], indexed: bool) {
     for &o in order {
         let d = scene.draws[o as usize];
-        pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, o..o + 1);
+        if indexed {
+            pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, o..o + 1);
+        } else {
+            pass.draw(0..d.index_count, o..o + 1);
+        }
     }
 }
 
@@ -263,7 +286,7 @@ pub fn blended_pass(frame: &mut Frame, pass: &BlendedPass, groups: &[(u32, &wgpu
             rp.set_bind_group(index, group, &[]);
         }
         rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        draw_in_order(&mut rp, scene, &order);
+        draw_in_order(&mut rp, scene, &order, pass.indexed);
     }
     if let Some(layer) = &pass.layer {
         let load = wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store };
