@@ -18,8 +18,7 @@
 //!   factors), emissive factor (times `KHR_materials_emissive_strength`) and
 //!   texture (sRGB, multiplying the factor), occlusion texture (red, with its
 //!   `strength`; applied to ambient light only), alpha mode and cutoff
-//!   (`MASK`; `BLEND` is drawn as `MASK` with cutoff 0.5, with a warning,
-//!   since no pipeline here blends). A texture whose factor is
+//!   (`MASK` cuts, `BLEND` blends: [`super::AlphaMode`]). A texture whose factor is
 //!   zero is not loaded (it would change nothing). Every texture is sampled
 //!   with TEXCOORD_0 (another set is a warning). `KHR_texture_transform`
 //!   (offset, rotation, scale) is baked into the primitive's UV0, so every
