@@ -455,7 +455,8 @@ impl Renderer {
         let lists = if self.pipeline.uses_object_light_lists() {
             culling::lights_per_object(&lights, &self.scene.object_bounds, Some(&frustum))
         } else if self.scene.has_blended() {
-            // Blended objects are lit forward from these lists in every pipeline.
+            // Deferred's and deferred-compute's blended passes light their
+            // objects forward, from these lists.
             let bounds: Vec<Aabb> = (self.scene.object_bounds.iter().zip(&self.scene.blended))
                 .map(|(b, &blended)| if blended { *b } else { Aabb::EMPTY })
                 .collect();

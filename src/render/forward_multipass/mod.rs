@@ -424,6 +424,27 @@ mod tests {
         }
     }
 
+    /// Blended objects' pairs follow the opaque ones in the order given,
+    /// each object's emission pair first (emissive or not), then one per
+    /// light reaching it, in light order.
+    #[test]
+    fn blended_pairs_follow_object_by_object() {
+        let lights = vec![
+            light(LightKind::Ambient, Vec3::ZERO, Vec3::NEG_Y, 0.0),
+            light(LightKind::Point, Vec3::new(10.0, 0.0, 0.0), Vec3::NEG_Y, 1.0),
+            light(LightKind::Point, Vec3::new(0.0, 0.0, 0.0), Vec3::NEG_Y, 2.0),
+        ];
+        let unit = |x: f32| Aabb { min: Vec3::new(x - 0.5, -0.5, -0.5), max: Vec3::new(x + 0.5, 0.5, 0.5) };
+        let bounds = [unit(0.0), unit(10.0), unit(0.5)];
+        // Object 0 is opaque; 1 and 2 are blended, drawn 2 then 1.
+        let mut builder = PairBuilder::default();
+        let opaque = builder.build(&lights, &bounds, &[true, false, false], &[false; 3]).len();
+        let pairs = builder.add_blended(&lights, &bounds, &[2, 1]);
+        let got: Vec<(u32, u32)> = pairs[opaque..].iter().map(|p| (p.object, p.light)).collect();
+        assert_eq!(got, [(2, EMISSION), (2, 0), (2, 2), (1, EMISSION), (1, 0), (1, 1)]);
+        assert!(pairs[..opaque].iter().all(|p| p.object == 0));
+    }
+
     /// The pairs are exactly the emissive visible objects, then, light by
     /// light, the visible objects each light reaches (`light_affects_aabb`).
     #[test]
