@@ -1,5 +1,5 @@
 //! Alpha-blended materials (`passes::blended`) on the panes scene
-//! (`scene::generate::panes`: red over green over blue over a wall): every
+//! (`scene::generate::panes`: red over green over blue over a wall): each
 //! pipeline, at one sample and at four, composites the panes back to front
 //! (each pixel's HDR colour against the analytic "over" of the panes its
 //! ray crosses, under an ambient light); object space shades the panes in
@@ -48,33 +48,6 @@ fn light(kind: LightKind, intensity: f32) -> Light {
         cos_outer: 1.0,
         casts_shadows: false,
     }
-}
-
-/// The configurations every test renders: each pipeline, and
-/// deferred-compute and object space with compute visibility too (whose
-/// depth the blended pass lays down itself); object space with the scene charted.
-fn configs(scene: &Scene, charted: &(Scene, Vec<Option<u32>>)) -> Vec<(String, PipelineConfig, Scene)> {
-    let mut out: Vec<(String, PipelineConfig, Scene)> = Vec::new();
-    let objectspace = |visibility| {
-        PipelineConfig::ObjectSpace(ObjectSpaceConfig {
-            texture_sizes: charted.1.clone(),
-            visibility,
-            ..Default::default()
-        })
-    };
-    for name in PipelineConfig::NAMES {
-        let pipeline = PipelineConfig::from_name(name).unwrap();
-        match pipeline {
-            PipelineConfig::ObjectSpace(_) => {
-                out.push((name.into(), objectspace(VisibilityMethod::Raster), charted.0.clone()))
-            }
-            _ => out.push((name.into(), pipeline, scene.clone())),
-        }
-    }
-    let compute = DeferredComputeConfig { visibility: VisibilityMethod::Compute, ..Default::default() };
-    out.push(("deferred-compute (compute visibility)".into(), PipelineConfig::DeferredCompute(compute), scene.clone()));
-    out.push(("objectspace (compute visibility)".into(), objectspace(VisibilityMethod::Compute), charted.0.clone()));
-    out
 }
 
 /// The resolved HDR frame of `pipeline` (linear RGB per pixel).
@@ -134,18 +107,9 @@ fn composite(panes: &[usize], wall: bool) -> Vec3 {
     c
 }
 
-/// Every pipeline (and compute visibility), at one sample and at four
-/// where the adapter has them, shows at every pixel away from edges the
-/// analytic back-to-front composite of the panes its ray crosses within
-/// `COMPOSITE_BOUND`; where two panes or more overlap, the composite in the
-/// other order is many bounds away, so drawing in object order (the panes
-/// are listed nearest first) or unsorted fails.
-#[test]
-fn panes_composite_back_to_front_in_every_pipeline() {
-    let ctx = common::gpu();
-    let scene = panes();
-    let charted = common::charted(&scene);
-    let lights = [light(LightKind::Ambient, 1.0)];
+/// The pixels away from edges, each with its analytic composite under a
+/// unit ambient light and the panes its ray crosses (nearest first).
+fn analytic_pixels() -> Vec<(usize, Vec3, Vec<usize>)> {
     let mut pixels = Vec::new();
     for y in 0..SIZE {
         for x in 0..SIZE {
@@ -154,6 +118,16 @@ fn panes_composite_back_to_front_in_every_pipeline() {
             }
         }
     }
+    pixels
+}
+
+/// The analytic check can tell the orders apart: many pixels see all three
+/// panes, and where two or more overlap the composite in the other order
+/// is many bounds away, so drawing in object order (the panes are listed
+/// nearest first) or unsorted fails the pipelines' tests below.
+#[test]
+fn the_composite_tells_the_orders_apart() {
+    let pixels = analytic_pixels();
     let three = pixels.iter().filter(|p| p.2.len() == 3).count();
     assert!(three > 200, "{three} pixels see all three panes");
     let swapped = pixels
@@ -166,19 +140,81 @@ fn panes_composite_back_to_front_in_every_pipeline() {
         .fold(0.0f32, f32::max);
     eprintln!("the panes composited in the other order: {swapped:.4} away");
     assert!(swapped > 10.0 * COMPOSITE_BOUND, "the other order differs by {swapped} only");
-    let samples: Vec<u32> = [1, 4].into_iter().filter(|&n| check_samples(&ctx, n).is_ok()).collect();
-    for (name, pipeline, scene) in configs(&scene, &charted) {
-        for &n in &samples {
-            if n > 1 && name.contains("compute visibility") {
-                continue; // the compute rasterizer has one sample per pixel
-            }
-            let hdr = render(&ctx, &scene, &lights, pipeline.clone(), n);
-            let worst =
-                pixels.iter().map(|(i, expected, _)| (hdr[*i] - *expected).abs().max_element()).fold(0.0, f32::max);
-            eprintln!("{name} at {n} samples: largest |HDR - composite| {worst:.5} over {} pixels", pixels.len());
-            assert!(worst <= COMPOSITE_BOUND, "{name} at {n} samples: {worst}");
+}
+
+/// `pipeline` (object space: with the scene charted), at one sample and,
+/// where the adapter has them and the visibility is raster, at four, shows
+/// at every pixel away from edges the analytic back-to-front composite of
+/// the panes its ray crosses within `COMPOSITE_BOUND`.
+fn composites_in_order(pipeline: PipelineConfig) {
+    let ctx = common::gpu();
+    let name = pipeline.name();
+    let (scene, pipeline) = match pipeline {
+        PipelineConfig::ObjectSpace(c) => {
+            let (scene, texture_sizes) = common::charted(&panes());
+            (scene, PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes, ..c }))
         }
+        p => (panes(), p),
+    };
+    let compute = match &pipeline {
+        PipelineConfig::ObjectSpace(c) => c.visibility == VisibilityMethod::Compute,
+        PipelineConfig::DeferredCompute(c) => c.visibility == VisibilityMethod::Compute,
+        _ => false,
+    };
+    let lights = [light(LightKind::Ambient, 1.0)];
+    let pixels = analytic_pixels();
+    // The compute rasterizer has one sample per pixel.
+    let samples = [1, 4].into_iter().filter(|&n| n == 1 || (!compute && check_samples(&ctx, n).is_ok()));
+    for n in samples {
+        let hdr = render(&ctx, &scene, &lights, pipeline.clone(), n);
+        let worst = pixels.iter().map(|(i, expected, _)| (hdr[*i] - *expected).abs().max_element()).fold(0.0, f32::max);
+        eprintln!("{name} (compute visibility: {compute}) at {n} samples: largest |HDR - composite| {worst:.5}");
+        assert!(worst <= COMPOSITE_BOUND, "{name} at {n} samples: {worst}");
     }
+}
+
+#[test]
+fn panes_composite_in_order_in_forward() {
+    composites_in_order(PipelineConfig::from_name("forward").unwrap());
+}
+
+#[test]
+fn panes_composite_in_order_in_forward_multipass() {
+    composites_in_order(PipelineConfig::from_name("forward-multipass").unwrap());
+}
+
+#[test]
+fn panes_composite_in_order_in_clustered() {
+    composites_in_order(PipelineConfig::from_name("clustered").unwrap());
+}
+
+#[test]
+fn panes_composite_in_order_in_deferred() {
+    composites_in_order(PipelineConfig::from_name("deferred").unwrap());
+}
+
+#[test]
+fn panes_composite_in_order_in_deferred_compute() {
+    composites_in_order(PipelineConfig::from_name("deferred-compute").unwrap());
+}
+
+/// With compute visibility, which writes no depth target: the blended
+/// pass lays the opaque depth down first.
+#[test]
+fn panes_composite_in_order_in_deferred_compute_with_compute_visibility() {
+    let c = DeferredComputeConfig { visibility: VisibilityMethod::Compute, ..Default::default() };
+    composites_in_order(PipelineConfig::DeferredCompute(c));
+}
+
+#[test]
+fn panes_composite_in_order_in_objectspace() {
+    composites_in_order(PipelineConfig::from_name("objectspace").unwrap());
+}
+
+#[test]
+fn panes_composite_in_order_in_objectspace_with_compute_visibility() {
+    let c = ObjectSpaceConfig { visibility: VisibilityMethod::Compute, ..Default::default() };
+    composites_in_order(PipelineConfig::ObjectSpace(c));
 }
 
 /// Under an ambient light, a sun and a point light, object space (the
