@@ -352,17 +352,17 @@ impl Renderer {
         let (device, queue) = (&ctx.device, &ctx.queue);
         let pipeline: Box<dyn Pipeline> = match &options.pipeline {
             PipelineConfig::Forward(c) => {
-                Box::new(forward::Forward::new(device, &mut shaders, &scene_gpu, *c, samples)?)
+                Box::new(forward::Forward::new(device, &mut shaders, &scene_gpu, &targets, *c)?)
             }
             PipelineConfig::ForwardMultipass(c) => {
-                Box::new(forward_multipass::ForwardMultipass::new(device, &mut shaders, &scene_gpu, *c, samples)?)
+                Box::new(forward_multipass::ForwardMultipass::new(device, &mut shaders, &scene_gpu, &targets, *c)?)
             }
             PipelineConfig::ObjectSpace(c) => {
                 let os = objectspace::ObjectSpace::new(ctx, &mut shaders, scene, &scene_gpu, &targets, c.clone())?;
                 Box::new(os)
             }
             PipelineConfig::Clustered(c) => {
-                Box::new(clustered::Clustered::new(device, &mut shaders, &scene_gpu, *c, samples)?)
+                Box::new(clustered::Clustered::new(device, &mut shaders, &scene_gpu, &targets, *c)?)
             }
             PipelineConfig::Deferred(c) => {
                 Box::new(deferred::Deferred::new(device, &mut shaders, &scene_gpu, &targets, *c)?)
@@ -454,10 +454,20 @@ impl Renderer {
         let frustum = Frustum::from_view_projection(view.view_proj);
         let lists = if self.pipeline.uses_object_light_lists() {
             culling::lights_per_object(&lights, &self.scene.object_bounds, Some(&frustum))
+        } else if self.scene.has_blended() {
+            // Deferred's and deferred-compute's blended passes light their
+            // objects forward, from these lists.
+            let bounds: Vec<Aabb> = (self.scene.object_bounds.iter().zip(&self.scene.blended))
+                .map(|(b, &blended)| if blended { *b } else { Aabb::EMPTY })
+                .collect();
+            culling::lights_per_object(&lights, &bounds, Some(&frustum))
         } else {
             culling::LightLists::empty(self.scene.object_bounds.len())
         };
-        let visible: Vec<bool> = self.scene.object_bounds.iter().map(|b| frustum.intersects_aabb(b)).collect();
+        // Blended objects are drawn by the pipelines' blended passes only.
+        let visible: Vec<bool> = (self.scene.object_bounds.iter().zip(&self.scene.blended))
+            .map(|(b, &blended)| !blended && frustum.intersects_aabb(b))
+            .collect();
         let sun = self.sun_shadow.then(|| SunView {
             camera,
             aspect: w as f32 / h as f32,

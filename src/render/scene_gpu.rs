@@ -77,6 +77,9 @@ pub struct SceneGpu {
     /// Per object: whether its material is alpha-masked
     /// ([`crate::scene::Material::alpha_cutoff`]).
     pub masked: Vec<bool>,
+    /// Per object: whether its material is alpha-blended
+    /// ([`crate::scene::Material::blend`]; drawn by [`super::passes::blended`]).
+    pub blended: Vec<bool>,
     /// Per object: whether it emits light, through its material's emissive
     /// factor or an emissive layer (multi-pass forward gives it an emission
     /// pass).
@@ -242,6 +245,7 @@ impl SceneGpu {
             triangle_count: scene.triangle_count() as u64,
             cull_back_faces: scene.cull_back_faces,
             masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),
+            blended: scene.objects.iter().map(|o| scene.materials[o.material].blend).collect(),
             emits: scene
                 .objects
                 .iter()
@@ -271,6 +275,11 @@ impl SceneGpu {
     /// Whether some object is alpha-masked.
     pub fn has_alpha_masks(&self) -> bool {
         self.masked.contains(&true)
+    }
+
+    /// Whether some object is alpha-blended.
+    pub fn has_blended(&self) -> bool {
+        self.blended.contains(&true)
     }
 
     pub fn bind_group(&self) -> &wgpu::BindGroup {

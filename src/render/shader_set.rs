@@ -51,7 +51,7 @@ pub fn contract_constants() -> Vec<(&'static str, u32)> {
 pub fn pass_shaders() -> Vec<ShaderSource> {
     let mut all =
         vec![forward::SHADER, passes::depth_prepass::SHADER, passes::visibility::SHADER, passes::tonemap::SHADER];
-    all.push(passes::shadows::SHADER);
+    all.extend([passes::shadows::SHADER, passes::blended::COMPOSITE_SHADER]);
     all.extend([forward_multipass::SHADER, passes::bloom::SHADER, passes::exposure::SHADER]);
     {
         use passes::visibility::compute::*;

@@ -23,8 +23,9 @@ const BRICKS: (u32, u32) = (4, 8);
 
 /// Gives every material of `scene` a detailed albedo (its old base colour
 /// texture's mean colour, modulated by stone-like grain and bricks) and the
-/// normal map of the same relief. Alpha-masked materials keep their base
-/// colour texture, whose alpha is their shape, and get the normal map only.
+/// normal map of the same relief. Alpha-masked and alpha-blended materials
+/// keep their base colour texture, whose alpha is their shape or opacity,
+/// and get the normal map only.
 /// Textures the materials no longer use stay in the list (their indices are
 /// unchanged).
 pub fn add_detailed_textures(scene: &mut Scene) {
@@ -34,7 +35,7 @@ pub fn add_detailed_textures(scene: &mut Scene) {
     let mut albedos: Vec<(Option<usize>, usize)> = Vec::new();
     for m in &mut scene.materials {
         m.normal_texture = Some(normal);
-        if m.alpha_cutoff.is_some() {
+        if m.alpha_cutoff.is_some() || m.blend {
             continue;
         }
         let source = m.base_color_texture;

@@ -18,8 +18,7 @@
 //!   factors), emissive factor (times `KHR_materials_emissive_strength`) and
 //!   texture (sRGB, multiplying the factor), occlusion texture (red, with its
 //!   `strength`; applied to ambient light only), alpha mode and cutoff
-//!   (`MASK`; `BLEND` is drawn as `MASK` with cutoff 0.5, with a warning,
-//!   since no pipeline here blends). A texture whose factor is
+//!   (`MASK` cuts, `BLEND` blends: [`super::AlphaMode`]). A texture whose factor is
 //!   zero is not loaded (it would change nothing). Every texture is sampled
 //!   with TEXCOORD_0 (another set is a warning). `KHR_texture_transform`
 //!   (offset, rotation, scale) is baked into the primitive's UV0, so every
@@ -707,16 +706,10 @@ impl Builder<'_> {
             );
             m.emissive = Vec3::ZERO;
         }
+        m.blend = material.alpha_mode() == AlphaMode::Blend;
         m.alpha_cutoff = match material.alpha_mode() {
-            AlphaMode::Opaque => None,
+            AlphaMode::Opaque | AlphaMode::Blend => None,
             AlphaMode::Mask => Some(material.alpha_cutoff().unwrap_or(0.5)),
-            AlphaMode::Blend => {
-                tracing::warn!(
-                    "{}: material '{name}': alphaMode BLEND is drawn as MASK with cutoff 0.5 (no pipeline here blends)",
-                    self.path.display(),
-                );
-                Some(0.5)
-            }
         }
         // A cutoff of 0 or less cuts nothing: the material is opaque.
         .filter(|&c| c > 0.0);
@@ -1265,7 +1258,7 @@ mod tests {
     }
 
     /// Alpha modes: `MASK` keeps its cutoff (0.5 where the file gives none),
-    /// `BLEND` becomes a mask at 0.5, `OPAQUE` and a cutoff of 0 mask nothing;
+    /// `BLEND` blends (no cutoff), `OPAQUE` and a cutoff of 0 mask nothing;
     /// a mode glTF does not define is an error naming the file.
     #[test]
     fn alpha_modes() {
@@ -1283,8 +1276,11 @@ mod tests {
         let scene = load(&write(dir.path(), "t.gltf", serde_json::to_vec(&doc).unwrap())).unwrap();
         let cutoffs: Vec<Option<f32>> =
             (0..5).map(|o| scene.materials[scene.objects[o].material].alpha_cutoff).collect();
-        assert_eq!(cutoffs, [Some(0.3), Some(0.5), Some(0.5), None, None]);
-        assert!(scene.has_alpha_masks());
+        assert_eq!(cutoffs, [Some(0.3), Some(0.5), None, None, None]);
+        use crate::scene::AlphaMode as A;
+        let modes: Vec<A> = (0..5).map(|o| scene.materials[scene.objects[o].material].alpha_mode()).collect();
+        assert_eq!(modes, [A::Mask(0.3), A::Mask(0.5), A::Blend, A::Opaque, A::Opaque]);
+        assert!(scene.has_alpha_masks() && scene.has_blended());
 
         doc["materials"][0]["alphaMode"] = json!("DITHER");
         let path = write(dir.path(), "bad.gltf", serde_json::to_vec(&doc).unwrap());

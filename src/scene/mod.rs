@@ -225,6 +225,10 @@ pub struct Material {
     /// the base colour texture's is below this, the surface is not there
     /// (not drawn, casts no shadow). `None`: opaque, alpha ignored.
     pub alpha_cutoff: Option<f32>,
+    /// Alpha blending (glTF `BLEND`): the surface is composited over what is
+    /// behind it with its [`Material::opacity`], after the opaque surfaces
+    /// and back to front. Never set together with `alpha_cutoff`.
+    pub blend: bool,
     /// Layers over the material's own surface, bottom first
     /// ([`crate::materials`]); none for a plain material.
     pub layers: Vec<crate::materials::Layer>,
@@ -247,6 +251,7 @@ impl Default for Material {
             specular: 0.25,
             shininess: 32.0,
             alpha_cutoff: None,
+            blend: false,
             layers: Vec::new(),
         }
     }
@@ -264,12 +269,39 @@ impl Material {
         ]
     }
 
+    /// How the material's alpha is used.
+    pub fn alpha_mode(&self) -> AlphaMode {
+        match (self.blend, self.alpha_cutoff) {
+            (true, _) => AlphaMode::Blend,
+            (false, Some(cutoff)) => AlphaMode::Mask(cutoff),
+            (false, None) => AlphaMode::Opaque,
+        }
+    }
+
+    /// The surface's opacity where its base colour texel's alpha is
+    /// `texel_alpha`: the base colour factor's alpha times it (glTF), in
+    /// 0..=1. Only blended materials use it (`alpha_blend.wgsl` on the GPU).
+    pub fn opacity(&self, texel_alpha: f32) -> f32 {
+        (self.base_color.w * texel_alpha).clamp(0.0, 1.0)
+    }
+
     /// Phong exponent equivalent to a GGX roughness (the Blinn-Phong mapping
     /// 2/alpha^2 - 2, halved for the reflection-vector form).
     pub fn shininess_from_roughness(roughness: f32) -> f32 {
         let alpha = (roughness * roughness).max(1e-3);
         ((2.0 / (alpha * alpha) - 2.0) * 0.25).clamp(1.0, 512.0)
     }
+}
+
+/// How a material's alpha is used (glTF's `alphaMode`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha ignored: the surface is everywhere.
+    Opaque,
+    /// Cut away where the alpha is below the cutoff ([`Material::alpha_cutoff`]).
+    Mask(f32),
+    /// Composited over what is behind it ([`Material::blend`]).
+    Blend,
 }
 
 /// One instance of a mesh in the world.
@@ -377,6 +409,11 @@ impl Scene {
         self.objects.iter().any(|o| self.materials[o.material].alpha_cutoff.is_some())
     }
 
+    /// Whether some object's material is alpha-blended.
+    pub fn has_blended(&self) -> bool {
+        self.objects.iter().any(|o| self.materials[o.material].blend)
+    }
+
     /// Every object's vertices in world space (for framing the scene).
     pub fn world_positions(&self) -> Vec<Vec3> {
         self.objects
@@ -414,10 +451,10 @@ impl Scene {
 }
 
 /// The names of the procedural scenes, for `--scene` and `--help`.
-pub const PROCEDURAL_SCENES: [&str; 4] = ["atrium", "voxels", "terrain", "terrain-small"];
+pub const PROCEDURAL_SCENES: [&str; 5] = ["atrium", "voxels", "terrain", "terrain-small", "panes"];
 
 /// Loads a scene by procedural name (`atrium`, `voxels`, `terrain`,
-/// `terrain-small`) or by path: a `.gltf`
+/// `terrain-small`, `panes`) or by path: a `.gltf`
 /// or `.glb` file, an `.obj` file, or a folder of `.obj` files (one scene).
 /// The result is validated, so a bad file fails here with its name.
 pub fn load(spec: &str) -> Result<Scene, SceneError> {
@@ -426,6 +463,7 @@ pub fn load(spec: &str) -> Result<Scene, SceneError> {
         "voxels" => generate::voxels(),
         "terrain" => generate::terrain(false),
         "terrain-small" => generate::terrain(true),
+        "panes" => generate::panes(),
         _ => {
             let path = Path::new(spec);
             if !path.exists() {

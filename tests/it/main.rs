@@ -6,6 +6,7 @@
 mod common;
 
 mod agreement;
+mod blending;
 mod bloom;
 mod cameras;
 mod cli;

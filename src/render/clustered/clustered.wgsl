@@ -5,6 +5,7 @@
     fragment_surface}
 #import shadespace::scene_bindings::objects
 #import shadespace::light_grid::{cluster_of, light_surface_in_cell}
+#import shadespace::alpha_mask::opacity
 #ifdef ALPHA_MASK
 #import shadespace::alpha_mask::masked_out
 #endif
@@ -24,4 +25,14 @@ fn fs_main(in: VertexOut) -> @location(0) vec4f {
     let o = objects[in.tag];
     let s = fragment_surface(o, in, sample_albedo(o, in), sample_normal_map(o, in), sample_material(o, in));
     return vec4f(light_surface_in_cell(o, s, cluster_of(in.clip.xy, in.world)), 1.0);
+}
+
+// An alpha-blended object's fragment (`passes::blended`): its radiance from
+// its cluster's lights times its opacity, and the opacity (premultiplied).
+@fragment
+fn fs_blend(in: VertexOut) -> @location(0) vec4f {
+    let a = opacity(in.tag, in.uv);
+    let o = objects[in.tag];
+    let s = fragment_surface(o, in, sample_albedo(o, in), sample_normal_map(o, in), sample_material(o, in));
+    return vec4f(a * light_surface_in_cell(o, s, cluster_of(in.clip.xy, in.world)), a);
 }

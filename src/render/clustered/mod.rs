@@ -6,15 +6,17 @@
 use serde::Serialize;
 
 use super::frame::Frame;
+use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::light_grid::clusters::{ClusterDims, Clusters, build_clusters};
 use super::passes::light_grid::{LightGrid, READ_GROUP};
 use super::passes::{
-    DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_objects, hdr_attachment, scene_raster_pipeline_from,
+    DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_objects, hdr_attachment_then,
+    scene_raster_pipeline_from,
 };
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
-use super::targets::HDR_FORMAT;
+use super::targets::{HDR_FORMAT, Targets};
 use super::{Pipeline, PipelineConfig, RenderError};
 use crate::shaders::{ShaderLibrary, ShaderSource};
 
@@ -31,6 +33,8 @@ pub struct Clustered {
     prepass: DepthPrepass,
     clusters: Clusters,
     shade: ScenePipeline,
+    /// For scenes with alpha-blended objects: lit from their clusters too.
+    blended: Option<BlendedPass>,
 }
 
 impl Clustered {
@@ -38,9 +42,10 @@ impl Clustered {
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
+        targets: &Targets,
         config: ClusteredConfig,
-        samples: u32,
     ) -> Result<Self, RenderError> {
+        let samples = targets.samples;
         let prepass = DepthPrepass::new(device, shaders, scene, samples)?;
         let clusters = Clusters::new(device, shaders, scene, config.clusters)?;
         let mut groups = vec![None; READ_GROUP as usize];
@@ -55,7 +60,8 @@ impl Clustered {
             samples,
         };
         let shade = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
-        Ok(Self { config, prepass, clusters, shade })
+        let blended = BlendedPass::new(device, shaders, scene, targets, SHADER, &groups, false)?;
+        Ok(Self { config, prepass, clusters, shade, blended })
     }
 
     /// The cluster grid (its last build can be read back).
@@ -68,7 +74,10 @@ impl Pipeline for Clustered {
     fn encode(&mut self, frame: &mut Frame) {
         depth_prepass(frame, &self.prepass);
         build_clusters(frame, &mut self.clusters);
-        clustered_shade(frame, &self.shade, &self.clusters.grid);
+        clustered_shade(frame, &self.shade, &self.clusters.grid, self.blended.is_some());
+        if let Some(blended) = &self.blended {
+            blended_pass(frame, blended, &[(READ_GROUP, self.clusters.grid.bind_group())]);
+        }
     }
 
     fn uses_object_light_lists(&self) -> bool {
@@ -90,10 +99,11 @@ impl Pipeline for Clustered {
 }
 
 /// Reads: the scene, its lights, the clusters and the depth target. Writes:
-/// `targets.hdr` (cleared first; under MSAA resolved from the samples).
-fn clustered_shade(frame: &mut Frame, pipeline: &ScenePipeline, grid: &LightGrid) {
+/// `targets.hdr` (cleared first; under MSAA resolved from the samples, or
+/// with `blended_after` left in them for the blended pass).
+fn clustered_shade(frame: &mut Frame, pipeline: &ScenePipeline, grid: &LightGrid, blended_after: bool) {
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
-    let color = [hdr_attachment(targets)];
+    let color = [hdr_attachment_then(targets, blended_after)];
     let mut rp = frame.render_pass("clustered shade", &color, Some(depth_attachment(targets, false)));
     rp.set_bind_group(READ_GROUP, grid.bind_group(), &[]);
     draw_objects(&mut rp, scene, visible, pipeline);

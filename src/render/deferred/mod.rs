@@ -22,6 +22,10 @@
 //! the face itself (`volumes.wgsl`), so volumes cost their fragments even
 //! behind walls there.
 //!
+//! Alpha-blended objects are drawn last, by a forward pass over the lit HDR
+//! target and the G-buffer's depth (`passes::blended`), lit by the shared
+//! lighting code from their CPU light lists.
+//!
 //! Simplified: no stencil marking of the pixels inside a volume (the
 //! lighting model's range cut-off leaves pixels in front of or behind the
 //! lit region unlit, at the cost of shading them); no shadows (the lighting
@@ -32,7 +36,9 @@ pub mod volumes;
 
 use serde::Serialize;
 
+use super::forward;
 use super::frame::Frame;
+use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::gbuffer::{GBuffer, GbufferStage, geometry};
 use super::passes::{compute_pipeline, hdr_output};
 use super::report::PipelineReport;
@@ -72,6 +78,8 @@ pub struct Deferred {
     /// The HDR target, written by the full-screen pass.
     output: wgpu::BindGroup,
     volumes: LightVolumes,
+    /// For scenes with alpha-blended objects: lit forward after the lights.
+    blended: Option<BlendedPass>,
 }
 
 impl Deferred {
@@ -88,7 +96,8 @@ impl Deferred {
         let groups = [&scene.layout, &geometry.gbuffer.read_layout, &layout];
         let globals = compute_pipeline(device, shaders, GLOBALS_SHADER, "lights_globals", &groups)?;
         let volumes = LightVolumes::new(device, shaders, scene, &geometry.gbuffer)?;
-        Ok(Self { config, geometry, globals, output, volumes })
+        let blended = BlendedPass::new(device, shaders, scene, targets, forward::SHADER, &[], false)?;
+        Ok(Self { config, geometry, globals, output, volumes, blended })
     }
 }
 
@@ -109,6 +118,9 @@ impl Pipeline for Deferred {
             ([VolumeList::PointOutside, VolumeList::PointInside], [VolumeList::SpotOutside, VolumeList::SpotInside]);
         draw_volumes(frame, &self.volumes, gbuffer, point, "lights point");
         draw_volumes(frame, &self.volumes, gbuffer, spot, "lights spot");
+        if let Some(blended) = &self.blended {
+            blended_pass(frame, blended, &[]);
+        }
     }
 
     /// Lights come from the volume lists, not the CPU's per-object ones.

@@ -20,6 +20,11 @@
 //! the frame's lit and edge pixels (counters `msaa_lit_pixels`,
 //! `msaa_edge_pixels`, `msaa_edge_share`).
 //!
+//! Alpha-blended objects are drawn last, by a forward pass over the lit HDR
+//! target and the depth (`passes::blended`; with compute visibility it
+//! first lays the opaque depth down), lit by the shared lighting code from
+//! their CPU light lists.
+//!
 //! Simplified: lights are culled by bounding spheres (a spot light by its
 //! sector's), not by exact cone tests; one depth range per tile (no 2.5D
 //! depth masks or clusters), so tiles across depth discontinuities keep
@@ -27,7 +32,9 @@
 
 use serde::Serialize;
 
+use super::forward;
 use super::frame::Frame;
+use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::gbuffer::{GbufferStage, geometry};
 use super::passes::visibility::compute::{ComputeVisibility, compute_visibility};
 use super::passes::visibility::{VisibilityBuffer, VisibilityMethod};
@@ -106,6 +113,8 @@ pub struct DeferredCompute {
     /// The HDR target, written (and under MSAA the edge counts).
     output: wgpu::BindGroup,
     edge_counts: Option<EdgeCounts>,
+    /// For scenes with alpha-blended objects: lit forward after the tiles.
+    blended: Option<BlendedPass>,
 }
 
 impl DeferredCompute {
@@ -160,7 +169,10 @@ impl DeferredCompute {
         };
         let groups = [&scene.layout, read_layout, &layout];
         let lighting = compute_pipeline(device, shaders, shader, "tiled_lighting", &groups)?;
-        Ok(Self { config, surfaces, lighting, output, edge_counts })
+        // The compute rasterizer leaves the depth target to the blended pass.
+        let lay_depth = config.visibility == VisibilityMethod::Compute;
+        let blended = BlendedPass::new(device, shaders, scene, targets, forward::SHADER, &[], lay_depth)?;
+        Ok(Self { config, surfaces, lighting, output, edge_counts, blended })
     }
 }
 
@@ -182,6 +194,9 @@ impl Pipeline for DeferredCompute {
         tiled_lighting(frame, &self.lighting, read, &self.output);
         if let Some(counts) = &mut self.edge_counts {
             counts.readback.copy(frame.device, frame.encoder, &counts.buffer, EDGE_COUNTS_BYTES, frame.number);
+        }
+        if let Some(blended) = &self.blended {
+            blended_pass(frame, blended, &[]);
         }
     }
 

@@ -4,6 +4,7 @@
     fragment_surface}
 #import shadespace::scene_bindings::objects
 #import shadespace::surface::light_surface
+#import shadespace::alpha_mask::opacity
 #ifdef ALPHA_MASK
 #import shadespace::alpha_mask::masked_out
 #endif
@@ -25,4 +26,14 @@ fn fs_main(in: VertexOut) -> @location(0) vec4f {
     let o = objects[in.tag];
     let s = fragment_surface(o, in, sample_albedo(o, in), sample_normal_map(o, in), sample_material(o, in));
     return vec4f(light_surface(o, s), 1.0);
+}
+
+// An alpha-blended object's fragment (`passes::blended`): its radiance times
+// its opacity, and the opacity (premultiplied alpha).
+@fragment
+fn fs_blend(in: VertexOut) -> @location(0) vec4f {
+    let a = opacity(in.tag, in.uv);
+    let o = objects[in.tag];
+    let s = fragment_surface(o, in, sample_albedo(o, in), sample_normal_map(o, in), sample_material(o, in));
+    return vec4f(a * light_surface(o, s), a);
 }

@@ -5,13 +5,15 @@
 use serde::Serialize;
 
 use super::frame::Frame;
+use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::{
-    DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_objects, hdr_attachment, scene_raster_pipeline_from,
+    DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_objects, hdr_attachment_then,
+    scene_raster_pipeline_from,
 };
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
-use super::targets::HDR_FORMAT;
+use super::targets::{HDR_FORMAT, Targets};
 use super::{Pipeline, RenderError};
 use crate::shaders::{ShaderLibrary, ShaderSource};
 
@@ -35,6 +37,8 @@ pub struct Forward {
     config: ForwardConfig,
     prepass: Option<DepthPrepass>,
     shade: ScenePipeline,
+    /// For scenes with alpha-blended objects: drawn after the opaque ones.
+    blended: Option<BlendedPass>,
 }
 
 impl Forward {
@@ -42,9 +46,10 @@ impl Forward {
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
+        targets: &Targets,
         config: ForwardConfig,
-        samples: u32,
     ) -> Result<Self, RenderError> {
+        let samples = targets.samples;
         let prepass = config.depth_prepass.then(|| DepthPrepass::new(device, shaders, scene, samples)).transpose()?;
         let raster = SceneRaster {
             shader: SHADER,
@@ -56,7 +61,8 @@ impl Forward {
             samples,
         };
         let shade = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
-        Ok(Self { config, prepass, shade })
+        let blended = BlendedPass::new(device, shaders, scene, targets, SHADER, &[], false)?;
+        Ok(Self { config, prepass, shade, blended })
     }
 }
 
@@ -65,7 +71,10 @@ impl Pipeline for Forward {
         if let Some(prepass) = &self.prepass {
             depth_prepass(frame, prepass);
         }
-        forward_shade(frame, &self.shade, self.prepass.is_none());
+        forward_shade(frame, &self.shade, self.prepass.is_none(), self.blended.is_some());
+        if let Some(blended) = &self.blended {
+            blended_pass(frame, blended, &[]);
+        }
     }
 
     fn report(&self) -> PipelineReport {
@@ -75,10 +84,11 @@ impl Pipeline for Forward {
 
 /// Reads: the scene, its lights and per-object light lists, and the depth
 /// target unless `clear_depth`. Writes: `targets.hdr` (cleared first;
-/// under MSAA resolved from the samples) and depth.
-fn forward_shade(frame: &mut Frame, pipeline: &ScenePipeline, clear_depth: bool) {
+/// under MSAA resolved from the samples, or with `blended_after` left in
+/// them for the blended pass) and depth.
+fn forward_shade(frame: &mut Frame, pipeline: &ScenePipeline, clear_depth: bool, blended_after: bool) {
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
-    let color = [hdr_attachment(targets)];
+    let color = [hdr_attachment_then(targets, blended_after)];
     let mut rp = frame.render_pass("forward shade", &color, Some(depth_attachment(targets, clear_depth)));
     draw_objects(&mut rp, scene, visible, pipeline);
 }

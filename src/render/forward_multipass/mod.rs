@@ -9,6 +9,13 @@
 //! buffer, and each draw's `first_instance` is its pair's index, so the
 //! shaders find their object and light with no per-draw uniform writes or
 //! bind-group switches. Emission is one more "light" of each emissive object.
+//!
+//! Alpha-blended objects follow in a render pass of their own, object by
+//! object back to front (`passes::blended::back_to_front`): each one's
+//! emission pair (every blended object has one) composites its emission
+//! times its opacity "over" the frame, scaling what is behind by one minus
+//! the opacity, and then each of its light pairs adds its light times the
+//! opacity: the same sum as one forward fragment, one light at a time.
 
 use std::collections::VecDeque;
 
@@ -16,14 +23,15 @@ use serde::Serialize;
 
 use super::culling;
 use super::frame::Frame;
+use super::passes::blended::{OVER, back_to_front, blended_pipeline, over_frame_attachment};
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::{
-    Binding, DepthMode, SceneRaster, bind_group, bind_group_layout_for, depth_attachment, hdr_attachment,
-    scene_raster_pipeline_from,
+    Binding, DepthMode, SceneRaster, bind_group, bind_group_layout_for, depth_attachment, depth_attachment_read_only,
+    hdr_attachment_then, scene_raster_pipeline_from,
 };
 use super::report::{Counters, PipelineReport};
 use super::scene_gpu::{GrowableBuffer, SceneGpu};
-use super::targets::HDR_FORMAT;
+use super::targets::{HDR_FORMAT, Targets};
 use super::{Pipeline, PipelineConfig, RenderError};
 use glam::{Mat4, Vec2, Vec3};
 
@@ -63,6 +71,15 @@ pub struct ForwardMultipass {
     emissive: Vec<bool>,
     /// Draws per recorded frame, until collected as counters.
     draws: VecDeque<(u64, usize)>,
+    /// For scenes with alpha-blended objects: the pipelines of their pairs.
+    blended: Option<BlendedPipelines>,
+}
+
+/// The pipelines drawing an alpha-blended object's pairs: its emission
+/// pair composited [`OVER`] the frame, then its light pairs added.
+struct BlendedPipelines {
+    over: wgpu::RenderPipeline,
+    add: wgpu::RenderPipeline,
 }
 
 impl ForwardMultipass {
@@ -70,9 +87,10 @@ impl ForwardMultipass {
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
+        targets: &Targets,
         config: ForwardMultipassConfig,
-        samples: u32,
     ) -> Result<Self, RenderError> {
+        let samples = targets.samples;
         let prepass = DepthPrepass::new(device, shaders, scene, samples)?;
         let pairs_layout = bind_group_layout_for(
             device,
@@ -98,7 +116,24 @@ impl ForwardMultipass {
         let pairs_buffer = GrowableBuffer::new(device, "light pairs", 64 * 1024);
         let pairs_group = bind_group(device, "light pairs", &pairs_layout, &[pairs_buffer.buffer.as_entire_binding()]);
         let emissive = scene.emits.clone();
+        let blended = if scene.has_blended() {
+            let groups = [Some(&pairs_layout)];
+            // Light pairs add their premultiplied colour and keep the alpha.
+            let keep = wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            };
+            let add = wgpu::BlendState { color: additive, alpha: keep };
+            Some(BlendedPipelines {
+                over: blended_pipeline(device, shaders, scene, targets, SHADER, &groups, OVER)?,
+                add: blended_pipeline(device, shaders, scene, targets, SHADER, &groups, add)?,
+            })
+        } else {
+            None
+        };
         Ok(Self {
+            blended,
             config,
             prepass,
             shade,
@@ -115,7 +150,12 @@ impl ForwardMultipass {
 impl Pipeline for ForwardMultipass {
     fn encode(&mut self, frame: &mut Frame) {
         depth_prepass(frame, &self.prepass);
-        let pairs = self.builder.build(frame.lights, &frame.scene.object_bounds, frame.visible, &self.emissive);
+        let opaque = self.builder.build(frame.lights, &frame.scene.object_bounds, frame.visible, &self.emissive).len();
+        let order = match self.blended {
+            Some(_) => back_to_front(frame.scene, frame.camera, frame.view.view_proj),
+            None => Vec::new(),
+        };
+        let pairs = self.builder.add_blended(frame.lights, &frame.scene.object_bounds, &order);
         if self.pairs_buffer.write(frame.device, frame.queue, bytemuck::cast_slice(pairs)) {
             self.pairs_group = bind_group(
                 frame.device,
@@ -125,7 +165,10 @@ impl Pipeline for ForwardMultipass {
             );
         }
         self.draws.push_back((frame.number, pairs.len()));
-        light_passes(frame, &self.shade, &self.pairs_group, pairs);
+        light_passes(frame, &self.shade, &self.pairs_group, &pairs[..opaque], self.blended.is_some());
+        if let Some(blended) = &self.blended {
+            blended_light_passes(frame, blended, &self.pairs_group, pairs, opaque);
+        }
     }
 
     fn uses_object_light_lists(&self) -> bool {
@@ -146,17 +189,19 @@ impl Pipeline for ForwardMultipass {
 /// and `pairs` (already uploaded to the buffer of `pairs_group`). Writes:
 /// `targets.hdr`, cleared, then one additive draw per pair, each light's
 /// draws scissored to the screen rectangle its volume covers (under MSAA
-/// into the samples, which the one pass resolves at its end).
+/// into the samples, which the one pass resolves at its end, or with
+/// `blended_after` leaves for the blended pass to resolve).
 fn light_passes(
     frame: &mut Frame,
     pipeline: &wgpu::RenderPipeline,
     pairs_group: &wgpu::BindGroup,
     pairs: &[LightPair],
+    blended_after: bool,
 ) {
     let (scene, targets, lights) = (frame.scene, frame.targets, frame.lights);
     let size = (targets.width, targets.height);
     let view_proj = frame.view.view_proj;
-    let color = [hdr_attachment(targets)];
+    let color = [hdr_attachment_then(targets, blended_after)];
     let mut rp = frame.render_pass("light passes", &color, Some(depth_attachment(targets, false)));
     rp.set_pipeline(pipeline);
     rp.set_bind_group(0, scene.bind_group(), &[]);
@@ -179,6 +224,41 @@ fn light_passes(
         }
         if rect.is_none() {
             continue; // the light's volume is off screen
+        }
+        let d = scene.draws[pair.object as usize];
+        let i = i as u32;
+        rp.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, i..i + 1);
+    }
+}
+
+/// Reads: the opaque frame and its depth, the scene and its lights, and
+/// `pairs` (uploaded to the buffer of `pairs_group`), whose pairs from
+/// `first` on are the blended objects', object by object (each object's
+/// emission pair first). Writes: those pairs over the frame, each emission
+/// pair composited over it and each light pair added (under MSAA into the
+/// samples, resolved at the end of the pass).
+fn blended_light_passes(
+    frame: &mut Frame,
+    pipelines: &BlendedPipelines,
+    pairs_group: &wgpu::BindGroup,
+    pairs: &[LightPair],
+    first: usize,
+) {
+    let (scene, targets) = (frame.scene, frame.targets);
+    if pairs.len() == first && targets.hdr_msaa_view.is_none() {
+        return;
+    }
+    let color = [over_frame_attachment(targets)];
+    let mut rp = frame.render_pass("blended light passes", &color, Some(depth_attachment_read_only(targets)));
+    rp.set_bind_group(0, scene.bind_group(), &[]);
+    rp.set_bind_group(1, pairs_group, &[]);
+    rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+    let mut over = None;
+    for (i, pair) in pairs.iter().enumerate().skip(first) {
+        let emission = pair.light == EMISSION;
+        if over != Some(emission) {
+            over = Some(emission);
+            rp.set_pipeline(if emission { &pipelines.over } else { &pipelines.add });
         }
         let d = scene.draws[pair.object as usize];
         let i = i as u32;
@@ -274,6 +354,27 @@ impl PairBuilder {
         }
         &self.pairs
     }
+
+    /// Appends the pairs of the blended objects `order` (back to front) to
+    /// the last [`PairBuilder::build`]'s, object by object: each one's
+    /// emission pair, then a pair per light reaching it (in light order);
+    /// returns every pair.
+    fn add_blended(&mut self, lights: &[Light], bounds: &[Aabb], order: &[u32]) -> &[LightPair] {
+        if order.is_empty() {
+            return &self.pairs;
+        }
+        self.bounds.clear();
+        self.bounds.resize(bounds.len(), Aabb::EMPTY);
+        for &o in order {
+            self.bounds[o as usize] = bounds[o as usize];
+        }
+        let lists = culling::lights_per_object(lights, &self.bounds, None);
+        for &object in order {
+            self.pairs.push(LightPair { object, light: EMISSION });
+            self.pairs.extend(lists.lights_of(object as usize).iter().map(|&light| LightPair { object, light }));
+        }
+        &self.pairs
+    }
 }
 
 #[cfg(test)]
@@ -321,6 +422,27 @@ mod tests {
             cos_outer: 0.9,
             casts_shadows: false,
         }
+    }
+
+    /// Blended objects' pairs follow the opaque ones in the order given,
+    /// each object's emission pair first (emissive or not), then one per
+    /// light reaching it, in light order.
+    #[test]
+    fn blended_pairs_follow_object_by_object() {
+        let lights = vec![
+            light(LightKind::Ambient, Vec3::ZERO, Vec3::NEG_Y, 0.0),
+            light(LightKind::Point, Vec3::new(10.0, 0.0, 0.0), Vec3::NEG_Y, 1.0),
+            light(LightKind::Point, Vec3::new(0.0, 0.0, 0.0), Vec3::NEG_Y, 2.0),
+        ];
+        let unit = |x: f32| Aabb { min: Vec3::new(x - 0.5, -0.5, -0.5), max: Vec3::new(x + 0.5, 0.5, 0.5) };
+        let bounds = [unit(0.0), unit(10.0), unit(0.5)];
+        // Object 0 is opaque; 1 and 2 are blended, drawn 2 then 1.
+        let mut builder = PairBuilder::default();
+        let opaque = builder.build(&lights, &bounds, &[true, false, false], &[false; 3]).len();
+        let pairs = builder.add_blended(&lights, &bounds, &[2, 1]);
+        let got: Vec<(u32, u32)> = pairs[opaque..].iter().map(|p| (p.object, p.light)).collect();
+        assert_eq!(got, [(2, EMISSION), (2, 0), (2, 2), (1, EMISSION), (1, 0), (1, 1)]);
+        assert!(pairs[..opaque].iter().all(|p| p.object == 0));
     }
 
     /// The pairs are exactly the emissive visible objects, then, light by

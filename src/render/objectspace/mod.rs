@@ -19,10 +19,12 @@
 //! the global lights and the lights of their cell of the world grid (Oxide's
 //! light matrix), built on the GPU before shading; no CPU light culling. No
 //! CPU read-back inside the frame: the counters are copied out and read a few
-//! frames later.
+//! frames later. Alpha-blended objects, which are not in the visibility
+//! buffer, are marked and gathered by raster passes over them ([`blended`]).
 
 pub mod atlas;
 pub mod atlas_view;
+pub mod blended;
 pub mod budget;
 pub mod cpu;
 pub mod debug;
@@ -34,6 +36,7 @@ pub mod resources;
 pub mod shade;
 pub mod trimap;
 
+use blended::{BlendedObjects, gather_blended, mark_blended};
 use budget::Budget;
 use std::str::FromStr;
 
@@ -497,6 +500,8 @@ pub struct ObjectSpace {
     residency: Residency,
     virtual_halvings: u32,
     extra_views: Vec<ExtraView>,
+    /// For scenes with alpha-blended objects: their marking and gathering.
+    blended: Option<BlendedObjects>,
     /// What each frame still in flight was rendered with.
     in_flight: std::collections::BTreeMap<u64, InFlight>,
 }
@@ -613,8 +618,12 @@ impl ObjectSpace {
             let visibility = Box::new(ComputeVisibility::new(device, shaders, scene, targets, &ids, false)?);
             extra_views.push(ExtraView { uniform, visibility, hdr });
         }
+        // The compute rasterizer leaves the depth target to the blended passes.
+        let lay_depth = config.visibility == VisibilityMethod::Compute;
+        let blended = BlendedObjects::new(device, shaders, scene, &res, targets, &grid.grid, lay_depth)?;
         Ok(Self {
             extra_views,
+            blended,
             visibility,
             mark: MarkPass::new(device, shaders, scene, &res)?,
             paging: PagingPass::new(device, shaders, scene, &res)?,
@@ -699,6 +708,9 @@ impl ObjectSpace {
         copy_pages(frame, &self.resize, &self.res, &old, old_pages, moves.as_ref());
         self.shade.rebind(frame.device, &self.res);
         self.gather.rebind(frame.device, &self.res);
+        if let Some(blended) = &mut self.blended {
+            blended.rebind(frame.device, &self.res);
+        }
         self.trimap.rebind(frame.device, &self.res);
         if let Some(view) = &mut self.atlas_view {
             view.rebind(frame.device, &self.res);
@@ -764,6 +776,9 @@ impl Pipeline for ObjectSpace {
             Visibility::Compute(pass) => compute_visibility(frame, pass),
         }
         mark_tiles(frame, &self.mark, &self.res, 0);
+        if let Some(blended) = &self.blended {
+            mark_blended(frame, blended, &self.res);
+        }
         let views = self.mark_extra_views(frame);
         if !quiet {
             back_pages(frame, &self.paging, &self.res);
@@ -778,6 +793,9 @@ impl Pipeline for ObjectSpace {
         for (k, group) in views.iter().enumerate() {
             let mut view = frame.with_scene_group(group);
             gather(&mut view, &self.gather, &self.res, &self.grid.grid, k + 1);
+        }
+        if let Some(blended) = &self.blended {
+            gather_blended(frame, blended, &self.res, &self.grid.grid);
         }
         if let Some(pass) = &self.atlas_view {
             draw_atlas_pages(frame, pass, &self.res, self.atlas_pages);

@@ -3,7 +3,8 @@
 // gathering must compute identically.
 #define_import_path shadespace::objectspace
 #import shadespace::contract::{MAX_LEVELS, TILE_COUNTER_SLOTS, BLOCK_SIDE, AGE_BUCKETS}
-#import shadespace::scene_bindings::{vertices, objects}
+#import shadespace::scene_bindings::{vertices, objects, triangle_vertices, object_clip_position}
+#import shadespace::scene::vertex_uv0
 #import shadespace::pixel_surface::{PixelSample, interpolate2}
 
 struct AtlasLevel {
@@ -402,4 +403,25 @@ fn same_chart_surface(a: vec2u, b: vec2u) -> bool {
     }
     let first = objects[a.x - 1u].first_index / 3u;
     return triangle_charts[first + a.y] == triangle_charts[first + b.y];
+}
+
+// A vertex of an alpha-blended object in object space's raster passes over
+// them (`objectspace::blended`), which draw without the index buffer: vertex
+// `k` of the draw is corner k % 3 of triangle k / 3, and the fragments carry
+// the ids a visibility buffer would hold for them.
+struct BlendedVertex {
+    @builtin(position) @invariant clip: vec4f,
+    // (object + 1, triangle), as in the visibility buffer; UV0 (the opacity).
+    @location(0) @interpolate(flat) ids: vec2u,
+    @location(1) texcoord: vec2f,
+}
+
+fn blended_vertex(k: u32, object: u32) -> BlendedVertex {
+    let triangle = k / 3u;
+    let vi = triangle_vertices(objects[object], triangle)[k % 3u];
+    var out: BlendedVertex;
+    out.clip = object_clip_position(object, vi);
+    out.ids = vec2u(object + 1u, triangle);
+    out.texcoord = vertex_uv0(vertices[vi]);
+    return out;
 }

@@ -9,7 +9,7 @@ use wgpu::util::DeviceExt;
 use super::atlas::{AtlasLayout, GpuAtlasEntry, PagePool};
 use super::{ObjectSpaceConfig, TileCounter};
 use crate::render::passes::visibility::VisibilityBuffer;
-use crate::render::passes::{Binding, bind_group, bind_group_layout, view_as};
+use crate::render::passes::{Binding, bind_group, bind_group_layout, bind_group_layout_for, view_as};
 use crate::render::targets::Targets;
 use crate::shaders::gpu_struct;
 
@@ -247,9 +247,13 @@ impl Resources {
 
         let rw = Binding::Storage { read_only: false };
         let uint = wgpu::TextureSampleType::Uint;
-        let layout = bind_group_layout(
+        // Fragments of object space's passes over blended objects mark and
+        // gather as its compute passes do.
+        let stages = wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT;
+        let layout = bind_group_layout_for(
             device,
             "object space",
+            stages,
             &[
                 Binding::Uniform,
                 Binding::Storage { read_only: true },

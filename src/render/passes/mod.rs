@@ -3,6 +3,7 @@
 //! the scene draw loop, the depth attachment, compute pipelines and
 //! bind-group layouts.
 
+pub mod blended;
 pub mod bloom;
 pub mod depth_prepass;
 pub mod exposure;
@@ -23,6 +24,8 @@ pub enum DepthMode {
     Write,
     /// Test `Equal`, no write: after a depth pre-pass, one fragment per pixel.
     EqualAfterPrepass,
+    /// Test `Greater`, no write: surfaces blended over the opaque frame.
+    TestOnly,
 }
 
 impl DepthMode {
@@ -114,7 +117,7 @@ pub fn scene_raster_pipeline_from(
 
 /// One pipeline of [`scene_raster_pipeline_from`]: the shader's
 /// [`ALPHA_MASK`] variant when `alpha_mask`.
-fn raster_pipeline(
+pub(crate) fn raster_pipeline(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,
     scene: &SceneGpu,
@@ -139,6 +142,7 @@ fn raster_pipeline(
     let (depth_write, compare) = match raster.depth {
         DepthMode::Write => (true, wgpu::CompareFunction::Greater),
         DepthMode::EqualAfterPrepass => (false, wgpu::CompareFunction::Equal),
+        DepthMode::TestOnly => (false, wgpu::CompareFunction::Greater),
     };
     Ok(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(shader.file),
@@ -230,10 +234,23 @@ pub fn color_attachment(view: &wgpu::TextureView, clear: wgpu::Color) -> Option<
 /// samples, in linear HDR, before exposure, bloom and tone mapping) and
 /// then discarded: the pass must be the pipeline's only one into it.
 pub fn hdr_attachment(targets: &Targets) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+    hdr_attachment_then(targets, false)
+}
+
+/// [`hdr_attachment`], or with `blended_after` for a shading pass that the
+/// blended pass follows ([`blended`]): under MSAA the samples are then
+/// stored, not resolved, and the blended pass resolves them.
+pub fn hdr_attachment_then(targets: &Targets, blended_after: bool) -> Option<wgpu::RenderPassColorAttachment<'_>> {
     let clear = wgpu::LoadOp::Clear(wgpu::Color::BLACK);
     Some(match &targets.hdr_msaa_view {
         None => wgpu::RenderPassColorAttachment {
             view: &targets.hdr_view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: clear, store: wgpu::StoreOp::Store },
+        },
+        Some(msaa) if blended_after => wgpu::RenderPassColorAttachment {
+            view: msaa,
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations { load: clear, store: wgpu::StoreOp::Store },

@@ -1,6 +1,7 @@
 //! Procedural scenes, built in code and deterministic: `atrium` (a Sponza-like
-//! courtyard, the default scene), `voxels` (a block world) and, for tests of
-//! anti-aliasing, [`fence`] (thin tilted bars before a wall).
+//! courtyard, the default scene), `voxels` (a block world), for tests of
+//! anti-aliasing [`fence`] (thin tilted bars before a wall) and, for tests of
+//! alpha blending, [`panes`] (overlapping transparent panes before a wall).
 //!
 //! Both are in metres, right-handed, +y up, with the floor at y = 0. Every
 //! object has its own Phong material with a UV-checker albedo sampled through
@@ -67,6 +68,75 @@ pub fn fence() -> Scene {
         bars.rect(centre - along * 1.2 - across * 0.01, across * 0.02, along * 2.4, 0.5, 1.0);
     }
     a.add("bars", bars, bar_look);
+    a.finish().scene
+}
+
+/// One transparent pane of [`panes`]: a rectangle facing +z at depth `z`,
+/// from `min` to `max` in x and y, of one linear colour and opacity.
+#[derive(Clone, Copy, Debug)]
+pub struct Pane {
+    pub name: &'static str,
+    pub color: Vec3,
+    pub opacity: f32,
+    pub min: glam::Vec2,
+    pub max: glam::Vec2,
+    pub z: f32,
+}
+
+/// The panes of [`panes`], nearest first: red over green over blue, each
+/// overlapping the others, so that one region shows all three.
+pub const PANES: [Pane; 3] = [
+    Pane {
+        name: "pane red",
+        color: Vec3::new(0.9, 0.08, 0.05),
+        opacity: 0.5,
+        min: glam::Vec2::new(-1.2, -0.6),
+        max: glam::Vec2::new(0.4, 1.0),
+        z: 0.6,
+    },
+    Pane {
+        name: "pane green",
+        color: Vec3::new(0.08, 0.8, 0.15),
+        opacity: 0.4,
+        min: glam::Vec2::new(-0.4, -0.2),
+        max: glam::Vec2::new(1.2, 1.0),
+        z: 0.2,
+    },
+    Pane {
+        name: "pane blue",
+        color: Vec3::new(0.06, 0.15, 0.9),
+        opacity: 0.6,
+        min: glam::Vec2::new(-0.8, -1.0),
+        max: glam::Vec2::new(0.8, 0.2),
+        z: -0.2,
+    },
+];
+
+/// The linear colour of the opaque wall behind [`PANES`].
+pub const PANES_BACKDROP: Vec3 = Vec3::new(0.6, 0.6, 0.55);
+
+/// A scene for alpha blending: an opaque wall (4 x 3 m at z = -1, facing
+/// +z, [`PANES_BACKDROP`]) behind three alpha-blended panes ([`PANES`]),
+/// each flat-coloured with its opacity in its base colour's alpha. The
+/// panes are listed nearest first, so that drawing them in object order
+/// (front to back) composites them wrongly. Seen from (0, 0, 4) looking
+/// down -z. No lights (the caller's).
+pub fn panes() -> Scene {
+    let mut a = Assembler::new("panes");
+    let wall_look = a.flat_look("panes wall", PANES_BACKDROP);
+    let mut wall = MeshBuilder::new();
+    wall.rect(Vec3::new(-2.0, -1.5, -1.0), Vec3::X * 4.0, Vec3::Y * 3.0, 1.0, 1.0);
+    a.add("wall", wall, wall_look);
+    for pane in PANES {
+        let look = a.flat_look(pane.name, pane.color);
+        let mut mesh = MeshBuilder::new();
+        let size = pane.max - pane.min;
+        mesh.rect(pane.min.extend(pane.z), Vec3::X * size.x, Vec3::Y * size.y, 1.0, 1.0);
+        a.add(pane.name, mesh, look);
+        let m = a.generated.scene.materials.last_mut().expect("just added");
+        m.blend = true;
+        m.base_color.w = pane.opacity;
+    }
     a.finish().scene
 }
 
@@ -245,6 +315,23 @@ mod tests {
             let nearest_bar_distance = (offset - offset.round()).abs() * 0.25 * normal.x;
             assert!(nearest_bar_distance <= 0.0101, "{p}: {nearest_bar_distance} m from a bar's centre line");
         }
+    }
+
+    /// The wall is opaque and the panes blended, nearest first, each with
+    /// its opacity.
+    #[test]
+    fn panes_are_blended_nearest_first() {
+        let g = panes();
+        g.validate().unwrap();
+        assert_eq!(g.objects.len(), 4);
+        assert!(!g.materials[g.objects[0].material].blend);
+        for (o, pane) in g.objects[1..].iter().zip(PANES) {
+            let m = &g.materials[o.material];
+            assert_eq!(m.alpha_mode(), crate::scene::AlphaMode::Blend);
+            assert_eq!(m.opacity(1.0), pane.opacity);
+            assert!(g.meshes[o.mesh].positions.iter().all(|p| p.z == pane.z));
+        }
+        assert!(PANES.windows(2).all(|w| w[0].z > w[1].z), "nearest first");
     }
 
     #[test]

@@ -1,4 +1,5 @@
-// Alpha masking (glTF `MASK`) in the raster passes over the scene bind group.
+// Alpha masking (glTF `MASK`) in the raster passes over the scene bind group,
+// and the opacity of alpha-blended surfaces (glTF `BLEND`).
 // Only their ALPHA_MASK variants call it, and only for the masked objects
 // (`passes::ScenePipeline`): a fragment shader that may discard costs opaque
 // objects their early depth test.
@@ -11,4 +12,12 @@
 fn masked_out(object: u32, uv0: vec2f) -> bool {
     let o = objects[object];
     return alpha_cut(o, textureSample(albedo, albedo_sampler, uv0, o.albedo_layer).a);
+}
+
+// The opacity of `object` at `uv0` (base colour factor alpha times texture
+// alpha, as `scene::Material::opacity`), for alpha-blended objects
+// (implicit derivatives: call it in uniform control flow).
+fn opacity(object: u32, uv0: vec2f) -> f32 {
+    let o = objects[object];
+    return clamp(o.base_color.a * textureSample(albedo, albedo_sampler, uv0, o.albedo_layer).a, 0.0, 1.0);
 }

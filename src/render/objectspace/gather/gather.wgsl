@@ -19,7 +19,8 @@
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_levels,
     bilinear, AtlasTexel, triangle_charts, locate, physical_page, virtual_page, physical_tile,
-    NOT_BACKED}
+    NOT_BACKED, BlendedVertex, blended_vertex}
+#import shadespace::alpha_mask::opacity
 
 @group(2) @binding(0) var atlas: texture_2d_array<f32>;
 @group(2) @binding(1) var hdr: texture_storage_2d<rgba16float, write>;
@@ -130,6 +131,22 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     textureStore(hdr, id.xy, gather_surface(sample_pixel(id.xy, ids)));
+}
+
+// An alpha-blended object's vertex (`objectspace::blended`).
+@vertex
+fn vs_blended(@builtin(vertex_index) k: u32, @builtin(instance_index) object: u32) -> BlendedVertex {
+    return blended_vertex(k, object);
+}
+
+// An alpha-blended object's fragment: its shade gathered from the atlas as
+// a pixel of it in the visibility buffer would gather it, times its
+// opacity, and the opacity (premultiplied, composited over the frame).
+@fragment
+fn fs_gather_blended(in: BlendedVertex) -> @location(0) vec4f {
+    let a = opacity(in.ids.x - 1u, in.texcoord);
+    let c = gather_surface(sample_pixel(vec2u(in.clip.xy), in.ids));
+    return vec4f(a * c.rgb, a);
 }
 
 // The shade of one surface point: its object's shades filtered (or a debug

@@ -17,7 +17,7 @@
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
-    page_request_bit, tile_request_bit, page_tile_origin, forget_request}
+    page_request_bit, tile_request_bit, page_tile_origin, forget_request, BlendedVertex, blended_vertex}
 #ifdef MSAA
 #import shadespace::objectspace::same_chart_surface
 #endif
@@ -220,6 +220,22 @@ fn mark_surface(p: PixelSample) -> u32 {
         mark_footprint(p.object, levels.hi, e.valid_since, f.uv);
     }
     return kind;
+}
+
+// An alpha-blended object's vertex (`objectspace::blended`).
+@vertex
+fn vs_blended(@builtin(vertex_index) k: u32, @builtin(instance_index) object: u32) -> BlendedVertex {
+    return blended_vertex(k, object);
+}
+
+// Marks the tiles an alpha-blended object's fragment needs (blended objects
+// are not in the visibility buffer): its footprint's, as `mark_pixel` marks
+// a pixel's. A fragment stage that writes storage may run before the depth
+// test (wgpu cannot force it early), so fragments hidden behind opaque
+// surfaces may mark tiles too: more shading, never a wrong image.
+@fragment
+fn fs_mark_blended(in: BlendedVertex) {
+    mark_surface(sample_pixel(vec2u(in.clip.xy), in.ids));
 }
 
 // Per page backed this frame (one workgroup each, one invocation per tile of
