@@ -59,7 +59,8 @@ pub struct SceneArgs {
     #[arg(long, default_value = "path")]
     pub camera: String,
     /// `studio` (a white key light that casts shadows, fill, rim and ambient,
-    /// placed from the model's bounds and the camera), or lights besides the
+    /// placed from the model's bounds and the camera), `daylight` (a sun and
+    /// a sky ambient, for landscapes), or lights besides the
     /// ambient and directional light that every generated set has:
     /// `small:N` (each covers 0.25-5% of the screen), `big:N` (20-100%),
     /// `shadowed:N` (big lights that cast shadows: a quarter are spots),
@@ -67,7 +68,8 @@ pub struct SceneArgs {
     /// several joined with `+` (`small:100+big:2`), or a JSON light file.
     /// `auto` (default): `studio` for a model seen from outside (a glTF or
     /// OBJ file framed automatically or seen through its own camera),
-    /// `small:32` for scenes the camera moves through.
+    /// `daylight` for the terrain, `small:32` for scenes the camera moves
+    /// through.
     #[arg(long, default_value = "auto")]
     pub lights: String,
     /// Seed of the light placement (same seed, same lights).

@@ -197,7 +197,7 @@ impl ViewSession {
             lights: a
                 .lights
                 .parse::<LightSpec>()
-                .map_or(a.lights.clone(), |spec| spec.resolve(self.cameras.source.seen_from_outside()).to_string()),
+                .map_or(a.lights.clone(), |spec| spec.resolve(&self.cameras.source).to_string()),
             seed: a.seed,
             exposure: self.exposure,
             view,

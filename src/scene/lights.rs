@@ -1,6 +1,7 @@
 //! Lights and the seeded light-set generators of the four classic scenarios
 //! (small, big, big shadowed, mixed), the three-point [`studio`] set for
-//! models seen from outside, parsed from `--lights SPEC`.
+//! models seen from outside and the [`daylight`] set for open landscapes,
+//! parsed from `--lights SPEC`.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -11,6 +12,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
+use super::path::CameraSource;
 use super::{Aabb, Camera};
 
 /// The four light types of the shared lighting model.
@@ -149,7 +151,7 @@ impl fmt::Display for LightPart {
 
 /// What `--lights SPEC` asks for.
 ///
-/// Grammar: `auto` | `studio` | `none` | `PART(+PART)*` | a path to a JSON
+/// Grammar: `auto` | `studio` | `daylight` | `none` | `PART(+PART)*` | a path to a JSON
 /// light file, where PART is `small:N`, `big:N`, `shadowed:N` or
 /// `mixed:N:R`. A spec that ends in `.json`, or names an existing file, is a
 /// light file; anything else is parsed as parts. `Display` gives the
@@ -157,11 +159,14 @@ impl fmt::Display for LightPart {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum LightSpec {
     /// The default for how the scene is seen, chosen by [`LightSpec::resolve`]:
-    /// [`LightSpec::Studio`] for a model seen from outside, `small:32` for a
+    /// [`LightSpec::Studio`] for a model seen from outside,
+    /// [`LightSpec::Daylight`] for a landscape flown over, `small:32` for a
     /// scene the cameras move through.
     Auto,
     /// Three-point studio lighting around the model ([`studio`]).
     Studio,
+    /// Sun and sky for an open landscape ([`daylight`]).
+    Daylight,
     /// Only the fixed ambient and directional lights.
     None,
     /// Fixed ambient + directional lights plus the generated parts, in order.
@@ -173,12 +178,12 @@ pub enum LightSpec {
 
 impl LightSpec {
     /// Number of generated lights (not counting the fixed ambient and
-    /// directional ones); `None` for a light file, `studio` and `auto`.
+    /// directional ones); `None` for a light file, `studio`, `daylight` and `auto`.
     pub fn generated_count(&self) -> Option<u64> {
         match self {
             LightSpec::None => Some(0),
             LightSpec::Generated(parts) => Some(parts.iter().map(LightPart::count).sum()),
-            LightSpec::File(_) | LightSpec::Studio | LightSpec::Auto => None,
+            LightSpec::File(_) | LightSpec::Studio | LightSpec::Daylight | LightSpec::Auto => None,
         }
     }
 
@@ -189,14 +194,17 @@ impl LightSpec {
     }
 
     /// This spec with `auto` replaced by the default for how the scene is
-    /// seen: `studio` for a model seen from outside (framed automatically,
-    /// or through its file's own camera: [`super::path::CameraSource::seen_from_outside`]),
-    /// [`LightSpec::scene_default`] otherwise. Other specs are returned as they are.
-    pub fn resolve(&self, seen_from_outside: bool) -> LightSpec {
-        match self {
-            LightSpec::Auto if seen_from_outside => LightSpec::Studio,
-            LightSpec::Auto => LightSpec::scene_default(),
-            other => other.clone(),
+    /// seen through `source`: `studio` for a model seen from outside (framed
+    /// automatically, or through its file's own camera:
+    /// [`CameraSource::seen_from_outside`]), `daylight` for the terrain's
+    /// flight, [`LightSpec::scene_default`] otherwise. Other specs are
+    /// returned as they are.
+    pub fn resolve(&self, source: &CameraSource) -> LightSpec {
+        match (self, source) {
+            (LightSpec::Auto, s) if s.seen_from_outside() => LightSpec::Studio,
+            (LightSpec::Auto, CameraSource::Flight) => LightSpec::Daylight,
+            (LightSpec::Auto, _) => LightSpec::scene_default(),
+            (other, _) => other.clone(),
         }
     }
 }
@@ -206,6 +214,7 @@ impl fmt::Display for LightSpec {
         match self {
             LightSpec::Auto => f.write_str("auto"),
             LightSpec::Studio => f.write_str("studio"),
+            LightSpec::Daylight => f.write_str("daylight"),
             LightSpec::None => f.write_str("none"),
             LightSpec::Generated(parts) => {
                 for (i, p) in parts.iter().enumerate() {
@@ -259,7 +268,13 @@ impl FromStr for LightSpec {
         if spec.is_empty() {
             return Err(LightSpecError::Empty);
         }
-        for (word, whole) in [("none", LightSpec::None), ("auto", LightSpec::Auto), ("studio", LightSpec::Studio)] {
+        let words = [
+            ("none", LightSpec::None),
+            ("auto", LightSpec::Auto),
+            ("studio", LightSpec::Studio),
+            ("daylight", LightSpec::Daylight),
+        ];
+        for (word, whole) in words {
             if spec.eq_ignore_ascii_case(word) {
                 return Ok(whole);
             }
@@ -272,7 +287,9 @@ impl FromStr for LightSpec {
         let mut parts = Vec::new();
         for part in spec.split('+') {
             let part = part.trim();
-            if let Some(word) = ["none", "auto", "studio"].into_iter().find(|w| part.eq_ignore_ascii_case(w)) {
+            if let Some(word) =
+                ["none", "auto", "studio", "daylight"].into_iter().find(|w| part.eq_ignore_ascii_case(w))
+            {
                 return Err(LightSpecError::Combined { spec: spec.into(), word });
             }
             parts.push(parse_part(part)?);
@@ -375,6 +392,23 @@ pub fn default_sun() -> Light {
         direction: Vec3::new(0.35, -1.0, 0.25).normalize(),
         ..default_ambient()
     }
+}
+
+/// Sun and sky for an open landscape (the terrain's default, `--lights
+/// daylight`): a white-warm sun at about 40 degrees elevation and a pale blue
+/// sky ambient, scaled so that a sunlit field of albedo 0.5 sits near the
+/// middle of the default exposure's range and shaded slopes stay readable.
+/// Two lights of no position: the same on a 2 km terrain as on a 2 m model.
+/// The sun's shadows are the renderers' `sun_shadow` option, as for every set.
+pub fn daylight() -> [Light; 2] {
+    let sky = Light { color: Vec3::new(0.55, 0.7, 1.0), intensity: 0.35, ..default_ambient() };
+    let sun = Light {
+        color: Vec3::new(1.0, 0.93, 0.82),
+        intensity: 2.2,
+        direction: Vec3::new(0.55, -0.65, 0.52).normalize(),
+        ..default_sun()
+    };
+    [sky, sun]
 }
 
 /// The box to place the generated lights of an object seen from outside in
@@ -563,6 +597,7 @@ pub fn build_lights(
     let parts = match spec {
         LightSpec::File(path) => return load_light_file(path),
         LightSpec::Studio => return studio(bounds, reference),
+        LightSpec::Daylight => return Ok(daylight().to_vec()),
         LightSpec::Auto => return Err(LightSetError::Unresolved),
         LightSpec::None => &[][..],
         LightSpec::Generated(parts) => &parts[..],
@@ -983,10 +1018,18 @@ mod tests {
         }
         assert_eq!(parse_err("studio+small:3"), "\"studio+small:3\": 'studio' cannot be combined with other parts");
         assert_eq!(parse_err("small:3+auto"), "\"small:3+auto\": 'auto' cannot be combined with other parts");
-        assert_eq!(LightSpec::Auto.resolve(true), LightSpec::Studio);
-        assert_eq!(LightSpec::Auto.resolve(false).to_string(), "small:32");
+        assert_eq!(LightSpec::Auto.resolve(&CameraSource::Framed), LightSpec::Studio);
+        assert_eq!(LightSpec::Auto.resolve(&CameraSource::Flight), LightSpec::Daylight);
+        let inside = CameraSource::Orbit(super::super::path::OrbitStyle::Inside);
+        assert_eq!(LightSpec::Auto.resolve(&inside).to_string(), "small:32");
         let given: LightSpec = "big:3".parse().unwrap();
-        assert_eq!(given.resolve(true), given, "a given spec overrides the default");
+        assert_eq!(given.resolve(&CameraSource::Framed), given, "a given spec overrides the default");
+        assert_eq!(given.resolve(&CameraSource::Flight), given, "a given spec overrides the default");
+        assert_eq!("Daylight".parse::<LightSpec>().unwrap().to_string(), "daylight");
+        assert_eq!(
+            parse_err("daylight+small:3"),
+            "\"daylight+small:3\": 'daylight' cannot be combined with other parts"
+        );
         assert!(matches!(
             build_lights(&LightSpec::Auto, &bounds(), &reference(), 1.0, 0),
             Err(LightSetError::Unresolved)

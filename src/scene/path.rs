@@ -341,7 +341,7 @@ impl SceneCameras {
         aspect: f32,
         seed: u64,
     ) -> Result<(LightSpec, Vec<Light>), LightSetError> {
-        let spec = spec.resolve(self.source.seen_from_outside());
+        let spec = spec.resolve(&self.source);
         let region = if spec == LightSpec::Studio { *bounds } else { self.light_region(bounds) };
         let lights = super::lights::build_lights(&spec, &region, reference, aspect, seed)?;
         Ok((spec, lights))

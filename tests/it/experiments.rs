@@ -524,7 +524,8 @@ fn quality_quick() {
     experiments::quality::merge(&shards, &dir, command).unwrap();
     eprintln!("quality quick, two shards and merge: {:.1} s", start.elapsed().as_secs_f64());
     let summary: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
-    let options = ExperimentOptions { command: command.into(), ..quick_options(ExperimentName::Quality, "atrium", &dir) };
+    let options =
+        ExperimentOptions { command: command.into(), ..quick_options(ExperimentName::Quality, "atrium", &dir) };
     check_common(&dir, &options, &summary);
     assert_eq!(summary["grid"], serde_json::to_value(&grid).unwrap());
 
