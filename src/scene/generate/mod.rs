@@ -1,6 +1,7 @@
 //! Procedural scenes, built in code and deterministic: `atrium` (a Sponza-like
-//! courtyard, the default scene), `voxels` (a block world) and, for tests of
-//! anti-aliasing, [`fence`] (thin tilted bars before a wall).
+//! courtyard, the default scene), `voxels` (a block world), [`terrain`],
+//! [`city`] (a city of instanced buildings) and, for tests of anti-aliasing,
+//! [`fence`] (thin tilted bars before a wall).
 //!
 //! Both are in metres, right-handed, +y up, with the floor at y = 0. Every
 //! object has its own Phong material with a UV-checker albedo sampled through
@@ -9,6 +10,7 @@
 
 mod atrium;
 pub mod builder;
+pub mod city;
 mod noise;
 pub mod terrain;
 mod voxels;
