@@ -367,9 +367,17 @@ impl Scene {
         self.meshes[o.mesh].bounds().transformed(&o.transform)
     }
 
+    /// World-space bounds of every object, in object order: each mesh's box
+    /// is found once and moved by each instance's transform, so the cost
+    /// grows with the meshes' vertices plus the instances, not their product.
+    pub fn all_object_bounds(&self) -> Vec<Aabb> {
+        let meshes: Vec<Aabb> = self.meshes.iter().map(Mesh::bounds).collect();
+        self.objects.iter().map(|o| meshes[o.mesh].transformed(&o.transform)).collect()
+    }
+
     /// World-space bounds of the whole scene.
     pub fn bounds(&self) -> Aabb {
-        (0..self.objects.len()).fold(Aabb::EMPTY, |b, i| b.union(&self.object_bounds(i)))
+        self.all_object_bounds().iter().fold(Aabb::EMPTY, |b, o| b.union(o))
     }
 
     /// Whether some object's material is alpha-masked.
