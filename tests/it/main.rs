@@ -8,6 +8,7 @@ mod common;
 mod agreement;
 mod bloom;
 mod cameras;
+mod city;
 mod cli;
 mod compute_visibility;
 mod corpus;
