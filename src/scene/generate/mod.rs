@@ -1,5 +1,5 @@
 //! Procedural scenes, built in code and deterministic: `atrium` (a Sponza-like
-//! courtyard, the default scene), `voxels` (a block world), [`terrain`],
+//! courtyard, the default scene), `voxels` (a block world), [`terrain()`],
 //! [`city`] (a city of instanced buildings) and, for tests of anti-aliasing,
 //! [`fence`] (thin tilted bars before a wall).
 //!
