@@ -578,7 +578,8 @@ pub fn load_cameras_json(path: &Path, scene_name: &str) -> Result<SceneCameras, 
 /// scene `sponza-thesis`. A `cameras.json` that exists but cannot be read or
 /// parsed is an error. The procedural `atrium` and `voxels` get the
 /// deterministic [`Orbit`] of their bounds (inside and above) and its five
-/// fixed cameras. Every other scene is framed from outside ([`framing`]):
+/// fixed cameras; the terrain its flight; the city its street-level walk,
+/// its fly-over (`--camera flyover`) and five fixed cameras from their keys. Every other scene is framed from outside ([`framing`]):
 /// its path is the framing turntable, or, when the file brings cameras
 /// (glTF), its first camera held still; its fixed cameras are the framed
 /// views. The file's own cameras are `gltf:K` in every case.
@@ -835,9 +836,11 @@ mod tests {
         assert_eq!("fixed:3".parse::<CameraChoice>().unwrap().to_string(), "fixed:3");
         assert_eq!("gltf:2".parse::<CameraChoice>(), Ok(CameraChoice::Gltf(2)));
         assert_eq!(CameraChoice::Gltf(1).to_string(), "gltf:1");
-        for bad in ["", "fixed", "fixed:", "fixed:-1", "fixed:x", "orbit", "gltf:", "gltf:a"] {
+        assert_eq!("flyover".parse::<CameraChoice>(), Ok(CameraChoice::Flyover));
+        assert_eq!(CameraChoice::Flyover.to_string(), "flyover");
+        for bad in ["", "fixed", "fixed:", "fixed:-1", "fixed:x", "orbit", "gltf:", "gltf:a", "fly"] {
             let err = bad.parse::<CameraChoice>().unwrap_err().to_string();
-            assert!(err.contains("expected 'path', 'fixed:K' or 'gltf:K'"), "{bad}: {err}");
+            assert!(err.contains("expected 'path', 'flyover', 'fixed:K' or 'gltf:K'"), "{bad}: {err}");
         }
     }
 
