@@ -76,6 +76,18 @@ fn object_space_and_deferred_compute_render_the_city_from_above() {
     agrees_with_forward(true, 0.25, &["deferred-compute", "objectspace"]);
 }
 
+/// Every mesh's charts are unique as object space judges them (no overlap
+/// at 1024 x 1024, nothing outside the square), so none needs generated
+/// charts.
+#[test]
+fn every_city_mesh_has_unique_charts() {
+    let scene = CitySpec { blocks: 1, ..CitySpec::DEFAULT }.scene();
+    for mesh in &scene.meshes {
+        let overlap = shadespace::charts::check_overlap(mesh.uv1.as_ref().unwrap(), &mesh.indices, 1024);
+        assert!(overlap.fraction <= 0.001 && overlap.out_of_range_vertices == 0, "{}: {overlap:?}", mesh.name);
+    }
+}
+
 /// The scene's vertex, index and chart buffers hold each mesh once: a city
 /// of 3 x 3 blocks (9 times the instances of 1 x 1) has the same bytes of
 /// them, and only the per-instance table grows, by the instance count.

@@ -696,24 +696,22 @@ mod tests {
         assert_ne!(placement(&city), placement(&other));
     }
 
-    /// Every mesh's charts are unique (no uvunwrap needed) and its triangles
-    /// face their normals, with facade charts unfolded within a bounded
-    /// density spread.
+    /// Every mesh's charts keep their gutters and stay in the square, its
+    /// triangles face their normals, and facades unfold within a bounded
+    /// density spread (that no chart overlaps itself is checked with the
+    /// charts module's overlap test in `tests/it/city.rs`).
     #[test]
-    fn every_mesh_has_unique_charts() {
+    fn every_mesh_has_separate_charts_wound_with_their_normals() {
         let g = CitySpec { blocks: 1, seed: 1 }.build();
         for (mesh, layout) in g.scene.meshes.iter().zip(&g.layouts) {
             let spread = super::super::builder::tests::check_mesh(mesh, layout);
-            let overlap = crate::charts::check_overlap(mesh.uv1.as_ref().unwrap(), &mesh.indices, 1024);
             eprintln!(
-                "{}: {} triangles, {} charts, utilisation {:.2}, density spread {spread:.2}, overlap {:.4}%",
+                "{}: {} triangles, {} charts, utilisation {:.2}, density spread {spread:.2}",
                 mesh.name,
                 mesh.triangle_count(),
                 layout.rects.len(),
                 layout.utilisation(),
-                100.0 * overlap.fraction
             );
-            assert!(overlap.fraction <= 0.001, "{}: {overlap:?}", mesh.name);
             assert!(spread < 4.0, "{}: density spread {spread}", mesh.name);
         }
     }
