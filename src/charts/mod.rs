@@ -418,7 +418,17 @@ pub fn chart_scene_sized(
             return Err(ChartError::MissingMesh { object: o.name.clone(), mesh: o.mesh });
         }
     }
-    let areas: Vec<f32> = scene.objects.iter().map(|o| world_area(&scene.meshes[o.mesh], &o.transform)).collect();
+    // Instances of a mesh turned alike have the same area (translation does
+    // not change it): one sum per mesh and turn, not per instance.
+    let mut area_of: std::collections::HashMap<(usize, [u32; 9]), f32> = Default::default();
+    let areas: Vec<f32> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            let linear = glam::Mat3::from_mat4(o.transform).to_cols_array().map(f32::to_bits);
+            *area_of.entry((o.mesh, linear)).or_insert_with(|| world_area(&scene.meshes[o.mesh], &o.transform))
+        })
+        .collect();
 
     let mut meshes: Vec<Option<ChartedMesh>> = vec![None; scene.meshes.len()];
     for (m, slot) in meshes.iter_mut().enumerate() {

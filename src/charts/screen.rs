@@ -50,9 +50,10 @@ pub fn path_cameras(path: &CameraPath) -> Vec<Camera> {
 pub fn projected_densities(scene: &Scene, cameras: &[Camera], width: u32, height: u32) -> Vec<f32> {
     let aspect = width.max(1) as f32 / height.max(1) as f32;
     let views: Vec<_> = cameras.iter().map(|c| (c, c.view_projection(aspect))).collect();
+    let all_bounds = scene.all_object_bounds();
     (0..scene.objects.len())
         .map(|i| {
-            let bounds = scene.object_bounds(i);
+            let bounds = all_bounds[i];
             if bounds.is_empty() {
                 return 0.0;
             }

@@ -33,8 +33,9 @@ pub enum TextureChoice {
 /// size, camera, lights, shading, and the groups below.
 #[derive(Args, Clone)]
 pub struct SceneArgs {
-    /// `atrium` (default), `voxels`, or a path: a .gltf/.glb file, an .obj file,
-    /// or a folder of .obj files (e.g. ../shared/scenes/sponza-thesis).
+    /// `atrium` (default), `voxels`, `terrain`, `terrain-small`, `city` (or
+    /// `city:N`, N x N blocks, `city:N:SEED`), or a path: a .gltf/.glb file,
+    /// an .obj file, or a folder of .obj files (e.g. ../shared/scenes/sponza-thesis).
     #[arg(long, default_value = "atrium")]
     pub scene: String,
     /// Shading pipeline.
@@ -52,7 +53,8 @@ pub struct SceneArgs {
     pub msaa: u32,
     /// `path`: the scene's camera path (from cameras.json beside a shared
     /// scene; an orbit for atrium and voxels; for other scenes the file's
-    /// first camera, or else a turntable framing the whole scene), `fixed:K`
+    /// first camera, or else a turntable framing the whole scene; the city's
+    /// walk at street level), `flyover` (the city's flight over it), `fixed:K`
     /// (fixed camera K, from 0; framed views for other scenes), `gltf:K`
     /// (camera K of the glTF file) or `bookmark:FILE:NAME` (the view saved as
     /// NAME, the text after the last colon, in the viewer's bookmark file FILE).

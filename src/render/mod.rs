@@ -551,12 +551,14 @@ impl Renderer {
     /// holds for every pipeline: the shadow maps (`shadow_maps` bytes,
     /// `shadow_faces`, the faces of the last frame's lights (the sun's
     /// cascades included), `shadow_refresh_every_frame` and `sun_shadow`,
-    /// 1 when set), and MSAA (`msaa_samples`, and `msaa_targets`: the bytes
-    /// of the multisampled colour and depth, 0 at one sample).
+    /// 1 when set), MSAA (`msaa_samples`, and `msaa_targets`: the bytes
+    /// of the multisampled colour and depth, 0 at one sample), and the
+    /// scene's own GPU data as setup facts ([`SceneGpu::memory`]: the same
+    /// for every pipeline, so not in `memory`).
     pub fn report(&self) -> PipelineReport {
         let every_frame = self.shadow_refresh == ShadowRefresh::EveryFrame;
-        self.pipeline
-            .report()
+        let report = self.scene.memory().into_iter().fold(self.pipeline.report(), |r, (k, v)| r.setup(k, v));
+        report
             .memory("shadow_maps", self.scene.shadow_atlas.bytes())
             .setup("shadow_faces", self.shadows.faces() as u64)
             .setup("shadow_refresh_every_frame", every_frame as u64)

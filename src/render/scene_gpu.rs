@@ -16,8 +16,9 @@ use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 /// Largest side of a layer of the albedo array; bigger textures are resized.
 pub const MAX_ALBEDO_SIZE: u32 = 1024;
 
-/// Where one object's triangles are in the shared buffers.
-#[derive(Clone, Copy, Debug)]
+/// Where one object's triangles are in the shared buffers (the same range
+/// for every instance of a mesh).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DrawRange {
     pub first_index: u32,
     pub index_count: u32,
@@ -101,6 +102,8 @@ pub struct SceneGpu {
     /// every scene texture (binding 6).
     pub albedo_view: wgpu::TextureView,
     linear_maps_view: wgpu::TextureView,
+    /// The linear maps' array (kept for its size).
+    linear_maps: wgpu::Texture,
     pub sampler: wgpu::Sampler,
     pub layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
@@ -232,7 +235,7 @@ impl SceneGpu {
             &sampler,
             &shadow_atlas,
         );
-        let object_bounds = (0..scene.objects.len()).map(|i| scene.object_bounds(i)).collect();
+        let object_bounds = scene.all_object_bounds();
         Self {
             vertices: vertices_buf,
             indices: indices_buf,
@@ -266,10 +269,33 @@ impl SceneGpu {
             light_indices,
             albedo_view,
             linear_maps_view,
+            linear_maps,
             sampler,
             layout,
             bind_group,
         }
+    }
+
+    /// Bytes of the scene's GPU data, by kind: `scene_vertex_bytes` and
+    /// `scene_index_bytes` (one range per mesh, however many instances
+    /// draw it), `scene_triangle_chart_bytes` (per mesh triangle too),
+    /// `scene_object_bytes` (the per-instance table: transform and material)
+    /// and `scene_texture_bytes` (the colour and linear arrays, mips included).
+    pub fn memory(&self) -> [(&'static str, u64); 5] {
+        let texture = |t: &wgpu::Texture| -> u64 {
+            let layers = u64::from(t.depth_or_array_layers());
+            let block = u64::from(t.format().block_copy_size(None).unwrap_or(4));
+            (0..t.mip_level_count())
+                .map(|m| u64::from((t.width() >> m).max(1)) * u64::from((t.height() >> m).max(1)) * layers * block)
+                .sum()
+        };
+        [
+            ("scene_vertex_bytes", self.vertices.size()),
+            ("scene_index_bytes", self.indices.size()),
+            ("scene_triangle_chart_bytes", self.triangle_charts.size()),
+            ("scene_object_bytes", self.objects.size()),
+            ("scene_texture_bytes", texture(&self.albedo) + texture(&self.linear_maps)),
+        ]
     }
 
     /// Whether some object is alpha-masked.

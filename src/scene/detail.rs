@@ -53,6 +53,15 @@ pub fn add_detailed_textures(scene: &mut Scene) {
     }
 }
 
+/// The relief of [`add_detailed_textures`] at `size` texels: one albedo per
+/// `(name, linear tint)` and its normal map (named `normal_name`), for
+/// generated scenes that want brick facades and paving of their own.
+pub(crate) fn brick_textures(size: u32, tints: &[(&str, Vec3)], normal_name: &str) -> (Vec<Texture>, Texture) {
+    let relief = Relief::new(size);
+    let albedos = tints.iter().map(|(name, tint)| relief.albedo(name, *tint)).collect();
+    (albedos, relief.normal_map(normal_name))
+}
+
 /// The mean linear colour of an sRGB texture.
 fn mean_linear(t: &Texture) -> Vec3 {
     let decode = srgb8_to_linear;

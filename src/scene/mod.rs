@@ -399,9 +399,17 @@ impl Scene {
         self.meshes[o.mesh].bounds().transformed(&o.transform)
     }
 
+    /// World-space bounds of every object, in object order: each mesh's box
+    /// is found once and moved by each instance's transform, so the cost
+    /// grows with the meshes' vertices plus the instances, not their product.
+    pub fn all_object_bounds(&self) -> Vec<Aabb> {
+        let meshes: Vec<Aabb> = self.meshes.iter().map(Mesh::bounds).collect();
+        self.objects.iter().map(|o| meshes[o.mesh].transformed(&o.transform)).collect()
+    }
+
     /// World-space bounds of the whole scene.
     pub fn bounds(&self) -> Aabb {
-        (0..self.objects.len()).fold(Aabb::EMPTY, |b, i| b.union(&self.object_bounds(i)))
+        self.all_object_bounds().iter().fold(Aabb::EMPTY, |b, o| b.union(o))
     }
 
     /// Whether some object's material is alpha-masked.
@@ -450,11 +458,12 @@ impl Scene {
     }
 }
 
-/// The names of the procedural scenes, for `--scene` and `--help`.
-pub const PROCEDURAL_SCENES: [&str; 5] = ["atrium", "voxels", "terrain", "terrain-small", "panes"];
+/// The names of the procedural scenes, for `--scene` and `--help` (the
+/// city also takes a size: `city:N`, [`generate::city::CitySpec::parse`]).
+pub const PROCEDURAL_SCENES: [&str; 6] = ["atrium", "voxels", "terrain", "terrain-small", "panes", "city"];
 
 /// Loads a scene by procedural name (`atrium`, `voxels`, `terrain`,
-/// `terrain-small`, `panes`) or by path: a `.gltf`
+/// `terrain-small`, `panes`, `city`, `city:N`, `city:N:SEED`) or by path: a `.gltf`
 /// or `.glb` file, an `.obj` file, or a folder of `.obj` files (one scene).
 /// The result is validated, so a bad file fails here with its name.
 pub fn load(spec: &str) -> Result<Scene, SceneError> {
@@ -464,24 +473,28 @@ pub fn load(spec: &str) -> Result<Scene, SceneError> {
         "terrain" => generate::terrain(false),
         "terrain-small" => generate::terrain(true),
         "panes" => generate::panes(),
-        _ => {
-            let path = Path::new(spec);
-            if !path.exists() {
-                return Err(SceneError::NotFound(path.to_path_buf()));
-            }
-            if path.is_dir() {
-                obj::load_folder(path)?
-            } else {
-                match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-                    Some("gltf" | "glb") => gltf::load(path)?,
-                    Some("obj") => obj::load_file(path)?,
-                    _ => return Err(SceneError::UnknownFormat(path.to_path_buf())),
-                }
-            }
-        }
+        _ => match generate::city::CitySpec::parse(spec) {
+            Some(city) => city.map_err(|problem| SceneError::Invalid { path: spec.into(), problem })?.scene(),
+            None => load_path(Path::new(spec))?,
+        },
     };
     scene.validate().map_err(|problem| SceneError::Invalid { path: spec.into(), problem })?;
     Ok(scene)
+}
+
+/// A scene file or folder (see [`load`]).
+fn load_path(path: &Path) -> Result<Scene, SceneError> {
+    if !path.exists() {
+        return Err(SceneError::NotFound(path.to_path_buf()));
+    }
+    if path.is_dir() {
+        return obj::load_folder(path);
+    }
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("gltf" | "glb") => gltf::load(path),
+        Some("obj") => obj::load_file(path),
+        _ => Err(SceneError::UnknownFormat(path.to_path_buf())),
+    }
 }
 
 #[cfg(test)]

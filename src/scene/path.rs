@@ -279,6 +279,9 @@ pub enum CameraSource {
     /// The procedural terrain's flight, low and high
     /// ([`super::generate::terrain::TerrainSpec::path`]).
     Flight,
+    /// The city's walk at street level; `--camera flyover` flies over it
+    /// ([`super::generate::city::CitySpec::street_path`]).
+    Streets,
     /// Camera `index` of the scene file (glTF).
     Own { scene: String, index: usize },
 }
@@ -300,6 +303,7 @@ impl fmt::Display for CameraSource {
             CameraSource::Orbit(OrbitStyle::Above) => f.write_str("orbit above the scene bounds"),
             CameraSource::Framed => f.write_str("turntable framing the scene bounds"),
             CameraSource::Flight => f.write_str("flight over the terrain, low and high"),
+            CameraSource::Streets => f.write_str("walk through the city at street level"),
             CameraSource::Own { scene, index } => write!(f, "{scene} [camera {index}]"),
         }
     }
@@ -316,6 +320,9 @@ pub struct SceneCameras {
     pub fixed: Vec<Camera>,
     /// The scene file's own cameras (glTF), for `--camera gltf:K`.
     pub own: Vec<Camera>,
+    /// A second path flying over the scene, for `--camera flyover` (the
+    /// city's; `None` for other scenes).
+    pub flyover: Option<CameraPath>,
     /// Where the path came from.
     pub source: CameraSource,
 }
@@ -352,6 +359,9 @@ impl SceneCameras {
     pub fn select(&self, choice: CameraChoice) -> Result<CameraPath, CameraChoiceError> {
         match choice {
             CameraChoice::Path => Ok(self.path.clone()),
+            CameraChoice::Flyover => {
+                self.flyover.clone().ok_or_else(|| CameraChoiceError::NoFlyover { scene: self.scene.clone() })
+            }
             CameraChoice::Fixed(k) => self
                 .fixed
                 .get(k)
@@ -370,6 +380,8 @@ pub enum CameraChoice {
     /// The scene's camera path.
     #[default]
     Path,
+    /// The scene's fly-over path (the city's).
+    Flyover,
     /// Fixed camera K (from 0).
     Fixed(usize),
     /// Camera K (from 0) of the scene's glTF file.
@@ -380,6 +392,7 @@ impl fmt::Display for CameraChoice {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             CameraChoice::Path => f.write_str("path"),
+            CameraChoice::Flyover => f.write_str("flyover"),
             CameraChoice::Fixed(k) => write!(f, "fixed:{k}"),
             CameraChoice::Gltf(k) => write!(f, "gltf:{k}"),
         }
@@ -391,11 +404,14 @@ impl fmt::Display for CameraChoice {
 pub enum CameraChoiceError {
     /// Not `path`, `fixed:K` or `gltf:K` (nor `bookmark:FILE:NAME`, which
     /// the command line resolves with [`super::bookmarks::BookmarkRef`]).
-    #[error("\"{0}\": expected 'path', 'fixed:K' or 'gltf:K' (K = 0, 1, ...), or 'bookmark:FILE:NAME'")]
+    #[error("\"{0}\": expected 'path', 'flyover', 'fixed:K' or 'gltf:K' (K = 0, 1, ...), or 'bookmark:FILE:NAME'")]
     Syntax(String),
     /// The scene has fewer fixed cameras.
     #[error("camera fixed:{index} does not exist: the scene has {count} fixed cameras (fixed:0 to fixed:{})", count.saturating_sub(1))]
     OutOfRange { index: usize, count: usize },
+    /// The scene has no fly-over path.
+    #[error("camera flyover: {scene} has no fly-over path (the city has one)")]
+    NoFlyover { scene: String },
     /// The scene file has fewer cameras of its own.
     #[error("camera gltf:{index} does not exist: {scene} {}", file_camera_count(*count))]
     NoSuchFileCamera { scene: String, index: usize, count: usize },
@@ -416,6 +432,9 @@ impl FromStr for CameraChoice {
         let s = s.trim();
         if s.eq_ignore_ascii_case("path") {
             return Ok(CameraChoice::Path);
+        }
+        if s.eq_ignore_ascii_case("flyover") {
+            return Ok(CameraChoice::Flyover);
         }
         let index = |prefix: &str| s.strip_prefix(prefix).and_then(|k| k.parse::<usize>().ok());
         index("fixed:")
@@ -538,6 +557,7 @@ impl CamerasFile {
             path: CameraPath::Keyed(KeyedPath { keys, frames_per_segment: self.frames_per_segment, projection }),
             fixed,
             own: Vec::new(),
+            flyover: None,
             source: CameraSource::File { path: path.into(), scene: scene.into() },
         })
     }
@@ -558,7 +578,8 @@ pub fn load_cameras_json(path: &Path, scene_name: &str) -> Result<SceneCameras, 
 /// scene `sponza-thesis`. A `cameras.json` that exists but cannot be read or
 /// parsed is an error. The procedural `atrium` and `voxels` get the
 /// deterministic [`Orbit`] of their bounds (inside and above) and its five
-/// fixed cameras. Every other scene is framed from outside ([`framing`]):
+/// fixed cameras; the terrain its flight; the city its street-level walk,
+/// its fly-over (`--camera flyover`) and five fixed cameras from their keys. Every other scene is framed from outside ([`framing`]):
 /// its path is the framing turntable, or, when the file brings cameras
 /// (glTF), its first camera held still; its fixed cameras are the framed
 /// views. The file's own cameras are `gltf:K` in every case.
@@ -581,6 +602,21 @@ fn cameras_for(
     }
     if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
         return Err(CameraFileError::EmptyBounds);
+    }
+    if let Some(Ok(city)) = super::generate::city::CitySpec::parse(spec) {
+        let (street, flyover) = (city.street_path(), city.flyover_path());
+        // Fixed cameras: the walk's first two keys, the fly-over's first three.
+        let keys =
+            |p: &KeyedPath, n: usize| p.keys.iter().take(n).map(|k| k.to_camera(p.projection)).collect::<Vec<_>>();
+        let fixed = [keys(&street, 2), keys(&flyover, 3)].concat();
+        return Ok(SceneCameras {
+            scene: spec.into(),
+            path: CameraPath::Keyed(street),
+            fixed,
+            own: own.to_vec(),
+            flyover: Some(CameraPath::Keyed(flyover)),
+            source: CameraSource::Streets,
+        });
     }
     let (path, fixed, source) = match spec {
         "atrium" | "voxels" => {
@@ -606,7 +642,7 @@ fn cameras_for(
             }
         }
     };
-    Ok(SceneCameras { scene: spec.into(), path, fixed, own: own.to_vec(), source })
+    Ok(SceneCameras { scene: spec.into(), path, fixed, own: own.to_vec(), flyover: None, source })
 }
 
 /// The entry of `cameras.json` beside the scene `spec` names, if there is one.
@@ -800,9 +836,11 @@ mod tests {
         assert_eq!("fixed:3".parse::<CameraChoice>().unwrap().to_string(), "fixed:3");
         assert_eq!("gltf:2".parse::<CameraChoice>(), Ok(CameraChoice::Gltf(2)));
         assert_eq!(CameraChoice::Gltf(1).to_string(), "gltf:1");
-        for bad in ["", "fixed", "fixed:", "fixed:-1", "fixed:x", "orbit", "gltf:", "gltf:a"] {
+        assert_eq!("flyover".parse::<CameraChoice>(), Ok(CameraChoice::Flyover));
+        assert_eq!(CameraChoice::Flyover.to_string(), "flyover");
+        for bad in ["", "fixed", "fixed:", "fixed:-1", "fixed:x", "orbit", "gltf:", "gltf:a", "fly"] {
             let err = bad.parse::<CameraChoice>().unwrap_err().to_string();
-            assert!(err.contains("expected 'path', 'fixed:K' or 'gltf:K'"), "{bad}: {err}");
+            assert!(err.contains("expected 'path', 'flyover', 'fixed:K' or 'gltf:K'"), "{bad}: {err}");
         }
     }
 

@@ -43,6 +43,19 @@ fn unknown_format_and_bad_gltf_are_input_errors() {
     assert!(err.contains("bad.gltf"), "{err}");
 }
 
+/// A malformed city size and a fly-over asked of a scene without one.
+#[test]
+fn bad_city_sizes_and_missing_flyovers_are_input_errors() {
+    for bad in ["city:0", "city:65", "city:x", "city:2:y"] {
+        let (code, err) = run(&["render", "--scene", bad]);
+        assert_eq!(code, 2, "{bad}");
+        assert!(err.contains(bad) && err.contains("city:N"), "{err}");
+    }
+    let (code, err) = run(&["render", "--scene", "atrium", "--camera", "flyover"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("flyover") && err.contains("atrium has no fly-over path"), "{err}");
+}
+
 #[test]
 fn bad_options_say_what_is_wrong() {
     let (code, err) = run(&["render", "--lights", "small:x"]);

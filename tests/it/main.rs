@@ -9,6 +9,7 @@ mod agreement;
 mod blending;
 mod bloom;
 mod cameras;
+mod city;
 mod cli;
 mod compute_visibility;
 mod corpus;

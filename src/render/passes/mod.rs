@@ -14,7 +14,7 @@ pub mod tonemap;
 pub mod visibility;
 
 use super::targets::{self, Targets};
-use crate::render::scene_gpu::SceneGpu;
+use crate::render::scene_gpu::{DrawRange, SceneGpu};
 use crate::shaders::{ALPHA_MASK, ShaderError, ShaderLibrary, ShaderSource};
 
 /// Depth state of a scene raster pass (reversed Z: nearer is greater).
@@ -193,11 +193,27 @@ pub fn draw_objects(pass: &mut wgpu::RenderPass, scene: &SceneGpu, visible: &[bo
     }
 }
 
-/// One draw per object `i` for which `draw(i)`, with the bound pipeline.
+/// Draws every object `i` for which `draw(i)` with the bound pipeline: one
+/// instanced draw per run of consecutive such objects of one mesh (the
+/// city's instances come mesh by mesh), else one per object.
 fn draw_visible(pass: &mut wgpu::RenderPass, scene: &SceneGpu, draw: impl Fn(usize) -> bool) {
+    let flush = |pass: &mut wgpu::RenderPass, (d, first, end): (DrawRange, u32, u32)| {
+        pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, first..end);
+    };
+    let mut run: Option<(DrawRange, u32, u32)> = None;
     for (i, d) in scene.draws.iter().enumerate().filter(|(i, _)| draw(*i)) {
         let i = i as u32;
-        pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, i..i + 1);
+        match &mut run {
+            Some((range, _, end)) if *range == *d && *end == i => *end = i + 1,
+            _ => {
+                if let Some(r) = run.replace((*d, i, i + 1)) {
+                    flush(pass, r);
+                }
+            }
+        }
+    }
+    if let Some(r) = run {
+        flush(pass, r);
     }
 }
 

@@ -1,7 +1,8 @@
 //! Procedural scenes, built in code and deterministic: `atrium` (a Sponza-like
-//! courtyard, the default scene), `voxels` (a block world), for tests of
-//! anti-aliasing [`fence`] (thin tilted bars before a wall) and, for tests of
-//! alpha blending, [`panes`] (overlapping transparent panes before a wall).
+//! courtyard, the default scene), `voxels` (a block world), [`terrain()`],
+//! [`city`] (a city of instanced buildings), for tests of anti-aliasing
+//! [`fence`] (thin tilted bars before a wall) and, for tests of alpha
+//! blending, [`panes`] (overlapping transparent panes before a wall).
 //!
 //! Both are in metres, right-handed, +y up, with the floor at y = 0. Every
 //! object has its own Phong material with a UV-checker albedo sampled through
@@ -10,6 +11,7 @@
 
 mod atrium;
 pub mod builder;
+pub mod city;
 mod noise;
 pub mod terrain;
 mod voxels;

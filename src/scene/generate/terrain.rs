@@ -216,7 +216,7 @@ impl TerrainSpec {
 }
 
 /// A camera pose in the keyed path's (Unity's) conventions at `eye` looking at `target`.
-fn pose(eye: Vec3, target: Vec3) -> UnityPose {
+pub(super) fn pose(eye: Vec3, target: Vec3) -> UnityPose {
     let f = (target - eye).normalize();
     // Inverse of `UnityPose::to_camera` for roll 0.
     let pitch = (-f.y).asin().to_degrees();
@@ -224,7 +224,8 @@ fn pose(eye: Vec3, target: Vec3) -> UnityPose {
     UnityPose { position: eye * Vec3::new(-1.0, 1.0, 1.0), euler_deg: Vec3::new(pitch, yaw, 0.0) }
 }
 
-fn unwrap_yaw(mut keys: Vec<UnityPose>) -> Vec<UnityPose> {
+/// Unwraps each key's yaw to within half a turn of the previous key's.
+pub(super) fn unwrap_yaw(mut keys: Vec<UnityPose>) -> Vec<UnityPose> {
     for k in 1..keys.len() {
         let previous = keys[k - 1].euler_deg.y;
         let y = &mut keys[k].euler_deg.y;
