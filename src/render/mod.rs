@@ -331,7 +331,11 @@ impl Renderer {
         let samples = options.samples;
         check_samples_for(ctx, samples, &options.pipeline)?;
         let mut shaders = crate::render::shader_set::library()?;
-        let scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
+        let mut scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
+        if let Some(env) = &scene.environment {
+            let maps = passes::environment::prefilter(ctx, &mut shaders, env)?;
+            scene_gpu.set_environment(&ctx.device, maps);
+        }
         if scene_gpu.material_textures {
             shaders.define(crate::shaders::MATERIAL_TEXTURES);
         }

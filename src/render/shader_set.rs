@@ -73,6 +73,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         deferred::volumes::VOLUMES_SHADER.with_defs(&[crate::shaders::MSAA]),
     ]);
     all.extend_from_slice(deferred::PASS_SHADERS);
+    all.push(passes::environment::SHADER);
     all
 }
 
@@ -147,6 +148,7 @@ mod tests {
         check::<GpuRasterParams>(&modules);
         check::<GpuResolveParams>(&modules);
         check::<crate::materials::GpuLayer>(&modules);
+        check::<crate::render::passes::environment::GpuEnvParams>(&modules);
     }
 
     #[test]

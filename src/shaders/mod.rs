@@ -52,6 +52,7 @@ impl ShaderSource {
 /// its own shared modules after them ([`ShaderLibrary::new`]).
 pub const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/shadows.wgsl", include_str!("shared/shadows.wgsl")),
+    ShaderSource::new("shared/environment.wgsl", include_str!("shared/environment.wgsl")),
     ShaderSource::new("shared/lighting.wgsl", include_str!("shared/lighting.wgsl")),
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),

@@ -5,6 +5,7 @@
 
 pub mod bloom;
 pub mod depth_prepass;
+pub mod environment;
 pub mod exposure;
 pub mod gbuffer;
 pub mod light_grid;
