@@ -937,6 +937,13 @@ mod tests {
         .unwrap();
         assert_eq!(load_light_file(&object).unwrap().len(), 1);
 
+        // An environment light scales `--env` and counts as global.
+        let env = dir.path().join("env.json");
+        std::fs::write(&env, r#"[{"kind": "environment", "color": [1, 0.9, 0.8], "intensity": 0.5}]"#).unwrap();
+        let lights = load_light_file(&env).unwrap();
+        assert_eq!(lights[0].kind, LightKind::Environment);
+        assert!(lights[0].kind.is_global() && !LightKind::Point.is_global());
+
         // A round trip through serde keeps the lights.
         let set = build("mixed:1:2", 4);
         let round = dir.path().join("round.json");
