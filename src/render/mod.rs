@@ -546,7 +546,8 @@ impl Renderer {
     /// `shadow_faces`, the faces of the last frame's lights (the sun's
     /// cascades included), `shadow_refresh_every_frame` and `sun_shadow`,
     /// 1 when set), and MSAA (`msaa_samples`, and `msaa_targets`: the bytes
-    /// of the multisampled colour and depth, 0 at one sample).
+    /// of the multisampled colour and depth, 0 at one sample), and the
+    /// environment (`environment`, 1 with `--env`; `environment_maps` bytes).
     pub fn report(&self) -> PipelineReport {
         let every_frame = self.shadow_refresh == ShadowRefresh::EveryFrame;
         self.pipeline
@@ -557,6 +558,11 @@ impl Renderer {
             .setup("sun_shadow", self.sun_shadow as u64)
             .setup("msaa_samples", u64::from(self.targets.samples))
             .memory("msaa_targets", self.targets.msaa_bytes())
+            .setup("environment", self.scene.environment.is_set() as u64)
+            .memory(
+                "environment_maps",
+                if self.scene.environment.is_set() { self.scene.environment.bytes() } else { 0 },
+            )
     }
 
     /// Whether the adapter can time passes.

@@ -380,3 +380,34 @@ fn bad_environment_files_exit_2_naming_the_file() {
         assert!(stderr.contains(&format!("--env {}: ", path.display())) && stderr.contains(problem), "{stderr}");
     }
 }
+
+/// `render --env sky` lights the frame and reports its maps (`environment`
+/// 1, 128x128 faces: 1,068,800 bytes with the table); without `--env` the
+/// report says 0.
+#[test]
+fn sky_renders_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |env: &[&str], name: &str| {
+        let (out, stats) = (dir.path().join(format!("{name}.png")), dir.path().join(format!("{name}.json")));
+        let status = Command::new(env!("CARGO_BIN_EXE_shadespace"))
+            .args(["render", "--size", "32x18", "--shading", "pbr"])
+            .args(env)
+            .arg("--out")
+            .arg(&out)
+            .arg("--stats")
+            .arg(&stats)
+            .output()
+            .unwrap();
+        assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        (image::open(&out).unwrap().to_rgba8(), report["pipeline"].clone())
+    };
+    let (sky, sky_report) = run(&["--env", "sky"], "sky");
+    let (none, none_report) = run(&[], "none");
+    assert_eq!(sky_report["setup"]["environment"], 1);
+    assert_eq!(sky_report["memory"]["environment_maps"], 1_068_800);
+    assert_eq!(none_report["setup"]["environment"], 0);
+    assert_eq!(none_report["memory"]["environment_maps"], 0);
+    let brightness = |img: &image::RgbaImage| img.pixels().map(|p| u64::from(p[1])).sum::<u64>();
+    assert!(brightness(&sky) > brightness(&none) * 11 / 10, "the sky adds no light");
+}

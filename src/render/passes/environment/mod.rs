@@ -111,6 +111,22 @@ impl EnvironmentMaps {
         &self.brdf_lut_view
     }
 
+    /// Whether these are a scene's maps, not the black placeholders.
+    pub fn is_set(&self) -> bool {
+        self.specular.width() > 1
+    }
+
+    /// Bytes of the three maps, mips included.
+    pub fn bytes(&self) -> u64 {
+        [&self.specular, &self.irradiance, &self.brdf_lut]
+            .iter()
+            .map(|t| {
+                let texel_bytes = 8 * u64::from(t.depth_or_array_layers());
+                (0..t.mip_level_count()).map(|k| texel_bytes * u64::from((t.width() >> k).max(1)).pow(2)).sum::<u64>()
+            })
+            .sum()
+    }
+
     /// Level `level` of `texture` (one of these maps) read back (blocks):
     /// per layer (cube faces +x, -x, +y, -y, +z, -z), row-major linear RGB.
     pub fn read_level(ctx: &GpuContext, texture: &wgpu::Texture, level: u32) -> Result<Vec<Vec<Vec3>>, GpuError> {
