@@ -31,7 +31,7 @@ use serde::Serialize;
 use crate::gpu::timing::{FrameTimings, GpuTimer};
 use crate::gpu::{GpuContext, GpuError, readback};
 use crate::hash::fnv1a;
-use crate::scene::{Aabb, Camera, Light, Scene};
+use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 use crate::shaders::ShaderError;
 pub use clustered::ClusteredConfig;
 use culling::Frustum;
@@ -335,6 +335,7 @@ impl Renderer {
         if let Some(env) = &scene.environment {
             let maps = passes::environment::prefilter(ctx, &mut shaders, env)?;
             scene_gpu.set_environment(&ctx.device, maps);
+            shaders.define(crate::shaders::ENVIRONMENT);
         }
         if scene_gpu.material_textures {
             shaders.define(crate::shaders::MATERIAL_TEXTURES);
@@ -444,6 +445,15 @@ impl Renderer {
             None => return Err(RenderError::BloomUnsupported(ctx.info.name.clone())),
         };
         let (w, h) = (self.targets.width, self.targets.height);
+        // Without an environment its lights add nothing: their shader code
+        // is compiled only with one (`shaders::ENVIRONMENT`).
+        let without_environment: Vec<Light>;
+        let lights = if !self.scene.environment.is_set() && lights.iter().any(|l| l.kind == LightKind::Environment) {
+            without_environment = lights.iter().filter(|l| l.kind != LightKind::Environment).copied().collect();
+            &without_environment
+        } else {
+            lights
+        };
         let (lights, global_lights) = scene_gpu::order_lights(lights);
         let mut view = scene_gpu::gpu_view(camera, w, h);
         if self.jitter != glam::Vec2::ZERO {

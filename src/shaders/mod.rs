@@ -81,6 +81,13 @@ pub const MATERIAL_TEXTURES: &str = "MATERIAL_TEXTURES";
 /// compiled, so unlayered scenes render and cost as before.
 pub const LAYERS: &str = "LAYERS";
 
+/// Defined when the scene has an environment (`--env`,
+/// [`crate::scene::Scene::environment`]): lights of kind `environment` then
+/// read its prefiltered maps (`shared/environment.wgsl`). Without it that
+/// code is not compiled, so scenes without one render and cost as before
+/// (an environment light there adds nothing).
+pub const ENVIRONMENT: &str = "ENVIRONMENT";
+
 /// Defined when the renderer has MSAA (more than one sample per pixel,
 /// [`ShaderLibrary::define`]): the G-buffer and object space's visibility
 /// buffer are multisampled, and the passes reading them read every sample.

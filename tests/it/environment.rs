@@ -339,10 +339,11 @@ fn metals_reflect_the_sky() {
     assert!(with_sky[p].x > with_sky[p].z * 1.5, "not gold: {}", with_sky[p]);
 }
 
-/// With no environment light the environment's bindings change nothing:
+/// With no environment light, a scene's environment changes nothing:
 /// forward's image of the floor scene is the same bytes with and without a
-/// prefiltered sky bound (what `--env none` keeps), and the environment
-/// light changes it.
+/// prefiltered sky (bound, its shader code compiled in: what `--env none`
+/// leaves out), the environment light changes it, and an environment light
+/// without an environment adds nothing.
 #[test]
 fn no_environment_light_keeps_images() {
     let ctx = common::gpu();
@@ -357,6 +358,8 @@ fn no_environment_light_keeps_images() {
     lit.push(environment_light());
     let (_, changed) = render_hdr(&ctx, &with_env, &camera, &lit, ShadingModel::Pbr, forward());
     assert_ne!(plain, changed, "the environment light changed nothing");
+    let (_, unlit) = render_hdr(&ctx, &scene, &camera, &lit, ShadingModel::Pbr, forward());
+    assert_eq!(plain, unlit, "an environment light without an environment changed the image");
 }
 
 /// `--env` with a missing file, or a file that is not a Radiance image,

@@ -115,6 +115,7 @@ fn ambient_reflectance(s: Surface) -> vec3f {
     return s.albedo;
 }
 
+#ifdef ENVIRONMENT
 // What the environment map (of unit scale) reflects towards `to_eye`:
 // diffuse from the irradiance map, specular by the split sum (the prefiltered
 // map at the reflection vector, times the BRDF's scale and bias of F0).
@@ -134,6 +135,7 @@ fn environment_reflectance(s: Surface, to_eye: vec3f) -> vec3f {
     let roughness = sqrt(sqrt(2.0 / (4.0 * p + 2.0)));
     return s.albedo * env_diffuse(n) + vec3f(s.specular * 2.0 / (p + 1.0)) * env_prefiltered(r, roughness);
 }
+#endif
 
 // The cut-off at the radius is a linear fade over the last tenth of it, so a
 // light's edge is not a visible ring (which bilinear filtering of object-space
@@ -148,9 +150,11 @@ fn light_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
     if light.kind == LIGHT_AMBIENT {
         return light.radiance * ambient_reflectance(s) * s.occlusion;
     }
+#ifdef ENVIRONMENT
     if light.kind == LIGHT_ENVIRONMENT {
         return light.radiance * environment_reflectance(s, to_eye) * s.occlusion;
     }
+#endif
     var to_light: vec3f;
     var falloff = 1.0;
     if light.kind == LIGHT_DIRECTIONAL {
