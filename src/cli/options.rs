@@ -151,6 +151,13 @@ pub struct SceneArgs {
     /// (docs/materials.md).
     #[arg(long, value_name = "none|layered:K|FILE", default_value = "none")]
     pub materials: shadespace::materials::MaterialsSpec,
+    /// Environment lighting, prefiltered on the GPU at load and added to the
+    /// lights as one environment light (diffuse and GGX specular, times the
+    /// material's occlusion, in every pipeline): `none` (default: today's
+    /// images, goldens and benchmarks), `sky` (a procedural clear sky with a
+    /// sun) or an equirectangular Radiance .hdr file (docs/environment.md).
+    #[arg(long, value_name = "none|sky|FILE", default_value = "none")]
+    pub env: shadespace::scene::environment::EnvSpec,
     #[command(flatten)]
     pub free_camera: FreeCameraArgs,
     #[command(flatten)]

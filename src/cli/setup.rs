@@ -63,6 +63,7 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     }
     scene::gloss::apply(&mut scene, a.gloss);
     input(shadespace::materials::apply(&mut scene, &a.materials))?;
+    scene.environment = input(a.env.load())?;
     for name in &a.objectspace.forward_only {
         let Some(o) = scene.objects.iter_mut().find(|o| &o.name == name) else {
             let known: Vec<_> = scene.objects.iter().map(|o| o.name.as_str()).collect();

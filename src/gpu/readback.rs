@@ -22,6 +22,29 @@ pub fn read_texture_region(
     origin: (u32, u32, u32),
     size: (u32, u32),
 ) -> Result<Vec<u8>, GpuError> {
+    read_texture_region_at(ctx, texture, bytes_per_texel, 0, origin, size)
+}
+
+/// Reads the `size` texels from the corner of array layer `layer` of mip `level`.
+pub fn read_texture_level(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    bytes_per_texel: u32,
+    level: u32,
+    layer: u32,
+    size: (u32, u32),
+) -> Result<Vec<u8>, GpuError> {
+    read_texture_region_at(ctx, texture, bytes_per_texel, level, (0, 0, layer), size)
+}
+
+fn read_texture_region_at(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    bytes_per_texel: u32,
+    level: u32,
+    origin: (u32, u32, u32),
+    size: (u32, u32),
+) -> Result<Vec<u8>, GpuError> {
     let (w, h) = size;
     let unpadded = w * bytes_per_texel;
     let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
@@ -35,7 +58,7 @@ pub fn read_texture_region(
     encoder.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo {
             texture,
-            mip_level: 0,
+            mip_level: level,
             origin: wgpu::Origin3d { x: origin.0, y: origin.1, z: origin.2 },
             aspect: wgpu::TextureAspect::All,
         },

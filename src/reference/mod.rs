@@ -29,6 +29,7 @@ use crate::color::reinhard_srgb8;
 use crate::gpu::{GpuContext, readback};
 use crate::hash::Fnv1a;
 use crate::render::{Exposure, ForwardConfig, PipelineConfig, RenderError, RenderOptions, Renderer, ShadingModel};
+use crate::scene::environment::Environment;
 use crate::scene::{Camera, Light, Scene};
 
 /// Bumped when the reference's method changes, so old cache files are not reused.
@@ -226,6 +227,15 @@ pub fn scene_hash(scene: &Scene) -> u64 {
         h.write_pod(&t.rgba8);
     }
     h.write(format!("{:?}|{:?}|{}", scene.materials, scene.objects, scene.cull_back_faces).as_bytes());
+    match &scene.environment {
+        None => h.write(b"no environment"),
+        Some(Environment::Sky(sky)) => h.write(format!("{sky:?}").as_bytes()),
+        Some(Environment::Image(img)) => {
+            h.write_u32(img.width);
+            h.write_u32(img.height);
+            h.write_pod(&img.rgb);
+        }
+    }
     h.finish()
 }
 

@@ -99,12 +99,12 @@ fn cone_rejects_sphere(cone: &Cone, center: Vec3, r: f32) -> bool {
     distance_to_surface > r || along > cone.range + r || along < -r
 }
 
-/// Whether `light` may light anything in the box. Ambient and directional
-/// lights light everything; point lights are spheres of their radius; spot
+/// Whether `light` may light anything in the box. Ambient, directional and
+/// environment lights light everything; point lights are spheres of their radius; spot
 /// lights are their outer cone cut at the radius.
 pub fn light_affects_aabb(light: &Light, b: &Aabb) -> bool {
     match light.kind {
-        LightKind::Ambient | LightKind::Directional => true,
+        LightKind::Ambient | LightKind::Directional | LightKind::Environment => true,
         LightKind::Point => sphere_intersects_aabb(light.position, light.radius, b),
         LightKind::Spot => cone_intersects_aabb(light.position, light.direction, light.radius, light.cos_outer, b),
     }
@@ -202,7 +202,9 @@ pub fn lights_per_object(lights: &[Light], object_bounds: &[Aabb], frustum: Opti
     let mut cand = Candidates::default();
     for (i, l) in lights.iter().enumerate() {
         match l.kind {
-            LightKind::Ambient | LightKind::Directional => cand.push(i, Vec3::ZERO, f32::INFINITY, None),
+            LightKind::Ambient | LightKind::Directional | LightKind::Environment => {
+                cand.push(i, Vec3::ZERO, f32::INFINITY, None)
+            }
             LightKind::Point | LightKind::Spot => {
                 if sphere_intersects_aabb(l.position, l.radius, &union) {
                     let cone = (l.kind == LightKind::Spot).then(|| {

@@ -143,10 +143,11 @@ pub enum GpuLightKind {
     Directional = 1,
     Point = 2,
     Spot = 3,
+    Environment = 4,
 }
 
 impl GpuLightKind {
-    pub const ALL: [Self; 4] = [Self::Ambient, Self::Directional, Self::Point, Self::Spot];
+    pub const ALL: [Self; 5] = [Self::Ambient, Self::Directional, Self::Point, Self::Spot, Self::Environment];
 
     pub fn wgsl_name(self) -> &'static str {
         match self {
@@ -154,6 +155,7 @@ impl GpuLightKind {
             Self::Directional => "LIGHT_DIRECTIONAL",
             Self::Point => "LIGHT_POINT",
             Self::Spot => "LIGHT_SPOT",
+            Self::Environment => "LIGHT_ENVIRONMENT",
         }
     }
 }
@@ -165,6 +167,7 @@ impl From<LightKind> for GpuLightKind {
             LightKind::Directional => Self::Directional,
             LightKind::Point => Self::Point,
             LightKind::Spot => Self::Spot,
+            LightKind::Environment => Self::Environment,
         }
     }
 }

@@ -31,7 +31,7 @@ use serde::Serialize;
 use crate::gpu::timing::{FrameTimings, GpuTimer};
 use crate::gpu::{GpuContext, GpuError, readback};
 use crate::hash::fnv1a;
-use crate::scene::{Aabb, Camera, Light, Scene};
+use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 use crate::shaders::ShaderError;
 pub use clustered::ClusteredConfig;
 use culling::Frustum;
@@ -331,7 +331,12 @@ impl Renderer {
         let samples = options.samples;
         check_samples_for(ctx, samples, &options.pipeline)?;
         let mut shaders = crate::render::shader_set::library()?;
-        let scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
+        let mut scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
+        if let Some(env) = &scene.environment {
+            let maps = passes::environment::prefilter(ctx, &mut shaders, env)?;
+            scene_gpu.set_environment(&ctx.device, maps);
+            shaders.define(crate::shaders::ENVIRONMENT);
+        }
         if scene_gpu.material_textures {
             shaders.define(crate::shaders::MATERIAL_TEXTURES);
         }
@@ -440,6 +445,15 @@ impl Renderer {
             None => return Err(RenderError::BloomUnsupported(ctx.info.name.clone())),
         };
         let (w, h) = (self.targets.width, self.targets.height);
+        // Without an environment its lights add nothing: their shader code
+        // is compiled only with one (`shaders::ENVIRONMENT`).
+        let without_environment: Vec<Light>;
+        let lights = if !self.scene.environment.is_set() && lights.iter().any(|l| l.kind == LightKind::Environment) {
+            without_environment = lights.iter().filter(|l| l.kind != LightKind::Environment).copied().collect();
+            &without_environment
+        } else {
+            lights
+        };
         let (lights, global_lights) = scene_gpu::order_lights(lights);
         let mut view = scene_gpu::gpu_view(camera, w, h);
         if self.jitter != glam::Vec2::ZERO {
@@ -552,9 +566,10 @@ impl Renderer {
     /// `shadow_faces`, the faces of the last frame's lights (the sun's
     /// cascades included), `shadow_refresh_every_frame` and `sun_shadow`,
     /// 1 when set), MSAA (`msaa_samples`, and `msaa_targets`: the bytes
-    /// of the multisampled colour and depth, 0 at one sample), and the
-    /// scene's own GPU data as setup facts ([`SceneGpu::memory`]: the same
-    /// for every pipeline, so not in `memory`).
+    /// of the multisampled colour and depth, 0 at one sample), the
+    /// environment (`environment`, 1 with `--env`; `environment_maps` bytes),
+    /// and the scene's own GPU data as setup facts ([`SceneGpu::memory`]: the
+    /// same for every pipeline, so not in `memory`).
     pub fn report(&self) -> PipelineReport {
         let every_frame = self.shadow_refresh == ShadowRefresh::EveryFrame;
         let report = self.scene.memory().into_iter().fold(self.pipeline.report(), |r, (k, v)| r.setup(k, v));
@@ -565,6 +580,11 @@ impl Renderer {
             .setup("sun_shadow", self.sun_shadow as u64)
             .setup("msaa_samples", u64::from(self.targets.samples))
             .memory("msaa_targets", self.targets.msaa_bytes())
+            .setup("environment", self.scene.environment.is_set() as u64)
+            .memory(
+                "environment_maps",
+                if self.scene.environment.is_set() { self.scene.environment.bytes() } else { 0 },
+            )
     }
 
     /// Whether the adapter can time passes.

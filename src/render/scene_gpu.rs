@@ -7,11 +7,12 @@ use wgpu::util::DeviceExt;
 
 use super::culling::LightLists;
 use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView, NO_TEXTURE};
+use super::passes::environment::{self, EnvironmentMaps};
 use super::passes::shadows::{ShadowAtlas, ShadowPlan};
 use super::passes::{Binding, bind_group_layout_for};
 use crate::charts::islands::triangle_islands;
 use crate::materials::{GpuLayer, LayerKind};
-use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
+use crate::scene::{Aabb, Camera, Light, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
 pub const MAX_ALBEDO_SIZE: u32 = 1024;
@@ -96,6 +97,10 @@ pub struct SceneGpu {
     layers_buffer: wgpu::Buffer,
     /// Shadow maps of the shadowed lights (bindings 8-11).
     pub shadow_atlas: ShadowAtlas,
+    /// The environment's prefiltered maps (bindings 14-17; black until
+    /// [`Self::set_environment`]).
+    pub environment: EnvironmentMaps,
+    environment_sampler: wgpu::Sampler,
     lights: GrowableBuffer,
     light_indices: GrowableBuffer,
     /// The colour textures as one array (binding 5), and the sampler of
@@ -227,6 +232,14 @@ impl SceneGpu {
         });
         let layout = bind_group_layout(device);
         let shadow_atlas = ShadowAtlas::new(device);
+        let environment = EnvironmentMaps::black(device);
+        let environment_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("environment"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            ..Default::default()
+        });
         let bind_group = make_bind_group(
             device,
             &layout,
@@ -234,6 +247,7 @@ impl SceneGpu {
             [&albedo_view, &linear_maps_view],
             &sampler,
             &shadow_atlas,
+            (&environment, &environment_sampler),
         );
         let object_bounds = scene.all_object_bounds();
         Self {
@@ -265,6 +279,8 @@ impl SceneGpu {
             layers_buffer: layers_buf,
             triangle_charts,
             shadow_atlas,
+            environment,
+            environment_sampler,
             lights,
             light_indices,
             albedo_view,
@@ -335,6 +351,13 @@ impl SceneGpu {
         }
     }
 
+    /// Binds the environment's prefiltered maps (lights of kind
+    /// `LightKind::Environment` read them).
+    pub fn set_environment(&mut self, device: &wgpu::Device, maps: EnvironmentMaps) {
+        self.environment = maps;
+        self.rebuild_bind_group(device);
+    }
+
     /// Uploads the shadow faces' view-projections, growing the atlas to hold them.
     pub fn update_shadows(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, plan: &ShadowPlan) {
         if self.shadow_atlas.update(device, queue, plan) {
@@ -362,6 +385,7 @@ impl SceneGpu {
             [&self.albedo_view, &self.linear_maps_view],
             &self.sampler,
             &self.shadow_atlas,
+            (&self.environment, &self.environment_sampler),
         )
     }
 
@@ -381,6 +405,7 @@ impl SceneGpu {
             [&self.albedo_view, &self.linear_maps_view],
             &self.sampler,
             &self.shadow_atlas,
+            (&self.environment, &self.environment_sampler),
         );
     }
 }
@@ -397,12 +422,12 @@ pub fn gpu_view(camera: &Camera, width: u32, height: u32) -> GpuView {
     }
 }
 
-/// The lights in the order the GPU holds them: ambient and directional
-/// lights first (every pipeline applies them everywhere), then point and
-/// spot lights, each group in the given order. Returns them and the number
-/// of global (ambient and directional) lights.
+/// The lights in the order the GPU holds them: ambient, directional and
+/// environment lights first (every pipeline applies them everywhere), then
+/// point and spot lights, each group in the given order. Returns them and
+/// the number of global lights.
 pub fn order_lights(lights: &[Light]) -> (Vec<Light>, u32) {
-    let global = |l: &&Light| matches!(l.kind, LightKind::Ambient | LightKind::Directional);
+    let global = |l: &&Light| l.kind.is_global();
     let mut ordered: Vec<Light> = lights.iter().filter(global).cloned().collect();
     let globals = ordered.len() as u32;
     ordered.extend(lights.iter().filter(|l| !global(l)).cloned());
@@ -420,14 +445,17 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     // Bindings 0-7: view, objects, vertices, lights, light indices, albedo,
     // its sampler, indices; 8-11: shadow atlas, comparison sampler, shadow
     // faces, sun cascades; 12: linear maps (normal, metallic-roughness, occlusion);
-    // 13: material layers.
+    // 13: material layers; 14-17: the environment's specular and irradiance
+    // maps, their sampler and the BRDF lookup table.
     let bindings = [Binding::Uniform, read, read, read, read, albedo, Binding::Sampler, read];
     let shadows = [depth, Binding::ComparisonSampler, read, depth];
-    bind_group_layout_for(device, "scene", stages, &[bindings.as_slice(), &shadows, &[albedo, read]].concat())
+    let maps = [albedo, read];
+    let env = environment::scene_bindings();
+    bind_group_layout_for(device, "scene", stages, &[bindings.as_slice(), &shadows, &maps, &env].concat())
 }
 
 /// Buffers in binding order 0, 1, 2, 3, 4, 7, 13; the shadow maps are 8-11;
-/// textures: albedo (5) and linear maps (12).
+/// textures: albedo (5) and linear maps (12); the environment 14-17.
 fn make_bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
@@ -435,6 +463,7 @@ fn make_bind_group(
     textures: [&wgpu::TextureView; 2],
     sampler: &wgpu::Sampler,
     shadows: &ShadowAtlas,
+    (env, env_sampler): (&EnvironmentMaps, &wgpu::Sampler),
 ) -> wgpu::BindGroup {
     let [view, objects, vertices, lights, light_indices, indices, layers] = buffers;
     let [albedo, linear_maps] = textures;
@@ -456,6 +485,10 @@ fn make_bind_group(
             wgpu::BindGroupEntry { binding: 11, resource: wgpu::BindingResource::TextureView(shadows.cascades_view()) },
             wgpu::BindGroupEntry { binding: 12, resource: wgpu::BindingResource::TextureView(linear_maps) },
             wgpu::BindGroupEntry { binding: 13, resource: layers.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 14, resource: wgpu::BindingResource::TextureView(env.specular_view()) },
+            wgpu::BindGroupEntry { binding: 15, resource: wgpu::BindingResource::TextureView(env.irradiance_view()) },
+            wgpu::BindGroupEntry { binding: 16, resource: wgpu::BindingResource::Sampler(env_sampler) },
+            wgpu::BindGroupEntry { binding: 17, resource: wgpu::BindingResource::TextureView(env.brdf_lut_view()) },
         ],
     })
 }

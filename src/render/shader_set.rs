@@ -73,6 +73,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         deferred::volumes::VOLUMES_SHADER.with_defs(&[crate::shaders::MSAA]),
     ]);
     all.extend_from_slice(deferred::PASS_SHADERS);
+    all.push(passes::environment::SHADER);
     all
 }
 
@@ -90,7 +91,7 @@ mod tests {
     use crate::render::passes::light_grid::GpuLightGridParams;
     use crate::render::passes::visibility::compute::{GpuRasterParams, GpuResolveParams};
     use crate::shaders::layout::check;
-    use crate::shaders::{ALPHA_MASK, LAYERS, MATERIAL_TEXTURES};
+    use crate::shaders::{ALPHA_MASK, ENVIRONMENT, LAYERS, MATERIAL_TEXTURES};
     use wgpu::naga;
 
     /// Every pass shader, composed (with layers, so that their structs are in).
@@ -101,18 +102,23 @@ mod tests {
     }
 
     /// Every pass shader composes and passes naga's validation, without a GPU,
-    /// with and without the material textures, and the scene raster passes'
-    /// alpha-mask variants too.
+    /// with and without the material textures, layers and an environment, and
+    /// the scene raster passes' alpha-mask variants too.
     #[test]
     fn all_shaders_compose_and_validate() {
         let masked = passes::alpha_masked_shaders();
-        for (materials, layers) in [(false, false), (true, false), (false, true), (true, true)] {
+        let bits = |i: u32| (i & 1 != 0, i & 2 != 0, i & 4 != 0);
+        let flags = [0, 1, 2, 3, 4, 7].map(bits);
+        for (materials, layers, environment) in flags {
             let mut lib = library().expect("shared modules compose");
             if materials {
                 lib.define(MATERIAL_TEXTURES);
             }
             if layers {
                 lib.define(LAYERS);
+            }
+            if environment {
+                lib.define(ENVIRONMENT);
             }
             let variants =
                 pass_shaders().into_iter().map(|s| (s, &[][..])).chain(masked.iter().map(|s| (*s, &[ALPHA_MASK][..])));
@@ -121,7 +127,10 @@ mod tests {
                 naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
                     .validate(&module)
                     .unwrap_or_else(|e| {
-                        panic!("{} {extra:?} (material textures: {materials}, layers: {layers}): {e:?}", shader.file)
+                        panic!(
+                            "{} {extra:?} (material textures: {materials}, layers: {layers}, environment: {environment}): {e:?}",
+                            shader.file
+                        )
                     });
             }
         }
@@ -147,6 +156,7 @@ mod tests {
         check::<GpuRasterParams>(&modules);
         check::<GpuResolveParams>(&modules);
         check::<crate::materials::GpuLayer>(&modules);
+        check::<crate::render::passes::environment::GpuEnvParams>(&modules);
     }
 
     #[test]

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use super::path::CameraSource;
 use super::{Aabb, Camera};
 
-/// The four light types of the shared lighting model.
+/// The light types of the shared lighting model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LightKind {
@@ -23,6 +23,20 @@ pub enum LightKind {
     Directional,
     Point,
     Spot,
+    /// The scene's prefiltered environment map (`--env`,
+    /// [`super::Scene::environment`]), scaled by `color` and `intensity`:
+    /// diffuse and specular image-based light, everywhere, times the
+    /// surface's occlusion. Black when the scene has no environment.
+    Environment,
+}
+
+impl LightKind {
+    /// Whether lights of this kind reach every point (ambient, directional,
+    /// environment): pipelines apply them everywhere, light grids list only
+    /// the others.
+    pub fn is_global(self) -> bool {
+        matches!(self, Self::Ambient | Self::Directional | Self::Environment)
+    }
 }
 
 /// One light. Fields a kind does not use are ignored (an ambient light uses
@@ -363,6 +377,12 @@ pub enum LightSetError {
     /// first (as [`super::path::SceneCameras::build_lights`] does).
     #[error("light spec 'auto' depends on how the scene is seen: resolve it with the scene's cameras first")]
     Unresolved,
+}
+
+/// The light that adds the scene's environment map (`--env`) at its own
+/// radiance.
+pub fn environment_light() -> Light {
+    Light { kind: LightKind::Environment, color: Vec3::ONE, intensity: 1.0, ..default_ambient() }
 }
 
 /// The fixed ambient light of every generated set: a dim, cool sky fill.
@@ -951,6 +971,13 @@ mod tests {
         )
         .unwrap();
         assert_eq!(load_light_file(&object).unwrap().len(), 1);
+
+        // An environment light scales `--env` and counts as global.
+        let env = dir.path().join("env.json");
+        std::fs::write(&env, r#"[{"kind": "environment", "color": [1, 0.9, 0.8], "intensity": 0.5}]"#).unwrap();
+        let lights = load_light_file(&env).unwrap();
+        assert_eq!(lights[0].kind, LightKind::Environment);
+        assert!(lights[0].kind.is_global() && !LightKind::Point.is_global());
 
         // A round trip through serde keeps the lights.
         let set = build("mixed:1:2", 4);

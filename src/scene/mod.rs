@@ -8,6 +8,7 @@ pub mod bookmarks;
 pub mod camera;
 pub mod checker;
 pub mod detail;
+pub mod environment;
 pub mod error;
 pub mod framing;
 pub mod free_camera;
@@ -386,6 +387,9 @@ pub struct Scene {
     /// compute rasterizer included (shadow maps keep both). Default false:
     /// both faces are drawn.
     pub cull_back_faces: bool,
+    /// The environment that lights of kind [`LightKind::Environment`] add
+    /// (`--env`; default none).
+    pub environment: Option<environment::Environment>,
 }
 
 impl Scene {

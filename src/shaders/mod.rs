@@ -52,6 +52,7 @@ impl ShaderSource {
 /// its own shared modules after them ([`ShaderLibrary::new`]).
 pub const SHARED: &[ShaderSource] = &[
     ShaderSource::new("shared/shadows.wgsl", include_str!("shared/shadows.wgsl")),
+    ShaderSource::new("shared/environment.wgsl", include_str!("shared/environment.wgsl")),
     ShaderSource::new("shared/lighting.wgsl", include_str!("shared/lighting.wgsl")),
     ShaderSource::new("shared/scene.wgsl", include_str!("shared/scene.wgsl")),
     ShaderSource::new("shared/scene_bindings.wgsl", include_str!("shared/scene_bindings.wgsl")),
@@ -79,6 +80,13 @@ pub const MATERIAL_TEXTURES: &str = "MATERIAL_TEXTURES";
 /// raster G-buffer stores UV0 and its mip. Without it that code is not
 /// compiled, so unlayered scenes render and cost as before.
 pub const LAYERS: &str = "LAYERS";
+
+/// Defined when the scene has an environment (`--env`,
+/// [`crate::scene::Scene::environment`]): lights of kind `environment` then
+/// read its prefiltered maps (`shared/environment.wgsl`). Without it that
+/// code is not compiled, so scenes without one render and cost as before
+/// (an environment light there adds nothing).
+pub const ENVIRONMENT: &str = "ENVIRONMENT";
 
 /// Defined when the renderer has MSAA (more than one sample per pixel,
 /// [`ShaderLibrary::define`]): the G-buffer and object space's visibility

@@ -16,6 +16,7 @@ mod corpus;
 mod deferred;
 mod density;
 mod doc_links;
+mod environment;
 mod examples;
 mod experiments;
 mod exposure;

@@ -6,6 +6,7 @@
 pub mod blended;
 pub mod bloom;
 pub mod depth_prepass;
+pub mod environment;
 pub mod exposure;
 pub mod gbuffer;
 pub mod light_grid;

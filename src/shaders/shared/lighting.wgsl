@@ -6,7 +6,8 @@
 // GGX metallic-roughness (glTF 2.0's BRDF): Cook-Torrance with the GGX
 // distribution, height-correlated Smith visibility and Schlick Fresnel;
 // diffuse Lambert on the non-metallic part.
-// Both: ambient light scaled by the surface's occlusion; point/spot
+// Both: ambient light and the environment map (LIGHT_ENVIRONMENT,
+// `environment_reflectance`) scaled by the surface's occlusion; point/spot
 // attenuation 1 / (1 + d^2) cut off at the light's radius,
 // spot factor (cos(theta) - cos_outer) / (cos_inner - cos_outer) clamped,
 // times the shadow factor of lights that cast shadows (`shadows.wgsl`).
@@ -15,8 +16,9 @@
 // rough dielectric alike.
 #define_import_path shadespace::lighting
 
-#import shadespace::contract::{LIGHT_AMBIENT, LIGHT_DIRECTIONAL, LIGHT_SPOT, SHADING_PBR}
+#import shadespace::contract::{LIGHT_AMBIENT, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SPOT, SHADING_PBR}
 #import shadespace::shadows::shadow_factor
+#import shadespace::environment::{env_brdf, env_diffuse, env_prefiltered}
 
 // 64 bytes; mirrors `render::gpu_types::GpuLight`.
 struct Light {
@@ -52,7 +54,7 @@ struct Surface {
     model: u32,
     // Emitted radiance, added once whatever the lights (`surface.wgsl`).
     emission: vec3f,
-    // Ambient occlusion, 1 for none: scales ambient light only.
+    // Ambient occlusion, 1 for none: scales ambient and environment light only.
     occlusion: f32,
     // Layered materials only (`shadespace::layers`; zero otherwise): UV0 and
     // the albedo mip there (for texture masks), and the material's layers.
@@ -113,6 +115,28 @@ fn ambient_reflectance(s: Surface) -> vec3f {
     return s.albedo;
 }
 
+#ifdef ENVIRONMENT
+// What the environment map (of unit scale) reflects towards `to_eye`:
+// diffuse from the irradiance map, specular by the split sum (the prefiltered
+// map at the reflection vector, times the BRDF's scale and bias of F0).
+// Phong's specular (R.L)^p is, with pi folded into the light, the
+// environment's mean over that lobe times 2 / (p + 1) (its integral over the
+// sphere over pi), read at the GGX roughness whose lobe matches p (the
+// inverse of `shininess_from_roughness`).
+fn environment_reflectance(s: Surface, to_eye: vec3f) -> vec3f {
+    let n = s.normal;
+    let r = reflect(-to_eye, n);
+    if s.model == SHADING_PBR {
+        let n_dot_v = max(dot(n, to_eye), 1e-4);
+        let specular = env_prefiltered(r, s.roughness) * env_brdf(specular_color(s), s.roughness, n_dot_v);
+        return s.albedo * (1.0 - s.metallic) * env_diffuse(n) + specular;
+    }
+    let p = max(s.shininess, 1.0);
+    let roughness = sqrt(sqrt(2.0 / (4.0 * p + 2.0)));
+    return s.albedo * env_diffuse(n) + vec3f(s.specular * 2.0 / (p + 1.0)) * env_prefiltered(r, roughness);
+}
+#endif
+
 // The cut-off at the radius is a linear fade over the last tenth of it, so a
 // light's edge is not a visible ring (which bilinear filtering of object-space
 // shades would blur differently from forward shading).
@@ -126,6 +150,11 @@ fn light_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
     if light.kind == LIGHT_AMBIENT {
         return light.radiance * ambient_reflectance(s) * s.occlusion;
     }
+#ifdef ENVIRONMENT
+    if light.kind == LIGHT_ENVIRONMENT {
+        return light.radiance * environment_reflectance(s, to_eye) * s.occlusion;
+    }
+#endif
     var to_light: vec3f;
     var falloff = 1.0;
     if light.kind == LIGHT_DIRECTIONAL {

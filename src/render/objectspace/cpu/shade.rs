@@ -107,7 +107,8 @@ pub fn attenuation(d: f32, radius: f32) -> f32 {
     fade / (1.0 + d * d)
 }
 
-/// Mirrors `light_radiance` for the Phong model, with no shadow.
+/// Mirrors `light_radiance` for the Phong model, with no shadow and no
+/// environment light (the twin has no environment maps).
 pub fn light_radiance(light: &GpuLight, s: &TexelSurface, to_eye: Vec3) -> Vec3 {
     let kind = light.kind;
     if kind == GpuLightKind::Ambient as u32 {

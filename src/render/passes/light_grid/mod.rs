@@ -44,7 +44,7 @@ use crate::gpu::readback::{self, ReadbackRing};
 use crate::gpu::{GpuContext, GpuError};
 use crate::render::frame::Frame;
 use crate::render::scene_gpu::SceneGpu;
-use crate::scene::{Light, LightKind};
+use crate::scene::Light;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
 
 /// The composable WGSL modules: reading a grid (`shadespace::light_grid`) and
@@ -437,7 +437,7 @@ impl LightGrid {
 
 /// Whether a light reaches everywhere (applied by `light_globals`, in no grid).
 fn is_global(l: &Light) -> bool {
-    matches!(l.kind, LightKind::Ambient | LightKind::Directional)
+    l.kind.is_global()
 }
 
 /// Workgroups `n` as (x, y) within the 65535-per-dimension limit; the
