@@ -35,9 +35,12 @@ pub fn grid(quick: bool) -> TimingGrid {
     } else {
         (vec![0, 1, 2, 4, 6, 8, 10, 15, 20, 25, 30], vec![0, 1, 10, 20, 50, 100, 200, 500, 1000])
     };
+    // Quick keeps one of each kind of object-space option (reuse, variable
+    // rate) so that every table has rows; the full run sweeps them.
+    let (reuses, rates) = if quick { (1..=2, vec![1.0]) } else { (1..=4, vec![1.0, 2.0]) };
     let mut shadings = Shading::CONVENTIONAL.to_vec();
-    shadings.extend((1..=4).map(|reuse| Shading::ObjectSpace { reuse, variable_rate: 0.0 }));
-    shadings.extend([1.0, 2.0].map(|variable_rate| Shading::ObjectSpace { reuse: 1, variable_rate }));
+    shadings.extend(reuses.map(|reuse| Shading::ObjectSpace { reuse, variable_rate: 0.0 }));
+    shadings.extend(rates.into_iter().map(|variable_rate| Shading::ObjectSpace { reuse: 1, variable_rate }));
     let sweeps =
         vec![Sweep { scenario: Scenario::Shadowed, counts: shadowed }, Sweep { scenario: Scenario::Big, counts: big }];
     let grid = TimingGrid::new(quick, shadings, sweeps);
