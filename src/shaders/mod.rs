@@ -18,6 +18,9 @@ pub mod contract;
 pub mod layout;
 
 use std::borrow::Cow;
+use std::collections::{HashMap, HashSet};
+use std::hash::{DefaultHasher, Hash, Hasher};
+use std::sync::{LazyLock, Mutex};
 
 use naga_oil::compose::{
     ComposableModuleDescriptor, Composer, ComposerError, NagaModuleDescriptor, ShaderDefValue, ShaderLanguage,
@@ -100,11 +103,29 @@ pub const MSAA: &str = "MSAA";
 pub const ALPHA_MASK: &str = "ALPHA_MASK";
 
 /// Composes pass shaders with the shared modules.
+///
+/// Composed modules are kept for the life of the process, keyed by
+/// everything that goes into them (the library's modules and constants, the
+/// shader's source and its definitions): every renderer composes the same few
+/// dozen shaders, and composing them (naga_oil's preprocessing, parsing and
+/// validation) was a large share of building a renderer on a CPU driver,
+/// where tests and the viewer build hundreds.
 pub struct ShaderLibrary {
-    composer: Composer,
+    /// Built on the first shader not composed before in this process.
+    composer: Option<Composer>,
+    /// The library's modules, kept to build the composer when needed.
+    sources: Vec<(&'static str, Cow<'static, str>)>,
+    /// Hash of `sources`: the part of a composed module's key the library gives.
+    key: u64,
     /// Defined for every shader this library composes.
     defs: Vec<&'static str>,
 }
+
+/// Composed modules by [`ShaderLibrary::module_key`].
+static COMPOSED: LazyLock<Mutex<HashMap<u64, wgpu::naga::Module>>> = LazyLock::new(Default::default);
+
+/// Libraries (by [`ShaderLibrary::key`]) whose modules composed without error.
+static VALID_LIBRARIES: LazyLock<Mutex<HashSet<u64>>> = LazyLock::new(Default::default);
 
 #[derive(Debug, thiserror::Error)]
 #[error("shader {file}: {message}")]
@@ -119,22 +140,47 @@ impl ShaderLibrary {
     /// then `modules` (shared modules of the layers above, in dependency
     /// order). `render::shader_set::library` is the one the renderer uses.
     pub fn new(constants: &[(&str, u32)], modules: &[ShaderSource]) -> Result<Self, ShaderError> {
-        let mut composer = Composer::default().with_capabilities(wgpu::naga::valid::Capabilities::all());
         let contract = contract::wgsl(constants);
-        let generated = [("shadespace::contract (generated)", contract.as_str())];
-        let shared = SHARED.iter().chain(modules).map(|s| (s.file, s.source));
-        for (file, source) in generated.into_iter().chain(shared) {
-            let added = composer.add_composable_module(ComposableModuleDescriptor {
-                source,
-                file_path: file,
-                language: ShaderLanguage::Wgsl,
-                ..Default::default()
-            });
-            if let Err(e) = added {
-                return Err(error(&composer, file, e));
-            }
+        let generated = [("shadespace::contract (generated)", Cow::Owned(contract))];
+        let shared = SHARED.iter().chain(modules).map(|s| (s.file, Cow::Borrowed(s.source)));
+        let sources: Vec<_> = generated.into_iter().chain(shared).collect();
+        let mut hasher = DefaultHasher::new();
+        sources.hash(&mut hasher);
+        let key = hasher.finish();
+        let mut library = Self { composer: None, sources, key, defs: Vec::new() };
+        if !VALID_LIBRARIES.lock().unwrap_or_else(|e| e.into_inner()).contains(&key) {
+            library.composer()?;
         }
-        Ok(Self { composer, defs: Vec::new() })
+        Ok(library)
+    }
+
+    /// The composer of this library's modules, built on first use (its
+    /// errors name the module that fails).
+    fn composer(&mut self) -> Result<&mut Composer, ShaderError> {
+        if self.composer.is_none() {
+            let mut composer = Composer::default().with_capabilities(wgpu::naga::valid::Capabilities::all());
+            for (file, source) in &self.sources {
+                let added = composer.add_composable_module(ComposableModuleDescriptor {
+                    source,
+                    file_path: file,
+                    language: ShaderLanguage::Wgsl,
+                    ..Default::default()
+                });
+                if let Err(e) = added {
+                    return Err(error(&composer, file, e));
+                }
+            }
+            VALID_LIBRARIES.lock().unwrap_or_else(|e| e.into_inner()).insert(self.key);
+            self.composer = Some(composer);
+        }
+        Ok(self.composer.as_mut().expect("built above"))
+    }
+
+    /// The key of `shader` composed with `defs` by this library.
+    fn module_key(&self, shader: &ShaderSource, defs: &[&str]) -> u64 {
+        let mut hasher = DefaultHasher::new();
+        (self.key, shader.file, shader.source, defs).hash(&mut hasher);
+        hasher.finish()
     }
 
     /// Defines `def` for every shader composed from now on (for example
@@ -153,16 +199,25 @@ impl ShaderLibrary {
     /// [`Self::compose`] with `extra` defined too (a variant of a shader
     /// that may itself have definitions).
     pub fn compose_with(&mut self, shader: ShaderSource, extra: &[&str]) -> Result<wgpu::naga::Module, ShaderError> {
-        let defs = shader.defs.iter().chain(&self.defs).chain(extra);
-        let shader_defs = defs.map(|d| (d.to_string(), ShaderDefValue::Bool(true))).collect();
-        let module = self.composer.make_naga_module(NagaModuleDescriptor {
+        let mut defs: Vec<&str> = shader.defs.iter().chain(&self.defs).chain(extra).copied().collect();
+        defs.sort_unstable();
+        defs.dedup();
+        let key = self.module_key(&shader, &defs);
+        if let Some(module) = COMPOSED.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+            return Ok(module.clone());
+        }
+        let shader_defs = defs.iter().map(|d| (d.to_string(), ShaderDefValue::Bool(true))).collect();
+        let composer = self.composer()?;
+        let module = composer.make_naga_module(NagaModuleDescriptor {
             source: shader.source,
             file_path: shader.file,
             shader_type: ShaderType::Wgsl,
             shader_defs,
             ..Default::default()
         });
-        module.map_err(|e| error(&self.composer, shader.file, e))
+        let module = module.map_err(|e| error(composer, shader.file, e))?;
+        COMPOSED.lock().unwrap_or_else(|e| e.into_inner()).insert(key, module.clone());
+        Ok(module)
     }
 
     /// A device shader module for a pass shader.
@@ -197,4 +252,46 @@ pub fn struct_size(module: &wgpu::naga::Module, name: &str) -> Option<u64> {
 
 fn error(composer: &Composer, file: &str, e: ComposerError) -> ShaderError {
     ShaderError { file: file.to_string(), message: e.emit_to_string(composer) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PASS: ShaderSource = ShaderSource::new(
+        "cache_test.wgsl",
+        "#ifdef WIDE\nconst SIDE: u32 = 16u;\n#else\nconst SIDE: u32 = 8u;\n#endif\n\
+         @compute @workgroup_size(SIDE) fn main() {}",
+    );
+
+    fn side(module: &wgpu::naga::Module) -> [u32; 3] {
+        module.entry_points[0].workgroup_size
+    }
+
+    /// A second library of the same modules composes from the cache, and the
+    /// key tells definitions apart (a cached module must not stand for a
+    /// variant with other definitions).
+    #[test]
+    fn composed_modules_are_kept_per_definitions() {
+        let mut first = ShaderLibrary::new(&[], &[]).unwrap();
+        assert_eq!(side(&first.compose(PASS).unwrap()), [8, 1, 1]);
+        assert_eq!(side(&first.compose_with(PASS, &["WIDE"]).unwrap()), [16, 1, 1]);
+        let mut second = ShaderLibrary::new(&[], &[]).unwrap();
+        assert!(second.composer.is_none(), "a library composed before is not parsed again");
+        assert_eq!(side(&second.compose(PASS).unwrap()), [8, 1, 1]);
+        second.define("WIDE");
+        assert_eq!(side(&second.compose(PASS).unwrap()), [16, 1, 1]);
+        assert!(second.composer.is_none(), "both variants came from the cache");
+    }
+
+    /// A library with a module that cannot be added (no import path) fails
+    /// when it is made, naming the module, however many good libraries were
+    /// made before.
+    #[test]
+    fn a_bad_module_fails_the_library() {
+        ShaderLibrary::new(&[], &[]).unwrap();
+        let bad = ShaderSource::new("bad_module.wgsl", "fn f() {}");
+        let e = ShaderLibrary::new(&[], &[bad]).err().expect("a module without an import path");
+        assert_eq!(e.file, "bad_module.wgsl", "{e}");
+    }
 }
