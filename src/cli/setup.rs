@@ -173,6 +173,8 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             visibility_prepass: !a.objectspace.no_visibility_prepass,
             visibility,
             count_visibility: a.count_visibility,
+            marking: a.objectspace.marking,
+            count_mark_atomics: false,
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::DeferredCompute => PipelineConfig::DeferredCompute(DeferredComputeConfig {
