@@ -15,7 +15,7 @@
 // on (directory and table word: one page but where the taps cross a page
 // edge, not one per tap); per tap its triangle-map texel and shade, and the
 // tap's chart island only where its triangle is not the pixel's own (a
-// triangle is in its own island).
+// triangle is in its own island; the pixel's island is then read too).
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
@@ -56,11 +56,10 @@ fn island(object: u32, triangle: u32) -> u32 {
     return triangle_charts[objects[object].first_index / 3u + triangle];
 }
 
-// The pixel's own chart island and triangle, which the island filter keeps.
+// The pixel's object and triangle, whose chart island the island filter keeps.
 struct OwnSurface {
     object: u32,
     triangle: u32,
-    island: u32,
 }
 
 // 1 when the texel at `at` belongs to the pixel's chart island (its
@@ -71,7 +70,10 @@ fn in_island(own: OwnSurface, at: AtlasTexel) -> f32 {
         return 0.0;
     }
     // The pixel's own triangle, the usual case inside a triangle: no lookup.
-    return select(0.0, 1.0, id - 1u == own.triangle || island(own.object, id - 1u) == own.island);
+    if id - 1u == own.triangle {
+        return 1.0;
+    }
+    return select(0.0, 1.0, island(own.object, id - 1u) == island(own.object, own.triangle));
 }
 
 // Shades the pixel here, as forward shading would.
@@ -209,7 +211,7 @@ fn gather_surface(p: PixelSample) -> vec4f {
         default: {
             // The levels around the footprint, blended by the coarser one's
             // weight (one level where the weight is 0 or 1).
-            let own = OwnSurface(p.object, p.triangle, island(p.object, p.triangle));
+            let own = OwnSurface(p.object, p.triangle);
             var c = vec3f(0.0);
             var backed = true;
             if levels.t < 1.0 {

@@ -14,7 +14,8 @@
 // tiles globally, as before; the tiles marked are the same). The resolve of
 // compute visibility is not fused in: it is a pass of its own that
 // deferred-compute shares and the raster path lacks, and the gather reads its
-// output anyway, so fusing would save one read of the visibility buffer.
+// output anyway, so fusing would save one read of the visibility buffer and
+// a pass boundary (the whole resolve is 0.026 ms at 1920x1080 on the H100).
 // `COUNT_MARK_ATOMICS` counts the global tile marks and the global atomics
 // they issue (`COUNT_MARK_TILES`, `COUNT_MARK_ATOMICS`).
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_PAGES_USED, COUNT_PAGES_REQUESTED, COUNT_PAGES_FAILED,
