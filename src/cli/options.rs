@@ -259,6 +259,11 @@ pub struct ObjectSpaceArgs {
     /// former pass, for comparison). Both mark the same tiles.
     #[arg(long, value_enum, default_value = "workgroup")]
     pub marking: Marking,
+    /// Count tile marking's global tile marks and atomics every frame into
+    /// the `--stats`/`bench` counters `mark_tiles` and `mark_atomics` (adds
+    /// workgroup atomics: for profiling, not for timing).
+    #[arg(long)]
+    pub count_marks: bool,
     /// Shade these objects (comma-separated names) forward instead of in object space.
     #[arg(long, value_delimiter = ',')]
     pub forward_only: Vec<String>,

@@ -343,12 +343,20 @@ fn compare_markings(ctx: &GpuContext, case: MarkingCase, most_share: f64) {
     let name = case.name;
     let (per_pixel, pixel_tiles, pixel_atomics) = marking_run(ctx, &case, Marking::PerPixel);
     let (workgroup, group_tiles, group_atomics) = marking_run(ctx, &case, Marking::Workgroup);
+    // The first tile whose stamps differ, and how many do.
+    let differ = |a: &[u32], b: &[u32]| {
+        let wrong: Vec<usize> = (0..a.len().max(b.len())).filter(|&t| a.get(t) != b.get(t)).collect();
+        wrong.first().map(|&t| format!("{} tiles, first {t}: {:?} against {:?}", wrong.len(), a.get(t), b.get(t)))
+    };
     for (frame, (a, b)) in per_pixel.iter().zip(&workgroup).enumerate() {
-        assert!(a.3[0] > 0, "{name} frame {frame}: no tile visible");
-        assert_eq!(a.0, b.0, "{name} frame {frame}: tile_visible differs between the markings");
-        assert_eq!(a.1, b.1, "{name} frame {frame}: tile_shaded differs between the markings");
-        assert_eq!(a.2, b.2, "{name} frame {frame}: the shade queue differs between the markings");
-        assert_eq!(a.3, b.3, "{name} frame {frame}: visible, new, queued, requested differ between the markings");
+        let at = format!("{name} frame {frame}, per pixel against workgroup");
+        assert!(a.3[0] > 0, "{at}: no tile visible");
+        assert_eq!(a.3, b.3, "{at}: the counters visible, new, queued, requested differ");
+        assert_eq!(differ(&a.0, &b.0), None, "{at}: tile_visible differs");
+        assert_eq!(differ(&a.1, &b.1), None, "{at}: tile_shaded differs");
+        let (qa, qb): (Vec<u32>, Vec<u32>) = (a.2.iter().map(|q| q[0]).collect(), b.2.iter().map(|q| q[0]).collect());
+        assert_eq!(differ(&qa, &qb), None, "{at}: the queued tiles differ");
+        assert!(a.2 == b.2, "{at}: a queued tile's object or level differs");
     }
     let share = group_atomics as f64 / pixel_atomics as f64;
     eprintln!(
