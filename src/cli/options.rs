@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use clap::{Args, ValueEnum};
 use glam::Vec3;
-use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, MAX_ATLAS_BUDGET_MI};
+use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, MAX_ATLAS_BUDGET_MI, Marking};
 use shadespace::render::{Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
 
@@ -264,6 +264,17 @@ pub struct ObjectSpaceArgs {
     /// as NAME-viewK.png.
     #[arg(long, value_parser = parse::views)]
     pub views: Option<Views>,
+    /// How tile marking writes the tiles pixels need: `workgroup` (default:
+    /// the first pixel of each 8x8 workgroup to need a tile marks it once)
+    /// or `per-pixel` (every pixel marks each tile of its footprint: the
+    /// former pass, for comparison). Both mark the same tiles.
+    #[arg(long, value_enum, default_value = "workgroup")]
+    pub marking: Marking,
+    /// Count tile marking's global tile marks and atomics every frame into
+    /// the `--stats`/`bench` counters `mark_tiles` and `mark_atomics` (adds
+    /// workgroup atomics: for profiling, not for timing).
+    #[arg(long)]
+    pub count_marks: bool,
     /// Shade these objects (comma-separated names) forward instead of in object space.
     #[arg(long, value_delimiter = ',')]
     pub forward_only: Vec<String>,

@@ -174,6 +174,8 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             visibility_prepass: !a.objectspace.no_visibility_prepass,
             visibility,
             count_visibility: a.count_visibility,
+            marking: a.objectspace.marking,
+            count_mark_atomics: a.objectspace.count_marks,
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::DeferredCompute => PipelineConfig::DeferredCompute(DeferredComputeConfig {

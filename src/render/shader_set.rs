@@ -58,6 +58,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         all.extend([RASTER, RASTER_CULLING, RASTER_COUNTING, RASTER_CULLING_COUNTING, RESOLVE]);
     }
     all.extend_from_slice(objectspace::PASS_SHADERS);
+    all.extend(objectspace::mark::VARIANTS);
     all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
     all.push(clustered::SHADER);
     all.extend([

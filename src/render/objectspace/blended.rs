@@ -74,7 +74,9 @@ impl BlendedObjects {
         let samples = targets.samples;
         let mark_groups = [Some(&res.layout)];
         let mark = SceneRaster {
-            shader: MARK_SHADER,
+            // Per pixel: a fragment stage has no workgroup to deduplicate in
+            // (the workgroup table is not even declared in this variant).
+            shader: MARK_SHADER.with_defs(&[super::mark::PER_PIXEL]),
             vertex_entry: "vs_blended",
             fragment: Some(("fs_mark_blended", &[])),
             depth: DepthMode::TestOnly,

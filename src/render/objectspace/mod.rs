@@ -268,10 +268,18 @@ pub enum TileCounter {
     /// Pages whose triangle maps the triangle-map pass built this frame
     /// (the pages backed this frame: none when none is new).
     TrimapPages = 15,
+    /// With [`ObjectSpaceConfig::count_mark_atomics`]: tile marks the mark
+    /// pass made in the global buffers (per pixel and tile of its footprint,
+    /// or per distinct tile of a workgroup: [`Marking`]).
+    MarkTiles = 25,
+    /// With [`ObjectSpaceConfig::count_mark_atomics`]: the global atomics
+    /// those marks issued (page table, requests, tile and page stamps,
+    /// counters; not the per-workgroup pixel counts).
+    MarkAtomics = 26,
 }
 
 impl TileCounter {
-    pub const ALL: [Self; 16] = [
+    pub const ALL: [Self; 18] = [
         Self::Queued,
         Self::Visible,
         Self::New,
@@ -288,6 +296,8 @@ impl TileCounter {
         Self::ChunksTaken,
         Self::TableChunks,
         Self::TrimapPages,
+        Self::MarkTiles,
+        Self::MarkAtomics,
     ];
     /// First slot of the age buckets (free pages, then unused for 128 or
     /// more frames, 64-127, ..., 1 frame).
@@ -314,6 +324,8 @@ impl TileCounter {
             Self::ChunksTaken => "COUNT_CHUNKS_TAKEN",
             Self::TableChunks => "COUNT_TABLE_CHUNKS",
             Self::TrimapPages => "COUNT_TRIMAP_PAGES",
+            Self::MarkTiles => "COUNT_MARK_TILES",
+            Self::MarkAtomics => "COUNT_MARK_ATOMICS",
         }
     }
 }
@@ -361,6 +373,20 @@ struct ExtraView {
     uniform: wgpu::Buffer,
     visibility: Box<ComputeVisibility>,
     pub hdr: wgpu::Texture,
+}
+
+/// How the mark pass writes the tiles its pixels need into the global tile
+/// state (`mark/mark.wgsl`); both mark the same tiles.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Marking {
+    /// Each pixel marks every tile of its footprint (most find it marked).
+    PerPixel,
+    /// The first pixel of a workgroup to need a tile marks it, found in a
+    /// workgroup hash table: global atomics per distinct tile of the
+    /// workgroup, not per pixel.
+    #[default]
+    Workgroup,
 }
 
 /// Settings of the object-space pipeline.
@@ -412,6 +438,12 @@ pub struct ObjectSpaceConfig {
     /// Compute visibility: count the rasterizer's work every frame into the
     /// counters (adds atomics: for profiling, not timing).
     pub count_visibility: bool,
+    /// How marking writes the global tile state.
+    pub marking: Marking,
+    /// Count the mark pass's global tile marks and atomics every frame into
+    /// the counters `mark_tiles` and `mark_atomics` (adds workgroup atomics:
+    /// for profiling, not timing).
+    pub count_mark_atomics: bool,
     /// Most texels shaded per frame: above it the mip levels are biased
     /// coarser until the shading fits ([`budget`]). `None`: no limit.
     pub shade_budget_texels: Option<u64>,
@@ -436,6 +468,8 @@ impl Default for ObjectSpaceConfig {
             visibility_prepass: true,
             visibility: VisibilityMethod::Raster,
             count_visibility: false,
+            marking: Marking::Workgroup,
+            count_mark_atomics: false,
             shade_budget_texels: None,
             extra_views: ExtraViews::None,
         }
@@ -638,7 +672,7 @@ impl ObjectSpace {
             extra_views,
             blended,
             visibility,
-            mark: MarkPass::new(device, shaders, scene, &res)?,
+            mark: MarkPass::new(device, shaders, scene, &res, config.marking, config.count_mark_atomics)?,
             paging: PagingPass::new(device, shaders, scene, &res)?,
             resize: ResizePass::new(device, shaders, scene, &res)?,
             trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res)?,
@@ -919,6 +953,10 @@ impl Pipeline for ObjectSpace {
                         count(TileCounter::UnderShadedPixels) / count(TileCounter::AtlasPixels).max(1.0),
                     ),
                 ];
+                if self.config.count_mark_atomics {
+                    counters.push(("mark_tiles", count(TileCounter::MarkTiles)));
+                    counters.push(("mark_atomics", count(TileCounter::MarkAtomics)));
+                }
                 if !self.extra_views.is_empty() {
                     // Like for like: tiles on pages already backed, shared
                     // by the views against summed over them.

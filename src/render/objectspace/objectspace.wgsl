@@ -377,19 +377,6 @@ fn bilinear(l: AtlasLevel, uv: vec2f) -> Bilinear {
     return out;
 }
 
-// Where texel `texel` of level `l` lies in the physical atlas; its layer is
-// NOT_BACKED when its page has no physical page.
-fn locate(l: AtlasLevel, texel: vec2i) -> AtlasTexel {
-    let t = vec2u(texel);
-    let page = physical_page(virtual_page(l, t));
-    if page == NOT_BACKED {
-        var out: AtlasTexel;
-        out.layer = NOT_BACKED;
-        return out;
-    }
-    return atlas_texel(page, t);
-}
-
 // Whether two visibility-buffer ids (object + 1, triangle) see one chart
 // surface: both background, or one object's triangles in one chart island
 // (whose shades are continuous, so a pixel whose samples all do is marked

@@ -9,6 +9,13 @@
 // (`same_chart_surface`) gathers each sample at its own position and writes
 // their mean (background samples black): the resolve, in linear HDR; the
 // others gather once.
+// Reads per pixel, one level: the visibility buffer; its object and
+// triangle's three indices; the three vertices (positions, chart UVs); the
+// atlas entry and level; the page of each distinct page the four taps lie
+// on (directory and table word: one page but where the taps cross a page
+// edge, not one per tap); per tap its triangle-map texel and shade, and the
+// tap's chart island only where its triangle is not the pixel's own (a
+// triangle is in its own island; the pixel's island is then read too).
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
@@ -18,7 +25,7 @@
 #endif
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_levels,
-    bilinear, AtlasTexel, triangle_charts, locate, physical_page, virtual_page, physical_tile,
+    bilinear, AtlasTexel, atlas_texel, triangle_charts, physical_page, virtual_page, physical_tile,
     NOT_BACKED, BlendedVertex, blended_vertex}
 #import shadespace::alpha_mask::opacity
 
@@ -50,11 +57,24 @@ fn island(object: u32, triangle: u32) -> u32 {
     return triangle_charts[objects[object].first_index / 3u + triangle];
 }
 
-// 1 when the texel at `at` belongs to chart island `own` of `object` (its
-// triangle map names a triangle of that island), else 0.
-fn in_island(object: u32, own: u32, at: AtlasTexel) -> f32 {
+// The pixel's object and triangle, whose chart island the island filter keeps.
+struct OwnSurface {
+    object: u32,
+    triangle: u32,
+}
+
+// 1 when the texel at `at` belongs to the pixel's chart island (its
+// triangle map names the pixel's triangle or another of that island), else 0.
+fn in_island(own: OwnSurface, at: AtlasTexel) -> f32 {
     let id = textureLoad(triangle_map, at.xy, at.layer, 0).x;
-    return select(0.0, 1.0, id != 0u && island(object, id - 1u) == own);
+    if id == 0u {
+        return 0.0;
+    }
+    // The pixel's own triangle, the usual case inside a triangle: no lookup.
+    if id - 1u == own.triangle {
+        return 1.0;
+    }
+    return select(0.0, 1.0, island(own.object, id - 1u) == island(own.object, own.triangle));
 }
 
 // Shades the pixel here, as forward shading would.
@@ -64,24 +84,43 @@ fn shade_forward(p: PixelSample) -> vec4f {
 }
 
 // The shade of chart point `uv` in level `level_index`, filtered bilinearly
-// over the taps in chart island `own` (a tap on a neighbouring chart's
+// over the taps in the pixel's chart island (a tap on a neighbouring chart's
 // texel, closer than a texel at coarse levels, would bleed its colour across
 // the border; with no tap in the island, a sliver thinner than the level's
 // texels, all four are kept). Alpha -1 when a tap's page has no physical
 // page (the atlas was full this frame).
-fn filter_level(object: u32, own: u32, level_index: u32, uv: vec2f) -> vec4f {
-    let l = entry_level(object, level_index);
+fn filter_level(own: OwnSurface, level_index: u32, uv: vec2f) -> vec4f {
+    let l = entry_level(own.object, level_index);
     let b = bilinear(l, uv);
-    let taps = array<AtlasTexel, 4>(
-        locate(l, b.texel),
-        locate(l, vec2i(b.texel_hi.x, b.texel.y)),
-        locate(l, vec2i(b.texel.x, b.texel_hi.y)),
-        locate(l, b.texel_hi),
-    );
-    if taps[0].layer == NOT_BACKED || taps[1].layer == NOT_BACKED || taps[2].layer == NOT_BACKED
-        || taps[3].layer == NOT_BACKED {
+    let lo = vec2u(b.texel);
+    let hi = vec2u(b.texel_hi);
+    // The taps share a page but across a page edge: each distinct page is
+    // looked up once (the same pages as a lookup per tap).
+    let crosses = hi / params.page_size != lo / params.page_size;
+    let page_lo = physical_page(virtual_page(l, lo));
+    var page_x = page_lo;
+    var page_y = page_lo;
+    if crosses.x {
+        page_x = physical_page(virtual_page(l, vec2u(hi.x, lo.y)));
+    }
+    if crosses.y {
+        page_y = physical_page(virtual_page(l, vec2u(lo.x, hi.y)));
+    }
+    var page_xy = select(page_lo, page_x, crosses.x);
+    if crosses.x && crosses.y {
+        page_xy = physical_page(virtual_page(l, hi));
+    } else if crosses.y {
+        page_xy = page_y;
+    }
+    if page_lo == NOT_BACKED || page_x == NOT_BACKED || page_y == NOT_BACKED || page_xy == NOT_BACKED {
         return vec4f(0.0, 0.0, 0.0, -1.0);
     }
+    let taps = array<AtlasTexel, 4>(
+        atlas_texel(page_lo, lo),
+        atlas_texel(page_x, vec2u(hi.x, lo.y)),
+        atlas_texel(page_y, vec2u(lo.x, hi.y)),
+        atlas_texel(page_xy, hi),
+    );
     var w = vec4f(
         (1.0 - b.weight.x) * (1.0 - b.weight.y),
         b.weight.x * (1.0 - b.weight.y),
@@ -89,10 +128,10 @@ fn filter_level(object: u32, own: u32, level_index: u32, uv: vec2f) -> vec4f {
         b.weight.x * b.weight.y,
     );
     let keep = vec4f(
-        in_island(object, own, taps[0]),
-        in_island(object, own, taps[1]),
-        in_island(object, own, taps[2]),
-        in_island(object, own, taps[3]),
+        in_island(own, taps[0]),
+        in_island(own, taps[1]),
+        in_island(own, taps[2]),
+        in_island(own, taps[3]),
     );
     let kept = dot(w, keep);
     if kept > 0.0 {
@@ -189,16 +228,16 @@ fn gather_surface(p: PixelSample) -> vec4f {
         default: {
             // The levels around the footprint, blended by the coarser one's
             // weight (one level where the weight is 0 or 1).
-            let own = island(p.object, p.triangle);
+            let own = OwnSurface(p.object, p.triangle);
             var c = vec3f(0.0);
             var backed = true;
             if levels.t < 1.0 {
-                let fine = filter_level(p.object, own, levels.lo, f.uv);
+                let fine = filter_level(own, levels.lo, f.uv);
                 backed = fine.w >= 0.0;
                 c = fine.rgb * (1.0 - levels.t);
             }
             if levels.t > 0.0 {
-                let coarse = filter_level(p.object, own, levels.hi, f.uv);
+                let coarse = filter_level(own, levels.hi, f.uv);
                 backed = backed && coarse.w >= 0.0;
                 c += coarse.rgb * levels.t;
             }

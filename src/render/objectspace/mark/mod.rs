@@ -5,14 +5,24 @@
 //! the tiles requested on the pages it backed are marked and queued. Then
 //! one invocation turns the queue length into the shade pass's indirect
 //! dispatch. `cpu.rs` is the CPU twin that tests check this pass against.
+//! [`Marking`] picks whether each pixel or each workgroup's first pixel of
+//! a tile marks it globally.
 
+use super::Marking;
 use super::resources::{BACKED_ARGS, Resources};
 use crate::render::frame::Frame;
-use crate::render::passes::compute_pipeline;
+use crate::render::passes::{compute_pipeline, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("mark.wgsl", include_str!("mark.wgsl"));
+/// Defined for [`Marking::PerPixel`].
+pub const PER_PIXEL: &str = "MARK_PER_PIXEL";
+/// Defined to count the global tile marks and atomics.
+pub const COUNT_ATOMICS: &str = "COUNT_MARK_ATOMICS";
+/// The variants besides [`SHADER`], for the test that validates every shader.
+pub const VARIANTS: [ShaderSource; 3] =
+    [SHADER.with_defs(&[PER_PIXEL]), SHADER.with_defs(&[COUNT_ATOMICS]), SHADER.with_defs(&[PER_PIXEL, COUNT_ATOMICS])];
 
 pub struct MarkPass {
     mark: wgpu::ComputePipeline,
@@ -26,11 +36,20 @@ impl MarkPass {
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         res: &Resources,
+        marking: Marking,
+        count_atomics: bool,
     ) -> Result<Self, ShaderError> {
         let plain = [&scene.layout, &res.layout];
         let with_dispatch = [&scene.layout, &res.layout, &res.dispatch_layout];
+        let mut defs = Vec::new();
+        if marking == Marking::PerPixel {
+            defs.push(PER_PIXEL);
+        }
+        if count_atomics {
+            defs.push(COUNT_ATOMICS);
+        }
         Ok(Self {
-            mark: compute_pipeline(device, shaders, SHADER, "mark", &plain)?,
+            mark: compute_pipeline_with(device, shaders, SHADER, &defs, "mark", &plain)?,
             mark_backed: compute_pipeline(device, shaders, SHADER, "mark_backed", &plain)?,
             queue_args: compute_pipeline(device, shaders, SHADER, "queue_args", &with_dispatch)?,
         })
