@@ -22,26 +22,32 @@ const MIN_AGREEMENT: f64 = 0.999;
 /// with `method`. The ids need no shading atlas: every object but the first
 /// is shaded forward (the atlas cannot be empty), so no charts are built.
 fn ids(ctx: &GpuContext, scene: &Scene, camera: &Camera, size: (u32, u32), method: VisibilityMethod) -> Vec<[u32; 2]> {
-    ids_with(ctx, scene, camera, size, method, true)
+    ids_with(ctx, scene, std::slice::from_ref(camera), size, method, true).remove(0)
 }
 
-/// [`ids`], the raster path with or without its depth pre-pass.
+/// [`ids`] of each of `cameras` from one renderer (a view's ids depend on
+/// nothing of the frames before it), the raster path with or without its
+/// depth pre-pass.
 fn ids_with(
     ctx: &GpuContext,
     scene: &Scene,
-    camera: &Camera,
+    cameras: &[Camera],
     size: (u32, u32),
     method: VisibilityMethod,
     visibility_prepass: bool,
-) -> Vec<[u32; 2]> {
+) -> Vec<Vec<[u32; 2]>> {
     let mut texture_sizes = vec![None; scene.objects.len()];
     texture_sizes[0] = Some(128);
     let objectspace = ObjectSpaceConfig { texture_sizes, visibility: method, visibility_prepass, ..Default::default() };
     let options =
         RenderOptions { width: size.0, height: size.1, pipeline: PipelineConfig::ObjectSpace(objectspace), samples: 1 };
     let mut renderer = Renderer::new(ctx, scene, &options).unwrap();
-    renderer.render(ctx, camera, &[], 0).unwrap();
-    renderer.pipeline::<ObjectSpace>().unwrap().read_mark_state(ctx).unwrap().visibility
+    let mut views = Vec::new();
+    for (frame, camera) in cameras.iter().enumerate() {
+        renderer.render(ctx, camera, &[], frame as u64).unwrap();
+        views.push(renderer.pipeline::<ObjectSpace>().unwrap().read_mark_state(ctx).unwrap().visibility);
+    }
+    views
 }
 
 /// Whether pixel `i` has a 4-neighbour with other ids in `buffer`.
@@ -67,13 +73,26 @@ fn on_edge(buffer: &[[u32; 2]], width: usize, i: usize) -> bool {
 /// Renders `camera`'s view both ways, prints the figures and checks them;
 /// returns (covered pixels, differing pixels).
 fn compare(ctx: &GpuContext, name: &str, scene: &Scene, camera: &Camera, size: (u32, u32)) -> (usize, usize) {
-    let raster = ids(ctx, scene, camera, size, VisibilityMethod::Raster);
-    let compute = ids(ctx, scene, camera, size, VisibilityMethod::Compute);
+    compare_views(ctx, scene, &[(name.to_string(), *camera)], size)[0]
+}
+
+/// [`compare`] for several named views of `scene`, each path's renderer
+/// built once for all of them.
+fn compare_views(ctx: &GpuContext, scene: &Scene, views: &[(String, Camera)], size: (u32, u32)) -> Vec<(usize, usize)> {
+    let cameras: Vec<Camera> = views.iter().map(|(_, c)| *c).collect();
+    let raster = ids_with(ctx, scene, &cameras, size, VisibilityMethod::Raster, true);
+    let compute = ids_with(ctx, scene, &cameras, size, VisibilityMethod::Compute, true);
+    views.iter().zip(raster.iter().zip(&compute)).map(|((name, _), (r, c))| compare_ids(name, r, c, size)).collect()
+}
+
+/// Checks one view's raster and compute ids against each other; returns
+/// (covered pixels, pixels that differ).
+fn compare_ids(name: &str, raster: &[[u32; 2]], compute: &[[u32; 2]], size: (u32, u32)) -> (usize, usize) {
     let width = size.0 as usize;
     let covered = (0..raster.len()).filter(|&i| raster[i][0] != 0 || compute[i][0] != 0).count();
     let differ: Vec<usize> = (0..raster.len()).filter(|&i| raster[i] != compute[i]).collect();
     let interior: Vec<usize> =
-        differ.iter().copied().filter(|&i| !on_edge(&raster, width, i) && !on_edge(&compute, width, i)).collect();
+        differ.iter().copied().filter(|&i| !on_edge(raster, width, i) && !on_edge(compute, width, i)).collect();
     let agreement = 1.0 - differ.len() as f64 / covered.max(1) as f64;
     eprintln!(
         "{name}: {} of {covered} covered pixels differ ({:.4} % agree), {} of them off edges",
@@ -103,9 +122,8 @@ fn ids_agree_with_raster_on_the_procedural_scenes() {
     let ctx = common::gpu();
     for name in ["atrium", "voxels"] {
         let scene = scene::load(name).unwrap();
-        for frame in [0, 40] {
-            compare(&ctx, &format!("{name} frame {frame}"), &scene, &path_camera(name, &scene, frame), (256, 144));
-        }
+        let views = [0, 40].map(|frame| (format!("{name} frame {frame}"), path_camera(name, &scene, frame)));
+        compare_views(&ctx, &scene, &views, (256, 144));
     }
 }
 
@@ -127,10 +145,8 @@ fn ids_agree_with_raster_with_alpha_masks() {
         for m in &mut scene.materials {
             (m.base_color_texture, m.alpha_cutoff) = (Some(stripes), Some(0.5));
         }
-        for frame in [0, 40] {
-            let camera = path_camera(name, &scene, frame);
-            compare(&ctx, &format!("{name} frame {frame}, masked"), &scene, &camera, (256, 144));
-        }
+        let views = [0, 40].map(|frame| (format!("{name} frame {frame}, masked"), path_camera(name, &scene, frame)));
+        compare_views(&ctx, &scene, &views, (256, 144));
     }
 }
 
@@ -142,9 +158,8 @@ fn ids_agree_with_raster_on_sponza() {
     }
     let ctx = common::gpu();
     let scene = scene::load(SPONZA).unwrap();
-    for frame in [0, 100] {
-        compare(&ctx, &format!("sponza frame {frame}"), &scene, &path_camera(SPONZA, &scene, frame), (320, 180));
-    }
+    let views = [0, 100].map(|frame| (format!("sponza frame {frame}"), path_camera(SPONZA, &scene, frame)));
+    compare_views(&ctx, &scene, &views, (320, 180));
 }
 
 /// Sponza with every surface cut into disks over its UV layout (the
@@ -182,7 +197,8 @@ fn masked_sponza_ids_differ_only_between_triangles_of_one_object() {
     let size = (640, 360);
     let compute = ids(&ctx, &scene, &camera, size, VisibilityMethod::Compute);
     for prepass in [true, false] {
-        let raster = ids_with(&ctx, &scene, &camera, size, VisibilityMethod::Raster, prepass);
+        let raster =
+            ids_with(&ctx, &scene, std::slice::from_ref(&camera), size, VisibilityMethod::Raster, prepass).remove(0);
         let interior: Vec<usize> = (0..raster.len())
             .filter(|&i| raster[i] != compute[i] && !on_edge(&raster, 640, i) && !on_edge(&compute, 640, i))
             .collect();
@@ -208,6 +224,7 @@ fn ids_agree_inside_objects_and_across_the_near_plane() {
     let ctx = common::gpu();
     let voxels = scene::load("voxels").unwrap();
     let base = path_camera("voxels", &voxels, 0);
+    let mut views = Vec::new();
     for object in [0, voxels.objects.len() / 2] {
         // Off the centre: from a block's exact centre its edges project onto
         // pixel diagonals, where the two faces' depths tie and rounding alone
@@ -215,9 +232,10 @@ fn ids_agree_inside_objects_and_across_the_near_plane() {
         let inside = voxels.object_bounds(object).center() + Vec3::new(0.13, 0.07, -0.05);
         for forward in [Vec3::X, Vec3::new(0.3, -0.5, 1.0).normalize()] {
             let camera = Camera { position: inside, forward, ..base };
-            compare(&ctx, &format!("inside voxel object {object} facing {forward}"), &voxels, &camera, (160, 120));
+            views.push((format!("inside voxel object {object} facing {forward}"), camera));
         }
     }
+    compare_views(&ctx, &voxels, &views, (160, 120));
     // Eye 2 cm above the 8 m floor, near plane 10 cm: the floor's two
     // triangles both cross the near plane (corners lie behind the eye); what
     // is left is a band below the horizon (nearer floor is clipped away).
