@@ -23,7 +23,8 @@ use crate::metrics;
 
 /// The grid: forward first (every image is compared with its), the other
 /// conventional pipelines, then object space with reuse 1-4 and variable
-/// rate 1 and 2 (quick: 0, 1 and 4 lights of each kind).
+/// rate 1 and 2 (quick: reuse 1-2 and variable rate 1, at 0, 1 and 4
+/// lights of each kind).
 ///
 /// 4 + 20 frames a point: a new light set invalidates every shade, so each
 /// tile is shaded in a point's first frame and every N frames after; the
