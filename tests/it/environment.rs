@@ -13,10 +13,7 @@ use shadespace::gpu::{GpuContext, readback};
 use shadespace::materials::{self, MaterialsSpec};
 use shadespace::metrics;
 use shadespace::render::passes::environment::{self, EnvironmentMaps, cpu};
-use shadespace::render::{
-    ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,
-    PipelineConfig, RenderOptions, Renderer, ShadingModel,
-};
+use shadespace::render::{ForwardConfig, PipelineConfig, RenderOptions, Renderer, ShadingModel};
 use shadespace::scene::environment::{EnvSpec, Environment, Sky};
 use shadespace::scene::generate::builder::MeshBuilder;
 use shadespace::scene::lights::environment_light;
@@ -25,17 +22,6 @@ use shadespace::scene::{Camera, Light, Material, Object, Scene};
 use crate::common;
 
 const SIZE: u32 = 96;
-
-fn every_pipeline(texture_sizes: Vec<Option<u32>>) -> Vec<PipelineConfig> {
-    vec![
-        PipelineConfig::Forward(ForwardConfig::default()),
-        PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
-        PipelineConfig::Clustered(ClusteredConfig::default()),
-        PipelineConfig::Deferred(DeferredConfig::default()),
-        PipelineConfig::DeferredCompute(DeferredComputeConfig::default()),
-        PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes, ..Default::default() }),
-    ]
-}
 
 /// The maps of `env`, prefiltered as the renderer does.
 fn prefilter(ctx: &GpuContext, env: &Environment) -> EnvironmentMaps {
@@ -249,7 +235,7 @@ fn uniform_environment_gives_the_analytic_radiance_in_every_pipeline() {
     let (scale, bias) = cpu::split_sum(0.5, 1.0, 128);
     let metal_want = l * (white * scale + bias);
     let centre = pixel_of(&camera, Vec3::new(0.0, 0.6, 0.0));
-    for pipeline in every_pipeline(sizes) {
+    for pipeline in common::every_pipeline(sizes) {
         let name = pipeline.name();
         let mut r = Renderer::new(&ctx, &scene, &RenderOptions::new(SIZE, SIZE, pipeline)).unwrap();
         let (phong, _) = frame(&ctx, &mut r, &camera, &lights, ShadingModel::Phong);
@@ -292,7 +278,7 @@ fn every_pipeline_agrees_with_forward_under_the_sky_with_layers() {
 fn agree_with_forward(label: &str, scene: &Scene, camera: &Camera, lights: &[Light], objectspace_bound: f32) {
     let ctx = common::gpu();
     let (scene, sizes) = common::charted_for(scene, camera, SIZE, SIZE);
-    let mut pipelines = every_pipeline(sizes).into_iter();
+    let mut pipelines = common::every_pipeline(sizes).into_iter();
     let forward = pipelines.next().unwrap();
     let (_, reference) = render_hdr(&ctx, &scene, camera, lights, ShadingModel::Pbr, forward);
     for pipeline in pipelines {

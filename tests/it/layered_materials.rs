@@ -11,27 +11,13 @@ use std::process::Command;
 use glam::Vec3;
 use shadespace::materials::{self, MaterialsSpec};
 use shadespace::metrics;
-use shadespace::render::{
-    ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,
-    PipelineConfig, RenderOptions, Renderer,
-};
+use shadespace::render::{ForwardConfig, ForwardMultipassConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::{Light, LightKind, Scene};
 
 use crate::common;
 
 /// Mean FLIP allowed against forward (the bound).
 const AGREEMENT_FLIP: f32 = 0.02;
-
-fn every_pipeline(texture_sizes: Vec<Option<u32>>) -> Vec<PipelineConfig> {
-    vec![
-        PipelineConfig::Forward(ForwardConfig::default()),
-        PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
-        PipelineConfig::Clustered(ClusteredConfig::default()),
-        PipelineConfig::Deferred(DeferredConfig::default()),
-        PipelineConfig::DeferredCompute(DeferredComputeConfig::default()),
-        PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes, ..Default::default() }),
-    ]
-}
 
 fn render(
     ctx: &shadespace::gpu::GpuContext,
@@ -99,7 +85,7 @@ fn two_layer_floor_shows_each_layer_on_its_half() {
     let lights = white_lights();
     let (charted, sizes) = common::charted(&scene);
     let size = (128, 128);
-    for pipeline in every_pipeline(sizes) {
+    for pipeline in common::every_pipeline(sizes) {
         let name = pipeline.name();
         let s = if matches!(pipeline, PipelineConfig::ObjectSpace(_)) { &charted } else { &scene };
         let img = render(&ctx, s, &camera, &lights, size, pipeline);
@@ -155,7 +141,7 @@ fn texture_and_decal_masks_agree_across_pipelines() {
     let (e, _) = metrics::compare(&render(&ctx, &plain, &camera, &lights, size, forward()), &reference);
     assert!(e.flip_mean > 0.05, "the masked layers hardly change the image: {e:?}");
     let (charted, sizes) = common::charted(&scene);
-    for pipeline in every_pipeline(sizes).into_iter().skip(1) {
+    for pipeline in common::every_pipeline(sizes).into_iter().skip(1) {
         let name = pipeline.name();
         let object_space = matches!(pipeline, PipelineConfig::ObjectSpace(_));
         let s = if object_space { &charted } else { &scene };
@@ -197,7 +183,7 @@ fn layered_4_agrees_with_forward_in_every_pipeline() {
     assert!(e.flip_mean > 0.05, "layered:4 hardly changes the image: {e:?}");
     let (charted, sizes) = common::charted(&scene);
     let out = common::out_dir();
-    for pipeline in every_pipeline(sizes).into_iter().skip(1) {
+    for pipeline in common::every_pipeline(sizes).into_iter().skip(1) {
         let name = pipeline.name();
         let s = if matches!(pipeline, PipelineConfig::ObjectSpace(_)) { &charted } else { &scene };
         let img = render(&ctx, s, &frame.camera, &frame.lights, (w, h), pipeline);

@@ -148,3 +148,17 @@ pub fn rendered_once(key: &str, render: impl FnOnce() -> image::RgbaImage) -> im
     let slot = IMAGES.lock().unwrap_or_else(|e| e.into_inner()).entry(key.to_string()).or_default().clone();
     slot.get_or_init(render).clone()
 }
+
+/// Every pipeline with its default configuration, forward first; object
+/// space with `texture_sizes` (from [`charted`]).
+pub fn every_pipeline(texture_sizes: Vec<Option<u32>>) -> Vec<shadespace::render::PipelineConfig> {
+    use shadespace::render::*;
+    vec![
+        PipelineConfig::Forward(ForwardConfig::default()),
+        PipelineConfig::ForwardMultipass(ForwardMultipassConfig::default()),
+        PipelineConfig::Clustered(ClusteredConfig::default()),
+        PipelineConfig::Deferred(DeferredConfig::default()),
+        PipelineConfig::DeferredCompute(DeferredComputeConfig::default()),
+        PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes, ..Default::default() }),
+    ]
+}
