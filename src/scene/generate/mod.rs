@@ -121,8 +121,10 @@ pub const PANES_BACKDROP: Vec3 = Vec3::new(0.6, 0.6, 0.55);
 /// +z, [`PANES_BACKDROP`]) behind three alpha-blended panes ([`PANES`]),
 /// each flat-coloured with its opacity in its base colour's alpha. The
 /// panes are listed nearest first, so that drawing them in object order
-/// (front to back) composites them wrongly. Seen from (0, 0, 4) looking
-/// down -z. No lights (the caller's).
+/// (front to back) composites them wrongly. Its own camera looks at the
+/// panes from in front and to the side, so that `--scene panes` alone shows
+/// them overlapping (framing from outside may face the wall's back); tests
+/// look from (0, 0, 4) down -z. No lights (the caller's).
 pub fn panes() -> Scene {
     let mut a = Assembler::new("panes");
     let wall_look = a.flat_look("panes wall", PANES_BACKDROP);
@@ -139,7 +141,17 @@ pub fn panes() -> Scene {
         m.blend = true;
         m.base_color.w = pane.opacity;
     }
-    a.finish().scene
+    let mut scene = a.finish().scene;
+    let eye = Vec3::new(1.5, 0.8, 4.0);
+    scene.cameras.push(super::Camera {
+        position: eye,
+        forward: (-eye).normalize(),
+        up: Vec3::Y,
+        fov_y: 60f32.to_radians(),
+        near: 0.1,
+        far: 20.0,
+    });
+    scene
 }
 
 /// A generated scene plus the chart layout of each mesh (for tests and reports).
