@@ -780,4 +780,108 @@ mod tests {
         assert_eq!(cells.len(), 4 * 2 * 2, "quick: detailed textures, two gloss settings, one light set, MSAA 1, 4");
         assert!(cells.iter().all(|c| c.textures == "detailed"));
     }
+
+    /// Every file of `dir` by name, for comparing two runs' outputs.
+    fn files(dir: &std::path::Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .map(|p| (p.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read(&p).unwrap()))
+            .collect()
+    }
+
+    /// Shards merged give the bytes one whole run gives: the same `data.csv`,
+    /// figures and results, whatever order the shard folders come in. (The
+    /// integration test `quality_quick` checks on the GPU that a cell
+    /// measures the same alone as among the others; this checks the merge.)
+    #[test]
+    fn merged_shards_equal_the_whole_run() {
+        let quick = grid(true);
+        let all = cells(&quick, true);
+        let setup = Setup {
+            scene: "synthetic".into(),
+            objects: 3,
+            width: quick.width,
+            height: quick.height,
+            first_frame: quick.first_frame,
+            warmup: quick.warmup,
+            frames: quick.frames,
+            seed: quick.seed,
+            lights: vec!["small:8".into()],
+            textures: vec!["detailed".into()],
+            gloss: vec!["default".into(), "high".into()],
+            msaa: vec![1, 4],
+            configs: configs(&quick, true).iter().map(Config::label).collect(),
+            cells: all.len(),
+            quick: true,
+            visibility: "compute".into(),
+        };
+        // Distinct values per cell, one without a GPU time, so a row merged
+        // into the wrong cell or summarized out of order changes the output.
+        let rows: Vec<Row> = all
+            .iter()
+            .enumerate()
+            .map(|(i, c)| Row {
+                cell: i,
+                textures: c.textures.into(),
+                gloss: c.gloss.name().into(),
+                lights_spec: c.scenario.spec(c.lights).to_string(),
+                msaa: c.msaa,
+                pipeline: c.config.pipeline().into(),
+                config: c.config.label(),
+                frames: quick.frames,
+                median_ms: (i != 5).then(|| 1.0 + (i * 7 % 11) as f64 * 0.1),
+                p95_ms: (i != 5).then(|| 2.0 + i as f64 * 0.01),
+                flip_mean: 0.01 + (i * 5 % 13) as f64 * 0.003,
+                psnr_db: 30.0 + i as f64 * 0.25,
+                flicker_mean: 0.1 * i as f64,
+                flicker_sum: 0.1 * i as f64 * f64::from(quick.frames - 1),
+            })
+            .collect();
+        let root = tempfile::tempdir().unwrap();
+        let whole = root.path().join("whole");
+        std::fs::create_dir_all(&whole).unwrap();
+        let output = Output { dir: &whole };
+        output.write_rows(&rows).unwrap();
+        let findings = summarize(&setup, &rows, output).unwrap();
+
+        let provenance = serde_json::json!({
+            "adapter": "test", "backend": "Vulkan", "driver": "test", "driver_info": "",
+            "date": "2026-01-01T00:00:00Z", "commit": "0000000", "command": "shadespace experiment quality --quick",
+        });
+        let mut shards = Vec::new();
+        for index in 1..=3 {
+            let shard = Shard { index, count: 3 };
+            let dir = root.path().join(format!("shard{index}"));
+            std::fs::create_dir_all(&dir).unwrap();
+            let part: Vec<Row> = rows.iter().filter(|r| shard.holds(r.cell)).cloned().collect();
+            Output { dir: &dir }.write_rows(&part).unwrap();
+            let summary = serde_json::json!({
+                "quality": setup, "grid": quick, "scene_spec": "synthetic", "shard": shard, "provenance": provenance,
+            });
+            std::fs::write(dir.join("summary.json"), summary.to_string()).unwrap();
+            shards.push(dir);
+        }
+        for (name, order) in [("merged", [0, 1, 2]), ("reordered", [2, 0, 1])] {
+            let out = root.path().join(name);
+            let dirs: Vec<_> = order.iter().map(|&i| shards[i].clone()).collect();
+            merge(&dirs, &out, "shadespace experiment merge").unwrap();
+            let mut merged = files(&out);
+            let summary: serde_json::Value = serde_json::from_slice(&merged.remove("summary.json").unwrap()).unwrap();
+            assert!(merged.remove("report.md").is_some());
+            // Through the same JSON text (serde_json parses floats to within an ULP).
+            let expected: serde_json::Value = serde_json::from_str(&findings.results.to_string()).unwrap();
+            assert_eq!(summary["results"], expected, "{name}: results");
+            assert!(summary.get("shard").is_none(), "{name}: a merged run is not a shard");
+            let expected = files(&whole);
+            assert_eq!(merged.keys().collect::<Vec<_>>(), expected.keys().collect::<Vec<_>>(), "{name}: files");
+            for (file, bytes) in &expected {
+                assert!(merged[file] == *bytes, "{name}: {file} differs from the whole run's");
+            }
+        }
+        // A shard given twice, or one missing, is not a run.
+        let out = root.path().join("bad");
+        assert!(merge(&[shards[0].clone(), shards[0].clone(), shards[1].clone()], &out, "m").is_err());
+        assert!(merge(&shards[..2], &out, "m").is_err());
+    }
 }

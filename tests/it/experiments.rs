@@ -498,9 +498,12 @@ const QUALITY_COLUMNS: [&str; 14] = [
 
 /// `quality` quick, run as two shards and merged (the way the H100 runs it):
 /// the merged run holds every cell once, in order, and its results pass the
-/// checks of a whole run. (Merging was also checked against an unsharded run
-/// bit for bit, timings aside; that doubled the test's time, so the cell
-/// order and the summary's grid stand for it now.)
+/// checks of a whole run; its last cell (object space at 30 Hz, 4 samples,
+/// high gloss), measured alone as a shard of one cell, gives the row it gave
+/// after the other cells, timings aside. With the unit test
+/// `merged_shards_equal_the_whole_run` (merging gives a whole run's bytes),
+/// this stands for comparing with an unsharded run, at a sixteenth of its
+/// time.
 #[test]
 fn quality_quick() {
     let start = std::time::Instant::now();
@@ -520,6 +523,16 @@ fn quality_quick() {
         assert!(rows > 0 && rows < cells.len(), "shard {index} measured {rows} of {} cells", cells.len());
         shards.push(out);
     }
+    // The last cell alone: nothing a cell measures depends on the cells before it.
+    let count = cells.len() as u32;
+    let alone = parts.path().join("alone");
+    let options = ExperimentOptions {
+        shard: Some(experiments::quality::Shard { index: count, count }),
+        ..quick_options(ExperimentName::Quality, "atrium", &alone)
+    };
+    experiments::run(&ctx, &options, &ProgressBar::hidden()).unwrap();
+    let alone = read_csv(&alone, &QUALITY_COLUMNS);
+    assert_eq!(alone.len(), 1);
     let dir = parts.path().join("merged");
     assert!(experiments::quality::merge(&shards[..1], &dir, "merge").is_err(), "one shard of two is not a run");
     let command = "shadespace experiment merge";
@@ -536,6 +549,15 @@ fn quality_quick() {
     let order: Vec<String> = rows.iter().map(|r| r["cell"].clone()).collect();
     let expected: Vec<String> = (0..cells.len()).map(|i| i.to_string()).collect();
     assert_eq!(order, expected, "merged cells out of order or repeated");
+    let timings_aside = |r: &BTreeMap<String, String>| {
+        r.iter().filter(|(k, _)| !k.ends_with("_ms")).map(|(k, v)| (k.clone(), v.clone())).collect::<Vec<_>>()
+    };
+    assert_eq!(
+        timings_aside(&alone[0]),
+        timings_aside(rows.last().unwrap()),
+        "a cell measured alone differs from the same cell after the others"
+    );
+    assert_eq!(alone[0]["config"], "objectspace-hz30");
     for r in &rows {
         assert_eq!(num(r, "frames"), f64::from(grid.frames), "{r:?}");
         assert!(num(r, "median_ms") > 0.0, "{r:?}");
