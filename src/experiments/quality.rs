@@ -831,7 +831,7 @@ mod tests {
                 config: c.config.label(),
                 frames: quick.frames,
                 median_ms: (i != 5).then(|| 1.0 + (i * 7 % 11) as f64 * 0.1),
-                p95_ms: (i != 5).then(|| 2.0 + i as f64 * 0.01),
+                p95_ms: (i != 5).then_some(2.0 + i as f64 * 0.01),
                 flip_mean: 0.01 + (i * 5 % 13) as f64 * 0.003,
                 psnr_db: 30.0 + i as f64 * 0.25,
                 flicker_mean: 0.1 * i as f64,

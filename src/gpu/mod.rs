@@ -1,6 +1,7 @@
 //! The GPU context: adapter choice, optional features, validation errors,
 //! timestamp profiling and read-back.
 
+pub mod pipelines;
 pub mod readback;
 pub mod timing;
 
@@ -53,7 +54,9 @@ pub struct GpuOptions {
     pub adapter: Option<String>,
 }
 
-/// An open device with the features that were turned on.
+/// An open device with the features that were turned on. Clones share the
+/// device, its pipelines and its validation errors.
+#[derive(Clone)]
 pub struct GpuContext {
     pub instance: wgpu::Instance,
     pub adapter: wgpu::Adapter,
@@ -62,6 +65,8 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     pub features: wgpu::Features,
     pub limits: wgpu::Limits,
+    /// The compute pipelines built on this device, for renderers built after.
+    pub pipelines: pipelines::PipelineCache,
     errors: Arc<Mutex<Vec<String>>>,
 }
 
@@ -99,7 +104,7 @@ impl GpuContext {
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             sink.lock().unwrap_or_else(|p| p.into_inner()).push(e.to_string());
         }));
-        Ok(Self { instance, adapter, device, queue, info, features, limits, errors })
+        Ok(Self { instance, adapter, device, queue, info, features, limits, pipelines: Default::default(), errors })
     }
 
     pub fn has(&self, feature: wgpu::Features) -> bool {

@@ -331,6 +331,7 @@ impl Renderer {
         let samples = options.samples;
         check_samples_for(ctx, samples, &options.pipeline)?;
         let mut shaders = crate::render::shader_set::library()?;
+        shaders.keep_pipelines_in(&ctx.pipelines);
         let mut scene_gpu = SceneGpu::new(&ctx.device, &ctx.queue, scene);
         if let Some(env) = &scene.environment {
             let maps = passes::environment::prefilter(ctx, &mut shaders, env)?;

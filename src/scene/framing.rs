@@ -125,9 +125,10 @@ fn clip_planes_around(eye: Vec3, centre: Vec3, radius: f32) -> Projection {
 fn fit(points: &[Vec3], centre: Vec3, forwards: &[Vec3], aspect: f32) -> (f32, f32) {
     let stride = points.len().div_ceil(SEARCH_POINTS).max(1);
     let sample: Vec<Vec3> = points.iter().step_by(stride).copied().collect();
-    let needed = |points: &[Vec3], lift: f32| {
-        forwards.iter().map(|&f| fit_distance(points, centre + lift * Vec3::Y, f, aspect)).fold(0.0, f32::max)
-    };
+    let reaches =
+        |points: &[Vec3]| -> Vec<Reach> { forwards.iter().map(|&f| Reach::new(points, centre, f, aspect)).collect() };
+    let needed = |reaches: &[Reach], lift: f32| reaches.iter().map(|r| r.distance(lift)).fold(0.0, f32::max);
+    let sampled = reaches(&sample);
     let half_height = points.iter().map(|p| (p.y - centre.y).abs()).fold(0.0, f32::max);
     // Lowering the target below a quarter of the height would bring the
     // closest fit with the eye level with the model's top: a box would show
@@ -135,14 +136,14 @@ fn fit(points: &[Vec3], centre: Vec3, forwards: &[Vec3], aspect: f32) -> (f32, f
     let (mut lo, mut hi) = (-0.25 * half_height, half_height);
     for _ in 0..SEARCH_STEPS {
         let (a, b) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
-        if needed(&sample, a) <= needed(&sample, b) {
+        if needed(&sampled, a) <= needed(&sampled, b) {
             hi = b;
         } else {
             lo = a;
         }
     }
     let lift = 0.5 * (lo + hi);
-    (lift, needed(points, lift))
+    (lift, needed(&reaches(points), lift))
 }
 
 /// Half the box's diagonal: the radius of the sphere around its centre that
@@ -161,28 +162,51 @@ fn view_direction(angle: f32, elevation: f32) -> Vec3 {
     Vec3::new(elevation.cos() * angle.cos(), elevation.sin(), elevation.cos() * angle.sin())
 }
 
-/// Distance from `target`, backwards along the unit view direction
-/// `forward`, at which a camera looking at `target` sees every point inside
-/// [`FILL`] of a frame of vertical field of view [`FOV_Y`] and aspect `aspect`.
+/// For one view direction, the distance back from a target lifted `lift`
+/// above `centre` at which a camera looking along the direction sees every
+/// point inside [`FILL`] of the frame (vertically the field of view,
+/// horizontally `aspect` times it).
 ///
-/// A point at (x right, y up, z along `forward`) from the target is at depth
-/// `d + z` from a camera `d` behind the centre, and in the frame when
+/// A point at (x right, y up, z along the direction) from the target is at
+/// depth `d + z` from a camera `d` behind it, and in the frame when
 /// `|y| <= FILL (d + z) tan(fov/2)` and `|x| <= FILL (d + z) tan(fov/2) aspect`:
-/// `d >= |y| / (FILL tan(fov/2)) - z`, and likewise for x.
-fn fit_distance(points: &[Vec3], target: Vec3, forward: Vec3, aspect: f32) -> f32 {
-    // The basis `look_at` gives the camera.
-    let camera = look_at(Vec3::ZERO, forward, Projection { fov_y: FOV_Y, near: 1.0, far: 2.0 });
-    let right = camera.forward.cross(camera.up);
-    let tan_y = FILL * (0.5 * FOV_Y).tan();
-    let tan_x = tan_y * aspect;
-    points
-        .iter()
-        .map(|&c| {
-            let p = c - target;
-            let z = p.dot(camera.forward);
-            (p.dot(camera.up).abs() / tan_y - z).max(p.dot(right).abs() / tan_x - z)
-        })
-        .fold(0.0, f32::max)
+/// `d >= |y| / (FILL tan(fov/2)) - z`, and likewise for x. So the distance
+/// is the largest of four functions linear
+/// in the lift, one per frame edge (`|up . p| / tan_y - forward . p` and its
+/// horizontal twin, for `p` a point less the target, split by sign). Their
+/// largest values over the points do not depend on the lift, so they are
+/// found once, and each lift tried costs four products, not one per point.
+struct Reach {
+    /// Per edge, the largest value over the points at lift 0.
+    base: [f32; 4],
+    /// Per edge, how the value grows with the lift.
+    slope: [f32; 4],
+}
+
+impl Reach {
+    fn new(points: &[Vec3], centre: Vec3, forward: Vec3, aspect: f32) -> Self {
+        // The basis `look_at` gives the camera.
+        let camera = look_at(Vec3::ZERO, forward, Projection { fov_y: FOV_Y, near: 1.0, far: 2.0 });
+        let tan_y = FILL * (0.5 * FOV_Y).tan();
+        let (f, up, right) = (camera.forward, camera.up / tan_y, camera.forward.cross(camera.up) / (tan_y * aspect));
+        // A point q (relative to the centre) at lift L is q - L y: edge k
+        // gives edges[k] . q + L slope[k].
+        let edges = [up - f, -up - f, right - f, -right - f];
+        let slope = [f.y - up.y, f.y + up.y, f.y - right.y, f.y + right.y];
+        let mut base = [f32::NEG_INFINITY; 4];
+        for &p in points {
+            let q = p - centre;
+            for (b, e) in base.iter_mut().zip(&edges) {
+                *b = b.max(e.dot(q));
+            }
+        }
+        Self { base, slope }
+    }
+
+    /// The distance at `lift` (0 for no point).
+    fn distance(&self, lift: f32) -> f32 {
+        self.base.iter().zip(&self.slope).map(|(b, s)| b + lift * s).fold(0.0, f32::max)
+    }
 }
 
 /// Clip planes of vertical field of view `fov_y` for a camera whose scene
@@ -246,6 +270,42 @@ mod tests {
             }
         }
         points
+    }
+
+    /// [`Reach`] gives, at any lift, the distance of the inequality in its
+    /// doc evaluated point by point.
+    #[test]
+    fn reach_is_the_largest_distance_any_point_needs() {
+        let mut seed = 7u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+        };
+        let points: Vec<Vec3> = (0..500).map(|_| Vec3::new(3.0 * next(), next(), 0.5 * next())).collect();
+        let centre = Vec3::new(0.1, -0.05, 0.02);
+        let tan_y = FILL * (0.5 * FOV_Y).tan();
+        for k in 0..12 {
+            let forward = -view_direction(TAU * k as f32 / 12.0, (10.0 + 5.0 * k as f32).to_radians());
+            let camera = look_at(Vec3::ZERO, forward, Projection { fov_y: FOV_Y, near: 1.0, far: 2.0 });
+            let right = camera.forward.cross(camera.up);
+            let reach = Reach::new(&points, centre, forward, 1.6);
+            for lift in [-0.2, 0.0, 0.13, 0.4] {
+                let target = centre + lift * Vec3::Y;
+                let direct = points
+                    .iter()
+                    .map(|&c| {
+                        let p = c - target;
+                        let z = p.dot(camera.forward);
+                        (p.dot(camera.up).abs() / tan_y - z).max(p.dot(right).abs() / (tan_y * 1.6) - z)
+                    })
+                    .fold(0.0, f32::max);
+                let d = reach.distance(lift);
+                assert!(
+                    (d - direct).abs() <= 1e-5 * direct.max(1.0),
+                    "direction {k}, lift {lift}: {d} against {direct}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -22,6 +22,7 @@ use std::collections::{HashMap, HashSet};
 use std::hash::{DefaultHasher, Hash, Hasher};
 use std::sync::{LazyLock, Mutex};
 
+use crate::gpu::pipelines::PipelineCache;
 use naga_oil::compose::{
     ComposableModuleDescriptor, Composer, ComposerError, NagaModuleDescriptor, ShaderDefValue, ShaderLanguage,
     ShaderType,
@@ -119,6 +120,8 @@ pub struct ShaderLibrary {
     key: u64,
     /// Defined for every shader this library composes.
     defs: Vec<&'static str>,
+    /// Where compute pipelines are kept ([`Self::keep_pipelines_in`]).
+    pipelines: Option<PipelineCache>,
 }
 
 /// Composed modules by [`ShaderLibrary::module_key`].
@@ -147,7 +150,7 @@ impl ShaderLibrary {
         let mut hasher = DefaultHasher::new();
         sources.hash(&mut hasher);
         let key = hasher.finish();
-        let mut library = Self { composer: None, sources, key, defs: Vec::new() };
+        let mut library = Self { composer: None, sources, key, defs: Vec::new(), pipelines: None };
         if !VALID_LIBRARIES.lock().unwrap_or_else(|e| e.into_inner()).contains(&key) {
             library.composer()?;
         }
@@ -183,6 +186,41 @@ impl ShaderLibrary {
         hasher.finish()
     }
 
+    /// Keeps the compute pipelines built through [`Self::compute_pipeline`]
+    /// in `cache` (the device's), and takes them from it when built before.
+    pub fn keep_pipelines_in(&mut self, cache: &PipelineCache) {
+        self.pipelines = Some(cache.clone());
+    }
+
+    /// The compute pipeline of `shader` (with `extra` defined too) at
+    /// `entry` with `groups` bind groups, as `build` makes it with this
+    /// library, or as it was made before if pipelines are kept
+    /// ([`Self::keep_pipelines_in`]).
+    pub fn compute_pipeline(
+        &mut self,
+        shader: ShaderSource,
+        extra: &[&str],
+        entry: &str,
+        groups: usize,
+        build: impl FnOnce(&mut Self) -> Result<wgpu::ComputePipeline, ShaderError>,
+    ) -> Result<wgpu::ComputePipeline, ShaderError> {
+        let Some(cache) = self.pipelines.clone() else {
+            return build(self);
+        };
+        let mut hasher = DefaultHasher::new();
+        (self.module_key(&shader, &self.defs_with(&shader, extra)), entry, groups).hash(&mut hasher);
+        cache.compute(hasher.finish(), || build(self))
+    }
+
+    /// Every definition `shader` is composed with: its own, the library's
+    /// and `extra`, sorted, once each.
+    fn defs_with<'a>(&'a self, shader: &ShaderSource, extra: &[&'a str]) -> Vec<&'a str> {
+        let mut defs: Vec<&str> = shader.defs.iter().chain(&self.defs).chain(extra).copied().collect();
+        defs.sort_unstable();
+        defs.dedup();
+        defs
+    }
+
     /// Defines `def` for every shader composed from now on (for example
     /// [`MATERIAL_TEXTURES`] for the scene a renderer draws).
     pub fn define(&mut self, def: &'static str) {
@@ -199,9 +237,7 @@ impl ShaderLibrary {
     /// [`Self::compose`] with `extra` defined too (a variant of a shader
     /// that may itself have definitions).
     pub fn compose_with(&mut self, shader: ShaderSource, extra: &[&str]) -> Result<wgpu::naga::Module, ShaderError> {
-        let mut defs: Vec<&str> = shader.defs.iter().chain(&self.defs).chain(extra).copied().collect();
-        defs.sort_unstable();
-        defs.dedup();
+        let defs = self.defs_with(&shader, extra);
         let key = self.module_key(&shader, &defs);
         if let Some(module) = COMPOSED.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
             return Ok(module.clone());

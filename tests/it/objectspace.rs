@@ -541,3 +541,24 @@ fn a_static_camera_shades_and_backs_nothing_after_the_first_frame() {
     assert_eq!(counter(&c, "quiet"), [0.0], "the camera moved");
     assert_eq!(counter(&c, "shaded_tiles"), counter(&c, "visible_tiles"), "the camera moved: every tile is due");
 }
+
+/// A second renderer on the same device takes its compute pipelines from the
+/// device's cache (`gpu::pipelines`): it builds none, and draws the same
+/// image as the first.
+#[test]
+fn a_second_renderer_builds_no_compute_pipeline() {
+    // A device of its own: the tests' shared one gains other tests' pipelines meanwhile.
+    let ctx = shadespace::GpuContext::new(&Default::default()).unwrap();
+    let (scene, camera, lights) = common::floor_scene();
+    let draw = || {
+        let mut os = Renderer::new(&ctx, &scene, &objectspace(1)).unwrap();
+        os.render(&ctx, &camera, &lights, 0).unwrap();
+        (os.read_image(&ctx).unwrap(), ctx.pipelines.len())
+    };
+    let (first, built) = draw();
+    let (second, after) = draw();
+    ctx.check_errors().unwrap();
+    assert!(built > 10, "object space built {built} compute pipelines");
+    assert_eq!(after, built, "the second renderer built compute pipelines");
+    assert!(first.as_raw() == second.as_raw(), "the second renderer's image differs");
+}

@@ -301,21 +301,23 @@ pub fn compute_pipeline_with(
     entry: &str,
     groups: &[&wgpu::BindGroupLayout],
 ) -> Result<wgpu::ComputePipeline, ShaderError> {
-    let module = shaders.module_with(device, shader, extra)?;
-    let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().copied().map(Some).collect();
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(entry),
-        bind_group_layouts: &groups,
-        immediate_size: 0,
-    });
-    Ok(device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: Some(&layout),
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    }))
+    shaders.compute_pipeline(shader, extra, entry, groups.len(), |shaders| {
+        let module = shaders.module_with(device, shader, extra)?;
+        let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().copied().map(Some).collect();
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(entry),
+            bind_group_layouts: &groups,
+            immediate_size: 0,
+        });
+        Ok(device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        }))
+    })
 }
 
 /// What one binding of a bind group holds (its index is its place

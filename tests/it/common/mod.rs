@@ -4,15 +4,23 @@
 pub mod gltf;
 
 use std::path::{Path, PathBuf};
+use std::sync::LazyLock;
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::scene::{Camera, Light, LightKind, Material, Mesh, Object, Scene, checker};
 
-/// A GPU context for tests; panics when none can be opened (CI installs
-/// lavapipe first, so "no adapter" is a real failure, not a skip).
+/// The GPU context of the tests: one device for the whole test binary, as
+/// one program would use it, so that a compute pipeline is compiled once
+/// (`gpu::pipelines`) and not again in every test. Panics when none can be
+/// opened (CI installs lavapipe first, so "no adapter" is a real failure,
+/// not a skip). Tests running at once share its validation errors: one that
+/// calls `check_errors` may report another's, so the suite still fails.
 pub fn gpu() -> GpuContext {
-    GpuContext::new(&GpuOptions::default()).unwrap_or_else(|e| panic!("cannot open a GPU adapter: {e}"))
+    static SHARED: LazyLock<GpuContext> = LazyLock::new(|| {
+        GpuContext::new(&GpuOptions::default()).unwrap_or_else(|e| panic!("cannot open a GPU adapter: {e}"))
+    });
+    SHARED.clone()
 }
 
 /// Where tests write images (actual, difference) for inspection.
