@@ -1,9 +1,12 @@
 //! The real-file corpus (`tests/data/corpus/`; sources and licences in its
 //! `LICENSES.md`): 40 files holding 30 distinct models (the Khronos box is
 //! in eight files, a cube from tinyobjloader's tests in three and the
-//! Cornell box in two; see [`MODELS`]). Every model renders through the
-//! command line with no option besides the image size, in forward and in
-//! object space, to an image that shows the whole model framed and lit: its
+//! Cornell box in two; see [`MODELS`]). Every model renders with no option
+//! besides the image size, in forward through the command line and in
+//! object space through the library ([`shadespace::Stage`], in this process,
+//! so that the device's compiled pipelines serve every model;
+//! [`IN_PROCESS_CHECKED`] is drawn both ways, and the two images agree), to
+//! an image that shows the whole model framed and lit: its
 //! bounding rectangle covers 30-90 % of the frame without touching its edges
 //! (a long or flat model, which cannot cover 30 % of a 16:9 frame uncut,
 //! spans at least 60 % of the frame along its longer side instead), its
@@ -164,6 +167,25 @@ const SPOT_MARGIN: f32 = 0.05;
 /// Most of the model's pixels that may be spot pixels.
 const MAX_SPOT_SHARE: f32 = 0.01;
 
+/// The model whose object-space image is drawn both ways, in this process
+/// and through the command line ([`MAX_IN_PROCESS_FLIP`]).
+const IN_PROCESS_CHECKED: &str = "knight.glb";
+/// Most mean FLIP between the two: the same frame drawn by the same code.
+const MAX_IN_PROCESS_FLIP: f32 = 0.01;
+
+/// `pipeline`'s image of `file` as `shadespace render` draws it with no
+/// option besides the size, drawn through the library on `ctx`.
+fn render_in_process(ctx: &shadespace::GpuContext, file: &Path, pipeline: &str) -> RgbaImage {
+    use shadespace::{LightSpec, PipelineConfig, Stage};
+    let stage = Stage::load(file.to_str().unwrap(), WIDTH, HEIGHT).unwrap();
+    let lights = stage.lights(&LightSpec::Auto, 1).unwrap();
+    let mut renderer = stage.renderer(ctx, PipelineConfig::from_name(pipeline).unwrap()).unwrap();
+    renderer.render(ctx, &stage.camera(0), &lights, 0).unwrap();
+    let image = renderer.read_image(ctx).unwrap();
+    ctx.check_errors().unwrap();
+    image
+}
+
 fn render(file: &Path, pipeline: &str, out: &Path, extra: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_shadespace"))
         .args(["render", "--size", &format!("{WIDTH}x{HEIGHT}"), "--pipeline", pipeline, "--scene"])
@@ -312,20 +334,35 @@ fn every_corpus_model_renders_framed_and_lit_in_forward_and_object_space() {
         String::from("model\tpipeline\tsilhouette\textent\tspan\tluma\tblown\tflip_vs_forward\tpalette\tspots\n");
     let mut failures = Vec::new();
     let mut sheets: [Vec<RgbaImage>; 2] = Default::default();
+    let ctx = crate::common::gpu();
     for m in MODELS {
         let mut forward: Option<RgbaImage> = None;
         let palette = palette_bound(&corpus().join(m.file));
         for (p, pipeline) in PIPELINES.iter().enumerate() {
             let name = format!("{}-{pipeline}.png", m.file.replace(['/', ' '], "_"));
             let png = out.join(&name);
-            let run = render(&corpus().join(m.file), pipeline, &png, &[]);
-            let stderr = String::from_utf8_lossy(&run.stderr);
-            assert!(!stderr.contains("panicked"), "{}, {pipeline}: panicked:\n{stderr}", m.file);
-            assert!(run.status.success(), "{}, {pipeline}: exit {:?}:\n{stderr}", m.file, run.status.code());
-            for warning in m.warns {
-                assert!(stderr.contains(warning), "{}: no warning '{warning}' in:\n{stderr}", m.file);
-            }
-            let image = image::open(&png).unwrap().to_rgba8();
+            let image = if *pipeline == "forward" {
+                let run = render(&corpus().join(m.file), pipeline, &png, &[]);
+                let stderr = String::from_utf8_lossy(&run.stderr);
+                assert!(!stderr.contains("panicked"), "{}, {pipeline}: panicked:\n{stderr}", m.file);
+                assert!(run.status.success(), "{}, {pipeline}: exit {:?}:\n{stderr}", m.file, run.status.code());
+                for warning in m.warns {
+                    assert!(stderr.contains(warning), "{}: no warning '{warning}' in:\n{stderr}", m.file);
+                }
+                image::open(&png).unwrap().to_rgba8()
+            } else {
+                let image = render_in_process(&ctx, &corpus().join(m.file), pipeline);
+                image.save(&png).unwrap();
+                if m.file == IN_PROCESS_CHECKED {
+                    let cli = out.join(format!("{name}-cli.png"));
+                    let run = render(&corpus().join(m.file), pipeline, &cli, &[]);
+                    assert!(run.status.success(), "{}: {}", m.file, String::from_utf8_lossy(&run.stderr));
+                    let flip = metrics::compare(&image::open(&cli).unwrap().to_rgba8(), &image).0.flip_mean;
+                    eprintln!("{}, {pipeline}: in this process against the command line: FLIP {flip:.4}", m.file);
+                    assert!(flip <= MAX_IN_PROCESS_FLIP, "{}: in-process image off the command line's: {flip}", m.file);
+                }
+                image
+            };
             let shot = measure(&image);
             let flip = forward.as_ref().map_or(0.0, |f| metrics::compare(f, &image).0.flip_mean);
             let spots = spots(&image, palette);
