@@ -22,7 +22,7 @@ use std::collections::{HashMap, HashSet};
 use std::hash::{DefaultHasher, Hash, Hasher};
 use std::sync::{LazyLock, Mutex};
 
-use crate::gpu::pipelines::PipelineCache;
+use crate::gpu::pipelines::{Cached, PipelineCache};
 use naga_oil::compose::{
     ComposableModuleDescriptor, Composer, ComposerError, NagaModuleDescriptor, ShaderDefValue, ShaderLanguage,
     ShaderType,
@@ -186,30 +186,29 @@ impl ShaderLibrary {
         hasher.finish()
     }
 
-    /// Keeps the compute pipelines built through [`Self::compute_pipeline`]
-    /// in `cache` (the device's), and takes them from it when built before.
+    /// Keeps the pipelines built through [`Self::pipeline`] in `cache` (the
+    /// device's), and takes them from it when built before.
     pub fn keep_pipelines_in(&mut self, cache: &PipelineCache) {
         self.pipelines = Some(cache.clone());
     }
 
-    /// The compute pipeline of `shader` (with `extra` defined too) at
-    /// `entry` with `groups` bind groups, as `build` makes it with this
-    /// library, or as it was made before if pipelines are kept
-    /// ([`Self::keep_pipelines_in`]).
-    pub fn compute_pipeline(
+    /// The pipeline of `shader` (with `extra` defined too) that `build`
+    /// makes with this library, or as it was made before if pipelines are
+    /// kept ([`Self::keep_pipelines_in`]); `state` is everything else that
+    /// tells it apart (entry points, number of bind groups, fixed state).
+    pub fn pipeline<P: Cached>(
         &mut self,
         shader: ShaderSource,
         extra: &[&str],
-        entry: &str,
-        groups: usize,
-        build: impl FnOnce(&mut Self) -> Result<wgpu::ComputePipeline, ShaderError>,
-    ) -> Result<wgpu::ComputePipeline, ShaderError> {
+        state: impl Hash,
+        build: impl FnOnce(&mut Self) -> Result<P, ShaderError>,
+    ) -> Result<P, ShaderError> {
         let Some(cache) = self.pipelines.clone() else {
             return build(self);
         };
         let mut hasher = DefaultHasher::new();
-        (self.module_key(&shader, &self.defs_with(&shader, extra)), entry, groups).hash(&mut hasher);
-        cache.compute(hasher.finish(), || build(self))
+        (self.module_key(&shader, &self.defs_with(&shader, extra)), state).hash(&mut hasher);
+        cache.get_or_build(hasher.finish(), || build(self))
     }
 
     /// Every definition `shader` is composed with: its own, the library's

@@ -19,7 +19,7 @@ use crate::render::scene_gpu::{DrawRange, SceneGpu};
 use crate::shaders::{ALPHA_MASK, ShaderError, ShaderLibrary, ShaderSource};
 
 /// Depth state of a scene raster pass (reversed Z: nearer is greater).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DepthMode {
     /// Test `Greater` and write: the first (or only) pass.
     Write,
@@ -127,6 +127,22 @@ pub(crate) fn raster_pipeline(
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
     let shader = raster.shader;
     let defs: &[&str] = if alpha_mask { &[ALPHA_MASK] } else { &[] };
+    let state = (
+        (raster.vertex_entry, raster.fragment, raster.depth, raster.groups.len()),
+        (raster.blend, raster.samples, scene.cull_back_faces),
+    );
+    shaders.pipeline(shader, defs, state, |shaders| build_raster_pipeline(device, shaders, scene, raster, defs))
+}
+
+/// [`raster_pipeline`] as it is built when not built before.
+fn build_raster_pipeline(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    scene: &SceneGpu,
+    raster: &SceneRaster,
+    defs: &[&str],
+) -> Result<wgpu::RenderPipeline, ShaderError> {
+    let shader = raster.shader;
     let module = shaders.module_with(device, shader, defs)?;
     let groups: Vec<Option<&wgpu::BindGroupLayout>> =
         std::iter::once(Some(&scene.layout)).chain(raster.groups.iter().copied()).collect();
@@ -301,7 +317,7 @@ pub fn compute_pipeline_with(
     entry: &str,
     groups: &[&wgpu::BindGroupLayout],
 ) -> Result<wgpu::ComputePipeline, ShaderError> {
-    shaders.compute_pipeline(shader, extra, entry, groups.len(), |shaders| {
+    shaders.pipeline(shader, extra, (entry, groups.len()), |shaders| {
         let module = shaders.module_with(device, shader, extra)?;
         let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().copied().map(Some).collect();
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
