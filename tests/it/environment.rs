@@ -3,7 +3,8 @@
 //! Radiance file's orientation, white Lambert surfaces under a uniform
 //! environment showing albedo x L, the background L and a white metal the
 //! split sum's reflectance in every pipeline, MSAA edges against the
-//! background resolving, the background showing the sky, every pipeline
+//! background resolving, blended surfaces over it, the background showing
+//! the sky, every pipeline
 //! agreeing with forward under the sky, metals lit by it, `--env none`
 //! leaving images as they were, and bad files exiting 2.
 
@@ -334,6 +335,47 @@ fn msaa_edges_against_the_environment_resolve_in_every_pipeline() {
         println!("{name}: pixels from {lo:.4} L to {hi:.4} L, {between} edge pixels between 0.81 L and 0.99 L");
         assert!(lo > 0.8 * 0.99 && hi < 1.01, "{name}: pixels from {lo} L to {hi} L");
         assert!(between >= SIZE as usize / 2, "{name}: {between} edge pixels resolved between surface and background");
+    }
+}
+
+/// A half-transparent white pane (alpha 0.5, Lambert 0.8) hung in front
+/// of the background composites over it: under a uniform environment L,
+/// the pixels through the pane show 0.5 x 0.8 L + 0.5 x L = 0.9 L in every
+/// pipeline (0.4 L where the background were missing behind it, L where it
+/// were drawn over the pane).
+#[test]
+fn blended_surfaces_composite_over_the_background_in_every_pipeline() {
+    let ctx = common::gpu();
+    let l = Vec3::new(0.5, 0.4, 0.3);
+    let lambert = material(Vec3::splat(0.8), 0.0, 1.0);
+    let (mut scene, camera) = spheres_scene(std::array::from_fn(|_| lambert.clone()));
+    scene.environment = Some(Environment::Sky(Sky::uniform(l)));
+    // A 1 m pane facing the camera, at z = -1 from y = 1.3 to 2.3.
+    scene.meshes.push(common::floor_quad(1.0, 0.0));
+    let pane = Material { blend: true, base_color: Vec3::splat(0.8).extend(0.5), ..lambert };
+    scene.materials.push(pane);
+    scene.objects.push(Object {
+        name: "pane".into(),
+        mesh: 4,
+        material: 4,
+        transform: Mat4::from_translation(Vec3::new(0.0, 1.8, -1.0)) * Mat4::from_rotation_x(90f32.to_radians()),
+        forward_only: false,
+    });
+    let (scene, sizes) = common::charted_for(&scene, &camera, SIZE, SIZE);
+    let through: Vec<usize> = (0..(SIZE * SIZE) as usize)
+        .filter(|&i| {
+            let d = pixel_ray(&camera, i);
+            let p = camera.position + d * ((-1.0 - camera.position.z) / d.z);
+            p.x.abs() < 0.45 && (1.35..2.25).contains(&p.y)
+        })
+        .collect();
+    assert!(through.len() > 100, "{} pixels through the pane", through.len());
+    for pipeline in common::every_pipeline(sizes) {
+        let name = pipeline.name();
+        let (hdr, _) = render_hdr(&ctx, &scene, &camera, &[environment_light()], ShadingModel::Phong, pipeline);
+        let worst = through.iter().map(|&i| relative(hdr[i], 0.9 * l)).fold(0.0, f32::max);
+        println!("{name}: {} pixels through the pane, worst {:.2} % from 0.9 L", through.len(), worst * 100.0);
+        assert!(worst < 0.01, "{name}: a pixel through the pane is {:.2} % off 0.9 L", worst * 100.0);
     }
 }
 
