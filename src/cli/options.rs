@@ -153,11 +153,14 @@ pub struct SceneArgs {
     pub materials: shadespace::materials::MaterialsSpec,
     /// Environment lighting, prefiltered on the GPU at load and added to the
     /// lights as one environment light (diffuse and GGX specular, times the
-    /// material's occlusion, in every pipeline): `none` (default: today's
-    /// images, goldens and benchmarks), `sky` (a procedural clear sky with a
-    /// sun) or an equirectangular Radiance .hdr file (docs/environment.md).
-    #[arg(long, value_name = "none|sky|FILE", default_value = "none")]
-    pub env: shadespace::scene::environment::EnvSpec,
+    /// material's occlusion, in every pipeline) and drawn as the background
+    /// where no surface is: `none`, `sky` (a procedural clear sky with a
+    /// sun, where the light set's sun is) or an equirectangular Radiance
+    /// .hdr file (docs/environment.md). Default: `sky` for the city and the
+    /// terrain under `--lights auto` (outdoor scenes seen against the sky),
+    /// `none` otherwise (today's images, goldens and benchmarks).
+    #[arg(long, value_name = "none|sky|FILE")]
+    pub env: Option<shadespace::scene::environment::EnvSpec>,
     #[command(flatten)]
     pub free_camera: FreeCameraArgs,
     #[command(flatten)]

@@ -17,7 +17,7 @@ use shadespace::scene::free_camera::{LookAt, OrbitSpec};
 use shadespace::scene::path::SceneCameras;
 use shadespace::scene::{self, Aabb, Camera, CameraPath, Light, Scene, path};
 
-use super::lights::light_set;
+use super::lights::{env_spec, light_set, under_lights};
 use super::options::{GpuArgs, ObjectSpaceArgs, PipelineName, SceneArgs, TextureChoice};
 use super::parse::Views;
 use super::{Failure, input};
@@ -63,7 +63,6 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     }
     scene::gloss::apply(&mut scene, a.gloss);
     input(shadespace::materials::apply(&mut scene, &a.materials))?;
-    scene.environment = input(a.env.load())?;
     for name in &a.objectspace.forward_only {
         let Some(o) = scene.objects.iter_mut().find(|o| &o.name == name) else {
             let known: Vec<_> = scene.objects.iter().map(|o| o.name.as_str()).collect();
@@ -88,6 +87,8 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
         }
     };
     let (lights, lights_spec) = light_set(a, &cameras, &bounds, &path)?;
+    let env = env_spec(a, &cameras.source);
+    scene.environment = under_lights(input(env.load())?, &lights);
     let (scene, texture_sizes) = if a.pipeline == PipelineName::Objectspace {
         // Textures follow the screen along the path and in the extra views.
         let mut views = charts::path_cameras(&path);

@@ -11,13 +11,14 @@ use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::atlas_view::AtlasPages;
 use shadespace::render::objectspace::{DebugView, MAX_ATLAS_BUDGET_MI};
 use shadespace::render::{Exposure, Renderer};
+use shadespace::scene::environment::{EnvSpec, Environment};
 use shadespace::scene::{Aabb, CameraPath, Light, LightSpec, path};
 use shadespace::viewer::camera::look_at_args;
 use shadespace::viewer::script::Script;
 use shadespace::viewer::settings::{ObjectSpaceSettings, Settings, exposure_arg};
 use shadespace::viewer::{self, Session, ViewCamera, ViewerOptions};
 
-use super::lights::light_set;
+use super::lights::{env_spec, light_set, under_lights};
 use super::options::{PipelineName, SceneArgs};
 use super::output::shell_quote;
 use super::parse::{mip_bias, on_off, shade_budget, texel_density, tile_size, variable_rate};
@@ -79,10 +80,11 @@ const VIEWER_FLAGS: [&str; 7] =
 /// The viewer's flags without a value, left out of the `render` command too.
 const VIEWER_SWITCHES: [&str; 2] = ["--hide-ui", "--headless"];
 /// Flags the viewer's settings replace in the `render` command.
-const SETTING_FLAGS: [&str; 14] = [
+const SETTING_FLAGS: [&str; 15] = [
     "--pipeline",
     "--lights",
     "--seed",
+    "--env",
     "--exposure",
     "--tile-size",
     "--reuse",
@@ -164,6 +166,10 @@ struct ViewSession {
     object_names: Vec<String>,
     /// `--exposure`, or its default for how the scene is seen (as `render`).
     exposure: Exposure,
+    /// The panel's environments: `none`, `sky`, and the command line's file.
+    environments: Vec<String>,
+    /// The last environment loaded (a file is read once, not per renderer).
+    environment: Option<(EnvSpec, Option<Environment>)>,
 }
 
 impl ViewSession {
@@ -172,6 +178,10 @@ impl ViewSession {
         let bounds = s.scene.bounds();
         let aspect = a.size.0 as f32 / a.size.1 as f32;
         let cameras = input(path::cameras_for_scene(&a.scene, &s.scene, aspect))?;
+        let mut environments = vec![EnvSpec::None.to_string(), EnvSpec::Sky.to_string()];
+        if let Some(file @ EnvSpec::File(_)) = &a.env {
+            environments.push(file.to_string());
+        }
         let mut session = Self {
             base: a.clone(),
             words: std::env::args().skip_while(|w| w != "view").skip(1).collect(),
@@ -183,6 +193,8 @@ impl ViewSession {
             pipelines: PipelineName::value_variants().iter().map(|p| p.name()).collect(),
             object_names: s.scene.objects.iter().map(|o| o.name.clone()).collect(),
             exposure: s.exposure,
+            environments,
+            environment: None,
         };
         session.keep(a, s);
         Ok(session)
@@ -199,6 +211,7 @@ impl ViewSession {
                 .parse::<LightSpec>()
                 .map_or(a.lights.clone(), |spec| spec.resolve(&self.cameras.source).to_string()),
             seed: a.seed,
+            env: env_spec(a, &self.cameras.source).to_string(),
             exposure: self.exposure,
             view,
             atlas_pages: AtlasPages::default(),
@@ -223,6 +236,7 @@ impl ViewSession {
             .map_err(|_| anyhow::anyhow!("no pipeline '{}' ({})", settings.pipeline, self.pipelines.join(", ")))?;
         a.lights = settings.lights.clone();
         a.seed = settings.seed;
+        a.env = Some(checked(settings.env.parse())?);
         a.exposure = Some(settings.exposure);
         let (os, wanted) = (&mut a.objectspace, &settings.objectspace);
         os.tile_size = checked(tile_size(&wanted.tile_size.to_string()))?;
@@ -257,8 +271,21 @@ impl ViewSession {
         }
     }
 
+    /// The environment of `a` (its `--env` loaded, or the last one again).
+    fn environment_for(&mut self, a: &SceneArgs) -> Result<Option<Environment>, Failure> {
+        let spec = env_spec(a, &self.cameras.source);
+        match &self.environment {
+            Some((loaded, env)) if *loaded == spec => Ok(env.clone()),
+            _ => {
+                let env = input(spec.load())?;
+                self.environment = Some((spec, env.clone()));
+                Ok(env)
+            }
+        }
+    }
+
     /// The setup (scene, charts) for `a`, built only if no kept one fits.
-    fn setup_for(&mut self, a: &SceneArgs) -> Result<&Setup, Failure> {
+    fn setup_for(&mut self, a: &SceneArgs) -> Result<&mut Setup, Failure> {
         let charted = a.pipeline == PipelineName::Objectspace;
         let density = a.objectspace.texel_density.map(f32::to_bits);
         let fits =
@@ -271,7 +298,7 @@ impl ViewSession {
             let s = setup(a)?;
             self.keep(a, s);
         }
-        Ok(if charted { &self.charted.as_ref().expect("kept").1 } else { self.plain.as_ref().expect("kept") })
+        Ok(if charted { &mut self.charted.as_mut().expect("kept").1 } else { self.plain.as_mut().expect("kept") })
     }
 }
 
@@ -284,9 +311,17 @@ impl Session for ViewSession {
         &self.object_names
     }
 
+    fn environments(&self) -> &[String] {
+        &self.environments
+    }
+
     fn renderer(&mut self, ctx: &GpuContext, settings: &Settings) -> anyhow::Result<Renderer> {
         let a = self.args_for(settings)?;
+        let env = self.environment_for(&a).map_err(Failure::into_error)?;
+        let lights = light_set(&a, &self.cameras, &self.bounds, &self.path).map_err(Failure::into_error)?.0;
         let s = self.setup_for(&a).map_err(Failure::into_error)?;
+        // A kept scene takes the environment asked for now.
+        s.scene.environment = under_lights(env, &lights);
         let mut renderer = Renderer::new(ctx, &s.scene, &render_options(&a, s, settings.view, ctx.device.features()))?;
         configure(&mut renderer, &a, s);
         // A kept setup holds the exposure of the options it was built for.
@@ -326,6 +361,7 @@ impl Session for ViewSession {
         add("--pipeline", settings.pipeline.clone());
         add("--lights", settings.lights.clone());
         add("--seed", settings.seed.to_string());
+        add("--env", settings.env.clone());
         add("--exposure", exposure_arg(settings.exposure));
         add("--tile-size", os.tile_size.to_string());
         if reuse_changed || self.base.objectspace.shade_hz.is_none() {

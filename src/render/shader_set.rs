@@ -75,6 +75,10 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     ]);
     all.extend_from_slice(deferred::PASS_SHADERS);
     all.push(passes::environment::SHADER);
+    {
+        use passes::background::*;
+        all.extend([SHADER, SHADER_SAMPLES, SHADER_IDS]);
+    }
     all
 }
 
@@ -158,6 +162,7 @@ mod tests {
         check::<GpuResolveParams>(&modules);
         check::<crate::materials::GpuLayer>(&modules);
         check::<crate::render::passes::environment::GpuEnvParams>(&modules);
+        check::<crate::render::passes::background::GpuBackground>(&modules);
     }
 
     #[test]

@@ -65,6 +65,9 @@ pub trait Session {
     fn pipelines(&self) -> &[&'static str];
     /// The scene's object names, by object index.
     fn object_names(&self) -> &[String];
+    /// The environments the panel offers (`--env` texts: `none`, `sky` and
+    /// the command line's file, if any).
+    fn environments(&self) -> &[String];
     /// A renderer for `settings`, configured as `render` configures it.
     fn renderer(&mut self, ctx: &GpuContext, settings: &Settings) -> anyhow::Result<Renderer>;
     /// The light set of `settings`.
@@ -446,10 +449,11 @@ impl Viewer {
 
     /// Builds a renderer or lights for the wanted settings.
     fn rebuild(&mut self, report: &mut RunReport) -> anyhow::Result<()> {
-        let lights_changed = (&self.wanted.lights, self.wanted.seed) != (&self.built.lights, self.built.seed);
+        // The environment brings its light and its maps: both change.
+        let (wanted, built) = (&self.wanted, &self.built);
+        let lights_changed = (&wanted.lights, wanted.seed, &wanted.env) != (&built.lights, built.seed, &built.env);
         let renderer_changed =
-            !Settings { lights: self.built.lights.clone(), seed: self.built.seed, ..self.wanted.clone() }
-                .same_renderer(&self.built);
+            !Settings { lights: built.lights.clone(), seed: built.seed, ..wanted.clone() }.same_renderer(built);
         let built = (|| -> anyhow::Result<_> {
             let lights = if lights_changed { Some(self.session.lights(&self.wanted)?) } else { None };
             let renderer = if renderer_changed { Some(self.session.renderer(&self.ctx, &self.wanted)?) } else { None };
@@ -530,6 +534,7 @@ impl Viewer {
                         bookmarks: &mut self.bookmarks,
                         timings: &self.timings,
                         pipelines: self.session.pipelines(),
+                        environments: self.session.environments(),
                         object_names: self.session.object_names(),
                         atlas_levels: &atlas_levels,
                         status: &self.status,
@@ -788,6 +793,7 @@ fn apply_step(step: &Step, t: &mut StepTarget, ui_shown: &mut bool) -> anyhow::R
         Step::Screenshot(path) => return Ok((1, Some(path.clone()))),
         Step::Pipeline(p) => wanted.pipeline = p.clone(),
         Step::Lights(l) => wanted.lights = l.clone(),
+        Step::Env(e) => wanted.env = e.clone(),
         Step::Seed(s) => wanted.seed = *s,
         Step::Exposure(e) => wanted.exposure = Exposure::Fixed(*e),
         Step::View(v) => wanted.view = v.parse().map_err(|e: String| anyhow::anyhow!(e))?,

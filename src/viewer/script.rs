@@ -6,7 +6,7 @@
 //!   "steps": [ {"pipeline": "objectspace"}, {"tile_size": 16}, {"frames": 2},
 //!              {"camera": {"eye": [0, 2, 8], "target": [0, 1, 0], "fov": 60}},
 //!              {"move": [0.5, 0, 1]}, {"turn": [10, -5]}, {"path_frame": 120},
-//!              {"lights": "small:500"}, {"seed": 3}, {"exposure": 1.5},
+//!              {"lights": "small:500"}, {"seed": 3}, {"env": "sky"}, {"exposure": 1.5},
 //!              {"view": "atlas-pages"}, {"atlas_object": 3}, {"atlas_level": 1},
 //!              {"variable_rate": 1.5}, {"atlas_budget": 4}, {"ui": true},
 //!              {"screenshot": "shot.png"} ] }
@@ -47,6 +47,8 @@ pub enum Step {
     Lights(String),
     /// The light placement's seed.
     Seed(u64),
+    /// An `--env` (`none`, `sky` or a Radiance file).
+    Env(String),
     /// A fixed exposure multiplier.
     Exposure(f32),
     /// Object space: a `--view` name.

@@ -1,5 +1,5 @@
 //! What the viewer's controls change: the pipeline, the light set, the
-//! object-space options, the debug view and the exposure. The command line
+//! environment, the object-space options, the debug view and the exposure. The command line
 //! gives the first settings; the panel and scripts change them; the
 //! [`super::Session`] turns them into a renderer, exactly as `render` would.
 
@@ -21,6 +21,8 @@ pub struct Settings {
     pub lights: String,
     /// The `--seed` of the light placement.
     pub seed: u64,
+    /// The `--env` text: `none`, `sky` or the command line's file.
+    pub env: String,
     #[serde(serialize_with = "exposure_text")]
     pub exposure: Exposure,
     /// Object space: the image shown (`--view`).

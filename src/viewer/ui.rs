@@ -1,4 +1,4 @@
-//! The control panel (egui): pipeline, lights, object-space options, debug
+//! The control panel (egui): pipeline, lights and environment, object-space options, debug
 //! view, exposure, camera and bookmarks, and the timing graph. It edits the
 //! viewer's state in place and returns what the viewer itself must do.
 
@@ -27,6 +27,8 @@ pub struct PanelState<'a> {
     pub timings: &'a TimingHistory,
     /// The `--pipeline` names.
     pub pipelines: &'a [&'static str],
+    /// The `--env` choices.
+    pub environments: &'a [String],
     /// The scene's object names, by object index.
     pub object_names: &'a [String],
     /// Shading-texture levels per object (0: shaded forward; empty without
@@ -85,7 +87,7 @@ pub fn panel(ui: &mut Ui, s: PanelState) -> Vec<Action> {
             timing_graph(ui, s.timings);
             tile_counters(ui, s.timings);
             counters(ui, s.timings);
-            lights(ui, s.settings);
+            lights(ui, s.settings, s.environments);
             if s.settings.pipeline == "objectspace" {
                 objectspace(ui, s.settings);
                 if s.settings.view == DebugView::AtlasPages {
@@ -115,7 +117,7 @@ fn pipeline(ui: &mut Ui, settings: &mut Settings, pipelines: &[&'static str]) {
     });
 }
 
-fn lights(ui: &mut Ui, settings: &mut Settings) {
+fn lights(ui: &mut Ui, settings: &mut Settings, environments: &[String]) {
     egui::CollapsingHeader::new("lights").default_open(true).show(ui, |ui| {
         match LightKind::parse(&settings.lights) {
             Some((mut kind, mut count)) => {
@@ -136,6 +138,12 @@ fn lights(ui: &mut Ui, settings: &mut Settings) {
             }
         }
         ui.add(egui::DragValue::new(&mut settings.seed).prefix("seed "));
+        // Lights every material and fills the background (`--env`).
+        egui::ComboBox::from_label("environment").selected_text(settings.env.clone()).show_ui(ui, |ui| {
+            for e in environments {
+                ui.selectable_value(&mut settings.env, e.clone(), e);
+            }
+        });
     });
 }
 

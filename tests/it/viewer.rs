@@ -108,13 +108,16 @@ fn render_like(shot: &Path, out: &Path) {
     shadespace(None, &args);
 }
 
-/// A scripted view in a window on `display` (none: headless): moves and
-/// turns away from the path's first camera, then a screenshot without the
-/// panel and one with it.
-fn check_screenshot_matches_render(display: Option<&str>, pipeline: &str) {
+/// A scripted view in a window on `display` (none: headless): switches to
+/// the environment `env` (the panel's control; `None` keeps the command
+/// line's), moves and turns away from the path's first camera, then a
+/// screenshot without the panel and one with it.
+fn check_screenshot_matches_render(display: Option<&str>, pipeline: &str, env: Option<&str>) {
     let dir = tempfile::tempdir().unwrap();
     let (hidden, shown) = (dir.path().join("hidden.png"), dir.path().join("shown.png"));
+    let env_step = env.map_or(serde_json::json!({"frames": 0}), |e| serde_json::json!({ "env": e }));
     let script = serde_json::json!({ "steps": [
+        env_step,
         {"frames": 2},
         {"move": [0.4, 0.2, 1.0]},
         {"turn": [12.0, -4.0]},
@@ -182,13 +185,13 @@ fn check_screenshot_matches_render(display: Option<&str>, pipeline: &str) {
 #[test]
 fn viewer_screenshot_matches_render_forward() {
     let Some(x) = xvfb() else { return };
-    check_screenshot_matches_render(Some(&x.display), "forward");
+    check_screenshot_matches_render(Some(&x.display), "forward", None);
 }
 
 #[test]
 fn viewer_screenshot_matches_render_objectspace() {
     let Some(x) = xvfb() else { return };
-    check_screenshot_matches_render(Some(&x.display), "objectspace");
+    check_screenshot_matches_render(Some(&x.display), "objectspace", None);
 }
 
 /// `--headless` with nothing to end the run is refused before any work,
@@ -206,10 +209,12 @@ fn headless_without_frames_or_script_is_refused() {
 }
 
 /// With no display at all: the same frames, the panel painted offscreen,
-/// and the per-pass GPU medians reported as in a window.
+/// and the per-pass GPU medians reported as in a window; the environment
+/// switched to the sky from the script (the panel's control): the frame
+/// matches `render --env sky`, which the sidecar's command asks for.
 #[test]
 fn headless_viewer_screenshot_matches_render() {
-    check_screenshot_matches_render(None, "deferred-compute");
+    check_screenshot_matches_render(None, "deferred-compute", Some("sky"));
 }
 
 #[test]

@@ -6,6 +6,7 @@
 use serde::Serialize;
 
 use super::frame::Frame;
+use super::passes::background::{Background, Coverage, background};
 use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::light_grid::clusters::{ClusterDims, Clusters, build_clusters};
@@ -33,6 +34,8 @@ pub struct Clustered {
     prepass: DepthPrepass,
     clusters: Clusters,
     shade: ScenePipeline,
+    /// For scenes with an environment: drawn where the opaque ones leave background.
+    background: Option<Background>,
     /// For scenes with alpha-blended objects: lit from their clusters too.
     blended: Option<BlendedPass>,
 }
@@ -61,7 +64,8 @@ impl Clustered {
         };
         let shade = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
         let blended = BlendedPass::new(device, shaders, scene, targets, SHADER, &groups, false)?;
-        Ok(Self { config, prepass, clusters, shade, blended })
+        let background = Background::new(device, shaders, scene, targets, Coverage::Depth, blended.is_some())?;
+        Ok(Self { config, prepass, clusters, shade, background, blended })
     }
 
     /// The cluster grid (its last build can be read back).
@@ -75,6 +79,9 @@ impl Pipeline for Clustered {
         depth_prepass(frame, &self.prepass);
         build_clusters(frame, &mut self.clusters);
         clustered_shade(frame, &self.shade, &self.clusters.grid, self.blended.is_some());
+        if let Some(pass) = &self.background {
+            background(frame, pass);
+        }
         if let Some(blended) = &self.blended {
             blended_pass(frame, blended, &[(READ_GROUP, self.clusters.grid.bind_group())]);
         }

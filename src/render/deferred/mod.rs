@@ -38,6 +38,7 @@ use serde::Serialize;
 
 use super::forward;
 use super::frame::Frame;
+use super::passes::background::{Background, Coverage, background};
 use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::gbuffer::{GBuffer, GbufferStage, geometry};
 use super::passes::{compute_pipeline, hdr_output};
@@ -78,6 +79,8 @@ pub struct Deferred {
     /// The HDR target, written by the full-screen pass.
     output: wgpu::BindGroup,
     volumes: LightVolumes,
+    /// For scenes with an environment: drawn where the G-buffer is background.
+    background: Option<Background>,
     /// For scenes with alpha-blended objects: lit forward after the lights.
     blended: Option<BlendedPass>,
 }
@@ -97,7 +100,8 @@ impl Deferred {
         let globals = compute_pipeline(device, shaders, GLOBALS_SHADER, "lights_globals", &groups)?;
         let volumes = LightVolumes::new(device, shaders, scene, &geometry.gbuffer)?;
         let blended = BlendedPass::new(device, shaders, scene, targets, forward::SHADER, &[], false)?;
-        Ok(Self { config, geometry, globals, output, volumes, blended })
+        let background = Background::new(device, shaders, scene, targets, Coverage::Depth, false)?;
+        Ok(Self { config, geometry, globals, output, volumes, background, blended })
     }
 }
 
@@ -118,6 +122,9 @@ impl Pipeline for Deferred {
             ([VolumeList::PointOutside, VolumeList::PointInside], [VolumeList::SpotOutside, VolumeList::SpotInside]);
         draw_volumes(frame, &self.volumes, gbuffer, point, "lights point");
         draw_volumes(frame, &self.volumes, gbuffer, spot, "lights spot");
+        if let Some(pass) = &self.background {
+            background(frame, pass);
+        }
         if let Some(blended) = &self.blended {
             blended_pass(frame, blended, &[]);
         }

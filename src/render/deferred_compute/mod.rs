@@ -34,6 +34,7 @@ use serde::Serialize;
 
 use super::forward;
 use super::frame::Frame;
+use super::passes::background::{Background, Coverage, background};
 use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::gbuffer::{GbufferStage, geometry};
 use super::passes::visibility::compute::{ComputeVisibility, compute_visibility};
@@ -113,6 +114,8 @@ pub struct DeferredCompute {
     /// The HDR target, written (and under MSAA the edge counts).
     output: wgpu::BindGroup,
     edge_counts: Option<EdgeCounts>,
+    /// For scenes with an environment: drawn where no surface is.
+    background: Option<Background>,
     /// For scenes with alpha-blended objects: lit forward after the tiles.
     blended: Option<BlendedPass>,
 }
@@ -172,7 +175,12 @@ impl DeferredCompute {
         // The compute rasterizer leaves the depth target to the blended pass.
         let lay_depth = config.visibility == VisibilityMethod::Compute;
         let blended = BlendedPass::new(device, shaders, scene, targets, forward::SHADER, &[], lay_depth)?;
-        Ok(Self { config, surfaces, lighting, output, edge_counts, blended })
+        let coverage = match &surfaces {
+            Surfaces::Gbuffer(_) => Coverage::Depth,
+            Surfaces::Visibility { ids, .. } => Coverage::Ids(ids),
+        };
+        let background = Background::new(device, shaders, scene, targets, coverage, false)?;
+        Ok(Self { config, surfaces, lighting, output, edge_counts, background, blended })
     }
 }
 
@@ -194,6 +202,9 @@ impl Pipeline for DeferredCompute {
         tiled_lighting(frame, &self.lighting, read, &self.output);
         if let Some(counts) = &mut self.edge_counts {
             counts.readback.copy(frame.device, frame.encoder, &counts.buffer, EDGE_COUNTS_BYTES, frame.number);
+        }
+        if let Some(pass) = &self.background {
+            background(frame, pass);
         }
         if let Some(blended) = &self.blended {
             blended_pass(frame, blended, &[]);

@@ -5,6 +5,7 @@
 use serde::Serialize;
 
 use super::frame::Frame;
+use super::passes::background::{Background, Coverage, background};
 use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::{
@@ -37,6 +38,8 @@ pub struct Forward {
     config: ForwardConfig,
     prepass: Option<DepthPrepass>,
     shade: ScenePipeline,
+    /// For scenes with an environment: drawn where the opaque ones leave background.
+    background: Option<Background>,
     /// For scenes with alpha-blended objects: drawn after the opaque ones.
     blended: Option<BlendedPass>,
 }
@@ -62,7 +65,8 @@ impl Forward {
         };
         let shade = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
         let blended = BlendedPass::new(device, shaders, scene, targets, SHADER, &[], false)?;
-        Ok(Self { config, prepass, shade, blended })
+        let background = Background::new(device, shaders, scene, targets, Coverage::Depth, blended.is_some())?;
+        Ok(Self { config, prepass, shade, background, blended })
     }
 }
 
@@ -72,6 +76,9 @@ impl Pipeline for Forward {
             depth_prepass(frame, prepass);
         }
         forward_shade(frame, &self.shade, self.prepass.is_none(), self.blended.is_some());
+        if let Some(pass) = &self.background {
+            background(frame, pass);
+        }
         if let Some(blended) = &self.blended {
             blended_pass(frame, blended, &[]);
         }

@@ -23,6 +23,7 @@ use serde::Serialize;
 
 use super::culling;
 use super::frame::Frame;
+use super::passes::background::{Background, Coverage, background};
 use super::passes::blended::{OVER, back_to_front, blended_pipeline, over_frame_attachment};
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::{
@@ -71,6 +72,8 @@ pub struct ForwardMultipass {
     emissive: Vec<bool>,
     /// Draws per recorded frame, until collected as counters.
     draws: VecDeque<(u64, usize)>,
+    /// For scenes with an environment: drawn where the opaque objects leave background.
+    background: Option<Background>,
     /// For scenes with alpha-blended objects: the pipelines of their pairs.
     blended: Option<BlendedPipelines>,
 }
@@ -132,7 +135,9 @@ impl ForwardMultipass {
         } else {
             None
         };
+        let background = Background::new(device, shaders, scene, targets, Coverage::Depth, blended.is_some())?;
         Ok(Self {
+            background,
             blended,
             config,
             prepass,
@@ -166,6 +171,9 @@ impl Pipeline for ForwardMultipass {
         }
         self.draws.push_back((frame.number, pairs.len()));
         light_passes(frame, &self.shade, &self.pairs_group, &pairs[..opaque], self.blended.is_some());
+        if let Some(pass) = &self.background {
+            background(frame, pass);
+        }
         if let Some(blended) = &self.blended {
             blended_light_passes(frame, blended, &self.pairs_group, pairs, opaque);
         }

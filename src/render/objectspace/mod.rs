@@ -45,6 +45,7 @@ use serde::Serialize;
 use super::culling::Frustum;
 use super::frame::Frame;
 use super::gpu_types::GpuView;
+use super::passes::background::{Background, Coverage, background};
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::light_grid::LightGrid;
 use super::passes::light_grid::world::{WorldGrid, build_world_grid};
@@ -547,6 +548,8 @@ pub struct ObjectSpace {
     residency: Residency,
     virtual_halvings: u32,
     extra_views: Vec<ExtraView>,
+    /// For scenes with an environment: drawn where no surface is.
+    background: Option<Background>,
     /// For scenes with alpha-blended objects: their marking and gathering.
     blended: Option<BlendedObjects>,
     /// What each frame still in flight was rendered with.
@@ -668,7 +671,10 @@ impl ObjectSpace {
         // The compute rasterizer leaves the depth target to the blended passes.
         let lay_depth = config.visibility == VisibilityMethod::Compute;
         let blended = BlendedObjects::new(device, shaders, scene, &res, targets, &grid.grid, lay_depth)?;
+        let coverage = if lay_depth { Coverage::Ids(&res.visibility) } else { Coverage::Depth };
+        let background = Background::new(device, shaders, scene, targets, coverage, false)?;
         Ok(Self {
+            background,
             extra_views,
             blended,
             visibility,
@@ -840,6 +846,9 @@ impl Pipeline for ObjectSpace {
         for (k, group) in views.iter().enumerate() {
             let mut view = frame.with_scene_group(group);
             gather(&mut view, &self.gather, &self.res, &self.grid.grid, k + 1);
+        }
+        if let Some(pass) = &self.background {
+            background(frame, pass);
         }
         if let Some(blended) = &self.blended {
             gather_blended(frame, blended, &self.res, &self.grid.grid);

@@ -3,6 +3,7 @@
 //! the scene draw loop, the depth attachment, compute pipelines and
 //! bind-group layouts.
 
+pub mod background;
 pub mod blended;
 pub mod bloom;
 pub mod depth_prepass;
