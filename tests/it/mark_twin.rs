@@ -91,6 +91,11 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
         let os = renderer.pipeline::<ObjectSpace>().unwrap();
         let gpu = os.read_mark_state(ctx).unwrap();
         let at = format!("{} frame {frame}", run.name);
+        // The page directory grows as objects come into view (their slots
+        // number tiles past the first frames').
+        let tiles = os.layout.tile_count as usize;
+        before.visible.resize(tiles, 0);
+        before.shaded.resize(tiles, 0);
 
         // The twin sees what the GPU saw: the view, the atlas table with this
         // frame's valid_since, the parameters.
