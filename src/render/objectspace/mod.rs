@@ -927,7 +927,10 @@ impl Pipeline for ObjectSpace {
     /// (backing visible tiles this frame), `pages_backed` (newly),
     /// `pages_failed` (found no page: the atlas was full), `page_texels`
     /// (texels of the pages in use), `table_chunks` (page-table chunks in
-    /// use), `trimap_pages` (pages whose triangle maps were built), `quiet`
+    /// use), `slotted_objects` and `slot_pages` (objects holding a
+    /// page-directory slot, the virtual pages in their slots: [`slots`]),
+    /// `unslotted_objects` (in view, no room left in the directory: shaded
+    /// forward), `trimap_pages` (pages whose triangle maps were built), `quiet`
     /// (1: nothing changed and the frame recorded no paging, triangle maps
     /// or shading),
     /// `atlas_pages` and `atlas_texels` (the physical atlas the frame

@@ -12,9 +12,9 @@
 //! chunks with them, and the range is given out again from the frame after
 //! (that frame's paging clears the directory words of the freed chunks).
 //! An object without a slot costs its atlas-table row and nothing in the
-//! page table. The space grows by doubling when a frame's objects do not
-//! fit (the directory keeps its words) up to `max_pages`; an object that
-//! still finds no room is shaded forward until one does.
+//! page table. The space grows (by a quarter at least) when a frame's
+//! objects do not fit (the directory keeps its words) up to `max_pages`; an
+//! object that still finds no room is shaded forward until one does.
 
 use std::collections::BTreeMap;
 
@@ -165,18 +165,17 @@ impl Slots {
         self.free.insert(start, len);
     }
 
-    /// Doubles the space until a free range at its end holds `span`, up to
-    /// `max_pages`.
+    /// Grows the space so that a free range at its end holds `span`: by a
+    /// quarter at least (growing copies the directory and request bits, so
+    /// not by the page), in whole [`MIN_PAGES`], up to `max_pages`.
     fn grow(&mut self, span: u32) {
         let tail = self.free.iter().next_back().filter(|(s, n)| *s + *n == self.pages).map_or(0, |(_, n)| *n);
-        let mut pages = self.pages as u64;
-        while pages - self.pages as u64 + (tail as u64) < span as u64 && pages * 2 <= self.max_pages as u64 {
-            pages *= 2;
-        }
-        if pages > self.pages as u64 {
-            let old = self.pages;
+        let old = self.pages as u64;
+        let needed = old + span.saturating_sub(tail) as u64;
+        let pages = needed.max(old + old / 4).next_multiple_of(MIN_PAGES as u64).min(self.max_pages as u64);
+        if needed <= pages {
             self.pages = pages as u32;
-            self.give_back(old, self.pages - old);
+            self.give_back(old as u32, self.pages - old as u32);
         }
     }
 }
@@ -202,7 +201,7 @@ mod tests {
         ranges.sort();
         assert!(ranges.windows(2).all(|w| w[0][1] <= w[1][0]));
         assert!(ranges.last().unwrap()[1] <= s.pages());
-        // The large one did not fit the first 64 Ki pages: the space doubled.
+        // The large one did not fit the first 64 Ki pages: the space grew.
         assert!(l.objects[0].as_ref().unwrap().span > MIN_PAGES);
         assert_eq!(c.grown, Some(s.pages()));
         assert_eq!(l.page_count, s.pages());
