@@ -87,20 +87,36 @@ impl AtlasLevel {
 pub struct ObjectAtlas {
     pub size: u32,
     pub levels: Vec<AtlasLevel>,
-    /// Page numbers its levels take (a multiple of [`SLOT_ALIGN`]).
+    /// Page numbers its slot takes: those of its levels from `first` on (a
+    /// multiple of [`SLOT_ALIGN`]).
     pub span: u32,
     /// Its slot's first page number; `None` while it has no slot (out of
     /// view: the passes see it as not in the atlas, `size` 0).
     pub slot: Option<u32>,
+    /// The finest level its slot holds: the passes see a texture of
+    /// `size >> first` with the levels from `first` on, so no pixel picks a
+    /// finer one (the renderer holds back levels that no pixel can pick
+    /// from where the views are: `super::slots`).
+    pub first: usize,
+    /// Page numbers of all its levels (before rounding to [`SLOT_ALIGN`]).
+    end: u32,
 }
 
 impl ObjectAtlas {
-    /// Moves the object into the slot at page `base` (`None`: takes its
-    /// slot away), renumbering its levels' pages and tiles.
-    pub fn place(&mut self, base: Option<u32>, tiles_per_page: u32) {
-        self.slot = base;
+    /// The span of a slot holding the levels from `first` on.
+    pub fn span_from(&self, first: usize) -> u32 {
+        (self.end - self.levels[first].offset).next_multiple_of(SLOT_ALIGN)
+    }
+
+    /// Moves the object into the slot at page `base` holding its levels
+    /// from `first` on (`None`: takes its slot away), renumbering their
+    /// pages and tiles.
+    pub fn place(&mut self, base: Option<u32>, first: usize, tiles_per_page: u32) {
+        let first = first.min(self.levels.len() - 1);
+        (self.slot, self.first, self.span) = (base, first, self.span_from(first));
+        let skipped = self.levels[first].offset;
         for l in &mut self.levels {
-            l.page_base = base.unwrap_or(0) + l.offset;
+            l.page_base = (base.unwrap_or(0) + l.offset).saturating_sub(skipped);
             l.tile_base = l.page_base * tiles_per_page;
         }
     }
@@ -180,7 +196,7 @@ impl AtlasLayout {
         for o in 0..layout.objects.len() {
             // Every object in a slot of its own, one after the other.
             let Some(span) = layout.objects[o].as_ref().map(|a| a.span) else { continue };
-            layout.place(o, Some(base));
+            layout.place(o, Some(base), 0);
             base += span;
         }
         layout.set_page_count(pages as u32);
@@ -222,8 +238,9 @@ impl AtlasLayout {
                     level
                 })
                 .collect();
+            let end = span as u32;
             let span = span.next_multiple_of(SLOT_ALIGN as u64) as u32;
-            objects.push(Some(ObjectAtlas { size, levels, span, slot: None }));
+            objects.push(Some(ObjectAtlas { size, levels, span, slot: None, first: 0, end }));
         }
         Ok(Self { page_size, tile_size, objects, tile_count: 0, page_count: 0 })
     }
@@ -240,12 +257,12 @@ impl AtlasLayout {
         self.tile_count = pages.saturating_mul(self.tiles_per_page());
     }
 
-    /// Moves object `object` (in the atlas) into the slot at page `base`, or
-    /// takes its slot away (`None`).
-    pub fn place(&mut self, object: usize, base: Option<u32>) {
+    /// Moves object `object` (in the atlas) into the slot at page `base`
+    /// holding its levels from `first` on, or takes its slot away (`None`).
+    pub fn place(&mut self, object: usize, base: Option<u32>, first: usize) {
         let tiles_per_page = self.tiles_per_page();
         if let Some(o) = &mut self.objects[object] {
-            o.place(base, tiles_per_page);
+            o.place(base, first, tiles_per_page);
         }
     }
 
@@ -254,9 +271,9 @@ impl AtlasLayout {
     pub fn gpu_entry(&self, object: usize) -> GpuAtlasEntry {
         let mut e = GpuAtlasEntry::zeroed();
         if let Some(o) = self.objects[object].as_ref().filter(|o| o.slot.is_some()) {
-            e.size = o.size;
-            e.level_count = o.levels.len() as u32;
-            for (g, l) in e.levels.iter_mut().zip(&o.levels) {
+            e.size = o.size >> o.first;
+            e.level_count = (o.levels.len() - o.first) as u32;
+            for (g, l) in e.levels.iter_mut().zip(&o.levels[o.first..]) {
                 *g = GpuAtlasLevel { size: l.size, page_base: l.page_base, tile_base: l.tile_base, pad: 0 };
             }
         }
@@ -273,13 +290,13 @@ impl AtlasLayout {
         self.objects.iter().flatten().map(|o| o.texels()).sum()
     }
 
-    /// Where virtual page `page` lies: (object, level, its first texel in
-    /// the level). `None` past the last page, or for a number of a block's
+    /// Where virtual page `page` lies: (object, level (an index into the
+    /// object's `levels`), its first texel in the level). `None` past the last page, or for a number of a block's
     /// part outside its level.
     pub fn page_origin(&self, page: u32) -> Option<(usize, usize, [u32; 2])> {
         for (object, o) in self.objects.iter().enumerate() {
             let Some(o) = o.as_ref().filter(|o| o.slot.is_some()) else { continue };
-            for (level, l) in o.levels.iter().enumerate() {
+            for (level, l) in o.levels.iter().enumerate().skip(o.first) {
                 if (l.page_base as u64..l.page_base as u64 + l.page_numbers(self.page_size)).contains(&(page as u64)) {
                     let [x, y] = l.page_position(self.page_size, page - l.page_base).map(|p| p * self.page_size);
                     return (x < l.size && y < l.size).then_some((object, level, [x, y]));
@@ -487,7 +504,7 @@ mod tests {
         let mut a = AtlasLayout::new(&[Some(256), None, Some(64)], 8, 16, 4096, 8).unwrap();
         let before = a.gpu_entries();
         let span = a.objects[2].as_ref().unwrap().span;
-        a.place(2, Some(1024));
+        a.place(2, Some(1024), 0);
         let o = a.objects[2].as_ref().unwrap();
         assert_eq!(o.levels[0].page_base, 1024);
         assert_eq!(o.levels[1].page_base, 1024 + o.levels[1].offset);
@@ -495,13 +512,13 @@ mod tests {
         assert_eq!(a.page_origin(1024), Some((2, 0, [0, 0])));
         assert!(o.levels.iter().all(|l| l.page_base < 1024 + span));
         // Out of its slot: the passes see no texture, and no page is its.
-        a.place(2, None);
+        a.place(2, None, 0);
         assert_eq!(a.gpu_entry(2).size, 0);
         assert_eq!(a.page_origin(1024), None);
         let bytes = bytemuck::bytes_of::<GpuAtlasEntry>;
         assert_eq!(bytes(&a.gpu_entry(0)), bytes(&before[0]));
         // Back where it was: the same row as at first.
-        a.place(2, before[2].levels[0].page_base.into());
+        a.place(2, before[2].levels[0].page_base.into(), 0);
         assert_eq!(bytes(&a.gpu_entry(2)), bytes(&before[2]));
     }
 

@@ -31,6 +31,7 @@ pub mod debug;
 pub mod gather;
 pub mod mark;
 pub mod paging;
+pub mod reach;
 pub mod residency;
 pub mod resources;
 pub mod shade;
@@ -557,6 +558,8 @@ pub struct ObjectSpace {
     slots: Slots,
     /// Ranges given back this frame, freed before it marks.
     released: Vec<[u32; 2]>,
+    /// Per object: its least chart-UV stretch per world metre ([`reach`]).
+    stretch: Vec<f32>,
     extra_views: Vec<ExtraView>,
     /// For scenes with alpha-blended objects: their marking and gathering.
     blended: Option<BlendedObjects>,
@@ -621,6 +624,7 @@ impl ObjectSpace {
         let max_pages = (device.limits().max_storage_buffer_binding_size * 8 / (1 + tiles_per_page))
             .min(u32::MAX as u64 / tiles_per_page) as u32;
         let slots = Slots::new(&mut layout, max_pages, config.slot_timeout);
+        let stretch = object_stretches(scene_cpu, &config.texture_sizes);
         // Each view sees its own pixels: the default atlas holds all of them.
         let views = 1 + config.extra_views.count() as u64;
         let pixels = targets.width as u64 * targets.height as u64;
@@ -711,6 +715,7 @@ impl ObjectSpace {
             budget_pool: pool,
             slots,
             released: Vec::new(),
+            stretch,
             in_flight: Default::default(),
         })
     }
@@ -783,15 +788,28 @@ impl ObjectSpace {
         }
     }
 
-    /// The objects some view's frustum holds this frame (blended ones too).
-    fn objects_in_view(&self, frame: &Frame) -> Vec<bool> {
+    /// Per object, whether some view's frustum holds it this frame (blended
+    /// ones too) and then the finest level any view's pixels may pick on it,
+    /// less a level of margin ([`reach`]; every level under the atlas-pages
+    /// view, which may show any).
+    fn objects_in_view(&self, frame: &Frame) -> Vec<Option<usize>> {
         let (w, h) = (frame.targets.width, frame.targets.height);
-        let mut frusta = vec![Frustum::from_view_projection(frame.view.view_proj)];
+        let mut cameras = vec![(*frame.camera, Frustum::from_view_projection(frame.view.view_proj))];
         for k in 0..self.extra_views.len() {
             let camera = self.config.extra_views.camera(k, frame.camera);
-            frusta.push(Frustum::from_view_projection(gpu_view(&camera, w, h).view_proj));
+            cameras.push((camera, Frustum::from_view_projection(gpu_view(&camera, w, h).view_proj)));
         }
-        frame.scene.object_bounds.iter().map(|b| frusta.iter().any(|f| f.intersects_aabb(b))).collect()
+        let every_level = self.config.view == DebugView::AtlasPages;
+        (frame.scene.object_bounds.iter().enumerate())
+            .map(|(o, b)| {
+                let size = self.layout.objects[o].as_ref().map_or(0, |a| a.size);
+                let levels = cameras.iter().filter(|(_, f)| f.intersects_aabb(b)).map(|(camera, _)| {
+                    let stretch = if every_level { 0.0 } else { self.stretch[o] };
+                    reach::finest_level(size, stretch, b, camera, h, self.config.mip_bias, 1)
+                });
+                levels.min()
+            })
+            .collect()
     }
 
     /// Gives the objects in view page-directory slots and takes them from
@@ -814,6 +832,21 @@ impl ObjectSpace {
     pub fn light_grid(&self) -> &LightGrid {
         &self.grid.grid
     }
+}
+
+/// Per object of `scene`, its least chart-UV stretch per world metre
+/// ([`reach::min_stretch`], once per mesh); 0 for objects not in the atlas.
+fn object_stretches(scene: &Scene, sizes: &[Option<u32>]) -> Vec<f32> {
+    let mut per_mesh: Vec<Option<f32>> = vec![None; scene.meshes.len()];
+    (scene.objects.iter().zip(sizes))
+        .map(|(o, size)| match size {
+            Some(_) => {
+                let m = *per_mesh[o.mesh].get_or_insert_with(|| reach::min_stretch(&scene.meshes[o.mesh]));
+                m / reach::max_scale(&o.transform)
+            }
+            None => 0.0,
+        })
+        .collect()
 }
 
 /// The share of the screen that object `o`'s bounding box covers (1 when

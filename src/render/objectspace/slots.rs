@@ -22,6 +22,9 @@ use super::atlas::{AtlasLayout, SLOT_ALIGN};
 
 /// The fewest page numbers the directory covers (a few KiB).
 pub const MIN_PAGES: u32 = 1 << 16;
+/// A slot holding this many more levels than its object needs (it went
+/// away from every view) moves to a smaller one.
+pub const REGROW_LEVELS: usize = 2;
 
 /// What [`Slots::update`] changed this frame.
 #[derive(Debug, Default, PartialEq, Eq)]
@@ -59,7 +62,7 @@ impl Slots {
     /// count becomes the directory's first size).
     pub fn new(layout: &mut AtlasLayout, max_pages: u32, timeout: u32) -> Self {
         for o in 0..layout.objects.len() {
-            layout.place(o, None);
+            layout.place(o, None, 0);
         }
         let max_pages = max_pages.max(MIN_PAGES);
         let pages = MIN_PAGES;
@@ -86,9 +89,13 @@ impl Slots {
     }
 
     /// Frame `frame` (counted from 1) holds the objects `in_view` in some
-    /// view: those without a slot get one, those out of view longer than
-    /// the timeout give theirs back; `layout` follows.
-    pub fn update(&mut self, layout: &mut AtlasLayout, in_view: &[bool], frame: u64) -> SlotChanges {
+    /// view (`Some`: the finest level any of its pixels may pick, less a
+    /// level of margin): those without a slot get one from that level on,
+    /// those whose slot lacks that level, or holds three or more finer ones
+    /// than it, move to a new one (their pages freed: shaded again), and
+    /// those out of view longer than the timeout give theirs back; `layout`
+    /// follows.
+    pub fn update(&mut self, layout: &mut AtlasLayout, in_view: &[Option<usize>], frame: u64) -> SlotChanges {
         let mut changes = SlotChanges::default();
         for [start, end] in std::mem::take(&mut self.quarantine) {
             self.give_back(start, end - start);
@@ -96,19 +103,27 @@ impl Slots {
         let (mut wanted, mut gone) = (Vec::new(), Vec::new());
         for (o, atlas) in layout.objects.iter().enumerate() {
             let Some(atlas) = atlas else { continue };
-            if in_view[o] {
+            let range = atlas.slot.map(|base| [base, base + atlas.span]);
+            if let Some(first) = in_view[o] {
+                let first = first.min(atlas.levels.len() - 1);
                 self.last_seen[o] = frame;
-                if atlas.slot.is_none() {
-                    wanted.push((atlas.span, o));
+                let fits = first >= atlas.first && first <= atlas.first + REGROW_LEVELS;
+                match range {
+                    None => wanted.push((atlas.span_from(first), o, first)),
+                    Some(range) if !fits => {
+                        gone.push((o, range));
+                        wanted.push((atlas.span_from(first), o, first));
+                    }
+                    Some(_) => {}
                 }
-            } else if let Some(base) = atlas.slot
+            } else if let Some(range) = range
                 && frame - self.last_seen[o] > self.timeout as u64
             {
-                gone.push((o, [base, base + atlas.span]));
+                gone.push((o, range));
             }
         }
         for (o, range) in gone {
-            layout.place(o, None);
+            layout.place(o, None, 0);
             self.quarantine.push(range);
             changes.released.push(range);
             changes.moved.push(o);
@@ -116,15 +131,17 @@ impl Slots {
         // The largest first: the small ones fill the gaps they leave.
         wanted.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)));
         self.unplaced = 0;
-        for (span, o) in wanted {
+        for (span, o, first) in wanted {
             let base = self.take(span).or_else(|| {
                 self.grow(span);
                 self.take(span)
             });
             match base {
                 Some(base) => {
-                    layout.place(o, Some(base));
-                    changes.moved.push(o);
+                    layout.place(o, Some(base), first);
+                    if !changes.moved.contains(&o) {
+                        changes.moved.push(o);
+                    }
                 }
                 None => self.unplaced += 1,
             }
@@ -184,6 +201,11 @@ impl Slots {
 mod tests {
     use super::*;
 
+    /// Objects in view (`true`) needing every level.
+    fn seen(objects: &[bool]) -> Vec<Option<usize>> {
+        objects.iter().map(|&v| v.then_some(0)).collect()
+    }
+
     fn layout() -> AtlasLayout {
         // Spans: 4096 at pages of 16 is 256x256 pages plus its mips.
         AtlasLayout::new(&[Some(4096), Some(64), None, Some(64)], 8, 16, 16384, 8).unwrap()
@@ -194,7 +216,7 @@ mod tests {
         let mut l = layout();
         let mut s = Slots::new(&mut l, 1 << 24, 2);
         assert!(l.objects.iter().flatten().all(|o| o.slot.is_none()));
-        let c = s.update(&mut l, &[true, true, false, true], 1);
+        let c = s.update(&mut l, &seen(&[true, true, false, true]), 1);
         assert_eq!(c.moved.len(), 3);
         let mut ranges: Vec<[u32; 2]> =
             l.objects.iter().flatten().map(|o| [o.slot.unwrap(), o.slot.unwrap() + o.span]).collect();
@@ -212,14 +234,14 @@ mod tests {
     fn a_slot_goes_back_after_its_timeout_and_is_given_out_again() {
         let mut l = layout();
         let mut s = Slots::new(&mut l, 1 << 24, 2);
-        s.update(&mut l, &[false, true, false, true], 1);
+        s.update(&mut l, &seen(&[false, true, false, true]), 1);
         let base = l.objects[1].as_ref().unwrap().slot.unwrap();
         // Out of view for two frames: kept.
         for frame in 2..=3 {
-            let c = s.update(&mut l, &[false, false, false, true], frame);
+            let c = s.update(&mut l, &seen(&[false, false, false, true]), frame);
             assert!(c.released.is_empty() && c.moved.is_empty());
         }
-        let c = s.update(&mut l, &[false, false, false, true], 4);
+        let c = s.update(&mut l, &seen(&[false, false, false, true]), 4);
         let span = l.objects[1].as_ref().unwrap().span;
         assert_eq!(c.released, vec![[base, base + span]]);
         assert_eq!(c.moved, vec![1]);
@@ -227,17 +249,41 @@ mod tests {
         // Not given out the frame it went back (its chunks are freed then) ...
         assert_eq!(s.pages_in_slots(), 2 * span as u64);
         // ... but from the next.
-        s.update(&mut l, &[false, false, false, true], 5);
+        s.update(&mut l, &seen(&[false, false, false, true]), 5);
         assert_eq!(s.pages_in_slots(), span as u64);
-        s.update(&mut l, &[false, true, false, true], 6);
+        s.update(&mut l, &seen(&[false, true, false, true]), 6);
         assert_eq!(l.objects[1].as_ref().unwrap().slot, Some(base));
+    }
+
+    #[test]
+    fn a_slot_holds_the_levels_its_object_needs_and_moves_when_it_needs_finer() {
+        let mut l = layout();
+        let mut s = Slots::new(&mut l, 1 << 24, 2);
+        // Far away: levels 3 on (4096 >> 3 = 512).
+        s.update(&mut l, &[Some(3), None, None, None], 1);
+        let far = l.objects[0].clone().unwrap();
+        assert_eq!((far.first, far.span), (3, far.span_from(3)));
+        assert!(far.span * 32 < far.span_from(0));
+        let e = l.gpu_entry(0);
+        assert_eq!((e.size, e.level_count as usize), (512, far.levels.len() - 3));
+        assert_eq!(e.levels[0].page_base, far.slot.unwrap());
+        // A level or two coarser: the slot stays.
+        let c = s.update(&mut l, &[Some(5), None, None, None], 2);
+        assert!(c.moved.is_empty() && c.released.is_empty());
+        // Nearer: a new slot from level 1, the old one given back.
+        let c = s.update(&mut l, &[Some(1), None, None, None], 3);
+        let near = l.objects[0].as_ref().unwrap();
+        assert_eq!(near.first, 1);
+        assert_eq!(c.released, vec![[far.slot.unwrap(), far.slot.unwrap() + far.span]]);
+        assert_eq!(c.moved, vec![0]);
+        assert_ne!(near.slot, far.slot);
     }
 
     #[test]
     fn objects_past_the_largest_space_stay_without_a_slot() {
         let mut l = layout();
         let mut s = Slots::new(&mut l, MIN_PAGES, 2);
-        s.update(&mut l, &[true, true, false, false], 1);
+        s.update(&mut l, &seen(&[true, true, false, false]), 1);
         assert_eq!(l.objects[0].as_ref().unwrap().slot, None);
         assert!(l.objects[1].as_ref().unwrap().slot.is_some());
         assert_eq!((s.unplaced(), s.pages()), (1, MIN_PAGES));
