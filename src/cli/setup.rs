@@ -177,6 +177,7 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             count_visibility: a.count_visibility,
             marking: a.objectspace.marking,
             count_mark_atomics: a.objectspace.count_marks,
+            ..Default::default()
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::DeferredCompute => PipelineConfig::DeferredCompute(DeferredComputeConfig {

@@ -91,6 +91,23 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
         let os = renderer.pipeline::<ObjectSpace>().unwrap();
         let gpu = os.read_mark_state(ctx).unwrap();
         let at = format!("{} frame {frame}", run.name);
+        // The page directory grows as objects come into view (their slots
+        // number tiles past the first frames').
+        let tiles = os.layout.tile_count as usize;
+        before.visible.resize(tiles, 0);
+        before.shaded.resize(tiles, 0);
+        // An object whose slot moved this frame (it needs finer levels, or it
+        // left the view) left its tiles' state behind with its pages.
+        let per_page = os.layout.tiles_per_page() as usize;
+        let mut live = vec![false; tiles];
+        for a in os.layout.objects.iter().flatten() {
+            if let Some(slot) = a.slot {
+                live[slot as usize * per_page..(slot + a.span) as usize * per_page].fill(true);
+            }
+        }
+        for (t, _) in live.iter().enumerate().filter(|(_, live)| !**live) {
+            (before.visible[t], before.shaded[t]) = (0, 0);
+        }
 
         // The twin sees what the GPU saw: the view, the atlas table with this
         // frame's valid_since, the parameters.

@@ -1,15 +1,20 @@
 //! Where every object's shading texture lives. Each object's texture (its
 //! whole mip pyramid, up to 16384 texels a side) is *virtual*: its levels
-//! are cut into square pages, numbered in one flat virtual page space, and
-//! only the pages that visible tiles need are backed by a page of the shared
+//! are cut into square pages, numbered within the object's *slot* (a range
+//! of the virtual page space, [`ObjectAtlas::span`] numbers long, that the
+//! renderer gives an object while it is in view: `super::slots`), and only
+//! the pages that visible tiles need are backed by a page of the shared
 //! physical atlas ([`PagePool`]), through a two-level page table the GPU
 //! keeps (`paging/`). Pages are numbered in blocks of [`BLOCK_SIDE`] x
 //! [`BLOCK_SIDE`] (a level's blocks row-major, the pages of a block
 //! row-major): the page directory has one word per block, and only the
 //! blocks holding backed pages have a table chunk of one word per page, so
-//! the table grows with the pages in use, not with the virtual space. Tiles keep a flat virtual numbering too (the shade queue and
-//! the CPU twin speak of virtual tiles); their state lives with the physical
-//! page that backs them.
+//! the table grows with the pages in use, and the directory with the slots
+//! given out, not with every object's virtual space. Tiles keep a virtual
+//! numbering too (the shade queue and the CPU twin speak of virtual tiles):
+//! a level's tiles start at its first page number times the tiles a page
+//! holds, so a slot numbers its tiles as well; their state lives with the
+//! physical page that backs them.
 
 use bytemuck::Zeroable;
 
@@ -25,6 +30,9 @@ pub const MAX_TEXTURE_SIZE: u32 = 16384;
 pub const BLOCK_SIDE: u32 = 4;
 /// Pages per block.
 pub const BLOCK_PAGES: u32 = BLOCK_SIDE * BLOCK_SIDE;
+/// Slots start and end on multiples of this many page numbers: whole words
+/// of page request bits (and of tile bits, and whole directory words).
+pub const SLOT_ALIGN: u32 = 32;
 
 /// One mip level of one object's virtual texture.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,8 +41,11 @@ pub struct AtlasLevel {
     /// Virtual index of the level's first page (a multiple of
     /// [`BLOCK_PAGES`]: the level's pages are numbered block by block).
     pub page_base: u32,
-    /// Global index of the level's first tile (tiles row-major).
+    /// Global index of the level's first tile (tiles row-major): the
+    /// level's first page number times the tiles a page holds.
     pub tile_base: u32,
+    /// The level's first page number within its object's slot.
+    pub offset: u32,
 }
 
 impl AtlasLevel {
@@ -70,14 +81,46 @@ impl AtlasLevel {
     }
 }
 
-/// An object's virtual shading texture: its size (mip 0) and levels.
+/// An object's virtual shading texture: its size (mip 0) and levels, and
+/// where its slot lies in the virtual page space.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ObjectAtlas {
     pub size: u32,
     pub levels: Vec<AtlasLevel>,
+    /// Page numbers its slot takes: those of its levels from `first` on (a
+    /// multiple of [`SLOT_ALIGN`]).
+    pub span: u32,
+    /// Its slot's first page number; `None` while it has no slot (out of
+    /// view: the passes see it as not in the atlas, `size` 0).
+    pub slot: Option<u32>,
+    /// The finest level its slot holds: the passes see a texture of
+    /// `size >> first` with the levels from `first` on, so no pixel picks a
+    /// finer one (the renderer holds back levels that no pixel can pick
+    /// from where the views are: `super::slots`).
+    pub first: usize,
+    /// Page numbers of all its levels (before rounding to [`SLOT_ALIGN`]).
+    end: u32,
 }
 
 impl ObjectAtlas {
+    /// The span of a slot holding the levels from `first` on.
+    pub fn span_from(&self, first: usize) -> u32 {
+        (self.end - self.levels[first].offset).next_multiple_of(SLOT_ALIGN)
+    }
+
+    /// Moves the object into the slot at page `base` holding its levels
+    /// from `first` on (`None`: takes its slot away), renumbering their
+    /// pages and tiles.
+    pub fn place(&mut self, base: Option<u32>, first: usize, tiles_per_page: u32) {
+        let first = first.min(self.levels.len() - 1);
+        (self.slot, self.first, self.span) = (base, first, self.span_from(first));
+        let skipped = self.levels[first].offset;
+        for l in &mut self.levels {
+            l.page_base = (base.unwrap_or(0) + l.offset).saturating_sub(skipped);
+            l.tile_base = l.page_base * tiles_per_page;
+        }
+    }
+
     pub fn texels(&self) -> u64 {
         self.levels.iter().map(|l| l.size as u64 * l.size as u64).sum()
     }
@@ -108,16 +151,16 @@ pub struct AtlasLayout {
     pub tile_size: u32,
     /// Per scene object; `None` for objects shaded forward (not in the atlas).
     pub objects: Vec<Option<ObjectAtlas>>,
-    /// Virtual tiles, all objects and levels.
+    /// Virtual tile numbers ([`Self::tiles_per_page`] per page number).
     pub tile_count: u32,
-    /// Virtual page numbers, all objects and levels (a multiple of
-    /// [`BLOCK_PAGES`]).
+    /// Virtual page numbers: the space the slots lie in and the page
+    /// directory covers (a multiple of [`SLOT_ALIGN`]).
     pub page_count: u32,
 }
 
 impl AtlasLayout {
     /// Lays out objects of the given shading-texture sizes (`None`: not in the
-    /// atlas). Sizes above `max_size` are clamped to it; sizes below the tile
+    /// atlas), each in a slot of its own, one after the other. Sizes above `max_size` are clamped to it; sizes below the tile
     /// size are raised to it. Levels go down to `coarsest` texels (or one
     /// tile, if larger): below the charts' gutter, neighbouring charts would
     /// share texels.
@@ -140,13 +183,41 @@ impl AtlasLayout {
         max_size: u32,
         coarsest: &[u32],
     ) -> Result<Self, AtlasError> {
+        let mut layout = Self::unplaced(sizes, tile_size, page_size, max_size, coarsest)?;
+        let pages: u64 = layout.objects.iter().flatten().map(|o| o.span as u64).sum();
+        let tiles = pages * layout.tiles_per_page() as u64;
+        if tiles > u32::MAX as u64 {
+            return Err(AtlasError::TooManyTiles { tiles });
+        }
+        if pages > u32::MAX as u64 {
+            return Err(AtlasError::TooManyPages { pages });
+        }
+        let mut base = 0;
+        for o in 0..layout.objects.len() {
+            // Every object in a slot of its own, one after the other.
+            let Some(span) = layout.objects[o].as_ref().map(|a| a.span) else { continue };
+            layout.place(o, Some(base), 0);
+            base += span;
+        }
+        layout.set_page_count(pages as u32);
+        Ok(layout)
+    }
+
+    /// The objects' textures with no slot and no page numbers (the
+    /// renderer gives slots to the objects in view: `super::slots`).
+    pub fn unplaced(
+        sizes: &[Option<u32>],
+        tile_size: u32,
+        page_size: u32,
+        max_size: u32,
+        coarsest: &[u32],
+    ) -> Result<Self, AtlasError> {
         if ![8, 16, 32, 64].contains(&tile_size) {
             return Err(AtlasError::BadTileSize(tile_size));
         }
         if !page_size.is_power_of_two() || page_size < tile_size || page_size > 4 * tile_size {
             return Err(AtlasError::BadPageSize { page: page_size, tile: tile_size });
         }
-        let (mut tiles, mut pages) = (0u64, 0u64);
         let mut objects = Vec::with_capacity(sizes.len());
         for (object, s) in sizes.iter().enumerate() {
             let size = match *s {
@@ -159,74 +230,59 @@ impl AtlasLayout {
             };
             let coarsest = coarsest.get(object).or(coarsest.last()).copied().unwrap_or(tile_size).max(tile_size);
             let count = ((size / coarsest.min(size)).ilog2() as usize + 1).min(MAX_LEVELS);
+            let mut span = 0u64;
             let levels = (0..count)
                 .map(|l| {
-                    let level = AtlasLevel {
-                        size: size >> l,
-                        page_base: pages as u32,
-                        tile_base: tiles.min(u32::MAX as u64) as u32,
-                    };
-                    tiles += ((size >> l) / tile_size) as u64 * ((size >> l) / tile_size) as u64;
-                    pages += level.page_numbers(page_size);
+                    let level = AtlasLevel { size: size >> l, page_base: 0, tile_base: 0, offset: span as u32 };
+                    span += level.page_numbers(page_size);
                     level
                 })
                 .collect();
-            objects.push(Some(ObjectAtlas { size, levels }));
+            let end = span as u32;
+            let span = span.next_multiple_of(SLOT_ALIGN as u64) as u32;
+            objects.push(Some(ObjectAtlas { size, levels, span, slot: None, first: 0, end }));
         }
-        if tiles > u32::MAX as u64 {
-            return Err(AtlasError::TooManyTiles { tiles });
-        }
-        if pages > u32::MAX as u64 {
-            return Err(AtlasError::TooManyPages { pages });
-        }
-        Ok(Self { page_size, tile_size, objects, tile_count: tiles as u32, page_count: pages as u32 })
+        Ok(Self { page_size, tile_size, objects, tile_count: 0, page_count: 0 })
     }
 
-    /// [`AtlasLayout::new`], with every object's side halved (down to 64)
-    /// until the layout has at most `max_pages` virtual pages: virtual pages
-    /// are numbered in 32 bits, and the page directory and request bits grow
-    /// with them. Returns the layout and the halvings.
-    pub fn fitting(
-        sizes: &[Option<u32>],
-        tile_size: u32,
-        page_size: u32,
-        max_size: u32,
-        coarsest: &[u32],
-        max_pages: u64,
-    ) -> Result<(Self, u32), AtlasError> {
-        let mut sizes: Vec<Option<u32>> = sizes.iter().map(|s| s.map(|s| s.min(max_size))).collect();
-        let mut halvings = 0;
-        loop {
-            let can_halve = sizes.iter().flatten().any(|&s| s > 64);
-            match Self::with_coarsest(&sizes, tile_size, page_size, max_size, coarsest) {
-                Ok(layout) if layout.page_count as u64 <= max_pages || !can_halve => return Ok((layout, halvings)),
-                Err(AtlasError::TooManyPages { .. } | AtlasError::TooManyTiles { .. }) if can_halve => {}
-                Ok(_) => {}
-                Err(e) => return Err(e),
-            }
-            for s in sizes.iter_mut().flatten() {
-                *s = (*s / 2).max(64);
-            }
-            halvings += 1;
+    /// Virtual tile numbers per page number.
+    pub fn tiles_per_page(&self) -> u32 {
+        (self.page_size / self.tile_size).pow(2)
+    }
+
+    /// Sets the virtual page numbers the page directory covers (the slots
+    /// lie below it), and the tile numbers with them.
+    pub fn set_page_count(&mut self, pages: u32) {
+        self.page_count = pages;
+        self.tile_count = pages.saturating_mul(self.tiles_per_page());
+    }
+
+    /// Moves object `object` (in the atlas) into the slot at page `base`
+    /// holding its levels from `first` on, or takes its slot away (`None`).
+    pub fn place(&mut self, object: usize, base: Option<u32>, first: usize) {
+        let tiles_per_page = self.tiles_per_page();
+        if let Some(o) = &mut self.objects[object] {
+            o.place(base, first, tiles_per_page);
         }
+    }
+
+    /// Object `object`'s row of the table the GPU passes read: an object
+    /// with no slot is not in the atlas (size 0).
+    pub fn gpu_entry(&self, object: usize) -> GpuAtlasEntry {
+        let mut e = GpuAtlasEntry::zeroed();
+        if let Some(o) = self.objects[object].as_ref().filter(|o| o.slot.is_some()) {
+            e.size = o.size >> o.first;
+            e.level_count = (o.levels.len() - o.first) as u32;
+            for (g, l) in e.levels.iter_mut().zip(&o.levels[o.first..]) {
+                *g = GpuAtlasLevel { size: l.size, page_base: l.page_base, tile_base: l.tile_base, pad: 0 };
+            }
+        }
+        e
     }
 
     /// The table the GPU passes read, one entry per scene object.
     pub fn gpu_entries(&self) -> Vec<GpuAtlasEntry> {
-        self.objects
-            .iter()
-            .map(|o| {
-                let mut e = GpuAtlasEntry::zeroed();
-                if let Some(o) = o {
-                    e.size = o.size;
-                    e.level_count = o.levels.len() as u32;
-                    for (g, l) in e.levels.iter_mut().zip(&o.levels) {
-                        *g = GpuAtlasLevel { size: l.size, page_base: l.page_base, tile_base: l.tile_base, pad: 0 };
-                    }
-                }
-                e
-            })
-            .collect()
+        (0..self.objects.len()).map(|o| self.gpu_entry(o)).collect()
     }
 
     /// Virtual texels of all objects (mip chains included).
@@ -234,13 +290,13 @@ impl AtlasLayout {
         self.objects.iter().flatten().map(|o| o.texels()).sum()
     }
 
-    /// Where virtual page `page` lies: (object, level, its first texel in
-    /// the level). `None` past the last page, or for a number of a block's
+    /// Where virtual page `page` lies: (object, level (an index into the
+    /// object's `levels`), its first texel in the level). `None` past the last page, or for a number of a block's
     /// part outside its level.
     pub fn page_origin(&self, page: u32) -> Option<(usize, usize, [u32; 2])> {
         for (object, o) in self.objects.iter().enumerate() {
-            let Some(o) = o else { continue };
-            for (level, l) in o.levels.iter().enumerate() {
+            let Some(o) = o.as_ref().filter(|o| o.slot.is_some()) else { continue };
+            for (level, l) in o.levels.iter().enumerate().skip(o.first) {
                 if (l.page_base as u64..l.page_base as u64 + l.page_numbers(self.page_size)).contains(&(page as u64)) {
                     let [x, y] = l.page_position(self.page_size, page - l.page_base).map(|p| p * self.page_size);
                     return (x < l.size && y < l.size).then_some((object, level, [x, y]));
@@ -358,17 +414,25 @@ mod tests {
         let a = AtlasLayout::new(&sizes, 16, 64, 16384, 64).unwrap();
         // Levels: 1024 -> 64 is 5 levels.
         assert_eq!(a.objects[0].as_ref().unwrap().levels.len(), 5);
-        let t = 16;
         assert!(a.objects[2].is_none());
-        let (mut tiles, mut pages) = (0, 0);
-        for o in a.objects.iter().flatten() {
-            for l in &o.levels {
-                assert_eq!((l.tile_base, l.page_base), (tiles, pages));
-                tiles += (l.size / t) * (l.size / t);
-                // Whole blocks of 4x4 pages of 64 texels.
-                pages += (l.size / 64).div_ceil(4).pow(2) * 16;
+        // Pages of 64 texels hold 16 tiles of 16.
+        assert_eq!(a.tiles_per_page(), 16);
+        let pages = {
+            let mut pages = 0;
+            for o in a.objects.iter().flatten() {
+                assert_eq!(o.slot, Some(pages));
+                let mut span = 0;
+                for l in &o.levels {
+                    assert_eq!((l.page_base, l.tile_base), (pages + span, (pages + span) * 16));
+                    // Whole blocks of 4x4 pages of 64 texels.
+                    span += (l.size / 64).div_ceil(4).pow(2) * 16;
+                }
+                assert_eq!(o.span, span.next_multiple_of(SLOT_ALIGN));
+                pages += o.span;
             }
-        }
+            pages
+        };
+        let tiles = pages * 16;
         assert_eq!((a.tile_count, a.page_count), (tiles, pages));
         // Object 1's level 2 (64 texels) is one page; its origin is found
         // back, and the rest of its block is outside the level.
@@ -385,7 +449,7 @@ mod tests {
 
     #[test]
     fn page_numbers_and_positions_are_inverse() {
-        let l = AtlasLevel { size: 1000, page_base: 128, tile_base: 0 };
+        let l = AtlasLevel { size: 1000, page_base: 128, tile_base: 0, offset: 0 };
         let per_row = l.pages_per_row(16);
         for y in 0..per_row {
             for x in 0..per_row {
@@ -436,14 +500,26 @@ mod tests {
     }
 
     #[test]
-    fn large_virtual_spaces_are_halved_until_the_page_table_fits() {
-        let sizes = [Some(8192), Some(4096), None];
-        let (full, none) = AtlasLayout::fitting(&sizes, 8, 16, 16384, &[128], 1 << 30).unwrap();
-        assert_eq!(none, 0);
-        let (fit, halvings) = AtlasLayout::fitting(&sizes, 8, 16, 16384, &[128], full.page_count as u64 / 3).unwrap();
-        assert_eq!(halvings, 1);
-        assert!(fit.page_count as u64 <= full.page_count as u64 / 3);
-        assert_eq!(fit.objects[0].as_ref().unwrap().size, 4096);
+    fn objects_move_between_slots_and_leave_the_table_without_one() {
+        let mut a = AtlasLayout::new(&[Some(256), None, Some(64)], 8, 16, 4096, 8).unwrap();
+        let before = a.gpu_entries();
+        let span = a.objects[2].as_ref().unwrap().span;
+        a.place(2, Some(1024), 0);
+        let o = a.objects[2].as_ref().unwrap();
+        assert_eq!(o.levels[0].page_base, 1024);
+        assert_eq!(o.levels[1].page_base, 1024 + o.levels[1].offset);
+        assert_eq!(o.levels[1].tile_base, o.levels[1].page_base * 4);
+        assert_eq!(a.page_origin(1024), Some((2, 0, [0, 0])));
+        assert!(o.levels.iter().all(|l| l.page_base < 1024 + span));
+        // Out of its slot: the passes see no texture, and no page is its.
+        a.place(2, None, 0);
+        assert_eq!(a.gpu_entry(2).size, 0);
+        assert_eq!(a.page_origin(1024), None);
+        let bytes = bytemuck::bytes_of::<GpuAtlasEntry>;
+        assert_eq!(bytes(&a.gpu_entry(0)), bytes(&before[0]));
+        // Back where it was: the same row as at first.
+        a.place(2, before[2].levels[0].page_base.into(), 0);
+        assert_eq!(bytes(&a.gpu_entry(2)), bytes(&before[2]));
     }
 
     #[test]

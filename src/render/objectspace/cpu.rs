@@ -729,6 +729,8 @@ mod tests {
     fn mark_frame_updates_visible_tiles_only() {
         // Object 0: 16 texels, 4 tiles; object 1: 32 then 16 texels, 16 + 4 tiles.
         let mut entries = AtlasLayout::new(&[Some(16), None, Some(32)], 8, 16, 64, 16).unwrap().gpu_entries();
+        // Tiles numbered one after the other (a slot's numbers may leave gaps).
+        (entries[2].levels[0].tile_base, entries[2].levels[1].tile_base) = (4, 20);
         entries[0].valid_since = 1;
         entries[2].valid_since = 3;
         assert_eq!(tile_owner(&entries, 8, 3), Some((0, 0)));

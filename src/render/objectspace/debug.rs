@@ -178,7 +178,8 @@ impl ObjectSpace {
         })
     }
 
-    /// Copies texel rows of the backed pages of `object`'s `level` out of a
+    /// Copies texel rows of the backed pages of `object`'s `level` (counted
+    /// as in the atlas table: from the finest its slot holds) out of a
     /// physical texture read back whole (`bytes`, `texel` bytes a texel)
     /// into a level-sized image; texels of pages with no physical page keep
     /// `fill`.
@@ -191,9 +192,10 @@ impl ObjectSpace {
         level: usize,
         fill: &[u8],
     ) -> Result<(u32, Vec<u8>), GpuError> {
-        let Some(l) =
-            self.layout.objects.get(object).and_then(|o| o.as_ref()).and_then(|o| o.levels.get(level)).copied()
-        else {
+        // `level` counts from the finest level the object's slot holds (as
+        // the atlas table the passes read does); the layout's levels from 0.
+        let atlas = self.layout.objects.get(object).and_then(|o| o.as_ref());
+        let Some((l, level)) = atlas.and_then(|o| o.levels.get(o.first + level).map(|l| (*l, o.first + level))) else {
             return Err(GpuError::Readback(format!("object {object} has no atlas level {level}")));
         };
         let pool = self.res.pool;

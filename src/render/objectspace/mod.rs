@@ -31,9 +31,11 @@ pub mod debug;
 pub mod gather;
 pub mod mark;
 pub mod paging;
+pub mod reach;
 pub mod residency;
 pub mod resources;
 pub mod shade;
+pub mod slots;
 pub mod trimap;
 
 use blended::{BlendedObjects, gather_blended, mark_blended};
@@ -66,10 +68,11 @@ use atlas_view::{AtlasPages, AtlasPagesError, AtlasViewPass, draw_atlas_pages};
 use gather::{GatherPass, gather};
 use mark::{MarkPass, mark_backed_pages, mark_tiles};
 use paging::resize::{ResizePass, compact_pages, copy_pages};
-use paging::{PagingPass, back_pages};
+use paging::{PagingPass, back_pages, release_slots};
 use residency::Residency;
 use resources::Resources;
 use shade::{ShadePass, shade_tiles};
+use slots::Slots;
 use trimap::{TrimapPass, build_triangle_maps};
 
 /// The WGSL modules every object-space pass imports (`shadespace::objectspace`,
@@ -83,6 +86,7 @@ pub const SHARED_WGSL: [ShaderSource; 2] = [
 pub const PASS_SHADERS: &[ShaderSource] = &[
     mark::SHADER,
     paging::SHADER,
+    paging::RELEASE_SHADER,
     paging::resize::SHADER,
     trimap::SHADER,
     shade::SHADER,
@@ -160,9 +164,6 @@ pub fn default_atlas_texels(pixels: u64) -> u64 {
 /// with the triangle maps: past any adapter's memory).
 pub const MAX_ATLAS_BUDGET_MI: u64 = 1 << 14;
 
-/// Most virtual page numbers: a page directory of 32 MiB (a word per 16
-/// pages) and 16 MiB of page request bits; 8 G virtual texels at pages of 8.
-const MAX_VIRTUAL_PAGES: u64 = 1 << 27;
 /// The page budget: past this share of the physical pages in use, the mip
 /// bias rises (the rest is room for newly visible pages).
 const PAGE_FILL: f64 = 0.95;
@@ -451,7 +452,14 @@ pub struct ObjectSpaceConfig {
     /// Views besides the frame's camera that share the atlas (compute
     /// visibility only).
     pub extra_views: ExtraViews,
+    /// Frames an object stays out of every view's frustum before its page
+    /// directory slot (and the pages in it) goes back ([`slots`]).
+    pub slot_timeout: u32,
 }
+
+/// [`ObjectSpaceConfig::slot_timeout`]'s default: a second at 60 Hz, so that
+/// an object glanced away from keeps its shades.
+pub const DEFAULT_SLOT_TIMEOUT: u32 = 60;
 
 impl Default for ObjectSpaceConfig {
     fn default() -> Self {
@@ -473,6 +481,7 @@ impl Default for ObjectSpaceConfig {
             count_mark_atomics: false,
             shade_budget_texels: None,
             extra_views: ExtraViews::None,
+            slot_timeout: DEFAULT_SLOT_TIMEOUT,
         }
     }
 }
@@ -546,7 +555,12 @@ pub struct ObjectSpace {
     /// The atlas at the whole budget; `res.pool` is what is resident now.
     budget_pool: PagePool,
     residency: Residency,
-    virtual_halvings: u32,
+    /// The page directory's slots, one per object in view.
+    slots: Slots,
+    /// Ranges given back this frame, freed before it marks.
+    released: Vec<[u32; 2]>,
+    /// Per object: its least chart-UV stretch per world metre ([`reach`]).
+    stretch: Vec<f32>,
     extra_views: Vec<ExtraView>,
     /// For scenes with an environment: drawn where no surface is.
     background: Option<Background>,
@@ -567,6 +581,11 @@ struct InFlight {
     stamp: u32,
     /// It skipped paging, triangle maps and shading (settled).
     quiet: bool,
+    /// Objects with a page-directory slot, and the page numbers in slots.
+    slots: u32,
+    slot_pages: u64,
+    /// Objects in view that found no slot (shaded forward).
+    unslotted: u32,
 }
 
 impl ObjectSpace {
@@ -595,22 +614,20 @@ impl ObjectSpace {
             return Err(ObjectSpaceError::SizeCount(config.texture_sizes.len(), scene.draws.len()));
         }
         let page_size = config.page_size.max(config.tile_size);
-        // The request bits hold a bit per virtual page and per virtual tile.
-        let bits_per_page = 1 + (page_size as u64 / config.tile_size as u64).pow(2);
-        let max_pages = (device.limits().max_storage_buffer_binding_size * 8 / bits_per_page).min(MAX_VIRTUAL_PAGES);
-        let (layout, virtual_halvings) = AtlasLayout::fitting(
+        let mut layout = AtlasLayout::unplaced(
             &config.texture_sizes,
             config.tile_size,
             page_size,
             atlas::MAX_TEXTURE_SIZE,
             &coarsest_levels(scene_cpu),
-            max_pages,
         )?;
-        if virtual_halvings > 0 {
-            tracing::info!(
-                "virtual textures halved {virtual_halvings} time(s) to fit the page directory and request bits"
-            );
-        }
+        // The slots' page numbers: the request bits (a bit per page and per
+        // tile) fit one binding, and tile numbers 32 bits.
+        let tiles_per_page = layout.tiles_per_page() as u64;
+        let max_pages = (device.limits().max_storage_buffer_binding_size * 8 / (1 + tiles_per_page))
+            .min(u32::MAX as u64 / tiles_per_page) as u32;
+        let slots = Slots::new(&mut layout, max_pages, config.slot_timeout);
+        let stretch = object_stretches(scene_cpu, &config.texture_sizes);
         // Each view sees its own pixels: the default atlas holds all of them.
         let views = 1 + config.extra_views.count() as u64;
         let pixels = targets.width as u64 * targets.height as u64;
@@ -702,7 +719,9 @@ impl ObjectSpace {
             budget: Budget::default(),
             residency: Residency::new(pool.layer_page_count(), pool.layers),
             budget_pool: pool,
-            virtual_halvings,
+            slots,
+            released: Vec::new(),
+            stretch,
             in_flight: Default::default(),
         })
     }
@@ -759,21 +778,81 @@ impl ObjectSpace {
         let device = frame.device;
         let old = self.res.resize(device, &mut frame.scope("atlas copy"), pool);
         copy_pages(frame, &self.resize, &self.res, &old, old_pages, moves.as_ref());
-        self.shade.rebind(frame.device, &self.res);
-        self.gather.rebind(frame.device, &self.res);
+        self.rebind(frame.device);
+    }
+
+    /// Binds the passes that keep their own bind groups to `res` again.
+    fn rebind(&mut self, device: &wgpu::Device) {
+        self.shade.rebind(device, &self.res);
+        self.gather.rebind(device, &self.res);
         if let Some(blended) = &mut self.blended {
-            blended.rebind(frame.device, &self.res);
+            blended.rebind(device, &self.res);
         }
-        self.trimap.rebind(frame.device, &self.res);
+        self.trimap.rebind(device, &self.res);
         if let Some(view) = &mut self.atlas_view {
-            view.rebind(frame.device, &self.res);
+            view.rebind(device, &self.res);
         }
+    }
+
+    /// Per object, whether some view's frustum holds it this frame (blended
+    /// ones too) and then the finest level any view's pixels may pick on it,
+    /// less a level of margin ([`reach`]; every level under the atlas-pages
+    /// view, which may show any).
+    fn objects_in_view(&self, frame: &Frame) -> Vec<Option<usize>> {
+        let (w, h) = (frame.targets.width, frame.targets.height);
+        let mut cameras = vec![(*frame.camera, Frustum::from_view_projection(frame.view.view_proj))];
+        for k in 0..self.extra_views.len() {
+            let camera = self.config.extra_views.camera(k, frame.camera);
+            cameras.push((camera, Frustum::from_view_projection(gpu_view(&camera, w, h).view_proj)));
+        }
+        let every_level = self.config.view == DebugView::AtlasPages;
+        (frame.scene.object_bounds.iter().enumerate())
+            .map(|(o, b)| {
+                let size = self.layout.objects[o].as_ref().map_or(0, |a| a.size);
+                let levels = cameras.iter().filter(|(_, f)| f.intersects_aabb(b)).map(|(camera, _)| {
+                    let stretch = if every_level { 0.0 } else { self.stretch[o] };
+                    reach::finest_level(size, stretch, b, camera, h, self.config.mip_bias, 1)
+                });
+                levels.min()
+            })
+            .collect()
+    }
+
+    /// Gives the objects in view page-directory slots and takes them from
+    /// those out of view past the timeout ([`slots`]), before anything
+    /// marks; returns whether the atlas table changed.
+    fn update_slots(&mut self, frame: &mut Frame) -> bool {
+        let in_view = self.objects_in_view(frame);
+        let changes = self.slots.update(&mut self.layout, &in_view, self.frames as u64);
+        if changes.grown.is_some() {
+            tracing::debug!("page directory grown to {} pages", self.layout.page_count);
+            self.res.grow_directory(frame.device, frame.encoder, &self.layout);
+            self.rebind(frame.device);
+        }
+        self.res.set_entries(frame.queue, &self.layout, &changes.moved);
+        self.released = changes.released;
+        !changes.moved.is_empty()
     }
 
     /// The world grid (its last build can be read back).
     pub fn light_grid(&self) -> &LightGrid {
         &self.grid.grid
     }
+}
+
+/// Per object of `scene`, its least chart-UV stretch per world metre
+/// ([`reach::min_stretch`], once per mesh); 0 for objects not in the atlas.
+fn object_stretches(scene: &Scene, sizes: &[Option<u32>]) -> Vec<f32> {
+    let mut per_mesh: Vec<Option<f32>> = vec![None; scene.meshes.len()];
+    (scene.objects.iter().zip(sizes))
+        .map(|(o, size)| match size {
+            Some(_) => {
+                let m = *per_mesh[o.mesh].get_or_insert_with(|| reach::min_stretch(&scene.meshes[o.mesh]));
+                m / reach::max_scale(&o.transform)
+            }
+            None => 0.0,
+        })
+        .collect()
 }
 
 /// The share of the screen that object `o`'s bounding box covers (1 when
@@ -796,6 +875,7 @@ impl Pipeline for ObjectSpace {
     fn encode(&mut self, frame: &mut Frame) {
         self.frames += 1;
         let stale = frame.lights_changed || self.frames == 1;
+        let slotted = self.update_slots(frame);
         let resize = self.residency.resize(self.res.pool.layers);
         if let Some(layers) = resize {
             self.resize_atlas(frame, layers);
@@ -811,14 +891,23 @@ impl Pipeline for ObjectSpace {
             self.view_since = self.frames;
             self.last_view = Some(*frame.view);
         }
-        if stale || resize.is_some() || biased || self.view_since == self.frames || self.config.reuse == 1 {
+        let changed = stale || resize.is_some() || biased || slotted;
+        if changed || self.view_since == self.frames || self.config.reuse == 1 {
             self.quiet_since = self.frames;
             self.settled = false;
         }
         let quiet = self.settled;
         let (pages, stamp) = (self.res.pool.pages, self.frames);
-        self.in_flight.insert(frame.number, InFlight { bias: added, pages, stamp, quiet });
+        let slotted_objects = self.layout.objects.iter().flatten().filter(|o| o.slot.is_some());
+        let (slots, slot_pages) =
+            (slotted_objects.clone().count() as u32, slotted_objects.map(|o| o.span as u64).sum());
+        let unslotted = self.slots.unplaced();
+        self.in_flight
+            .insert(frame.number, InFlight { bias: added, pages, stamp, quiet, slots, slot_pages, unslotted });
         self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, self.view_since, &self.config);
+        if !self.released.is_empty() {
+            release_slots(frame, &self.paging, &self.res, &std::mem::take(&mut self.released));
+        }
         match &mut self.visibility {
             Visibility::Raster { prepass, ids } => {
                 if let Some(prepass) = prepass {
@@ -880,7 +969,10 @@ impl Pipeline for ObjectSpace {
     /// (backing visible tiles this frame), `pages_backed` (newly),
     /// `pages_failed` (found no page: the atlas was full), `page_texels`
     /// (texels of the pages in use), `table_chunks` (page-table chunks in
-    /// use), `trimap_pages` (pages whose triangle maps were built), `quiet`
+    /// use), `slotted_objects` and `slot_pages` (objects holding a
+    /// page-directory slot, the virtual pages in their slots: [`slots`]),
+    /// `unslotted_objects` (in view, no room left in the directory: shaded
+    /// forward), `trimap_pages` (pages whose triangle maps were built), `quiet`
     /// (1: nothing changed and the frame recorded no paging, triangle maps
     /// or shading),
     /// `atlas_pages` and `atlas_texels` (the physical atlas the frame
@@ -913,6 +1005,8 @@ impl Pipeline for ObjectSpace {
                 let rendered = self.in_flight.remove(&frame);
                 let (used, resident) = rendered.map_or((0.0, self.res.pool.pages), |r| (r.bias, r.pages));
                 let quiet = rendered.is_some_and(|r| r.quiet);
+                let (slots, slot_pages, unslotted) =
+                    rendered.map_or((0, 0, 0), |r| (r.slots, r.slot_pages, r.unslotted));
                 // Settled: this frame is `reuse` frames into the quiet run
                 // (tiles shaded with an earlier view are due by then) and
                 // needed nothing; the quiet run's later frames will not either.
@@ -952,6 +1046,11 @@ impl Pipeline for ObjectSpace {
                     ("atlas_pages", resident as f64),
                     ("atlas_texels", resident as f64 * page_texels),
                     ("table_chunks", self.table_chunks),
+                    // Page-directory slots: objects holding one, and the
+                    // virtual page numbers in them.
+                    ("slotted_objects", slots as f64),
+                    ("slot_pages", slot_pages as f64),
+                    ("unslotted_objects", unslotted as f64),
                     ("trimap_pages", count(TileCounter::TrimapPages)),
                     ("quiet", quiet as u8 as f64),
                     ("budget_bias", used as f64),
@@ -1001,7 +1100,6 @@ impl Pipeline for ObjectSpace {
             .setup("virtual_pages", self.layout.page_count as u64)
             .setup("virtual_texels", self.layout.virtual_texels())
             .setup("virtual_tiles", self.layout.tile_count as u64)
-            .setup("virtual_halvings", self.virtual_halvings as u64)
             .setup("world_grid_list_capacity", self.grid.grid.capacity())
             .setup("world_grid_list_peak", self.grid.grid.peak_entries());
         let page = self.layout.page_size;

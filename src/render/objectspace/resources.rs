@@ -197,6 +197,18 @@ pub fn table_chunks(pages: u32) -> u32 {
     pages
 }
 
+/// The page directory (a word per block of the layout's virtual pages) and
+/// the request bits (a bit per virtual page, then from the returned word a
+/// bit per virtual tile).
+fn directory_buffers(device: &wgpu::Device, layout: &AtlasLayout) -> (wgpu::Buffer, wgpu::Buffer, u32) {
+    let copy = wgpu::BufferUsages::COPY_DST;
+    let virtual_pages = layout.page_count as u64;
+    let directory = storage(device, "page directory", virtual_pages / super::atlas::BLOCK_PAGES as u64 * 4, copy);
+    let tile_base = virtual_pages.div_ceil(32);
+    let words = tile_base + (layout.tile_count as u64).div_ceil(32);
+    (directory, storage(device, "page requests", words * 4, copy), tile_base as u32)
+}
+
 /// Indirect dispatch offsets in [`Resources::dispatch`] (bytes).
 pub const SHADE_ARGS: u64 = 0;
 pub const ALLOCATE_ARGS: u64 = 16;
@@ -231,13 +243,10 @@ impl Resources {
         // Chunks for the whole budget: a resize leaves the table as it is.
         let chunks = table_chunks(pool.pages);
         let block_pages = super::atlas::BLOCK_PAGES as u64;
-        let page_directory = storage("page directory", virtual_pages / block_pages * 4, none);
+        let (page_directory, page_requests, request_tile_base) = directory_buffers(device, atlas_layout);
         let page_table = storage("page table", chunks as u64 * block_pages * 4, none);
         let table_chunk_state = storage("page table chunks", chunks as u64 * 8, none);
         let free_chunks = storage("free page table chunks", chunks as u64 * 4, none);
-        let request_tile_base = virtual_pages.div_ceil(32);
-        let request_words = request_tile_base + (atlas_layout.tile_count as u64).div_ceil(32);
-        let page_requests = storage("page requests", request_words * 4, none);
         let request_list = storage("page request list", pool.pages as u64 * 8, none);
         let dispatch = storage("object-space dispatch", 48, wgpu::BufferUsages::INDIRECT);
         let dispatch_layout =
@@ -306,7 +315,7 @@ impl Resources {
             dispatch_group,
             layout,
             virtual_pages: virtual_pages as u32,
-            request_tile_base: request_tile_base as u32,
+            request_tile_base,
             budget_pages: pool.pages,
         };
         let main = res.visibility.view.clone();
@@ -333,6 +342,40 @@ impl Resources {
         self.view_groups =
             self.views.iter().map(|(visibility, slot)| self.view_group(device, visibility, slot)).collect();
         old
+    }
+
+    /// Follows the layout's larger virtual page space (`slots`): a new page
+    /// directory and request bits, holding the old ones' words (the slots
+    /// given out keep their numbers), and group 1 of every view bound again.
+    pub fn grow_directory(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, layout: &AtlasLayout) {
+        let (directory, requests, tile_base) = directory_buffers(device, layout);
+        encoder.copy_buffer_to_buffer(&self.page_directory, 0, &directory, 0, self.page_directory.size());
+        let (old_base, new_base) = (self.request_tile_base as u64 * 4, tile_base as u64 * 4);
+        encoder.copy_buffer_to_buffer(&self.page_requests, 0, &requests, 0, old_base);
+        let tile_bytes = self.page_requests.size() - old_base;
+        encoder.copy_buffer_to_buffer(&self.page_requests, old_base, &requests, new_base, tile_bytes);
+        (self.page_directory, self.page_requests) = (directory, requests);
+        (self.virtual_pages, self.request_tile_base) = (layout.page_count, tile_base);
+        self.view_groups =
+            self.views.iter().map(|(visibility, slot)| self.view_group(device, visibility, slot)).collect();
+    }
+
+    /// Uploads the atlas-table rows of `objects` from `layout` (their slots
+    /// changed; their stamps and biases stay).
+    pub fn set_entries(&mut self, queue: &wgpu::Queue, layout: &AtlasLayout, objects: &[usize]) {
+        for &o in objects {
+            let e = &mut self.entry_data[o];
+            *e = GpuAtlasEntry { valid_since: e.valid_since, mip_bias: e.mip_bias, ..layout.gpu_entry(o) };
+        }
+        // Row by row when few changed (an object coming into view), else at once.
+        if objects.len() > 64 {
+            queue.write_buffer(&self.entries, 0, bytemuck::cast_slice(&self.entry_data));
+        } else {
+            let row = size_of::<GpuAtlasEntry>() as u64;
+            for &o in objects {
+                queue.write_buffer(&self.entries, o as u64 * row, bytemuck::bytes_of(&self.entry_data[o]));
+            }
+        }
     }
 
     /// Adds group 1 of the next view: these resources with the view's
@@ -397,7 +440,7 @@ impl Resources {
     }
 
     /// Bytes of the page table and page state: the directory (a word per
-    /// block of virtual pages), the chunks (a word per page of a block, its
+    /// block of the virtual pages the slots cover), the chunks (a word per page of a block, its
     /// state and free-list slot), the request bits, and per physical page
     /// its owner, last use, request, candidate and backed slots.
     pub fn page_table_bytes(&self) -> u64 {

@@ -9,13 +9,17 @@
 
 pub mod resize;
 
+use wgpu::util::DeviceExt;
+
 use super::resources::{ALLOCATE_ARGS, Resources};
 use crate::render::frame::Frame;
-use crate::render::passes::compute_pipeline;
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
 use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("paging.wgsl", include_str!("paging.wgsl"));
+/// Frees the pages of slots given back (`slots`).
+pub const RELEASE_SHADER: ShaderSource = ShaderSource::new("release.wgsl", include_str!("release.wgsl"));
 
 pub struct PagingPass {
     age_pages: wgpu::ComputePipeline,
@@ -28,6 +32,9 @@ pub struct PagingPass {
     claim_blocks: wgpu::ComputePipeline,
     bind_pages: wgpu::ComputePipeline,
     backed_args: wgpu::ComputePipeline,
+    release_slots: wgpu::ComputePipeline,
+    /// Group 2 of `release_slots`: the released ranges.
+    release_layout: wgpu::BindGroupLayout,
 }
 
 impl PagingPass {
@@ -39,7 +46,11 @@ impl PagingPass {
     ) -> Result<Self, ShaderError> {
         let plain = [&scene.layout, &res.layout];
         let with_dispatch = [&scene.layout, &res.layout, &res.dispatch_layout];
+        let release_layout = bind_group_layout(device, "released slots", &[Binding::Storage { read_only: true }]);
+        let with_ranges = [&scene.layout, &res.layout, &release_layout];
         Ok(Self {
+            release_slots: compute_pipeline(device, shaders, RELEASE_SHADER, "release_slots", &with_ranges)?,
+            release_layout,
             age_pages: compute_pipeline(device, shaders, SHADER, "age_pages", &plain)?,
             page_offsets: compute_pipeline(device, shaders, SHADER, "page_offsets", &with_dispatch)?,
             list_candidates: compute_pipeline(device, shaders, SHADER, "list_candidates", &plain)?,
@@ -86,6 +97,24 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     cp.set_bind_group(2, &res.dispatch_group, &[]);
     cp.set_pipeline(&pass.backed_args);
     cp.dispatch_workgroups(1, 1, 1);
+}
+
+/// Frees the physical pages backing the virtual pages of `ranges` (first,
+/// end), the slots given back this frame: their table words are cleared and
+/// their chunks freed by this frame's [`back_pages`].
+pub fn release_slots(frame: &mut Frame, pass: &PagingPass, res: &Resources, ranges: &[[u32; 2]]) {
+    let buffer = frame.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("released slots"),
+        contents: bytemuck::cast_slice(ranges),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let group = bind_group(frame.device, "released slots", &pass.release_layout, &[buffer.as_entire_binding()]);
+    let scene = frame.scene_group;
+    let mut cp = frame.compute_pass("release slots");
+    res.bind(&mut cp, scene);
+    cp.set_bind_group(2, &group, &[]);
+    cp.set_pipeline(&pass.release_slots);
+    cp.dispatch_workgroups(res.pool.pages.div_ceil(64), 1, 1);
 }
 
 /// When [`rank_candidates`] ranks the pages.
