@@ -176,6 +176,8 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             count_visibility: a.count_visibility,
             marking: a.objectspace.marking,
             count_mark_atomics: a.objectspace.count_marks,
+            paging_chain: a.objectspace.os_paging,
+            trimap_lanes: a.objectspace.os_trimap_lanes,
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::DeferredCompute => PipelineConfig::DeferredCompute(DeferredComputeConfig {

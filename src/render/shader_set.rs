@@ -18,6 +18,7 @@ pub const SHARED: &[ShaderSource] = &[
     passes::light_grid::SHARED_WGSL[1],
     objectspace::SHARED_WGSL[0],
     objectspace::SHARED_WGSL[1],
+    objectspace::SHARED_WGSL[2],
     passes::gbuffer::SHARED_WGSL,
     passes::visibility::compute::SHARED_WGSL,
     deferred::SHARED_WGSL,
@@ -59,6 +60,8 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     }
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend(objectspace::mark::VARIANTS);
+    all.extend(objectspace::paging::VARIANTS);
+    all.extend(objectspace::trimap::VARIANTS);
     all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
     all.push(clustered::SHADER);
     all.extend([

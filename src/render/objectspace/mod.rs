@@ -72,10 +72,11 @@ use shade::{ShadePass, shade_tiles};
 use trimap::{TrimapPass, build_triangle_maps};
 
 /// The WGSL modules every object-space pass imports (`shadespace::objectspace`,
-/// `shadespace::objectspace_dispatch`).
-pub const SHARED_WGSL: [ShaderSource; 2] = [
+/// `shadespace::objectspace_dispatch`, `shadespace::objectspace_mark_backed`).
+pub const SHARED_WGSL: [ShaderSource; 3] = [
     ShaderSource::new("objectspace.wgsl", include_str!("objectspace.wgsl")),
     ShaderSource::new("dispatch.wgsl", include_str!("dispatch.wgsl")),
+    mark::MARK_BACKED_WGSL,
 ];
 
 /// The object-space pass shaders, for the test that validates every shader.
@@ -389,6 +390,28 @@ pub enum Marking {
     Workgroup,
 }
 
+/// How the passes between marking and shading that back requested pages are
+/// recorded (`--os-paging`); both back, build and queue the same pages and
+/// tiles.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum PagingChain {
+    /// Six passes, eleven dispatches: paging (age, offsets, list), allocate
+    /// (allocate, release chunks, claim blocks, bind pages), backed args,
+    /// triangle maps, mark backed, queue (the shade dispatch's arguments).
+    #[default]
+    Split,
+    /// Three passes, eight dispatches: the offsets write the backed pages'
+    /// and the shade's dispatch arguments as bounds (known once marking is
+    /// done; extra workgroups return), and the triangle-map workgroup of a
+    /// page also marks its requested tiles: no backed args, mark backed or
+    /// queue pass, each a launch and a barrier.
+    Fused,
+}
+
+/// The triangle-map pass's invocations per texel (`--os-trimap-lanes`).
+pub const TRIMAP_LANES: [u32; 4] = [1, 2, 4, 8];
+
 /// Settings of the object-space pipeline.
 #[derive(Clone, Debug, Serialize)]
 pub struct ObjectSpaceConfig {
@@ -450,6 +473,11 @@ pub struct ObjectSpaceConfig {
     /// Views besides the frame's camera that share the atlas (compute
     /// visibility only).
     pub extra_views: ExtraViews,
+    /// How the paging chain is recorded.
+    pub paging_chain: PagingChain,
+    /// Invocations weighing each texel's triangles in the triangle-map
+    /// pass, one of [`TRIMAP_LANES`] (1: one per texel).
+    pub trimap_lanes: u32,
 }
 
 impl Default for ObjectSpaceConfig {
@@ -472,6 +500,8 @@ impl Default for ObjectSpaceConfig {
             count_mark_atomics: false,
             shade_budget_texels: None,
             extra_views: ExtraViews::None,
+            paging_chain: PagingChain::Split,
+            trimap_lanes: 1,
         }
     }
 }
@@ -498,6 +528,10 @@ pub enum ObjectSpaceError {
     ViewsNeedComputeVisibility,
     #[error("an atlas of {texels} texels needs {bytes} bytes of tile state, more than the adapter's largest buffer")]
     AtlasTooLarge { texels: u64, bytes: u64 },
+    #[error("triangle-map lanes must be one of 1, 2, 4, 8 (got {0})")]
+    BadTrimapLanes(u32),
+    #[error("{lanes} triangle-map lanes need {invocations} invocations per workgroup; {adapter} allows {max}")]
+    TrimapLanesTooMany { lanes: u32, invocations: u32, adapter: String, max: u32 },
     #[error("an atlas of {texels} texels takes {layers} layers of {side}x{side}, more than the adapter's {max} layers")]
     AtlasTooManyLayers { texels: u64, layers: u32, side: u32, max: u32 },
 }
@@ -584,6 +618,15 @@ impl ObjectSpace {
         }
         if !(0.0..=1.0).contains(&config.level_blend) {
             return Err(ObjectSpaceError::BadLevelBlend(config.level_blend));
+        }
+        if !TRIMAP_LANES.contains(&config.trimap_lanes) {
+            return Err(ObjectSpaceError::BadTrimapLanes(config.trimap_lanes));
+        }
+        let invocations = 64 * config.trimap_lanes;
+        let max = device.limits().max_compute_invocations_per_workgroup;
+        if invocations > max {
+            let (lanes, adapter) = (config.trimap_lanes, ctx.info.name.clone());
+            return Err(ObjectSpaceError::TrimapLanesTooMany { lanes, invocations, adapter, max });
         }
         if !device.features().contains(wgpu::Features::PRIMITIVE_INDEX) {
             return Err(ObjectSpaceError::NoPrimitiveIndex(ctx.info.name.clone()));
@@ -673,9 +716,9 @@ impl ObjectSpace {
             blended,
             visibility,
             mark: MarkPass::new(device, shaders, scene, &res, config.marking, config.count_mark_atomics)?,
-            paging: PagingPass::new(device, shaders, scene, &res)?,
+            paging: PagingPass::new(device, shaders, scene, &res, config.paging_chain)?,
             resize: ResizePass::new(device, shaders, scene, &res)?,
-            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res)?,
+            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res, config.trimap_lanes, config.paging_chain)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather,
             atlas_view: (config.view == DebugView::AtlasPages)
@@ -830,7 +873,9 @@ impl Pipeline for ObjectSpace {
         if !quiet {
             back_pages(frame, &self.paging, &self.res);
             build_triangle_maps(frame, &self.trimap, &self.res);
-            mark_backed_pages(frame, &self.mark, &self.res);
+            if self.config.paging_chain == PagingChain::Split {
+                mark_backed_pages(frame, &self.mark, &self.res);
+            }
         }
         build_world_grid(frame, &mut self.grid);
         if !quiet {

@@ -28,6 +28,7 @@
 #import shadespace::pixel_surface::{sample_pixel_at, standard_sample_position}
 #endif
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
+#import shadespace::objectspace_mark_backed::mark_backed_page
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
@@ -353,9 +354,7 @@ fn fs_mark_blended(in: BlendedVertex) {
 }
 
 // Per page backed this frame (one workgroup each, one invocation per tile of
-// the page, at most 16): the page's tiles start over (never visible, never
-// shaded), and those whose request bits are set are marked visible and
-// queued; the bits are cleared for a later request.
+// the page, at most 16): `mark_backed_page`.
 @compute @workgroup_size(16)
 fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
                @builtin(local_invocation_index) lid: u32) {
@@ -363,34 +362,7 @@ fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups
     if index >= min(atomicLoad(&counters[COUNT_PAGES_BACKED]), params.physical_pages) {
         return;
     }
-    let b = backed[index];
-    let object = b.y >> 8u;
-    let level_index = b.y & 0xffu;
-    let e = atlas_entries[object];
-    let l = entry_level(object, level_index);
-    let per_row = params.page_size / params.tile_size;
-    let t = lid;
-    if t < per_row * per_row {
-        let slot = b.z * per_row * per_row + t;
-        let texel = page_tile_origin(page_origin(l, b.x), t);
-        var requested = false;
-        if all(texel < vec2u(l.size)) {
-            let bit = tile_request_bit(virtual_tile(l, texel));
-            requested = (atomicAnd(&page_requests[bit.x], ~bit.y) & bit.y) != 0u;
-        }
-        atomicStore(&tile_visible[slot], select(0u, params.stamp, requested));
-        tile_shaded[slot] = 0u;
-        if requested {
-            atomicAdd(&counters[COUNT_VISIBLE], 1u);
-            atomicAdd(&counters[COUNT_BACKED_TILES], 1u);
-            atomicAdd(&counters[COUNT_NEW], 1u);
-            _ = queue_if_due(slot, virtual_tile(l, texel), object, level_index, e.valid_since);
-        }
-    }
-    if lid == 0u {
-        let p = page_request_bit(b.x);
-        atomicAnd(&page_requests[p.x], ~p.y);
-    }
+    mark_backed_page(index, lid);
 }
 
 // Indirect dispatch arguments for shading: one workgroup per queued tile.

@@ -16,6 +16,10 @@ use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("mark.wgsl", include_str!("mark.wgsl"));
+/// The marking of the pages backed this frame (`shadespace::objectspace_mark_backed`),
+/// which the mark-backed pass or, with [`super::PagingChain::Fused`], the
+/// triangle-map pass runs.
+pub const MARK_BACKED_WGSL: ShaderSource = ShaderSource::new("mark_backed.wgsl", include_str!("mark_backed.wgsl"));
 /// Defined for [`Marking::PerPixel`].
 pub const PER_PIXEL: &str = "MARK_PER_PIXEL";
 /// Defined to count the global tile marks and atomics.
