@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use clap::{Args, ValueEnum};
 use glam::Vec3;
-use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, MAX_ATLAS_BUDGET_MI, Marking, PagingChain};
+use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, GatherInput, MAX_ATLAS_BUDGET_MI, Marking, PagingChain};
 use shadespace::render::{Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
 
@@ -287,6 +287,12 @@ pub struct ObjectSpaceArgs {
     /// the most triangles. The maps are the same.
     #[arg(long, default_value_t = 1, value_parser = parse::trimap_lanes)]
     pub os_trimap_lanes: u32,
+    /// What the gather reads for each pixel's chart UV and levels: `surface`
+    /// (default: it rebuilds the pixel's surface as marking did) or `record`
+    /// (marking writes them, 16 bytes a pixel, and the gather reads them; one
+    /// view, no MSAA). Both give the same image.
+    #[arg(long, value_enum, default_value = "surface")]
+    pub os_gather: GatherInput,
     /// Shade these objects (comma-separated names) forward instead of in object space.
     #[arg(long, value_delimiter = ',')]
     pub forward_only: Vec<String>,

@@ -178,6 +178,7 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             count_mark_atomics: a.objectspace.count_marks,
             paging_chain: a.objectspace.os_paging,
             trimap_lanes: a.objectspace.os_trimap_lanes,
+            gather_input: a.objectspace.os_gather,
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),
         PipelineName::DeferredCompute => PipelineConfig::DeferredCompute(DeferredComputeConfig {

@@ -73,6 +73,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     all.extend([
         objectspace::mark::SHADER.with_defs(&[crate::shaders::MSAA]),
         objectspace::gather::SHADER.with_defs(&[crate::shaders::MSAA]),
+        objectspace::gather::SHADER.with_defs(&[objectspace::mark::PIXEL_RECORD]),
         deferred::GLOBALS_SHADER.with_defs(&[crate::shaders::MSAA]),
         deferred::volumes::VOLUMES_SHADER.with_defs(&[crate::shaders::MSAA]),
     ]);

@@ -1,7 +1,8 @@
 //! The object-space variants of issue 25's remaining overhead change what is
 //! recorded, not what is computed: the fused paging chain (`--os-paging
-//! fused`) and the triangle-map pass with several lanes per texel
-//! (`--os-trimap-lanes`) mark, back, build and shade what the default does,
+//! fused`), the triangle-map pass with several lanes per texel
+//! (`--os-trimap-lanes`) and the gather reading marking's pixel records
+//! (`--os-gather record`) mark, back, build and shade what the default does,
 //! frame by frame along a path (tile stamps, shade queue, counters, every
 //! backed texel's triangle and shade, the image bit for bit), and the fused
 //! chain records three passes fewer in each frame that backs pages.
@@ -10,7 +11,7 @@ use crate::common;
 
 use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::debug::BackedPages;
-use shadespace::render::objectspace::{ObjectSpace, PagingChain, TileCounter};
+use shadespace::render::objectspace::{GatherInput, ObjectSpace, PagingChain, TileCounter};
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
 
@@ -46,12 +47,16 @@ struct Case<'a> {
 const WIDTH: u32 = 160;
 const HEIGHT: u32 = 90;
 
-fn run(ctx: &GpuContext, case: &Case, paging_chain: PagingChain, trimap_lanes: u32) -> RunResult {
+/// A variant: paging chain, triangle-map lanes, gather input.
+type Variant = (PagingChain, u32, GatherInput);
+
+fn run(ctx: &GpuContext, case: &Case, (paging_chain, trimap_lanes, gather_input): Variant) -> RunResult {
     let config = ObjectSpaceConfig {
         reuse: 2,
         texture_sizes: case.texture_sizes.clone(),
         paging_chain,
         trimap_lanes,
+        gather_input,
         ..Default::default()
     };
     let options =
@@ -75,16 +80,15 @@ fn run(ctx: &GpuContext, case: &Case, paging_chain: PagingChain, trimap_lanes: u
     RunResult { states, image, passes }
 }
 
-/// Each of `variants` (paging chain, triangle-map lanes) against the
-/// default, frame by frame.
-fn compare(ctx: &GpuContext, case: &Case, variants: &[(PagingChain, u32)]) {
+/// Each of `variants` against the default, frame by frame.
+fn compare(ctx: &GpuContext, case: &Case, variants: &[Variant]) {
     let name = case.name;
-    let default = run(ctx, case, PagingChain::Split, 1);
+    let default = run(ctx, case, (PagingChain::Split, 1, GatherInput::Surface));
     let backed = |s: &FrameState| s.counters[TileCounter::PagesBacked as usize];
     assert!(default.states.iter().all(|s| backed(s) > 0), "{name}: a frame backed no page (nothing to compare)");
-    for &(chain, lanes) in variants {
-        let at = format!("{name}, --os-paging {chain:?} --os-trimap-lanes {lanes}");
-        let variant = run(ctx, case, chain, lanes);
+    for &(chain, lanes, gather) in variants {
+        let at = format!("{name}, --os-paging {chain:?} --os-trimap-lanes {lanes} --os-gather {gather:?}");
+        let variant = run(ctx, case, (chain, lanes, gather));
         for (frame, (a, b)) in default.states.iter().zip(&variant.states).enumerate() {
             assert!(a.tile_visible == b.tile_visible, "{at}, frame {frame}: tile_visible differs");
             assert!(a.tile_shaded == b.tile_shaded, "{at}, frame {frame}: tile_shaded differs");
@@ -130,7 +134,11 @@ fn fused_paging_and_triangle_map_lanes_change_nothing() {
     let (charted, texture_sizes) = common::charted(&scene);
     // Each shader variant once: the fused chain's marking in the one-lane
     // and in the several-lane triangle-map pass.
-    let variants = [(PagingChain::Fused, 1), (PagingChain::Split, 4), (PagingChain::Fused, 8)];
+    let variants = [
+        (PagingChain::Fused, 1, GatherInput::Surface),
+        (PagingChain::Split, 4, GatherInput::Record),
+        (PagingChain::Fused, 8, GatherInput::Record),
+    ];
     compare(&ctx, &Case { name: "atrium", scene: &charted, texture_sizes, cameras, lights }, &variants);
 
     const SPONZA: &str = "../shared/scenes/sponza-thesis";

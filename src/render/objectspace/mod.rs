@@ -409,6 +409,21 @@ pub enum PagingChain {
     Fused,
 }
 
+/// What the gather reads to find a pixel's chart UV and levels
+/// (`--os-gather`); both give the same image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum GatherInput {
+    /// Rebuilds the pixel's surface as marking did: visibility, object,
+    /// indices, vertices, footprint, level, then page, texel, shade.
+    #[default]
+    Surface,
+    /// Marking writes each pixel's chart UV and levels (16 bytes) and the
+    /// gather reads them: a write and a read per pixel against a chain of
+    /// dependent loads. One view, one sample per pixel.
+    Record,
+}
+
 /// The triangle-map pass's invocations per texel (`--os-trimap-lanes`).
 pub const TRIMAP_LANES: [u32; 4] = [1, 2, 4, 8];
 
@@ -478,6 +493,8 @@ pub struct ObjectSpaceConfig {
     /// Invocations weighing each texel's triangles in the triangle-map
     /// pass, one of [`TRIMAP_LANES`] (1: one per texel).
     pub trimap_lanes: u32,
+    /// What the gather reads for a pixel's chart UV and levels.
+    pub gather_input: GatherInput,
 }
 
 impl Default for ObjectSpaceConfig {
@@ -502,6 +519,7 @@ impl Default for ObjectSpaceConfig {
             extra_views: ExtraViews::None,
             paging_chain: PagingChain::Split,
             trimap_lanes: 1,
+            gather_input: GatherInput::Surface,
         }
     }
 }
@@ -528,6 +546,8 @@ pub enum ObjectSpaceError {
     ViewsNeedComputeVisibility,
     #[error("an atlas of {texels} texels needs {bytes} bytes of tile state, more than the adapter's largest buffer")]
     AtlasTooLarge { texels: u64, bytes: u64 },
+    #[error("--os-gather record needs one view and one sample per pixel (got {views} views, {samples} samples)")]
+    RecordNeedsOneSample { views: u32, samples: u32 },
     #[error("triangle-map lanes must be one of 1, 2, 4, 8 (got {0})")]
     BadTrimapLanes(u32),
     #[error("{lanes} triangle-map lanes need {invocations} invocations per workgroup; {adapter} allows {max}")]
@@ -670,6 +690,17 @@ impl ObjectSpace {
         if view_count > 1 && config.visibility != VisibilityMethod::Compute {
             return Err(ObjectSpaceError::ViewsNeedComputeVisibility);
         }
+        if config.gather_input == GatherInput::Record && (view_count > 1 || targets.samples > 1) {
+            return Err(ObjectSpaceError::RecordNeedsOneSample { views: view_count, samples: targets.samples });
+        }
+        let records = (config.gather_input == GatherInput::Record).then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("pixel records"),
+                size: targets.width as u64 * targets.height as u64 * 16,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        });
         let mut res = Resources::new(device, &layout, pool, &scene.triangle_charts, targets, view_count);
         let visibility = match config.visibility {
             VisibilityMethod::Raster => Visibility::Raster {
@@ -692,7 +723,7 @@ impl ObjectSpace {
             }
         };
         let grid = WorldGrid::new(device, shaders, scene)?;
-        let mut gather = GatherPass::new(device, shaders, scene, &res, targets, &grid.grid)?;
+        let mut gather = GatherPass::new(device, shaders, scene, &res, targets, &grid.grid, records.as_ref())?;
         let mut extra_views = Vec::new();
         for _ in 1..view_count {
             let ids = VisibilityBuffer::new(device, targets);
@@ -715,7 +746,15 @@ impl ObjectSpace {
             extra_views,
             blended,
             visibility,
-            mark: MarkPass::new(device, shaders, scene, &res, config.marking, config.count_mark_atomics)?,
+            mark: MarkPass::new(
+                device,
+                shaders,
+                scene,
+                &res,
+                config.marking,
+                config.count_mark_atomics,
+                records.as_ref(),
+            )?,
             paging: PagingPass::new(device, shaders, scene, &res, config.paging_chain)?,
             resize: ResizePass::new(device, shaders, scene, &res)?,
             trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res, config.trimap_lanes, config.paging_chain)?,

@@ -37,6 +37,15 @@
 #import shadespace::objectspace::same_chart_surface
 #endif
 
+#ifdef PIXEL_RECORD
+// Per pixel of the view (`--os-gather record`): what the gather reads
+// instead of rebuilding the pixel's surface: chart UV, the level pair's
+// weight, its levels (lo | hi << 16). Written for pixels of objects in the
+// atlas; `record_index` is the pixel `mark_surface` marks for.
+@group(2) @binding(0) var<storage, read_write> pixel_records: array<vec4u>;
+var<private> record_index: u32;
+#endif
+
 // A small integer hash (PCG's output permutation) for tile phases.
 fn hash(x: u32) -> u32 {
     let state = x * 747796405u + 2891336453u;
@@ -312,6 +321,9 @@ fn mark_pixel(pixel: vec2u) -> u32 {
     if ids.x == 0u {
         return PIXEL_NOT_IN_ATLAS;
     }
+#ifdef PIXEL_RECORD
+    record_index = pixel.y * size.x + pixel.x;
+#endif
     return mark_surface(sample_pixel(pixel, ids));
 }
 
@@ -324,6 +336,9 @@ fn mark_surface(p: PixelSample) -> u32 {
     }
     let f = chart_footprint(p);
     let levels = select_levels(e, p, f);
+#ifdef PIXEL_RECORD
+    pixel_records[record_index] = vec4u(bitcast<vec2u>(f.uv), bitcast<u32>(levels.t), levels.lo | (levels.hi << 16u));
+#endif
     // The finer of the levels it reads decides whether it is under-shaded.
     let finest = select(levels.lo, levels.hi, levels.t >= 1.0);
     let kind = select(PIXEL_SHADED, PIXEL_UNDER_SHADED, f32(finest) > footprint_level(e, f));
