@@ -7,7 +7,7 @@ use shadespace::bench::BenchSetup;
 use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::atlas::MAX_TEXTURE_SIZE;
-use shadespace::render::objectspace::{DebugView, ExtraViews, MAX_DENSITY_SIZE};
+use shadespace::render::objectspace::{DebugView, ExtraViews, GatherInput, MAX_DENSITY_SIZE};
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, Exposure, ForwardConfig, ForwardMultipassConfig,
     ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
@@ -54,6 +54,12 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
         return input(Err(anyhow::anyhow!(
             "--views needs compute visibility, which has one sample per pixel: not with --msaa {}",
             a.msaa
+        )));
+    }
+    if os.os_gather == GatherInput::Record && (os.views.is_some() || a.msaa > 1) {
+        let with = if os.views.is_some() { "--views".to_string() } else { format!("--msaa {}", a.msaa) };
+        return input(Err(anyhow::anyhow!(
+            "--os-gather record needs one view and one sample per pixel: not with {with}"
         )));
     }
     let mut scene = input(scene::load(&a.scene))?;
