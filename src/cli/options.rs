@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use clap::{Args, ValueEnum};
 use glam::Vec3;
-use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, MAX_ATLAS_BUDGET_MI, Marking};
+use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, GatherInput, MAX_ATLAS_BUDGET_MI, Marking, PagingChain};
 use shadespace::render::{Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
 
@@ -278,6 +278,24 @@ pub struct ObjectSpaceArgs {
     /// workgroup atomics: for profiling, not for timing).
     #[arg(long)]
     pub count_marks: bool,
+    /// How the passes that back requested pages are recorded: `split`
+    /// (default: paging, backed args, triangle maps, mark backed and queue
+    /// each a pass) or `fused` (the triangle-map pass marks the backed
+    /// pages, and the dispatch arguments are written with paging's: three
+    /// passes fewer a frame). Both give the same pages, tiles and image.
+    #[arg(long, value_enum, default_value = "split")]
+    pub os_paging: PagingChain,
+    /// Invocations weighing each texel's triangles in the triangle-map pass
+    /// (1, 2, 4 or 8): more lanes shorten the slowest page, whose cells hold
+    /// the most triangles. The maps are the same.
+    #[arg(long, default_value_t = 1, value_parser = parse::trimap_lanes)]
+    pub os_trimap_lanes: u32,
+    /// What the gather reads for each pixel's chart UV and levels: `surface`
+    /// (default: it rebuilds the pixel's surface as marking did) or `record`
+    /// (marking writes them, 16 bytes a pixel, and the gather reads them; one
+    /// view, no MSAA). Both give the same image.
+    #[arg(long, value_enum, default_value = "surface")]
+    pub os_gather: GatherInput,
     /// Shade these objects (comma-separated names) forward instead of in object space.
     #[arg(long, value_delimiter = ',')]
     pub forward_only: Vec<String>,

@@ -176,6 +176,15 @@ pub fn tile_size(s: &str) -> Result<u32, String> {
     }
 }
 
+/// `--os-trimap-lanes`: one of the triangle-map pass's lane counts.
+pub fn trimap_lanes(s: &str) -> Result<u32, String> {
+    use shadespace::render::objectspace::TRIMAP_LANES;
+    match s.parse::<u32>() {
+        Ok(n) if TRIMAP_LANES.contains(&n) => Ok(n),
+        _ => Err(format!("'{s}' is not 1, 2, 4 or 8 (invocations per texel)")),
+    }
+}
+
 /// `--msaa`: samples per pixel, 1, 2, 4 or 8 (the counts with standard
 /// sample positions).
 pub fn msaa(s: &str) -> Result<u32, String> {

@@ -7,7 +7,7 @@ use shadespace::bench::BenchSetup;
 use shadespace::charts::{self, ChartCache, SceneCharts, TextureSizing};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::render::objectspace::atlas::MAX_TEXTURE_SIZE;
-use shadespace::render::objectspace::{DebugView, ExtraViews, MAX_DENSITY_SIZE};
+use shadespace::render::objectspace::{DebugView, ExtraViews, GatherInput, MAX_DENSITY_SIZE};
 use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, Exposure, ForwardConfig, ForwardMultipassConfig,
     ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
@@ -54,6 +54,12 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
         return input(Err(anyhow::anyhow!(
             "--views needs compute visibility, which has one sample per pixel: not with --msaa {}",
             a.msaa
+        )));
+    }
+    if os.os_gather == GatherInput::Record && (os.views.is_some() || a.msaa > 1) {
+        let with = if os.views.is_some() { "--views".to_string() } else { format!("--msaa {}", a.msaa) };
+        return input(Err(anyhow::anyhow!(
+            "--os-gather record needs one view and one sample per pixel: not with {with}"
         )));
     }
     let mut scene = input(scene::load(&a.scene))?;
@@ -177,6 +183,9 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             count_visibility: a.count_visibility,
             marking: a.objectspace.marking,
             count_mark_atomics: a.objectspace.count_marks,
+            paging_chain: a.objectspace.os_paging,
+            trimap_lanes: a.objectspace.os_trimap_lanes,
+            gather_input: a.objectspace.os_gather,
             ..Default::default()
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),

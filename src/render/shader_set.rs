@@ -18,6 +18,7 @@ pub const SHARED: &[ShaderSource] = &[
     passes::light_grid::SHARED_WGSL[1],
     objectspace::SHARED_WGSL[0],
     objectspace::SHARED_WGSL[1],
+    objectspace::SHARED_WGSL[2],
     passes::gbuffer::SHARED_WGSL,
     passes::visibility::compute::SHARED_WGSL,
     deferred::SHARED_WGSL,
@@ -59,6 +60,8 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     }
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend(objectspace::mark::VARIANTS);
+    all.extend(objectspace::paging::VARIANTS);
+    all.extend(objectspace::trimap::VARIANTS);
     all.extend_from_slice(&passes::light_grid::PASS_SHADERS);
     all.push(clustered::SHADER);
     all.extend([
@@ -70,6 +73,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     all.extend([
         objectspace::mark::SHADER.with_defs(&[crate::shaders::MSAA]),
         objectspace::gather::SHADER.with_defs(&[crate::shaders::MSAA]),
+        objectspace::gather::SHADER.with_defs(&[objectspace::mark::PIXEL_RECORD]),
         deferred::GLOBALS_SHADER.with_defs(&[crate::shaders::MSAA]),
         deferred::volumes::VOLUMES_SHADER.with_defs(&[crate::shaders::MSAA]),
     ]);

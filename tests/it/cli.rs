@@ -93,6 +93,12 @@ fn bad_options_say_what_is_wrong() {
     let (code, err) = run(&["render", "--pipeline", "objectspace", "--shade-hz", "30", "--reuse", "2"]);
     assert_eq!(code, 2);
     assert!(err.contains("--shade-hz") && err.contains("--reuse"), "{err}");
+    let (code, err) = run(&["render", "--pipeline", "objectspace", "--os-trimap-lanes", "3"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--os-trimap-lanes") && err.contains("1, 2, 4 or 8"), "{err}");
+    let (code, err) = run(&["render", "--pipeline", "objectspace", "--os-gather", "record", "--msaa", "4"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--os-gather record") && err.contains("--msaa 4"), "{err}");
     let (code, err) = run(&["bench", "--forward-only", "nothing-called-this"]);
     assert_eq!(code, 2);
     assert!(err.contains("nothing-called-this"), "{err}");

@@ -32,6 +32,7 @@ mod mark_twin;
 mod materials;
 mod msaa;
 mod objectspace;
+mod osperf;
 mod page_directory;
 mod reference;
 mod seams;

@@ -7,6 +7,10 @@ use super::resources::{ATLAS_FORMAT, TRIANGLE_MAP_FORMAT};
 use crate::color::reinhard_srgb8;
 use crate::gpu::{GpuContext, GpuError, readback};
 
+/// Per virtual page backed: its triangle map's and its shades' texel bytes
+/// ([`ObjectSpace::read_backed_pages`]).
+pub type BackedPages = std::collections::BTreeMap<u32, (Vec<u8>, Vec<u8>)>;
+
 /// The object-space marking state after a frame, read back from the GPU,
 /// with the tile state of the backed pages translated to virtual tiles.
 #[derive(Clone, Debug)]
@@ -270,6 +274,34 @@ impl ObjectSpace {
             });
         }
         Ok(out)
+    }
+
+    /// Every backed page's triangle map and shades (raw texel bytes, rows of
+    /// the page one after the other), keyed by the virtual page it backs:
+    /// what the atlas holds, whichever physical page holds it.
+    pub fn read_backed_pages(&self, ctx: &GpuContext) -> Result<BackedPages, GpuError> {
+        let shade_texel = ATLAS_FORMAT.block_copy_size(None).expect("uncompressed format") as usize;
+        let id_texel = TRIANGLE_MAP_FORMAT.block_copy_size(None).expect("uncompressed format") as usize;
+        let shades = self.read_layers(ctx, &self.res.physical.atlas, shade_texel as u32)?;
+        let ids = self.read_layers(ctx, &self.res.physical.triangle_map, id_texel as u32)?;
+        let pool = self.res.pool;
+        let (side, size) = ((pool.layer_pages * pool.page_size) as usize, pool.page_size as usize);
+        let owners = Self::words(ctx, &self.res.physical.page_owner)?;
+        let mut pages = BackedPages::new();
+        for (physical, owner) in owners.iter().enumerate().take(pool.pages as usize) {
+            let Some(page) = owner.checked_sub(1) else { continue };
+            let (px, py, layer) = pool.origin(physical as u32);
+            let rows = |bytes: &[u8], texel: usize| -> Vec<u8> {
+                (0..size)
+                    .flat_map(|r| {
+                        let src = ((layer as usize * side + py as usize + r) * side + px as usize) * texel;
+                        bytes[src..src + size * texel].iter().copied()
+                    })
+                    .collect()
+            };
+            pages.insert(page, (rows(&ids, id_texel), rows(&shades, shade_texel)));
+        }
+        Ok(pages)
     }
 
     /// One mip level of one object's triangle map, row-major: triangle + 1

@@ -76,10 +76,11 @@ use slots::Slots;
 use trimap::{TrimapPass, build_triangle_maps};
 
 /// The WGSL modules every object-space pass imports (`shadespace::objectspace`,
-/// `shadespace::objectspace_dispatch`).
-pub const SHARED_WGSL: [ShaderSource; 2] = [
+/// `shadespace::objectspace_dispatch`, `shadespace::objectspace_mark_backed`).
+pub const SHARED_WGSL: [ShaderSource; 3] = [
     ShaderSource::new("objectspace.wgsl", include_str!("objectspace.wgsl")),
     ShaderSource::new("dispatch.wgsl", include_str!("dispatch.wgsl")),
+    mark::MARK_BACKED_WGSL,
 ];
 
 /// The object-space pass shaders, for the test that validates every shader.
@@ -391,6 +392,43 @@ pub enum Marking {
     Workgroup,
 }
 
+/// How the passes between marking and shading that back requested pages are
+/// recorded (`--os-paging`); both back, build and queue the same pages and
+/// tiles.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum PagingChain {
+    /// Six passes, eleven dispatches: paging (age, offsets, list), allocate
+    /// (allocate, release chunks, claim blocks, bind pages), backed args,
+    /// triangle maps, mark backed, queue (the shade dispatch's arguments).
+    #[default]
+    Split,
+    /// Three passes, eight dispatches: the offsets write the backed pages'
+    /// and the shade's dispatch arguments as bounds (known once marking is
+    /// done; extra workgroups return), and the triangle-map workgroup of a
+    /// page also marks its requested tiles: no backed args, mark backed or
+    /// queue pass, each a launch and a barrier.
+    Fused,
+}
+
+/// What the gather reads to find a pixel's chart UV and levels
+/// (`--os-gather`); both give the same image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum GatherInput {
+    /// Rebuilds the pixel's surface as marking did: visibility, object,
+    /// indices, vertices, footprint, level, then page, texel, shade.
+    #[default]
+    Surface,
+    /// Marking writes each pixel's chart UV and levels (16 bytes) and the
+    /// gather reads them: a write and a read per pixel against a chain of
+    /// dependent loads. One view, one sample per pixel.
+    Record,
+}
+
+/// The triangle-map pass's invocations per texel (`--os-trimap-lanes`).
+pub const TRIMAP_LANES: [u32; 4] = [1, 2, 4, 8];
+
 /// Settings of the object-space pipeline.
 #[derive(Clone, Debug, Serialize)]
 pub struct ObjectSpaceConfig {
@@ -455,6 +493,13 @@ pub struct ObjectSpaceConfig {
     /// Frames an object stays out of every view's frustum before its page
     /// directory slot (and the pages in it) goes back ([`slots`]).
     pub slot_timeout: u32,
+    /// How the paging chain is recorded.
+    pub paging_chain: PagingChain,
+    /// Invocations weighing each texel's triangles in the triangle-map
+    /// pass, one of [`TRIMAP_LANES`] (1: one per texel).
+    pub trimap_lanes: u32,
+    /// What the gather reads for a pixel's chart UV and levels.
+    pub gather_input: GatherInput,
 }
 
 /// [`ObjectSpaceConfig::slot_timeout`]'s default: a second at 60 Hz, so that
@@ -482,6 +527,9 @@ impl Default for ObjectSpaceConfig {
             shade_budget_texels: None,
             extra_views: ExtraViews::None,
             slot_timeout: DEFAULT_SLOT_TIMEOUT,
+            paging_chain: PagingChain::Split,
+            trimap_lanes: 1,
+            gather_input: GatherInput::Surface,
         }
     }
 }
@@ -508,6 +556,12 @@ pub enum ObjectSpaceError {
     ViewsNeedComputeVisibility,
     #[error("an atlas of {texels} texels needs {bytes} bytes of tile state, more than the adapter's largest buffer")]
     AtlasTooLarge { texels: u64, bytes: u64 },
+    #[error("--os-gather record needs one view and one sample per pixel (got {views} views, {samples} samples)")]
+    RecordNeedsOneSample { views: u32, samples: u32 },
+    #[error("triangle-map lanes must be one of 1, 2, 4, 8 (got {0})")]
+    BadTrimapLanes(u32),
+    #[error("{lanes} triangle-map lanes need {invocations} invocations per workgroup; {adapter} allows {max}")]
+    TrimapLanesTooMany { lanes: u32, invocations: u32, adapter: String, max: u32 },
     #[error("an atlas of {texels} texels takes {layers} layers of {side}x{side}, more than the adapter's {max} layers")]
     AtlasTooManyLayers { texels: u64, layers: u32, side: u32, max: u32 },
 }
@@ -607,6 +661,15 @@ impl ObjectSpace {
         if !(0.0..=1.0).contains(&config.level_blend) {
             return Err(ObjectSpaceError::BadLevelBlend(config.level_blend));
         }
+        if !TRIMAP_LANES.contains(&config.trimap_lanes) {
+            return Err(ObjectSpaceError::BadTrimapLanes(config.trimap_lanes));
+        }
+        let invocations = 64 * config.trimap_lanes;
+        let max = device.limits().max_compute_invocations_per_workgroup;
+        if invocations > max {
+            let (lanes, adapter) = (config.trimap_lanes, ctx.info.name.clone());
+            return Err(ObjectSpaceError::TrimapLanesTooMany { lanes, invocations, adapter, max });
+        }
         if !device.features().contains(wgpu::Features::PRIMITIVE_INDEX) {
             return Err(ObjectSpaceError::NoPrimitiveIndex(ctx.info.name.clone()));
         }
@@ -647,6 +710,17 @@ impl ObjectSpace {
         if view_count > 1 && config.visibility != VisibilityMethod::Compute {
             return Err(ObjectSpaceError::ViewsNeedComputeVisibility);
         }
+        if config.gather_input == GatherInput::Record && (view_count > 1 || targets.samples > 1) {
+            return Err(ObjectSpaceError::RecordNeedsOneSample { views: view_count, samples: targets.samples });
+        }
+        let records = (config.gather_input == GatherInput::Record).then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("pixel records"),
+                size: targets.width as u64 * targets.height as u64 * 16,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        });
         let mut res = Resources::new(device, &layout, pool, &scene.triangle_charts, targets, view_count);
         let visibility = match config.visibility {
             VisibilityMethod::Raster => Visibility::Raster {
@@ -669,7 +743,7 @@ impl ObjectSpace {
             }
         };
         let grid = WorldGrid::new(device, shaders, scene)?;
-        let mut gather = GatherPass::new(device, shaders, scene, &res, targets, &grid.grid)?;
+        let mut gather = GatherPass::new(device, shaders, scene, &res, targets, &grid.grid, records.as_ref())?;
         let mut extra_views = Vec::new();
         for _ in 1..view_count {
             let ids = VisibilityBuffer::new(device, targets);
@@ -695,10 +769,18 @@ impl ObjectSpace {
             extra_views,
             blended,
             visibility,
-            mark: MarkPass::new(device, shaders, scene, &res, config.marking, config.count_mark_atomics)?,
-            paging: PagingPass::new(device, shaders, scene, &res)?,
+            mark: MarkPass::new(
+                device,
+                shaders,
+                scene,
+                &res,
+                config.marking,
+                config.count_mark_atomics,
+                records.as_ref(),
+            )?,
+            paging: PagingPass::new(device, shaders, scene, &res, config.paging_chain)?,
             resize: ResizePass::new(device, shaders, scene, &res)?,
-            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res)?,
+            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res, config.trimap_lanes, config.paging_chain)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather,
             atlas_view: (config.view == DebugView::AtlasPages)
@@ -925,7 +1007,9 @@ impl Pipeline for ObjectSpace {
         if !quiet {
             back_pages(frame, &self.paging, &self.res);
             build_triangle_maps(frame, &self.trimap, &self.res);
-            mark_backed_pages(frame, &self.mark, &self.res);
+            if self.config.paging_chain == PagingChain::Split {
+                mark_backed_pages(frame, &self.mark, &self.res);
+            }
         }
         build_world_grid(frame, &mut self.grid);
         if !quiet {

@@ -16,6 +16,9 @@
 // edge, not one per tap); per tap its triangle-map texel and shade, and the
 // tap's chart island only where its triangle is not the pixel's own (a
 // triangle is in its own island; the pixel's island is then read too).
+// With `PIXEL_RECORD` (`--os-gather record`), a pixel of an object in the
+// atlas reads marking's record of its chart UV and levels (16 bytes) in
+// place of the object, indices, vertices and footprint.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
@@ -28,11 +31,19 @@
     bilinear, AtlasTexel, atlas_texel, triangle_charts, physical_page, virtual_page, physical_tile,
     NOT_BACKED, BlendedVertex, blended_vertex}
 #import shadespace::alpha_mask::opacity
+#import shadespace::objectspace::LevelPair
+#ifdef PIXEL_RECORD
+#import shadespace::contract::VIEW_SHADE
+#endif
 
 @group(2) @binding(0) var atlas: texture_2d_array<f32>;
 @group(2) @binding(1) var hdr: texture_storage_2d<rgba16float, write>;
 // Per atlas texel: triangle + 1 covering it; 0 = empty.
 @group(2) @binding(2) var triangle_map: texture_2d_array<u32>;
+#ifdef PIXEL_RECORD
+// Per pixel: what marking found (`mark.wgsl`): chart UV, level weight, levels.
+@group(2) @binding(3) var<storage, read> pixel_records: array<vec4u>;
+#endif
 
 // Debug colours go through the tone mapper: pre-invert Reinhard so that they
 // come out as written.
@@ -169,7 +180,49 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
         textureStore(hdr, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
         return;
     }
+#ifdef PIXEL_RECORD
+    textureStore(hdr, id.xy, gather_recorded(id.xy, ids, size));
+#else
     textureStore(hdr, id.xy, gather_surface(sample_pixel(id.xy, ids)));
+#endif
+}
+
+#ifdef PIXEL_RECORD
+// `gather_surface` of an object in the atlas from the chart UV and levels
+// marking recorded for the pixel: no rebuilding of its surface (object,
+// indices, vertices, footprint) before the level's page can be read.
+fn gather_recorded(pixel: vec2u, ids: vec2u, size: vec2u) -> vec4f {
+    let object = ids.x - 1u;
+    if atlas_entries[object].size == 0u || params.view_mode != VIEW_SHADE {
+        return gather_surface(sample_pixel(pixel, ids));
+    }
+    let r = pixel_records[pixel.y * size.x + pixel.x];
+    let c = gather_levels(OwnSurface(object, ids.y), LevelPair(r.w & 0xffffu, r.w >> 16u, bitcast<f32>(r.z)),
+        bitcast<vec2f>(r.xy));
+    if c.w < 0.0 {
+        return shade_forward(sample_pixel(pixel, ids));
+    }
+    return c;
+}
+#endif
+
+// The shade of chart point `uv` from the levels around its footprint,
+// blended by the coarser one's weight (one level where the weight is 0 or
+// 1); alpha -1 when a tap's page has no physical page (the atlas was full).
+fn gather_levels(own: OwnSurface, levels: LevelPair, uv: vec2f) -> vec4f {
+    var c = vec3f(0.0);
+    var backed = true;
+    if levels.t < 1.0 {
+        let fine = filter_level(own, levels.lo, uv);
+        backed = fine.w >= 0.0;
+        c = fine.rgb * (1.0 - levels.t);
+    }
+    if levels.t > 0.0 {
+        let coarse = filter_level(own, levels.hi, uv);
+        backed = backed && coarse.w >= 0.0;
+        c += coarse.rgb * levels.t;
+    }
+    return vec4f(c, select(-1.0, 1.0, backed));
 }
 
 // An alpha-blended object's vertex (`objectspace::blended`).
@@ -226,26 +279,11 @@ fn gather_surface(p: PixelSample) -> vec4f {
             }
         }
         default: {
-            // The levels around the footprint, blended by the coarser one's
-            // weight (one level where the weight is 0 or 1).
-            let own = OwnSurface(p.object, p.triangle);
-            var c = vec3f(0.0);
-            var backed = true;
-            if levels.t < 1.0 {
-                let fine = filter_level(own, levels.lo, f.uv);
-                backed = fine.w >= 0.0;
-                c = fine.rgb * (1.0 - levels.t);
-            }
-            if levels.t > 0.0 {
-                let coarse = filter_level(own, levels.hi, f.uv);
-                backed = backed && coarse.w >= 0.0;
-                c += coarse.rgb * levels.t;
-            }
-            if !backed {
+            out = gather_levels(OwnSurface(p.object, p.triangle), levels, f.uv);
+            if out.w < 0.0 {
                 // The atlas was full this frame: shade the pixel forward.
                 return shade_forward(p);
             }
-            out = vec4f(c, 1.0);
         }
     }
     return out;

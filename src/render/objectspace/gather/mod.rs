@@ -3,10 +3,11 @@
 //! the HDR target (objects outside the atlas are shaded here per pixel, with
 //! the world grid's lights).
 
+use super::mark::PIXEL_RECORD;
 use super::resources::Resources;
 use crate::render::frame::Frame;
 use crate::render::passes::light_grid::{LightGrid, READ_GROUP};
-use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::targets::{HDR_FORMAT, Targets};
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
@@ -20,6 +21,8 @@ pub struct GatherPass {
     io: Vec<wgpu::BindGroup>,
     /// Per view: its HDR target, to bind the atlas again after a resize.
     outputs: Vec<wgpu::TextureView>,
+    /// With [`super::GatherInput::Record`]: marking's pixel records.
+    records: Option<wgpu::Buffer>,
 }
 
 impl GatherPass {
@@ -30,25 +33,27 @@ impl GatherPass {
         res: &Resources,
         targets: &Targets,
         grid: &LightGrid,
+        records: Option<&wgpu::Buffer>,
     ) -> Result<Self, ShaderError> {
-        let layout = bind_group_layout(
-            device,
-            "gather io",
-            &[
-                Binding::Texture {
-                    sample: wgpu::TextureSampleType::Float { filterable: false },
-                    dimension: wgpu::TextureViewDimension::D2Array,
-                },
-                Binding::StorageTexture { format: HDR_FORMAT, dimension: wgpu::TextureViewDimension::D2 },
-                Binding::Texture {
-                    sample: wgpu::TextureSampleType::Uint,
-                    dimension: wgpu::TextureViewDimension::D2Array,
-                },
-            ],
-        );
+        let mut bindings = vec![
+            Binding::Texture {
+                sample: wgpu::TextureSampleType::Float { filterable: false },
+                dimension: wgpu::TextureViewDimension::D2Array,
+            },
+            Binding::StorageTexture { format: HDR_FORMAT, dimension: wgpu::TextureViewDimension::D2 },
+            Binding::Texture { sample: wgpu::TextureSampleType::Uint, dimension: wgpu::TextureViewDimension::D2Array },
+        ];
+        let defs: &[&str] = if records.is_some() {
+            bindings.push(Binding::Storage { read_only: true });
+            &[PIXEL_RECORD]
+        } else {
+            &[]
+        };
+        let layout = bind_group_layout(device, "gather io", &bindings);
         let groups = [&scene.layout, &res.layout, &layout, &grid.layout];
-        let pipeline = compute_pipeline(device, shaders, SHADER, "gather", &groups)?;
-        let mut pass = Self { pipeline, io_layout: layout, io: Vec::new(), outputs: Vec::new() };
+        let pipeline = compute_pipeline_with(device, shaders, SHADER, defs, "gather", &groups)?;
+        let records = records.cloned();
+        let mut pass = Self { pipeline, io_layout: layout, io: Vec::new(), outputs: Vec::new(), records };
         pass.add_view(device, res, &targets.hdr_view);
         Ok(pass)
     }
@@ -65,16 +70,15 @@ impl GatherPass {
     }
 
     fn io_group(&self, device: &wgpu::Device, res: &Resources, hdr: &wgpu::TextureView) -> wgpu::BindGroup {
-        bind_group(
-            device,
-            "gather io",
-            &self.io_layout,
-            &[
-                wgpu::BindingResource::TextureView(&res.physical.atlas_array),
-                wgpu::BindingResource::TextureView(hdr),
-                wgpu::BindingResource::TextureView(&res.physical.triangle_map_array),
-            ],
-        )
+        let mut resources = vec![
+            wgpu::BindingResource::TextureView(&res.physical.atlas_array),
+            wgpu::BindingResource::TextureView(hdr),
+            wgpu::BindingResource::TextureView(&res.physical.triangle_map_array),
+        ];
+        if let Some(records) = &self.records {
+            resources.push(records.as_entire_binding());
+        }
+        bind_group(device, "gather io", &self.io_layout, &resources)
     }
 }
 

@@ -28,12 +28,22 @@
 #import shadespace::pixel_surface::{sample_pixel_at, standard_sample_position}
 #endif
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
+#import shadespace::objectspace_mark_backed::mark_backed_page
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
     page_request_bit, tile_request_bit, page_tile_origin, forget_request, BlendedVertex, blended_vertex}
 #ifdef MSAA
 #import shadespace::objectspace::same_chart_surface
+#endif
+
+#ifdef PIXEL_RECORD
+// Per pixel of the view (`--os-gather record`): what the gather reads
+// instead of rebuilding the pixel's surface: chart UV, the level pair's
+// weight, its levels (lo | hi << 16). Written for pixels of objects in the
+// atlas; `record_index` is the pixel `mark_surface` marks for.
+@group(2) @binding(0) var<storage, read_write> pixel_records: array<vec4u>;
+var<private> record_index: u32;
 #endif
 
 // A small integer hash (PCG's output permutation) for tile phases.
@@ -311,6 +321,9 @@ fn mark_pixel(pixel: vec2u) -> u32 {
     if ids.x == 0u {
         return PIXEL_NOT_IN_ATLAS;
     }
+#ifdef PIXEL_RECORD
+    record_index = pixel.y * size.x + pixel.x;
+#endif
     return mark_surface(sample_pixel(pixel, ids));
 }
 
@@ -323,6 +336,9 @@ fn mark_surface(p: PixelSample) -> u32 {
     }
     let f = chart_footprint(p);
     let levels = select_levels(e, p, f);
+#ifdef PIXEL_RECORD
+    pixel_records[record_index] = vec4u(bitcast<vec2u>(f.uv), bitcast<u32>(levels.t), levels.lo | (levels.hi << 16u));
+#endif
     // The finer of the levels it reads decides whether it is under-shaded.
     let finest = select(levels.lo, levels.hi, levels.t >= 1.0);
     let kind = select(PIXEL_SHADED, PIXEL_UNDER_SHADED, f32(finest) > footprint_level(e, f));
@@ -353,9 +369,7 @@ fn fs_mark_blended(in: BlendedVertex) {
 }
 
 // Per page backed this frame (one workgroup each, one invocation per tile of
-// the page, at most 16): the page's tiles start over (never visible, never
-// shaded), and those whose request bits are set are marked visible and
-// queued; the bits are cleared for a later request.
+// the page, at most 16): `mark_backed_page`.
 @compute @workgroup_size(16)
 fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
                @builtin(local_invocation_index) lid: u32) {
@@ -363,34 +377,7 @@ fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups
     if index >= min(atomicLoad(&counters[COUNT_PAGES_BACKED]), params.physical_pages) {
         return;
     }
-    let b = backed[index];
-    let object = b.y >> 8u;
-    let level_index = b.y & 0xffu;
-    let e = atlas_entries[object];
-    let l = entry_level(object, level_index);
-    let per_row = params.page_size / params.tile_size;
-    let t = lid;
-    if t < per_row * per_row {
-        let slot = b.z * per_row * per_row + t;
-        let texel = page_tile_origin(page_origin(l, b.x), t);
-        var requested = false;
-        if all(texel < vec2u(l.size)) {
-            let bit = tile_request_bit(virtual_tile(l, texel));
-            requested = (atomicAnd(&page_requests[bit.x], ~bit.y) & bit.y) != 0u;
-        }
-        atomicStore(&tile_visible[slot], select(0u, params.stamp, requested));
-        tile_shaded[slot] = 0u;
-        if requested {
-            atomicAdd(&counters[COUNT_VISIBLE], 1u);
-            atomicAdd(&counters[COUNT_BACKED_TILES], 1u);
-            atomicAdd(&counters[COUNT_NEW], 1u);
-            _ = queue_if_due(slot, virtual_tile(l, texel), object, level_index, e.valid_since);
-        }
-    }
-    if lid == 0u {
-        let p = page_request_bit(b.x);
-        atomicAnd(&page_requests[p.x], ~p.y);
-    }
+    mark_backed_page(index, lid);
 }
 
 // Indirect dispatch arguments for shading: one workgroup per queued tile.

@@ -11,21 +11,34 @@
 use super::Marking;
 use super::resources::{BACKED_ARGS, Resources};
 use crate::render::frame::Frame;
-use crate::render::passes::{compute_pipeline, compute_pipeline_with};
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("mark.wgsl", include_str!("mark.wgsl"));
+/// The marking of the pages backed this frame (`shadespace::objectspace_mark_backed`),
+/// which the mark-backed pass or, with [`super::PagingChain::Fused`], the
+/// triangle-map pass runs.
+pub const MARK_BACKED_WGSL: ShaderSource = ShaderSource::new("mark_backed.wgsl", include_str!("mark_backed.wgsl"));
 /// Defined for [`Marking::PerPixel`].
 pub const PER_PIXEL: &str = "MARK_PER_PIXEL";
 /// Defined to count the global tile marks and atomics.
 pub const COUNT_ATOMICS: &str = "COUNT_MARK_ATOMICS";
+/// Defined for [`super::GatherInput::Record`] (in `gather.wgsl` too): marking
+/// writes each pixel's chart UV and levels for the gather.
+pub const PIXEL_RECORD: &str = "PIXEL_RECORD";
 /// The variants besides [`SHADER`], for the test that validates every shader.
-pub const VARIANTS: [ShaderSource; 3] =
-    [SHADER.with_defs(&[PER_PIXEL]), SHADER.with_defs(&[COUNT_ATOMICS]), SHADER.with_defs(&[PER_PIXEL, COUNT_ATOMICS])];
+pub const VARIANTS: [ShaderSource; 4] = [
+    SHADER.with_defs(&[PER_PIXEL]),
+    SHADER.with_defs(&[COUNT_ATOMICS]),
+    SHADER.with_defs(&[PER_PIXEL, COUNT_ATOMICS]),
+    SHADER.with_defs(&[PIXEL_RECORD]),
+];
 
 pub struct MarkPass {
     mark: wgpu::ComputePipeline,
+    /// With [`super::GatherInput::Record`]: the pixel records (group 2).
+    records: Option<wgpu::BindGroup>,
     mark_backed: wgpu::ComputePipeline,
     queue_args: wgpu::ComputePipeline,
 }
@@ -38,9 +51,14 @@ impl MarkPass {
         res: &Resources,
         marking: Marking,
         count_atomics: bool,
+        records: Option<&wgpu::Buffer>,
     ) -> Result<Self, ShaderError> {
         let plain = [&scene.layout, &res.layout];
         let with_dispatch = [&scene.layout, &res.layout, &res.dispatch_layout];
+        let records_layout = bind_group_layout(device, "pixel records", &[Binding::Storage { read_only: false }]);
+        let records = records.map(|b| bind_group(device, "pixel records", &records_layout, &[b.as_entire_binding()]));
+        let mark_groups: &[&wgpu::BindGroupLayout] =
+            if records.is_some() { &[&scene.layout, &res.layout, &records_layout] } else { &plain };
         let mut defs = Vec::new();
         if marking == Marking::PerPixel {
             defs.push(PER_PIXEL);
@@ -48,8 +66,12 @@ impl MarkPass {
         if count_atomics {
             defs.push(COUNT_ATOMICS);
         }
+        if records.is_some() {
+            defs.push(PIXEL_RECORD);
+        }
         Ok(Self {
-            mark: compute_pipeline_with(device, shaders, SHADER, &defs, "mark", &plain)?,
+            mark: compute_pipeline_with(device, shaders, SHADER, &defs, "mark", mark_groups)?,
+            records,
             mark_backed: compute_pipeline(device, shaders, SHADER, "mark_backed", &plain)?,
             queue_args: compute_pipeline(device, shaders, SHADER, "queue_args", &with_dispatch)?,
         })
@@ -58,7 +80,7 @@ impl MarkPass {
 
 /// Reads: the visibility buffer, the atlas table, the page table, the tile
 /// stamps. Writes: the tile stamps, page use, page requests, the shade
-/// queue, the counters.
+/// queue, the counters (and the pixel records, when the gather reads them).
 /// `view`: which view's visibility buffer (0: the main view).
 pub fn mark_tiles(frame: &mut Frame, pass: &MarkPass, res: &Resources, view: usize) {
     let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
@@ -66,6 +88,9 @@ pub fn mark_tiles(frame: &mut Frame, pass: &MarkPass, res: &Resources, view: usi
     let mut cp = frame.compute_pass(if view == 0 { "mark" } else { "mark: other views" });
     cp.set_pipeline(&pass.mark);
     res.bind_view(&mut cp, scene, view);
+    if let Some(records) = &pass.records {
+        cp.set_bind_group(2, records, &[]);
+    }
     cp.dispatch_workgroups(w, h, 1);
 }
 

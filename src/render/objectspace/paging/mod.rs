@@ -11,15 +11,21 @@ pub mod resize;
 
 use wgpu::util::DeviceExt;
 
+use super::PagingChain;
 use super::resources::{ALLOCATE_ARGS, Resources};
 use crate::render::frame::Frame;
-use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("paging.wgsl", include_str!("paging.wgsl"));
 /// Frees the pages of slots given back (`slots`).
 pub const RELEASE_SHADER: ShaderSource = ShaderSource::new("release.wgsl", include_str!("release.wgsl"));
+/// Defined for [`PagingChain::Fused`]: `page_offsets` also writes the backed
+/// pages' and the shade's dispatch arguments.
+pub const FUSED: &str = "FUSED_PAGING";
+/// The variants besides [`SHADER`], for the test that validates every shader.
+pub const VARIANTS: [ShaderSource; 1] = [SHADER.with_defs(&[FUSED])];
 
 pub struct PagingPass {
     age_pages: wgpu::ComputePipeline,
@@ -35,6 +41,7 @@ pub struct PagingPass {
     release_slots: wgpu::ComputePipeline,
     /// Group 2 of `release_slots`: the released ranges.
     release_layout: wgpu::BindGroupLayout,
+    chain: PagingChain,
 }
 
 impl PagingPass {
@@ -43,16 +50,19 @@ impl PagingPass {
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         res: &Resources,
+        chain: PagingChain,
     ) -> Result<Self, ShaderError> {
         let plain = [&scene.layout, &res.layout];
         let with_dispatch = [&scene.layout, &res.layout, &res.dispatch_layout];
         let release_layout = bind_group_layout(device, "released slots", &[Binding::Storage { read_only: true }]);
         let with_ranges = [&scene.layout, &res.layout, &release_layout];
+        let offsets_defs: &[&str] = if chain == PagingChain::Fused { &[FUSED] } else { &[] };
         Ok(Self {
+            chain,
             release_slots: compute_pipeline(device, shaders, RELEASE_SHADER, "release_slots", &with_ranges)?,
             release_layout,
             age_pages: compute_pipeline(device, shaders, SHADER, "age_pages", &plain)?,
-            page_offsets: compute_pipeline(device, shaders, SHADER, "page_offsets", &with_dispatch)?,
+            page_offsets: compute_pipeline_with(device, shaders, SHADER, offsets_defs, "page_offsets", &with_dispatch)?,
             list_candidates: compute_pipeline(device, shaders, SHADER, "list_candidates", &plain)?,
             age_pages_if_requested: compute_pipeline(device, shaders, SHADER, "age_pages_if_requested", &plain)?,
             list_candidates_if_requested: compute_pipeline(
@@ -73,7 +83,8 @@ impl PagingPass {
 
 /// Reads: the page requests, page use and owners. Writes: the page
 /// directory and table chunks, page owners and use, the backed-page list,
-/// the counters, the dispatches of allocation and of the backed pages' passes.
+/// the counters, the dispatches of allocation and of the backed pages' passes
+/// (with [`PagingChain::Fused`], bounds, and the shade dispatch's too).
 pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass("paging");
@@ -92,6 +103,10 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     cp.set_pipeline(&pass.bind_pages);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     drop(cp);
+    if pass.chain == PagingChain::Fused {
+        // `page_offsets` wrote the backed pages' dispatch.
+        return;
+    }
     let mut cp = frame.compute_pass("backed args");
     res.bind(&mut cp, scene);
     cp.set_bind_group(2, &res.dispatch_group, &[]);

@@ -11,15 +11,44 @@ pub mod grid;
 
 use wgpu::util::DeviceExt;
 
+use super::PagingChain;
 use super::resources::{BACKED_ARGS, Resources, TRIANGLE_MAP_FORMAT};
 use crate::render::frame::Frame;
-use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
 use crate::scene::Scene;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
 use grid::ChartGrid;
 
 pub const SHADER: ShaderSource = ShaderSource::new("trimap.wgsl", include_str!("trimap.wgsl"));
+/// Defined with [`PagingChain::Fused`]: each page's workgroup also marks its
+/// requested tiles (`mark_backed.wgsl`).
+pub const MARK_BACKED: &str = "MARK_BACKED";
+/// Defined for more than one invocation per texel, with `TRIMAP_LANES_4` or
+/// `TRIMAP_LANES_8` for 4 or 8 (else 2).
+pub const LANES: &str = "TRIMAP_LANES";
+/// The variants besides [`SHADER`], for the test that validates every shader.
+pub const VARIANTS: [ShaderSource; 4] = [
+    SHADER.with_defs(&[MARK_BACKED]),
+    SHADER.with_defs(&[LANES]),
+    SHADER.with_defs(&[LANES, "TRIMAP_LANES_4"]),
+    SHADER.with_defs(&[LANES, "TRIMAP_LANES_8", MARK_BACKED]),
+];
+
+/// The definitions composing the pass for `lanes` invocations per texel
+/// (one of [`super::TRIMAP_LANES`]) and the paging `chain`.
+fn defs(lanes: u32, chain: PagingChain) -> Vec<&'static str> {
+    let mut defs = match lanes {
+        1 => vec![],
+        2 => vec![LANES],
+        4 => vec![LANES, "TRIMAP_LANES_4"],
+        _ => vec![LANES, "TRIMAP_LANES_8"],
+    };
+    if chain == PagingChain::Fused {
+        defs.push(MARK_BACKED);
+    }
+    defs
+}
 
 gpu_struct! {
     /// One object's chart grid (`ChartGrid` in `trimap.wgsl`).
@@ -40,13 +69,17 @@ pub struct TrimapPass {
 }
 
 impl TrimapPass {
-    /// Builds the chart grids of `scene`'s meshes (chart UVs: `uv1`, else `uv0`).
+    /// Builds the chart grids of `scene`'s meshes (chart UVs: `uv1`, else
+    /// `uv0`); the pass weighs each texel's triangles with `lanes`
+    /// invocations, and with [`PagingChain::Fused`] also marks the pages.
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &Scene,
         scene_gpu: &SceneGpu,
         res: &Resources,
+        lanes: u32,
+        chain: PagingChain,
     ) -> Result<Self, ShaderError> {
         let (mut cell_start, mut triangles, mut mesh_grids) = (Vec::new(), Vec::new(), Vec::new());
         for mesh in &scene.meshes {
@@ -75,7 +108,8 @@ impl TrimapPass {
             "triangle map build",
             &[Binding::StorageTexture { format: TRIANGLE_MAP_FORMAT, dimension }, read, read, read],
         );
-        let pipeline = compute_pipeline(device, shaders, SHADER, "build", &[&scene_gpu.layout, &res.layout, &layout])?;
+        let groups = [&scene_gpu.layout, &res.layout, &layout];
+        let pipeline = compute_pipeline_with(device, shaders, SHADER, &defs(lanes, chain), "build", &groups)?;
         let grid_bytes = (grids.len() * 8 + cell_start.len() * 4 + triangles.len() * 4) as u64;
         let grids = [grid_buffer, start_buffer, triangle_buffer];
         let group = Self::group(device, &layout, &grids, res);
@@ -108,7 +142,8 @@ impl TrimapPass {
 }
 
 /// Reads: the backed-page list, the chart grids, the scene's chart UVs.
-/// Writes: the triangle maps of the pages backed this frame.
+/// Writes: the triangle maps of the pages backed this frame (with
+/// [`PagingChain::Fused`], what `mark::mark_backed_pages` writes too).
 pub fn build_triangle_maps(frame: &mut Frame, pass: &TrimapPass, res: &Resources) {
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass("triangle maps");
