@@ -9,6 +9,7 @@
 //! the line in [`Renderer::new`] that builds it.
 
 pub mod clustered;
+pub mod clusters;
 pub mod culling;
 pub mod deferred;
 pub mod deferred_compute;
@@ -34,6 +35,7 @@ use crate::hash::fnv1a;
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 use crate::shaders::ShaderError;
 pub use clustered::ClusteredConfig;
+pub use clusters::Culling;
 use culling::Frustum;
 pub use deferred::DeferredConfig;
 pub use deferred_compute::DeferredComputeConfig;
@@ -304,6 +306,9 @@ pub struct Renderer {
     pub sun_shadow: bool,
     /// The lighting model every pass evaluates (default Phong, the studies').
     pub shading: ShadingModel,
+    /// How the compute rasterizer culls the scene's clusters (default:
+    /// two-pass occlusion; the visibility buffer is the same in every mode).
+    pub culling: Culling,
     /// Sub-pixel offset of the projection, in pixels (x right, y down;
     /// default none): supersampled references (`crate::reference`) average
     /// frames rendered at a grid of such offsets.
@@ -396,6 +401,7 @@ impl Renderer {
             shadow_refresh: ShadowRefresh::default(),
             sun_shadow: false,
             shading: ShadingModel::Phong,
+            culling: Culling::default(),
             jitter: glam::Vec2::ZERO,
             shadows,
             lights_hash: None,
@@ -508,6 +514,7 @@ impl Renderer {
         }
         self.shadows.set_plan(&ctx.device, &ctx.queue, &mut self.scene, &lights, &shadow_plan);
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
+        self.scene.culling = self.culling;
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         {
             let mut f = Frame {
