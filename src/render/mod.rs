@@ -575,6 +575,7 @@ impl Renderer {
     /// 1 when set), MSAA (`msaa_samples`, and `msaa_targets`: the bytes
     /// of the multisampled colour and depth, 0 at one sample), the
     /// environment (`environment`, 1 with `--env`; `environment_maps` bytes),
+    /// the compute rasterizer's `culling` (0 none, 1 frustum, 2 occlusion),
     /// and the scene's own GPU data as setup facts ([`SceneGpu::memory`]: the
     /// same for every pipeline, so not in `memory`).
     pub fn report(&self) -> PipelineReport {
@@ -585,6 +586,7 @@ impl Renderer {
             .setup("shadow_faces", self.shadows.faces() as u64)
             .setup("shadow_refresh_every_frame", every_frame as u64)
             .setup("sun_shadow", self.sun_shadow as u64)
+            .setup("culling", self.culling as u64)
             .setup("msaa_samples", u64::from(self.targets.samples))
             .memory("msaa_targets", self.targets.msaa_bytes())
             .setup("environment", self.scene.environment.is_set() as u64)
