@@ -71,6 +71,9 @@ pub const SHARED_WGSL: ShaderSource = ShaderSource::new("visibility_read.wgsl", 
 /// and of `raster_clusters`: one cluster's triangles.
 const RASTER_WORKGROUP: u32 = 64;
 const _: () = assert!(crate::render::clusters::CLUSTER_TRIANGLES as u32 == RASTER_WORKGROUP);
+/// Clusters per workgroup of `cull.wgsl` (`CULL_WORKGROUP`): one object's,
+/// a thread each (an object with more takes several).
+const CULL_CHUNK: u32 = 64;
 
 /// Workgroups of `raster_big`, which loop over the queued tiles
 /// (`BIG_WORKGROUPS` in `raster.wgsl`).
@@ -99,7 +102,7 @@ gpu_struct! {
 gpu_struct! {
     /// Per-frame settings of `cull.wgsl` (`CullParams`).
     pub struct GpuCullParams as "CullParams" {
-        /// Visible objects (entries of the range list): the workgroups.
+        /// Visible objects (entries of the range list).
         pub range_count: u32,
         /// [`CULL_CONE`] | [`CULL_OCCLUSION`].
         pub flags: u32,
@@ -109,8 +112,9 @@ gpu_struct! {
         pub levels: u32,
         pub width: u32,
         pub height: u32,
-        pub pad0: u32,
-        pub pad1: u32,
+        /// Chunks of up to 64 clusters of one visible object: the workgroups.
+        pub chunk_count: u32,
+        pub pad: u32,
         /// First entry of each pyramid level (level k: `[k / 4][k % 4]`).
         pub level_offsets: [glam::UVec4; 4],
     }
@@ -277,6 +281,9 @@ struct Cull {
     /// Indirect dispatch sizes of both lists.
     dispatch: wgpu::Buffer,
     capacity: u32,
+    /// This frame's chunks (visible object, first cluster) of up to
+    /// [`CULL_CHUNK`] clusters: the cull passes' workgroups.
+    chunks: wgpu::Buffer,
     /// Bytes of its buffers (lists, history, pyramid).
     bytes: u64,
 }
@@ -388,6 +395,9 @@ impl ComputeVisibility {
         };
         let cull_counts = buffer("vis cull counts", CULL_COUNTS_BYTES, U::STORAGE | U::COPY_DST | U::COPY_SRC);
         let dispatch = buffer("vis cull dispatch", 24, U::STORAGE | U::INDIRECT);
+        // Chunks of up to CULL_CHUNK clusters: at most one partial chunk per object.
+        let chunks_capacity = scene.draws.len() as u64 + u64::from(capacity) / CULL_CHUNK as u64 + 1;
+        let chunks = buffer("vis cull chunks", chunks_capacity * 8, U::STORAGE | U::COPY_DST);
         let (levels, hiz_texels) = hiz_levels(width, height);
         let hiz = buffer("vis depth pyramid", hiz_texels.max(1) * 4, U::STORAGE);
         let align = device.limits().min_uniform_buffer_offset_alignment.max(size_of::<GpuHizLevel>() as u32);
@@ -449,7 +459,7 @@ impl ComputeVisibility {
         };
         let raster_groups = [raster_group(&list_params[0]), raster_group(&list_params[1])];
         let cull_layout =
-            bind_group_layout(device, "vis cull", &[Binding::Uniform, read, read, read, rw, rw, rw, read, rw]);
+            bind_group_layout(device, "vis cull", &[Binding::Uniform, read, read, read, rw, rw, rw, read, rw, read]);
         let cull_group = bind_group(
             device,
             "vis cull",
@@ -464,6 +474,7 @@ impl ComputeVisibility {
                 cull_counts.as_entire_binding(),
                 hiz.as_entire_binding(),
                 dispatch.as_entire_binding(),
+                chunks.as_entire_binding(),
             ],
         );
         let hiz_layout = bind_group_layout(
@@ -530,9 +541,10 @@ impl ComputeVisibility {
             group: cull_group,
             raster_groups,
             hiz_group,
-            bytes: lists.size() + history.size() + hiz.size() + object_clusters.size(),
+            bytes: lists.size() + history.size() + hiz.size() + object_clusters.size() + chunks.size(),
             levels,
             counts: cull_counts,
+            chunks,
             dispatch,
             capacity,
         };
@@ -687,7 +699,15 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
     let resolve = GpuResolveParams { width: pass.width, height: pass.height, range_count, pad: 0 };
     frame.queue.write_buffer(&pass.resolve_params, 0, bytemuck::bytes_of(&resolve));
     let culling = frame.scene.culling;
+    let mut chunks: Vec<[u32; 2]> = Vec::new();
     if culling != Culling::None {
+        for (r, range) in ranges.iter().enumerate() {
+            let clusters = frame.scene.object_clusters[range[0] as usize][1];
+            chunks.extend((0..clusters).step_by(CULL_CHUNK as usize).map(|first| [r as u32, first]));
+        }
+        if !chunks.is_empty() {
+            frame.queue.write_buffer(&pass.cull.chunks, 0, bytemuck::cast_slice(&chunks));
+        }
         let mut level_offsets = [glam::UVec4::ZERO; 4];
         for (k, (l, _)) in pass.cull.levels.iter().enumerate() {
             level_offsets[k / 4][k % 4] = l.dst_offset;
@@ -701,8 +721,8 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
             levels: pass.cull.levels.len() as u32,
             width: pass.width,
             height: pass.height,
-            pad0: 0,
-            pad1: 0,
+            chunk_count: chunks.len() as u32,
+            pad: 0,
             level_offsets,
         };
         frame.queue.write_buffer(&pass.cull.params, 0, bytemuck::bytes_of(&params));
@@ -724,9 +744,9 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         let groups = split(triangles.div_ceil(RASTER_WORKGROUP));
         raster_passes(frame, pass, &pass.raster, None, groups, "");
     } else if range_count > 0 {
-        let objects = split(range_count);
-        cull_pass(frame, pass, &pass.cull.early, "vis: cull", objects);
-        raster_passes(frame, pass, &pass.cull.raster, Some(0), objects, "");
+        let groups = split(chunks.len() as u32);
+        cull_pass(frame, pass, &pass.cull.early, "vis: cull", groups);
+        raster_passes(frame, pass, &pass.cull.raster, Some(0), groups, "");
         if culling == Culling::Occlusion {
             {
                 let mut cp = frame.compute_pass("vis: hiz");
@@ -736,9 +756,9 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
                     cp.dispatch_workgroups(l.dst_width.div_ceil(8), l.dst_height.div_ceil(8), 1);
                 }
             }
-            cull_pass(frame, pass, &pass.cull.late, "vis: cull late", objects);
+            cull_pass(frame, pass, &pass.cull.late, "vis: cull late", groups);
             frame.encoder.clear_buffer(&pass.big_count, 0, None);
-            raster_passes(frame, pass, &pass.cull.raster, Some(1), objects, " late");
+            raster_passes(frame, pass, &pass.cull.raster, Some(1), groups, " late");
         }
     }
     {

@@ -1,7 +1,7 @@
 // GPU culling of the compute rasterizer's clusters (`--culling`,
-// `visibility::compute`). One workgroup per visible object (the CPU has
-// already skipped the objects outside the frustum) loops over its mesh's
-// clusters; each cluster is tested against the frustum (its object-space
+// `visibility::compute`). One workgroup per chunk of up to 64 clusters of an
+// object in view (the CPU has already skipped the objects outside the
+// frustum, and lists the chunks), a thread per cluster; each is tested against the frustum (its object-space
 // box through the object's model-view-projection) and, where the scene culls
 // back faces, its normal cone. `cull_early` appends the survivors to list 0
 // (with occlusion: only those visible last frame); the rasterizer draws
@@ -26,7 +26,7 @@ struct Cluster {
 
 // Mirrors `visibility::compute::GpuCullParams`.
 struct CullParams {
-    // Entries of `ranges` (visible objects): the workgroups.
+    // Entries of `ranges` (visible objects).
     range_count: u32,
     // CULL_CONE | CULL_OCCLUSION.
     flags: u32,
@@ -36,8 +36,9 @@ struct CullParams {
     levels: u32,
     width: u32,
     height: u32,
-    pad0: u32,
-    pad1: u32,
+    // Entries of `chunks`: the workgroups.
+    chunk_count: u32,
+    pad: u32,
     // First entry of each level in `hiz` (level k: [k / 4][k % 4]).
     level_offsets: array<vec4u, 4>,
 }
@@ -84,6 +85,8 @@ const MAX_GROUPS_X: u32 = 32768u;
 @group(1) @binding(7) var<storage, read> hiz: array<f32>;
 // Indirect dispatch sizes of `raster_clusters` for lists 0 and 1.
 @group(1) @binding(8) var<storage, read_write> dispatch: array<u32, 6>;
+// The workgroups' work: (entry of `ranges`, first cluster of its object).
+@group(1) @binding(9) var<storage, read> chunks: array<vec2u>;
 
 var<workgroup> group_counts: array<atomic<u32>, 4>;
 
@@ -172,60 +175,69 @@ fn append(list: u32, range_index: u32, cluster: u32) {
     cluster_lists[list * params.capacity + at] = vec2u(range_index, cluster);
 }
 
-// The clusters of visible object `range_index`, one thread per cluster in
-// turn. Early: tests and lists; late: the occlusion test and history.
-fn cull_object(range_index: u32, local: u32, late: bool) {
+// Cluster `i` of visible object `range_index`. Early: the frustum and cone
+// tests and the early list; late: the occlusion test, the history and the
+// late list.
+fn cull_cluster(range_index: u32, i: u32, late: bool) {
+    let object = ranges[range_index].x;
+    let oc = object_clusters[object];
+    if i >= oc.y {
+        return;
+    }
+    let o = objects[object];
+    let mvp = view.view_proj * o.model;
+    let cluster = oc.x + i;
+    let slot = oc.z + i;
+    let c = clusters[cluster];
+    // Counted once a frame, in the early pass.
+    if !late {
+        atomicAdd(&group_counts[0], 1u);
+    }
+    let outside = outside_frustum(mvp, c);
+    var away = false;
+    if !outside && (params.flags & CULL_CONE) != 0u {
+        // The model's inverse is the transpose of the normal matrix.
+        let eye = (transpose(o.normal_model) * vec4f(view.camera_position.xyz, 1.0)).xyz;
+        let linear = mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz);
+        away = backfacing(c, eye, select(1.0, -1.0, determinant(linear) < 0.0));
+    }
+    if outside || away {
+        if late {
+            history[slot] = 0u;
+        } else {
+            atomicAdd(&group_counts[select(2u, 1u, outside)], 1u);
+        }
+        return;
+    }
+    let was_visible = history[slot] != 0u;
+    if !late {
+        if (params.flags & CULL_OCCLUSION) == 0u || was_visible {
+            append(LIST_EARLY, range_index, cluster);
+        }
+        return;
+    }
+    let seen = !occluded(mvp, c);
+    history[slot] = select(0u, 1u, seen);
+    if !was_visible {
+        if seen {
+            append(LIST_LATE, range_index, cluster);
+        } else {
+            atomicAdd(&group_counts[3], 1u);
+        }
+    }
+}
+
+// Chunk `chunk` of the frame's list (`chunks`: up to CULL_WORKGROUP clusters
+// of one visible object), a thread per cluster; the workgroup's counts are
+// summed before one global add each.
+fn cull_chunk(chunk: u32, local: u32, late: bool) {
     if local < 4u {
         atomicStore(&group_counts[local], 0u);
     }
     workgroupBarrier();
-    if range_index < params.range_count {
-        let object = ranges[range_index].x;
-        let oc = object_clusters[object];
-        let o = objects[object];
-        let mvp = view.view_proj * o.model;
-        // The model's inverse is the transpose of the normal matrix.
-        let eye = (transpose(o.normal_model) * vec4f(view.camera_position.xyz, 1.0)).xyz;
-        let linear = mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz);
-        let flip = select(1.0, -1.0, determinant(linear) < 0.0);
-        let cone = (params.flags & CULL_CONE) != 0u;
-        let occlusion = (params.flags & CULL_OCCLUSION) != 0u;
-        for (var i = local; i < oc.y; i += CULL_WORKGROUP) {
-            let cluster = oc.x + i;
-            let slot = oc.z + i;
-            let c = clusters[cluster];
-            // Counted once a frame, in the early pass.
-            let first = !late;
-            if first {
-                atomicAdd(&group_counts[0], 1u);
-            }
-            let outside = outside_frustum(mvp, c);
-            if outside || (cone && backfacing(c, eye, flip)) {
-                if first {
-                    atomicAdd(&group_counts[select(2u, 1u, outside)], 1u);
-                }
-                if late {
-                    history[slot] = 0u;
-                }
-                continue;
-            }
-            let was_visible = history[slot] != 0u;
-            if !late {
-                if !occlusion || was_visible {
-                    append(LIST_EARLY, range_index, cluster);
-                }
-                continue;
-            }
-            let seen = !occluded(mvp, c);
-            history[slot] = select(0u, 1u, seen);
-            if !was_visible {
-                if seen {
-                    append(LIST_LATE, range_index, cluster);
-                } else {
-                    atomicAdd(&group_counts[3], 1u);
-                }
-            }
-        }
+    if chunk < params.chunk_count {
+        let ch = chunks[chunk];
+        cull_cluster(ch.x, ch.y + local, late);
     }
     workgroupBarrier();
     if local < 4u {
@@ -242,7 +254,7 @@ fn cull_early(
     @builtin(num_workgroups) groups: vec3u,
     @builtin(local_invocation_index) local: u32,
 ) {
-    cull_object(group.y * groups.x + group.x, local, false);
+    cull_chunk(group.y * groups.x + group.x, local, false);
 }
 
 @compute @workgroup_size(CULL_WORKGROUP)
@@ -251,7 +263,7 @@ fn cull_late(
     @builtin(num_workgroups) groups: vec3u,
     @builtin(local_invocation_index) local: u32,
 ) {
-    cull_object(group.y * groups.x + group.x, local, true);
+    cull_chunk(group.y * groups.x + group.x, local, true);
 }
 
 // Sizes the indirect dispatches of both lists (one workgroup per entry,
