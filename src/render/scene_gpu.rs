@@ -449,16 +449,17 @@ impl SceneGpu {
     }
 }
 
-/// Every mesh's clusters, built in parallel: the GPU clusters (their
-/// triangle ranges into the scene-wide list), that list (mesh-local triangle
-/// indices), and per mesh its (first cluster, cluster count). Both lists hold
-/// at least one entry (empty buffers cannot be bound).
+/// Every mesh's clusters: the GPU clusters (their triangle ranges into the
+/// scene-wide list), that list (mesh-local triangle indices), and per mesh
+/// its (first cluster, cluster count). Both lists hold at least one entry
+/// (empty buffers cannot be bound). Built on the calling thread, not with
+/// rayon: renderers are built inside rayon jobs whose pool may be blocked
+/// waiting for them (the speedup experiment's `par_bridge` deadlocked so);
+/// Sponza's 208,221 triangles take a few tens of milliseconds.
 fn upload_clusters(scene: &Scene) -> (Vec<GpuCluster>, Vec<u32>, Vec<(u32, u32)>) {
-    use rayon::prelude::*;
-    let built: Vec<clusters::MeshClusters> =
-        scene.meshes.par_iter().map(|m| clusters::build(&m.positions, &m.indices)).collect();
     let (mut gpu, mut triangles, mut ranges) = (Vec::new(), Vec::new(), Vec::new());
-    for mc in &built {
+    for mesh in &scene.meshes {
+        let mc = clusters::build(&mesh.positions, &mesh.indices);
         ranges.push((gpu.len() as u32, mc.clusters.len() as u32));
         let base = triangles.len() as u32;
         gpu.extend(mc.clusters.iter().map(|c| GpuCluster::new(c, base + c.first)));
