@@ -7,7 +7,7 @@ use std::str::FromStr;
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, GatherInput, MAX_ATLAS_BUDGET_MI, Marking, PagingChain};
-use shadespace::render::{Exposure, ShadingModel, ShadowRefresh};
+use shadespace::render::{Culling, Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
 
 use super::parse::{self, Orbit, Views, VisibilityChoice};
@@ -140,6 +140,17 @@ pub struct SceneArgs {
     /// counters. Adds atomics: for profiling, not for timing.
     #[arg(long)]
     pub count_visibility: bool,
+    /// Compute visibility: how the meshes' clusters (up to 64 triangles) are
+    /// culled on the GPU before rasterizing (objects outside the view are
+    /// skipped on the CPU in every mode): `none` (every triangle of every
+    /// object in view), `frustum` (clusters outside the view, and with
+    /// --cull-back-faces those facing away) or `occlusion` (default: also
+    /// two-pass occlusion against a depth pyramid of the clusters visible
+    /// last frame). The visibility buffer is the same in every mode; with
+    /// --count-visibility the counters cull_tested, cull_frustum, cull_cone,
+    /// cull_occlusion and cull_drawn (docs/culling.md).
+    #[arg(long, value_name = "none|frustum|occlusion", default_value = "occlusion", value_parser = parse::culling)]
+    pub culling: Culling,
     /// `default`: the scene's materials; `high`: every material with Phong
     /// exponent 1500, GGX roughness 0.05 and specular strength at least 1, to
     /// provoke specular aliasing (normal maps: the file's or --textures detailed).

@@ -5,7 +5,7 @@ use std::str::FromStr;
 
 use glam::Vec3;
 use shadespace::render::targets::SAMPLE_COUNTS;
-use shadespace::render::{Exposure, VisibilityMethod};
+use shadespace::render::{Culling, Exposure, VisibilityMethod};
 
 /// A finite number in `range`, for a flag whose meaning needs one.
 fn finite_in(s: &str, range: std::ops::RangeInclusive<f32>, what: &str) -> Result<f32, String> {
@@ -94,6 +94,11 @@ pub fn visibility(s: &str) -> Result<VisibilityChoice, String> {
             .map(|m| VisibilityChoice(Some(m)))
             .map_err(|_| format!("'{s}' is not auto, raster or compute")),
     }
+}
+
+/// `--culling`: `none`, `frustum` or `occlusion`.
+pub fn culling(s: &str) -> Result<Culling, String> {
+    Culling::from_str(s)
 }
 
 /// `--bloom`: a strength from 0 to 1.

@@ -257,4 +257,5 @@ pub fn configure(renderer: &mut Renderer, a: &SceneArgs, s: &Setup) {
     renderer.shadow_refresh = a.shadow_refresh;
     renderer.sun_shadow = a.sun_shadow;
     renderer.shading = a.shading;
+    renderer.culling = a.culling;
 }

@@ -9,6 +9,7 @@
 //! the line in [`Renderer::new`] that builds it.
 
 pub mod clustered;
+pub mod clusters;
 pub mod culling;
 pub mod deferred;
 pub mod deferred_compute;
@@ -34,6 +35,7 @@ use crate::hash::fnv1a;
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 use crate::shaders::ShaderError;
 pub use clustered::ClusteredConfig;
+pub use clusters::Culling;
 use culling::Frustum;
 pub use deferred::DeferredConfig;
 pub use deferred_compute::DeferredComputeConfig;
@@ -304,6 +306,9 @@ pub struct Renderer {
     pub sun_shadow: bool,
     /// The lighting model every pass evaluates (default Phong, the studies').
     pub shading: ShadingModel,
+    /// How the compute rasterizer culls the scene's clusters (default:
+    /// two-pass occlusion; the visibility buffer is the same in every mode).
+    pub culling: Culling,
     /// Sub-pixel offset of the projection, in pixels (x right, y down;
     /// default none): supersampled references (`crate::reference`) average
     /// frames rendered at a grid of such offsets.
@@ -397,6 +402,7 @@ impl Renderer {
             shadow_refresh: ShadowRefresh::default(),
             sun_shadow: false,
             shading: ShadingModel::Phong,
+            culling: Culling::default(),
             jitter: glam::Vec2::ZERO,
             shadows,
             lights_hash: None,
@@ -509,6 +515,7 @@ impl Renderer {
         }
         self.shadows.set_plan(&ctx.device, &ctx.queue, &mut self.scene, &lights, &shadow_plan);
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
+        self.scene.culling = self.culling;
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         {
             let mut f = Frame {
@@ -569,6 +576,7 @@ impl Renderer {
     /// 1 when set), MSAA (`msaa_samples`, and `msaa_targets`: the bytes
     /// of the multisampled colour and depth, 0 at one sample), the
     /// environment (`environment`, 1 with `--env`; `environment_maps` bytes),
+    /// the compute rasterizer's `culling` (0 none, 1 frustum, 2 occlusion),
     /// and the scene's own GPU data as setup facts ([`SceneGpu::memory`]: the
     /// same for every pipeline, so not in `memory`).
     pub fn report(&self) -> PipelineReport {
@@ -579,6 +587,7 @@ impl Renderer {
             .setup("shadow_faces", self.shadows.faces() as u64)
             .setup("shadow_refresh_every_frame", every_frame as u64)
             .setup("sun_shadow", self.sun_shadow as u64)
+            .setup("culling", self.culling as u64)
             .setup("msaa_samples", u64::from(self.targets.samples))
             .memory("msaa_targets", self.targets.msaa_bytes())
             .setup("environment", self.scene.environment.is_set() as u64)

@@ -5,6 +5,7 @@ use glam::{Mat4, Vec4};
 use image::imageops::FilterType;
 use wgpu::util::DeviceExt;
 
+use super::clusters::{self, Culling, GpuCluster};
 use super::culling::LightLists;
 use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView, NO_TEXTURE};
 use super::passes::environment::{self, EnvironmentMaps};
@@ -76,6 +77,21 @@ pub struct SceneGpu {
     pub triangle_charts: wgpu::Buffer,
     /// The scene's [`Scene::cull_back_faces`].
     pub cull_back_faces: bool,
+    /// Every mesh's clusters ([`clusters::build`]), mesh after mesh.
+    pub clusters: wgpu::Buffer,
+    /// The clusters' triangles (indices of their mesh's triangles), cluster
+    /// after cluster.
+    pub cluster_triangles: wgpu::Buffer,
+    /// Per object: its mesh's first cluster and cluster count, its first slot
+    /// in per-instance cluster state (slots are numbered object after
+    /// object), and its first triangle in the scene's numbering (objects'
+    /// triangles back to back: the compute rasterizer's payload).
+    pub object_clusters: Vec<[u32; 4]>,
+    /// Clusters of all objects (instances count once each).
+    pub instance_clusters: u32,
+    /// How the compute rasterizer culls clusters this frame (the renderer
+    /// sets it from [`super::Renderer::culling`]).
+    pub culling: Culling,
     /// Per object: whether its material is alpha-masked
     /// ([`crate::scene::Material::alpha_cutoff`]).
     pub masked: Vec<bool>,
@@ -119,6 +135,7 @@ impl SceneGpu {
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
         let mut mesh_ranges = Vec::with_capacity(scene.meshes.len());
+        let (gpu_clusters, cluster_triangles, mesh_clusters) = upload_clusters(scene);
         for mesh in &scene.meshes {
             let charts = mesh.uv1.as_ref().unwrap_or(&mesh.uv0);
             mesh_ranges.push(DrawRange {
@@ -250,6 +267,21 @@ impl SceneGpu {
             (&environment, &environment_sampler),
         );
         let object_bounds = scene.all_object_bounds();
+        let (mut slots, mut triangles) = (0u32, 0u32);
+        let object_clusters: Vec<[u32; 4]> = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let (first, count) = mesh_clusters[o.mesh];
+                let entry = [first, count, slots, triangles];
+                slots += count;
+                triangles = triangles.saturating_add(scene.meshes[o.mesh].triangle_count() as u32);
+                entry
+            })
+            .collect();
+        let clusters_buf = storage("clusters", bytemuck::cast_slice(&gpu_clusters), wgpu::BufferUsages::empty());
+        let cluster_triangles =
+            storage("cluster triangles", bytemuck::cast_slice(&cluster_triangles), wgpu::BufferUsages::empty());
         Self {
             vertices: vertices_buf,
             indices: indices_buf,
@@ -261,6 +293,11 @@ impl SceneGpu {
             object_data,
             triangle_count: scene.triangle_count() as u64,
             cull_back_faces: scene.cull_back_faces,
+            clusters: clusters_buf,
+            cluster_triangles,
+            object_clusters,
+            instance_clusters: slots,
+            culling: Culling::default(),
             masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),
             blended: scene.objects.iter().map(|o| scene.materials[o.material].blend).collect(),
             emits: scene
@@ -296,8 +333,9 @@ impl SceneGpu {
     /// `scene_index_bytes` (one range per mesh, however many instances
     /// draw it), `scene_triangle_chart_bytes` (per mesh triangle too),
     /// `scene_object_bytes` (the per-instance table: transform and material)
-    /// and `scene_texture_bytes` (the colour and linear arrays, mips included).
-    pub fn memory(&self) -> [(&'static str, u64); 5] {
+    /// `scene_texture_bytes` (the colour and linear arrays, mips included)
+    /// and `scene_cluster_bytes` (clusters and their triangle lists, per mesh).
+    pub fn memory(&self) -> [(&'static str, u64); 6] {
         let texture = |t: &wgpu::Texture| -> u64 {
             let layers = u64::from(t.depth_or_array_layers());
             let block = u64::from(t.format().block_copy_size(None).unwrap_or(4));
@@ -311,6 +349,7 @@ impl SceneGpu {
             ("scene_triangle_chart_bytes", self.triangle_charts.size()),
             ("scene_object_bytes", self.objects.size()),
             ("scene_texture_bytes", texture(&self.albedo) + texture(&self.linear_maps)),
+            ("scene_cluster_bytes", self.clusters.size() + self.cluster_triangles.size()),
         ]
     }
 
@@ -408,6 +447,31 @@ impl SceneGpu {
             (&self.environment, &self.environment_sampler),
         );
     }
+}
+
+/// Every mesh's clusters: the GPU clusters (their triangle ranges into the
+/// scene-wide list), that list (mesh-local triangle indices), and per mesh
+/// its (first cluster, cluster count). Both lists hold at least one entry
+/// (empty buffers cannot be bound). Built on the calling thread, not with
+/// rayon: renderers are built inside rayon jobs whose pool may be blocked
+/// waiting for them (the speedup experiment's `par_bridge` deadlocked so);
+/// Sponza's 208,221 triangles take a few tens of milliseconds.
+fn upload_clusters(scene: &Scene) -> (Vec<GpuCluster>, Vec<u32>, Vec<(u32, u32)>) {
+    let (mut gpu, mut triangles, mut ranges) = (Vec::new(), Vec::new(), Vec::new());
+    for mesh in &scene.meshes {
+        let mc = clusters::build(&mesh.positions, &mesh.indices);
+        ranges.push((gpu.len() as u32, mc.clusters.len() as u32));
+        let base = triangles.len() as u32;
+        gpu.extend(mc.clusters.iter().map(|c| GpuCluster::new(c, base + c.first)));
+        triangles.extend_from_slice(&mc.triangles);
+    }
+    if gpu.is_empty() {
+        gpu.push(GpuCluster::default());
+    }
+    if triangles.is_empty() {
+        triangles.push(0);
+    }
+    (gpu, triangles, ranges)
 }
 
 /// The view uniform for a camera and a target size (its light counts are

@@ -56,7 +56,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     all.extend([forward_multipass::SHADER, passes::bloom::SHADER, passes::exposure::SHADER]);
     {
         use passes::visibility::compute::*;
-        all.extend([RASTER, RASTER_CULLING, RASTER_COUNTING, RASTER_CULLING_COUNTING, RESOLVE]);
+        all.extend([RASTER, RASTER_CULLING, RASTER_COUNTING, RASTER_CULLING_COUNTING, RESOLVE, CULL, HIZ]);
     }
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend(objectspace::mark::VARIANTS);
@@ -89,6 +89,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::clusters::GpuCluster;
     use crate::render::deferred::volumes::GpuVolumeParams;
     use crate::render::forward_multipass::LightPair;
     use crate::render::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView};
@@ -98,7 +99,9 @@ mod tests {
     use crate::render::objectspace::trimap::GpuChartGrid;
     use crate::render::passes::gbuffer::GpuUnproject;
     use crate::render::passes::light_grid::GpuLightGridParams;
-    use crate::render::passes::visibility::compute::{GpuRasterParams, GpuResolveParams};
+    use crate::render::passes::visibility::compute::{
+        GpuCullParams, GpuHizLevel, GpuListParams, GpuRasterParams, GpuResolveParams,
+    };
     use crate::shaders::layout::check;
     use crate::shaders::{ALPHA_MASK, ENVIRONMENT, LAYERS, MATERIAL_TEXTURES};
     use wgpu::naga;
@@ -164,6 +167,10 @@ mod tests {
         check::<GpuVolumeParams>(&modules);
         check::<GpuRasterParams>(&modules);
         check::<GpuResolveParams>(&modules);
+        check::<GpuCullParams>(&modules);
+        check::<GpuHizLevel>(&modules);
+        check::<GpuListParams>(&modules);
+        check::<GpuCluster>(&modules);
         check::<crate::materials::GpuLayer>(&modules);
         check::<crate::render::passes::environment::GpuEnvParams>(&modules);
         check::<crate::render::passes::background::GpuBackground>(&modules);

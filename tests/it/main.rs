@@ -13,6 +13,7 @@ mod city;
 mod cli;
 mod compute_visibility;
 mod corpus;
+mod culling;
 mod deferred;
 mod density;
 mod doc_links;

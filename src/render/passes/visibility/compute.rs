@@ -15,13 +15,27 @@
 //! colour alpha passes the cutoff (the other scenes run the same code as
 //! without masks).
 //!
-//! Payload: the complement of the triangle's index in this frame's list of
-//! visible triangles, object by object (at equal depth the first drawn wins,
-//! as in the raster path; 0 stays background). The same per-frame list of (object, first
-//! index) ranges drives the dispatch (a thread finds its object by binary
-//! search), so culled objects cost nothing and the 32 bits hold any mix of
-//! object and triangle counts up to 2^32 - 1 visible triangles, where packing
-//! fixed bit fields would have to cap one of them.
+//! Payload: the complement of the triangle's index in the scene's numbering
+//! (objects' triangles back to back, in object order: at equal depth the
+//! first drawn without culling wins, as in the raster path, whatever culling
+//! skipped; 0 stays background). A per-frame list of the visible objects'
+//! (object, first index in the frame's list, first index in the scene's
+//! numbering) drives the dispatch without culling (a thread finds its object
+//! by binary search) and the resolve; the 32 bits hold any mix of object and
+//! triangle counts up to 2^32 - 1 triangles, where packing fixed bit fields
+//! would have to cap one of them.
+//!
+//! Culling ([`SceneGpu::culling`], `--culling`; `cull.wgsl`, `hiz.wgsl`): with
+//! `frustum` or `occlusion` the triangles are rasterized cluster by cluster
+//! ([`crate::render::clusters`]): `vis: cull` tests every cluster of the
+//! visible objects (frustum, normal cone where back faces are culled) and
+//! lists the survivors, `vis: raster` (one workgroup per listed cluster,
+//! dispatched indirectly) and `vis: raster big` draw them. With occlusion
+//! the early list holds only the clusters visible last frame; then `vis:
+//! hiz` builds a depth pyramid from what they drew, `vis: cull late` tests
+//! the rest against it (and remembers every cluster's visibility for the
+//! next frame), and `vis: raster late` / `vis: raster big late` draw the
+//! newly visible. The visibility buffer is the same in every mode (tested).
 //!
 //! The depth target is not written: the consumers are all compute passes
 //! (object space's, tiled deferred's), which read depth, where they need it,
@@ -30,6 +44,7 @@
 
 use super::VisibilityBuffer;
 use crate::gpu::readback::ReadbackRing;
+use crate::render::clusters::Culling;
 use crate::render::frame::Frame;
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, compute_pipeline_with};
 use crate::render::report::Counters;
@@ -44,12 +59,22 @@ pub const RASTER_CULLING: ShaderSource = RASTER.with_defs(&["CULL_BACK"]);
 pub const RASTER_COUNTING: ShaderSource = RASTER.with_defs(&["COUNT"]);
 pub const RASTER_CULLING_COUNTING: ShaderSource = RASTER.with_defs(&["CULL_BACK", "COUNT"]);
 pub const RESOLVE: ShaderSource = ShaderSource::new("resolve.wgsl", include_str!("resolve.wgsl"));
+/// Cluster culling (`cull_early`, `cull_late`, `finish`).
+pub const CULL: ShaderSource = ShaderSource::new("cull.wgsl", include_str!("cull.wgsl"));
+/// The depth pyramid of occlusion culling.
+pub const HIZ: ShaderSource = ShaderSource::new("hiz.wgsl", include_str!("hiz.wgsl"));
 /// The module lighting passes import to read the output as a G-buffer
 /// (`shadespace::visibility_read`, group 1: [`ComputeVisibility::read_layout`]).
 pub const SHARED_WGSL: ShaderSource = ShaderSource::new("visibility_read.wgsl", include_str!("visibility_read.wgsl"));
 
-/// Threads per workgroup of `raster` (`RASTER_WORKGROUP` in `raster.wgsl`).
+/// Threads per workgroup of `raster` (`RASTER_WORKGROUP` in `raster.wgsl`),
+/// and of `raster_clusters`: one cluster's triangles.
 const RASTER_WORKGROUP: u32 = 64;
+const _: () = assert!(crate::render::clusters::CLUSTER_TRIANGLES as u32 == RASTER_WORKGROUP);
+/// Clusters per workgroup of `cull.wgsl` (`CULL_WORKGROUP`): one object's,
+/// a thread each (an object with more takes several).
+const CULL_CHUNK: u32 = 64;
+
 /// Workgroups of `raster_big`, which loop over the queued tiles
 /// (`BIG_WORKGROUPS` in `raster.wgsl`).
 const BIG_WORKGROUPS: u32 = 1024;
@@ -73,6 +98,94 @@ gpu_struct! {
         pub setup_capacity: u32,
     }
 }
+
+gpu_struct! {
+    /// Per-frame settings of `cull.wgsl` (`CullParams`).
+    pub struct GpuCullParams as "CullParams" {
+        /// Visible objects (entries of the range list).
+        pub range_count: u32,
+        /// [`CULL_CONE`] | [`CULL_OCCLUSION`].
+        pub flags: u32,
+        /// Entries of each cluster list.
+        pub capacity: u32,
+        /// Levels of the depth pyramid.
+        pub levels: u32,
+        pub width: u32,
+        pub height: u32,
+        /// Chunks of up to 64 clusters of one visible object: the workgroups.
+        pub chunk_count: u32,
+        pub pad: u32,
+        /// First entry of each pyramid level (level k: `[k / 4][k % 4]`).
+        pub level_offsets: [glam::UVec4; 4],
+    }
+}
+
+/// [`GpuCullParams::flags`]: test normal cones (the scene culls back faces).
+pub const CULL_CONE: u32 = 1;
+/// [`GpuCullParams::flags`]: two-pass occlusion.
+pub const CULL_OCCLUSION: u32 = 2;
+
+gpu_struct! {
+    /// One level's dispatch of `hiz.wgsl` (`HizLevel`).
+    pub struct GpuHizLevel as "HizLevel" {
+        pub src_offset: u32,
+        pub src_width: u32,
+        pub src_height: u32,
+        pub dst_offset: u32,
+        pub dst_width: u32,
+        pub dst_height: u32,
+        /// 1: the source is the pixels.
+        pub from_pixels: u32,
+        pub pad: u32,
+    }
+}
+
+gpu_struct! {
+    /// Which cluster list a `raster_clusters` dispatch reads (`ListParams`).
+    pub struct GpuListParams as "ListParams" {
+        /// Its length's entry in the cull counts (0 early, 1 late).
+        pub index: u32,
+        /// Its first entry in the lists' buffer.
+        pub base: u32,
+    }
+}
+
+/// What `cull.wgsl` counts per frame (its `counts` array, in this order;
+/// read back with `--count-visibility`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CullCount {
+    /// Clusters drawn by the early pass.
+    DrawnEarly,
+    /// Clusters drawn by the late pass (newly visible).
+    DrawnLate,
+    /// Clusters of the visible objects (each tested once a frame).
+    Tested,
+    /// Skipped: outside the frustum.
+    Frustum,
+    /// Skipped: every triangle faces away (normal cone).
+    Cone,
+    /// Skipped: behind the depth pyramid (and not drawn early).
+    Occlusion,
+}
+
+impl CullCount {
+    pub const ALL: [Self; 6] =
+        [Self::DrawnEarly, Self::DrawnLate, Self::Tested, Self::Frustum, Self::Cone, Self::Occlusion];
+
+    /// Its name among the frame counters.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::DrawnEarly => "cull_drawn_early",
+            Self::DrawnLate => "cull_drawn_late",
+            Self::Tested => "cull_tested",
+            Self::Frustum => "cull_frustum",
+            Self::Cone => "cull_cone",
+            Self::Occlusion => "cull_occlusion",
+        }
+    }
+}
+
+const CULL_COUNTS_BYTES: u64 = CullCount::ALL.len() as u64 * 4;
 
 gpu_struct! {
     /// Settings of `resolve.wgsl` (`ResolveParams`).
@@ -139,10 +252,40 @@ impl RasterCount {
     }
 }
 
-/// The counting variant's buffer and its read-back.
+/// The counting variant's buffer and its read-back, and the read-back of
+/// the cull counts.
 struct RasterCounting {
     counts: wgpu::Buffer,
     readback: ReadbackRing<u64>,
+    cull: ReadbackRing<u64>,
+}
+
+/// Cluster culling's pipelines and buffers (`cull.wgsl`, `hiz.wgsl`).
+struct Cull {
+    early: wgpu::ComputePipeline,
+    late: wgpu::ComputePipeline,
+    finish: wgpu::ComputePipeline,
+    reduce: wgpu::ComputePipeline,
+    raster: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    /// `raster.wgsl`'s group 1 reading the early list (also the group of
+    /// the unculled path) and the late list.
+    raster_groups: [wgpu::BindGroup; 2],
+    /// The pyramid's group at each level's offset into `hiz_levels`.
+    hiz_group: wgpu::BindGroup,
+    /// Per level: its sizes, and its entry's offset in the dynamic uniform.
+    levels: Vec<(GpuHizLevel, u32)>,
+    /// The lists' lengths and the counters (cleared every frame).
+    counts: wgpu::Buffer,
+    /// Indirect dispatch sizes of both lists.
+    dispatch: wgpu::Buffer,
+    capacity: u32,
+    /// This frame's chunks (visible object, first cluster) of up to
+    /// [`CULL_CHUNK`] clusters: the cull passes' workgroups.
+    chunks: wgpu::Buffer,
+    /// Bytes of its buffers (lists, history, pyramid).
+    bytes: u64,
 }
 
 const COUNTS_BYTES: u64 = RasterCount::ALL.len() as u64 * 4;
@@ -174,7 +317,7 @@ pub struct ComputeVisibility {
     setup_capacity: u32,
     /// Bytes of the big-triangle setups.
     setup_bytes: u64,
-    raster_group: wgpu::BindGroup,
+    cull: Cull,
     resolve_group: wgpu::BindGroup,
     /// Group 1 of passes that import `shadespace::visibility_read`: the ids
     /// and the 64-bit buffer.
@@ -207,7 +350,7 @@ impl ComputeVisibility {
         let raster_params = buffer("vis raster params", size_of::<GpuRasterParams>() as u64, U::UNIFORM | U::COPY_DST);
         let resolve_params =
             buffer("vis resolve params", size_of::<GpuResolveParams>() as u64, U::UNIFORM | U::COPY_DST);
-        let ranges = buffer("vis ranges", (scene.draws.len().max(1) * 8) as u64, U::STORAGE | U::COPY_DST);
+        let ranges = buffer("vis ranges", (scene.draws.len().max(1) * 16) as u64, U::STORAGE | U::COPY_DST);
         let depth_ids = buffer("vis depth and ids", width as u64 * height as u64 * 8, U::STORAGE);
         // Room for big triangles' tiles covering every pixel 128 times over (a
         // tile holds up to 1024 pixels; boxes of thin triangles and hidden
@@ -232,8 +375,62 @@ impl ComputeVisibility {
         let counting = counting.then(|| RasterCounting {
             counts: buffer("vis raster counts", COUNTS_BYTES, U::STORAGE | U::COPY_DST | U::COPY_SRC),
             readback: ReadbackRing::new("vis raster counts", COUNTS_BYTES),
+            cull: ReadbackRing::new("vis cull counts", CULL_COUNTS_BYTES),
         });
-        let mut raster_bindings = vec![Binding::Uniform, read, rw, rw, rw, rw];
+        // Cluster culling: two lists of up to every cluster of every object.
+        let capacity = scene.instance_clusters.max(1).next_multiple_of(32);
+        let lists = buffer("vis cluster lists", 2 * capacity as u64 * 8, U::STORAGE);
+        let history = buffer("vis cluster history", capacity as u64 * 4, U::STORAGE);
+        let object_clusters = {
+            let data: Vec<[u32; 4]> =
+                if scene.object_clusters.is_empty() { vec![[0; 4]] } else { scene.object_clusters.clone() };
+            wgpu::util::DeviceExt::create_buffer_init(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some("vis object clusters"),
+                    contents: bytemuck::cast_slice(&data),
+                    usage: U::STORAGE,
+                },
+            )
+        };
+        let cull_counts = buffer("vis cull counts", CULL_COUNTS_BYTES, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+        let dispatch = buffer("vis cull dispatch", 24, U::STORAGE | U::INDIRECT);
+        // Chunks of up to CULL_CHUNK clusters: at most one partial chunk per object.
+        let chunks_capacity = scene.draws.len() as u64 + u64::from(capacity) / CULL_CHUNK as u64 + 1;
+        let chunks = buffer("vis cull chunks", chunks_capacity * 8, U::STORAGE | U::COPY_DST);
+        let (levels, hiz_texels) = hiz_levels(width, height);
+        let hiz = buffer("vis depth pyramid", hiz_texels.max(1) * 4, U::STORAGE);
+        let align = device.limits().min_uniform_buffer_offset_alignment.max(size_of::<GpuHizLevel>() as u32);
+        let levels: Vec<(GpuHizLevel, u32)> =
+            levels.into_iter().enumerate().map(|(i, l)| (l, i as u32 * align)).collect();
+        let mut level_bytes = vec![0u8; levels.len().max(1) * align as usize];
+        for (l, offset) in &levels {
+            let at = *offset as usize;
+            level_bytes[at..at + size_of::<GpuHizLevel>()].copy_from_slice(bytemuck::bytes_of(l));
+        }
+        let hiz_levels = wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("vis pyramid levels"),
+                contents: &level_bytes,
+                usage: U::UNIFORM,
+            },
+        );
+        let list_params = |index: u32| {
+            wgpu::util::DeviceExt::create_buffer_init(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some("vis cluster list"),
+                    contents: bytemuck::bytes_of(&GpuListParams { index, base: index * capacity }),
+                    usage: U::UNIFORM,
+                },
+            )
+        };
+        let list_params = [list_params(0), list_params(1)];
+        let cull_params = buffer("vis cull params", size_of::<GpuCullParams>() as u64, U::UNIFORM | U::COPY_DST);
+
+        let mut raster_bindings =
+            vec![Binding::Uniform, read, rw, rw, rw, rw, read, read, read, read, Binding::Uniform];
         if counting.is_some() {
             raster_bindings.push(rw);
         }
@@ -241,18 +438,64 @@ impl ComputeVisibility {
         let dimension = wgpu::TextureViewDimension::D2;
         let out_binding = Binding::StorageTexture { format: super::FORMAT, dimension };
         let resolve_layout = bind_group_layout(device, "vis resolve", &[Binding::Uniform, read, rw, out_binding]);
-        let mut raster_resources = vec![
-            raster_params.as_entire_binding(),
-            ranges.as_entire_binding(),
-            depth_ids.as_entire_binding(),
-            big_tiles.as_entire_binding(),
-            big_count.as_entire_binding(),
-            big_setups.as_entire_binding(),
-        ];
-        if let Some(c) = &counting {
-            raster_resources.push(c.counts.as_entire_binding());
-        }
-        let raster_group = bind_group(device, "vis raster", &raster_layout, &raster_resources);
+        let raster_group = |list: &wgpu::Buffer| {
+            let mut resources = vec![
+                raster_params.as_entire_binding(),
+                ranges.as_entire_binding(),
+                depth_ids.as_entire_binding(),
+                big_tiles.as_entire_binding(),
+                big_count.as_entire_binding(),
+                big_setups.as_entire_binding(),
+                scene.clusters.as_entire_binding(),
+                scene.cluster_triangles.as_entire_binding(),
+                lists.as_entire_binding(),
+                cull_counts.as_entire_binding(),
+                list.as_entire_binding(),
+            ];
+            if let Some(c) = &counting {
+                resources.push(c.counts.as_entire_binding());
+            }
+            bind_group(device, "vis raster", &raster_layout, &resources)
+        };
+        let raster_groups = [raster_group(&list_params[0]), raster_group(&list_params[1])];
+        let cull_layout =
+            bind_group_layout(device, "vis cull", &[Binding::Uniform, read, read, read, rw, rw, rw, read, rw, read]);
+        let cull_group = bind_group(
+            device,
+            "vis cull",
+            &cull_layout,
+            &[
+                cull_params.as_entire_binding(),
+                ranges.as_entire_binding(),
+                scene.clusters.as_entire_binding(),
+                object_clusters.as_entire_binding(),
+                history.as_entire_binding(),
+                lists.as_entire_binding(),
+                cull_counts.as_entire_binding(),
+                hiz.as_entire_binding(),
+                dispatch.as_entire_binding(),
+                chunks.as_entire_binding(),
+            ],
+        );
+        let hiz_layout = bind_group_layout(
+            device,
+            "vis depth pyramid",
+            &[Binding::DynamicUniform { size: size_of::<GpuHizLevel>() as u64 }, read, rw],
+        );
+        let hiz_group = bind_group(
+            device,
+            "vis depth pyramid",
+            &hiz_layout,
+            &[
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &hiz_levels,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(size_of::<GpuHizLevel>() as u64),
+                }),
+                depth_ids.as_entire_binding(),
+                hiz.as_entire_binding(),
+            ],
+        );
         let resolve_group = bind_group(
             device,
             "vis resolve",
@@ -276,7 +519,7 @@ impl ComputeVisibility {
             &read_layout,
             &[wgpu::BindingResource::TextureView(&out.view), depth_ids.as_entire_binding()],
         );
-        let raster_groups = [&scene.layout, &raster_layout];
+        let raster_layouts = [&scene.layout, &raster_layout];
         let raster_shader = match (scene.cull_back_faces, counting.is_some()) {
             (false, false) => RASTER,
             (false, true) => RASTER_COUNTING,
@@ -285,10 +528,30 @@ impl ComputeVisibility {
         };
         // Alpha testing is compiled in only for scenes that need it.
         let defs: &[&str] = if scene.has_alpha_masks() { &[ALPHA_MASK] } else { &[] };
-        let mut raster = |entry| compute_pipeline_with(device, shaders, raster_shader, defs, entry, &raster_groups);
+        let mut raster = |entry| compute_pipeline_with(device, shaders, raster_shader, defs, entry, &raster_layouts);
+        let (plain, big, clustered) = (raster("raster")?, raster("raster_big")?, raster("raster_clusters")?);
+        let cull_layouts = [&scene.layout, &cull_layout];
+        let cull = Cull {
+            early: compute_pipeline(device, shaders, CULL, "cull_early", &cull_layouts)?,
+            late: compute_pipeline(device, shaders, CULL, "cull_late", &cull_layouts)?,
+            finish: compute_pipeline(device, shaders, CULL, "finish", &cull_layouts)?,
+            reduce: compute_pipeline(device, shaders, HIZ, "reduce", &[&hiz_layout])?,
+            raster: clustered,
+            params: cull_params,
+            group: cull_group,
+            raster_groups,
+            hiz_group,
+            bytes: lists.size() + history.size() + hiz.size() + object_clusters.size() + chunks.size(),
+            levels,
+            counts: cull_counts,
+            chunks,
+            dispatch,
+            capacity,
+        };
         Ok(Self {
-            raster: raster("raster")?,
-            raster_big: raster("raster_big")?,
+            raster: plain,
+            raster_big: big,
+            cull,
             clear: compute_pipeline(device, shaders, RESOLVE, "clear", &[&resolve_layout])?,
             resolve: compute_pipeline(device, shaders, RESOLVE, "resolve", &[&resolve_layout])?,
             raster_params,
@@ -298,7 +561,6 @@ impl ComputeVisibility {
             big_capacity,
             setup_capacity,
             setup_bytes,
-            raster_group,
             resolve_group,
             read_layout,
             read_group,
@@ -310,23 +572,36 @@ impl ComputeVisibility {
 }
 
 impl ComputeVisibility {
-    /// Bytes of its buffers (the 64-bit one, the big-tile queue and setups,
-    /// the ranges).
     /// Starts the read-back of the frame's counts (counting variant). Call
     /// right after the frame's submit.
     pub fn after_submit(&mut self) {
         if let Some(c) = &mut self.counting {
             c.readback.after_submit();
+            c.cull.after_submit();
         }
     }
 
     /// The counting variant's counts of finished frames, by frame number,
     /// with three ratios: `vis_atomics_per_pixel` (writes per screen pixel),
     /// `vis_tests_per_write` (pixels tested per write) and
-    /// `vis_small_pixels_per_triangle`. None without counting.
+    /// `vis_small_pixels_per_triangle`; with culling, the [`CullCount`]s and
+    /// `cull_drawn` (clusters drawn by both passes). None without counting.
     pub fn collect_counts(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
         let Some(c) = &mut self.counting else { return Vec::new() };
         let pixels = self.width as f64 * self.height as f64;
+        let mut culls: std::collections::BTreeMap<u64, Counters> = c
+            .cull
+            .collect(device, wait)
+            .into_iter()
+            .map(|(frame, bytes)| {
+                let raw: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+                let mut counters: Counters =
+                    CullCount::ALL.iter().map(|&k| (k.name().to_string(), raw[k as usize] as f64)).collect();
+                let drawn = raw[CullCount::DrawnEarly as usize] as f64 + raw[CullCount::DrawnLate as usize] as f64;
+                counters.insert("cull_drawn".into(), drawn);
+                (frame, counters)
+            })
+            .collect();
         c.readback
             .collect(device, wait)
             .into_iter()
@@ -342,29 +617,68 @@ impl ComputeVisibility {
                     "vis_small_pixels_per_triangle".into(),
                     get(RasterCount::SmallPixelsTested) / get(RasterCount::SmallTriangles).max(1.0),
                 );
+                counters.extend(culls.remove(&frame).unwrap_or_default());
                 (frame, counters)
             })
             .collect()
     }
 
+    /// Bytes of its buffers (the 64-bit one, the big-tile queue and setups,
+    /// the ranges, and culling's cluster lists, history and depth pyramid).
     pub fn bytes(&self) -> u64 {
         self.width as u64 * self.height as u64 * 8
             + self.big_capacity as u64 * 8
             + self.setup_bytes
             + self.ranges.size()
+            + self.cull.bytes
     }
 }
 
-/// This frame's (object, first triangle) ranges of the visible objects, and
-/// the number of visible triangles.
-pub fn visible_ranges(scene: &SceneGpu, visible: &[bool]) -> (Vec<[u32; 2]>, u32) {
+/// The depth pyramid's levels at `width` x `height` (each half the last,
+/// rounded up, down to 1x1; level 0 from the pixels) and its texels.
+fn hiz_levels(width: u32, height: u32) -> (Vec<GpuHizLevel>, u64) {
+    let mut levels = Vec::new();
+    let (mut src, mut src_offset, mut offset) = ((width, height), 0, 0u32);
+    loop {
+        let dst = (src.0.div_ceil(2), src.1.div_ceil(2));
+        levels.push(GpuHizLevel {
+            src_offset,
+            src_width: src.0,
+            src_height: src.1,
+            dst_offset: offset,
+            dst_width: dst.0,
+            dst_height: dst.1,
+            from_pixels: u32::from(levels.is_empty()),
+            pad: 0,
+        });
+        src_offset = offset;
+        offset += dst.0 * dst.1;
+        src = dst;
+        if dst == (1, 1) {
+            break;
+        }
+    }
+    assert!(levels.len() <= 16, "a {width}x{height} pyramid has more levels than cull.wgsl holds");
+    (levels, offset as u64)
+}
+
+/// This frame's ranges of the visible objects, (object, first triangle in
+/// the frame's list, first triangle in the scene's numbering, 0), and the
+/// number of visible triangles.
+pub fn visible_ranges(scene: &SceneGpu, visible: &[bool]) -> (Vec<[u32; 4]>, u32) {
     let mut ranges = Vec::new();
     let mut total = 0u32;
     for (object, d) in scene.draws.iter().enumerate().filter(|(i, _)| visible[*i]) {
-        ranges.push([object as u32, total]);
+        ranges.push([object as u32, total, scene.object_clusters[object][3], 0]);
         total += d.index_count / 3;
     }
     (ranges, total)
+}
+
+/// A 2D dispatch of `groups` workgroups (at most [`MAX_GROUPS_X`] along x).
+fn split(groups: u32) -> (u32, u32) {
+    let x = groups.clamp(1, MAX_GROUPS_X);
+    (x, groups.div_ceil(x))
 }
 
 /// Reads: the scene and the frame's visible objects. Writes: `pass`'s output
@@ -384,6 +698,36 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
     frame.queue.write_buffer(&pass.raster_params, 0, bytemuck::bytes_of(&raster));
     let resolve = GpuResolveParams { width: pass.width, height: pass.height, range_count, pad: 0 };
     frame.queue.write_buffer(&pass.resolve_params, 0, bytemuck::bytes_of(&resolve));
+    let culling = frame.scene.culling;
+    let mut chunks: Vec<[u32; 2]> = Vec::new();
+    if culling != Culling::None {
+        for (r, range) in ranges.iter().enumerate() {
+            let clusters = frame.scene.object_clusters[range[0] as usize][1];
+            chunks.extend((0..clusters).step_by(CULL_CHUNK as usize).map(|first| [r as u32, first]));
+        }
+        if !chunks.is_empty() {
+            frame.queue.write_buffer(&pass.cull.chunks, 0, bytemuck::cast_slice(&chunks));
+        }
+        let mut level_offsets = [glam::UVec4::ZERO; 4];
+        for (k, (l, _)) in pass.cull.levels.iter().enumerate() {
+            level_offsets[k / 4][k % 4] = l.dst_offset;
+        }
+        let flags = if frame.scene.cull_back_faces { CULL_CONE } else { 0 }
+            | if culling == Culling::Occlusion { CULL_OCCLUSION } else { 0 };
+        let params = GpuCullParams {
+            range_count,
+            flags,
+            capacity: pass.cull.capacity,
+            levels: pass.cull.levels.len() as u32,
+            width: pass.width,
+            height: pass.height,
+            chunk_count: chunks.len() as u32,
+            pad: 0,
+            level_offsets,
+        };
+        frame.queue.write_buffer(&pass.cull.params, 0, bytemuck::bytes_of(&params));
+        frame.encoder.clear_buffer(&pass.cull.counts, 0, None);
+    }
     frame.encoder.clear_buffer(&pass.big_count, 0, None);
     if let Some(c) = &pass.counting {
         frame.encoder.clear_buffer(&c.counts, 0, None);
@@ -396,22 +740,26 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         cp.set_bind_group(0, &pass.resolve_group, &[]);
         cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1);
     }
-    if triangles > 0 {
-        let scene = frame.scene_group;
-        let groups = triangles.div_ceil(RASTER_WORKGROUP);
-        let groups_x = groups.min(MAX_GROUPS_X);
-        {
-            let mut cp = frame.compute_pass("vis: raster");
-            cp.set_pipeline(&pass.raster);
-            cp.set_bind_group(0, scene, &[]);
-            cp.set_bind_group(1, &pass.raster_group, &[]);
-            cp.dispatch_workgroups(groups_x, groups.div_ceil(groups_x), 1);
+    if range_count > 0 && culling == Culling::None {
+        let groups = split(triangles.div_ceil(RASTER_WORKGROUP));
+        raster_passes(frame, pass, &pass.raster, None, groups, "");
+    } else if range_count > 0 {
+        let groups = split(chunks.len() as u32);
+        cull_pass(frame, pass, &pass.cull.early, "vis: cull", groups);
+        raster_passes(frame, pass, &pass.cull.raster, Some(0), groups, "");
+        if culling == Culling::Occlusion {
+            {
+                let mut cp = frame.compute_pass("vis: hiz");
+                cp.set_pipeline(&pass.cull.reduce);
+                for (l, offset) in &pass.cull.levels {
+                    cp.set_bind_group(0, &pass.cull.hiz_group, &[*offset]);
+                    cp.dispatch_workgroups(l.dst_width.div_ceil(8), l.dst_height.div_ceil(8), 1);
+                }
+            }
+            cull_pass(frame, pass, &pass.cull.late, "vis: cull late", groups);
+            frame.encoder.clear_buffer(&pass.big_count, 0, None);
+            raster_passes(frame, pass, &pass.cull.raster, Some(1), groups, " late");
         }
-        let mut cp = frame.compute_pass("vis: raster big");
-        cp.set_pipeline(&pass.raster_big);
-        cp.set_bind_group(0, scene, &[]);
-        cp.set_bind_group(1, &pass.raster_group, &[]);
-        cp.dispatch_workgroups(BIG_WORKGROUPS, 1, 1);
     }
     {
         let mut cp = frame.compute_pass("vis: resolve");
@@ -421,5 +769,57 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
     }
     if let Some(c) = &mut pass.counting {
         c.readback.copy(frame.device, frame.encoder, &c.counts, COUNTS_BYTES, frame.number);
+        if culling != Culling::None {
+            c.cull.copy(frame.device, frame.encoder, &pass.cull.counts, CULL_COUNTS_BYTES, frame.number);
+        }
     }
+}
+
+/// `entry` of `cull.wgsl` over the visible objects (`groups`), then `finish`
+/// sizing the lists' dispatches.
+fn cull_pass(
+    frame: &mut Frame,
+    pass: &ComputeVisibility,
+    entry: &wgpu::ComputePipeline,
+    label: &str,
+    groups: (u32, u32),
+) {
+    let scene = frame.scene_group;
+    let mut cp = frame.compute_pass(label);
+    cp.set_bind_group(0, scene, &[]);
+    cp.set_bind_group(1, &pass.cull.group, &[]);
+    cp.set_pipeline(entry);
+    cp.dispatch_workgroups(groups.0, groups.1, 1);
+    cp.set_pipeline(&pass.cull.finish);
+    cp.dispatch_workgroups(1, 1, 1);
+}
+
+/// `vis: raster{suffix}` with `entry` (`raster`: `groups` workgroups;
+/// `raster_clusters`: indirect, over cluster list `list`), then `vis: raster
+/// big{suffix}` over the tiles it queued.
+fn raster_passes(
+    frame: &mut Frame,
+    pass: &ComputeVisibility,
+    entry: &wgpu::ComputePipeline,
+    list: Option<usize>,
+    groups: (u32, u32),
+    suffix: &str,
+) {
+    let scene = frame.scene_group;
+    let group = &pass.cull.raster_groups[list.unwrap_or(0)];
+    {
+        let mut cp = frame.compute_pass(&format!("vis: raster{suffix}"));
+        cp.set_pipeline(entry);
+        cp.set_bind_group(0, scene, &[]);
+        cp.set_bind_group(1, group, &[]);
+        match list {
+            Some(l) => cp.dispatch_workgroups_indirect(&pass.cull.dispatch, l as u64 * 12),
+            None => cp.dispatch_workgroups(groups.0, groups.1, 1),
+        }
+    }
+    let mut cp = frame.compute_pass(&format!("vis: raster big{suffix}"));
+    cp.set_pipeline(&pass.raster_big);
+    cp.set_bind_group(0, scene, &[]);
+    cp.set_bind_group(1, group, &[]);
+    cp.dispatch_workgroups(BIG_WORKGROUPS, 1, 1);
 }

@@ -1,26 +1,16 @@
-// Compute rasterizer of the visibility pass: one thread per triangle of the
-// visible objects writes, per covered pixel, one 64-bit
-// `atomicMax(depth_bits << 32 | payload)` (reversed Z: nearer is greater, and
-// positive floats order like their bits). The payload is the complement of
-// the triangle's index in this frame's list of visible triangles, so that at
-// equal depth the triangle drawn first wins, as with the raster path's
-// `Greater` test, and 0 (background) is no triangle's; the resolve pass turns
-// it back into (object, triangle) through `ranges`.
+// Compute rasterizer of the visibility pass: one thread per triangle writes,
+// per covered pixel, one 64-bit `atomicMax(depth_bits << 32 | payload)`
+// (reversed Z: nearer is greater, and positive floats order like their
+// bits). The payload is the complement of the triangle's index in the
+// scene's numbering (objects' triangles back to back, in object order), so
+// that at equal depth the triangle drawn first without culling wins, as with
+// the raster path's `Greater` test, whichever triangles culling skipped; 0
+// (background) is no triangle's. The resolve pass turns it back into
+// (object, triangle) through `ranges`.
 //
-// Alpha-masked objects (compiled with ALPHA_MASK, for scenes that have
-// them): a covered pixel nearer than what the pixel holds is kept only where
-// the triangle's base colour alpha passes the cutoff (`cut_away`).
-//
-// Coverage, as the hardware decides it: a triangle wholly in front of the
-// near plane and inside the guard band is snapped to 1/256 pixel (8
-// sub-pixel bits, as NVIDIA GPUs and llvmpipe snap) and its edge functions
-// are evaluated exactly in 64-bit integers, with the top-left rule: watertight,
-// and the same pixels as the raster path. A triangle crossing the near plane
-// is rasterized in homogeneous coordinates instead (Olano and Greer 1997): the
-// edge functions of clip-space (x, y, w) vertices stay exact for vertices
-// behind the eye, so no triangle is split; the bounding box comes from the
-// triangle clipped against the near plane. Either way the near and far planes
-// are clipped per pixel by the interpolated depth.
+// Two ways to find the triangles: `raster` runs one thread per triangle of
+// the visible objects (`ranges`); `raster_clusters` one workgroup per entry of
+// a list of clusters that `cull.wgsl` kept, one thread per triangle of it.
 #import shadespace::scene_bindings::{view, object_clip_position, objects, triangle_vertices}
 #ifdef ALPHA_MASK
 #import shadespace::scene::{alpha_cut, vertex_uv0}
@@ -40,9 +30,10 @@ struct RasterParams {
 }
 
 @group(1) @binding(0) var<uniform> params: RasterParams;
-// Per visible object: (object, index of its first triangle in this frame's
-// list), ascending.
-@group(1) @binding(1) var<storage, read> ranges: array<vec2u>;
+// Per visible object, ascending: (object, index of its first triangle in
+// this frame's list of visible triangles, index of its first triangle in the
+// scene's numbering, 0).
+@group(1) @binding(1) var<storage, read> ranges: array<vec4u>;
 // Per pixel: depth bits << 32 | payload; 0 = background.
 @group(1) @binding(2) var<storage, read_write> depth_ids: array<atomic<u64>>;
 // Big triangles' work: (entry of `big_setups`, tile of the triangle's
@@ -58,10 +49,37 @@ struct BigCounts {
 // Big triangles, set up once by the thread that queues their tiles.
 @group(1) @binding(5) var<storage, read_write> big_setups: array<Setup>;
 
+// Mirrors `clusters::GpuCluster`.
+struct Cluster {
+    min: vec3f,
+    // First entry of `cluster_triangles`.
+    first: u32,
+    max: vec3f,
+    count: u32,
+    center: vec3f,
+    radius: f32,
+    cone_axis: vec3f,
+    cone_cutoff: f32,
+}
+// Which list of `cluster_lists` a `raster_clusters` dispatch reads.
+struct ListParams {
+    // Entry of `list_counts` holding its length.
+    index: u32,
+    // Its first entry in `cluster_lists`.
+    base: u32,
+}
+@group(1) @binding(6) var<storage, read> clusters: array<Cluster>;
+// Per cluster entry: a triangle of the cluster's mesh.
+@group(1) @binding(7) var<storage, read> cluster_triangles: array<u32>;
+// (entry of `ranges`, cluster), written by `cull.wgsl`.
+@group(1) @binding(8) var<storage, read> cluster_lists: array<vec2u>;
+@group(1) @binding(9) var<storage, read> list_counts: array<u32>;
+@group(1) @binding(10) var<uniform> list: ListParams;
+
 #ifdef COUNT
 // The profiling variant's work counts (`compute::RasterCount`), each added
 // once per thread.
-@group(1) @binding(6) var<storage, read_write> counts: array<atomic<u32>, 9>;
+@group(1) @binding(11) var<storage, read_write> counts: array<atomic<u32>, 9>;
 #endif
 
 // Adds n to work count `k` (nothing unless built with COUNT).
@@ -141,13 +159,14 @@ struct Setup {
 // `Setup.owns` bit of a triangle whose object is alpha-masked.
 const MASKED: u32 = 8u;
 
-// Index of the entry of `ranges` holding list triangle `index`.
-fn find_range(index: u32) -> u32 {
+// Index of the entry of `ranges` whose component `k` (1: the frame's list,
+// 2: the scene's numbering) is the last at most `index`.
+fn find_range(index: u32, k: u32) -> u32 {
     var lo = 0u;
     var hi = params.range_count - 1u;
     while lo < hi {
         let mid = (lo + hi + 1u) / 2u;
-        if ranges[mid].y <= index {
+        if ranges[mid][k] <= index {
             lo = mid;
         } else {
             hi = mid - 1u;
@@ -327,17 +346,16 @@ fn setup_fixed(h: array<vec4f, 3>, s: ptr<function, Setup>) -> bool {
     return true;
 }
 
-fn setup_triangle(index: u32) -> Setup {
-    let range = ranges[find_range(index)];
-    let object = range.x;
-    let tri = triangle_vertices(objects[object], index - range.y);
+// Sets up triangle `triangle` of `object`, whose payload is `payload`.
+fn setup_triangle(object: u32, triangle: u32, payload: u32) -> Setup {
+    let tri = triangle_vertices(objects[object], triangle);
     let h = array<vec4f, 3>(
         object_clip_position(object, tri.x),
         object_clip_position(object, tri.y),
         object_clip_position(object, tri.z),
     );
     var s: Setup;
-    s.payload = ~index;
+    s.payload = payload;
     s.bounds = vec4i(0, 0, -1, -1);
 #ifdef ALPHA_MASK
     let masked = select(0u, MASKED, objects[object].alpha_cutoff > 0.0);
@@ -401,7 +419,7 @@ fn uv_at(n0: vec3f, n1: vec3f, n2: vec3f, uv0: vec2f, uv1: vec2f, uv2: vec2f, p:
     return (e.x * uv0 + e.y * uv1 + e.z * uv2) / (e.x + e.y + e.z);
 }
 
-// Whether list triangle ~payload, of an alpha-masked object, is cut away at
+// Whether scene triangle ~payload, of an alpha-masked object, is cut away at
 // pixel p: its base colour texel's alpha there, at the level its UV
 // derivatives across the pixel's 2x2 quad give, as fragment shaders take
 // them (coarse: from the quad's first pixel). On lavapipe the ids of masked
@@ -412,9 +430,9 @@ fn uv_at(n0: vec3f, n1: vec3f, n2: vec3f, uv0: vec2f, uv1: vec2f, uv2: vec2f, p:
 // up once.
 fn cut_away(payload: u32, p: vec2i) -> bool {
     let index = ~payload;
-    let range = ranges[find_range(index)];
+    let range = ranges[find_range(index, 2u)];
     let o = objects[range.x];
-    let tri = triangle_vertices(o, index - range.y);
+    let tri = triangle_vertices(o, index - range.z);
     let c0 = object_clip_position(range.x, tri.x).xyw;
     let c1 = object_clip_position(range.x, tri.y).xyw;
     let c2 = object_clip_position(range.x, tri.z).xyw;
@@ -511,7 +529,37 @@ fn raster(
     if index >= params.triangle_count {
         return;
     }
-    let s = setup_triangle(index);
+    let range = ranges[find_range(index, 1u)];
+    let triangle = index - range.y;
+    raster_triangle(setup_triangle(range.x, triangle, ~(range.z + triangle)));
+}
+
+// One workgroup per entry of the list `list` names (dispatched indirectly,
+// `cull.wgsl`'s `finish` sizes it): thread i rasterizes the cluster's
+// triangle i.
+@compute @workgroup_size(RASTER_WORKGROUP)
+fn raster_clusters(
+    @builtin(workgroup_id) group: vec3u,
+    @builtin(num_workgroups) groups: vec3u,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let entry = group.y * groups.x + group.x;
+    if entry >= list_counts[list.index] {
+        return;
+    }
+    let item = cluster_lists[list.base + entry];
+    let c = clusters[item.y];
+    if local >= c.count {
+        return;
+    }
+    let range = ranges[item.x];
+    let triangle = cluster_triangles[c.first + local];
+    raster_triangle(setup_triangle(range.x, triangle, ~(range.z + triangle)));
+}
+
+// Rasterizes a set-up triangle: small ones here, big ones queued for
+// `raster_big` as tiles.
+fn raster_triangle(s: Setup) {
     let extent = s.bounds.zw - s.bounds.xy + 1;
     if any(extent <= vec2i(0)) {
         return;

@@ -14,8 +14,9 @@ struct ResolveParams {
 }
 
 @group(0) @binding(0) var<uniform> params: ResolveParams;
-// Per visible object: (object, index of its first triangle in this frame's list).
-@group(0) @binding(1) var<storage, read> ranges: array<vec2u>;
+// Per visible object: (object, index of its first triangle in this frame's
+// list, index of its first triangle in the scene's numbering, 0).
+@group(0) @binding(1) var<storage, read> ranges: array<vec4u>;
 // Per pixel: (payload, depth bits), the halves of `raster.wgsl`'s `depth_ids`.
 @group(0) @binding(2) var<storage, read_write> depth_ids: array<vec2u>;
 @group(0) @binding(3) var visibility: texture_storage_2d<rg32uint, write>;
@@ -35,20 +36,20 @@ fn resolve(@builtin(global_invocation_id) id: vec3u) {
     let payload = depth_ids[id.y * params.width + id.x].x;
     var ids = vec2u(0u);
     if payload != 0u {
-        // The payload is the complement of the index in the frame's list; the
+        // The payload is the complement of the scene's triangle index; the
         // entry is the last visible object whose first triangle is at most it.
         let index = ~payload;
         var lo = 0u;
         var hi = params.range_count - 1u;
         while lo < hi {
             let mid = (lo + hi + 1u) / 2u;
-            if ranges[mid].y <= index {
+            if ranges[mid].z <= index {
                 lo = mid;
             } else {
                 hi = mid - 1u;
             }
         }
-        ids = vec2u(ranges[lo].x + 1u, index - ranges[lo].y);
+        ids = vec2u(ranges[lo].x + 1u, index - ranges[lo].z);
     }
     textureStore(visibility, id.xy, vec4u(ids, 0u, 0u));
 }
