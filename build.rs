@@ -11,7 +11,11 @@ fn git(args: &[&str]) -> Option<String> {
 fn main() {
     let commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
     // Tracked files changed since the commit: the build is not that commit.
-    let modified = git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
+    // Without optional locks `git status` does not rewrite the index it
+    // refreshes, which would rerun this script (it watches the index) and
+    // rebuild the crate on the next cargo command.
+    let modified =
+        git(&["--no-optional-locks", "status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
     let suffix = if modified { "-modified" } else { "" };
     println!("cargo:rustc-env=SHADESPACE_GIT_COMMIT={commit}{suffix}");
     for path in ["src", "Cargo.toml", "build.rs"] {

@@ -6,7 +6,9 @@ use std::str::FromStr;
 
 use clap::{Args, ValueEnum};
 use glam::Vec3;
-use shadespace::render::objectspace::{DEFAULT_PAGE_SIZE, GatherInput, MAX_ATLAS_BUDGET_MI, Marking, PagingChain};
+use shadespace::render::objectspace::{
+    DEFAULT_PAGE_SIZE, DEFAULT_TRIMAP_LANES, GatherInput, MAX_ATLAS_BUDGET_MI, Marking, PagingChain,
+};
 use shadespace::render::{Culling, Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
 
@@ -144,13 +146,15 @@ pub struct SceneArgs {
     /// culled on the GPU before rasterizing (objects outside the view are
     /// skipped on the CPU in every mode): `none` (every triangle of every
     /// object in view), `frustum` (clusters outside the view, and with
-    /// --cull-back-faces those facing away) or `occlusion` (default: also
-    /// two-pass occlusion against a depth pyramid of the clusters visible
-    /// last frame). The visibility buffer is the same in every mode; with
+    /// --cull-back-faces those facing away) or `occlusion` (also two-pass
+    /// occlusion against a depth pyramid of the clusters visible last
+    /// frame). Default: `occlusion` for scenes of 64 objects or more (the
+    /// city), `none` for fewer (Sponza, a model), the faster on each. The
+    /// visibility buffer is the same in every mode; with
     /// --count-visibility the counters cull_tested, cull_frustum, cull_cone,
     /// cull_occlusion and cull_drawn (docs/culling.md).
-    #[arg(long, value_name = "none|frustum|occlusion", default_value = "occlusion", value_parser = parse::culling)]
-    pub culling: Culling,
+    #[arg(long, value_name = "none|frustum|occlusion", value_parser = parse::culling)]
+    pub culling: Option<Culling>,
     /// `default`: the scene's materials; `high`: every material with Phong
     /// exponent 1500, GGX roughness 0.05 and specular strength at least 1, to
     /// provoke specular aliasing (normal maps: the file's or --textures detailed).
@@ -289,17 +293,17 @@ pub struct ObjectSpaceArgs {
     /// workgroup atomics: for profiling, not for timing).
     #[arg(long)]
     pub count_marks: bool,
-    /// How the passes that back requested pages are recorded: `split`
-    /// (default: paging, backed args, triangle maps, mark backed and queue
-    /// each a pass) or `fused` (the triangle-map pass marks the backed
-    /// pages, and the dispatch arguments are written with paging's: three
-    /// passes fewer a frame). Both give the same pages, tiles and image.
-    #[arg(long, value_enum, default_value = "split")]
+    /// How the passes that back requested pages are recorded: `fused`
+    /// (default: the triangle-map pass marks the backed pages, and the
+    /// dispatch arguments are written with paging's) or `split` (paging,
+    /// backed args, triangle maps, mark backed and queue each a pass: three
+    /// passes more a frame). Both give the same pages, tiles and image.
+    #[arg(long, value_enum, default_value = "fused")]
     pub os_paging: PagingChain,
     /// Invocations weighing each texel's triangles in the triangle-map pass
     /// (1, 2, 4 or 8): more lanes shorten the slowest page, whose cells hold
     /// the most triangles. The maps are the same.
-    #[arg(long, default_value_t = 1, value_parser = parse::trimap_lanes)]
+    #[arg(long, default_value_t = DEFAULT_TRIMAP_LANES, value_parser = parse::trimap_lanes)]
     pub os_trimap_lanes: u32,
     /// What the gather reads for each pixel's chart UV and levels: `surface`
     /// (default: it rebuilds the pixel's surface as marking did) or `record`

@@ -257,5 +257,7 @@ pub fn configure(renderer: &mut Renderer, a: &SceneArgs, s: &Setup) {
     renderer.shadow_refresh = a.shadow_refresh;
     renderer.sun_shadow = a.sun_shadow;
     renderer.shading = a.shading;
-    renderer.culling = a.culling;
+    if let Some(culling) = a.culling {
+        renderer.culling = culling;
+    }
 }

@@ -31,6 +31,7 @@ use crate::shaders::gpu_struct;
 #[serde(rename_all = "kebab-case")]
 pub enum Culling {
     /// Every triangle of every object in view is rasterized.
+    #[default]
     None,
     /// Clusters outside the frustum, and under back-face culling those whose
     /// normal cone faces away, are skipped (GPU).
@@ -38,12 +39,26 @@ pub enum Culling {
     /// [`Culling::Frustum`], then two-pass occlusion: the clusters visible
     /// last frame are drawn, a depth pyramid is built from them, the rest
     /// are tested against it and the newly visible drawn.
-    #[default]
     Occlusion,
 }
 
+/// Objects from which a scene is culled by occlusion by default
+/// ([`Culling::for_scene`]).
+pub const OCCLUSION_OBJECTS: usize = 64;
+
 impl Culling {
     pub const ALL: [Self; 3] = [Self::None, Self::Frustum, Self::Occlusion];
+
+    /// The default for a scene of `objects` objects (instances): two-pass
+    /// occlusion where there are many to hide one another, none where there
+    /// are few. On the H200 at 1920x1080 (BENCHMARKS.md, "Cluster culling"),
+    /// occlusion took the city's street-path visibility from 1.98 to 0.57
+    /// ms, but Sponza's (15 objects, seen from inside, few clusters hidden)
+    /// from 0.67 to 0.76 ms; frustum culling alone cost 0.01-0.1 ms more
+    /// than none on every path.
+    pub fn for_scene(objects: usize) -> Self {
+        if objects >= OCCLUSION_OBJECTS { Self::Occlusion } else { Self::None }
+    }
 
     /// The name `--culling` takes.
     pub fn name(self) -> &'static str {

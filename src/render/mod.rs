@@ -17,6 +17,7 @@ pub mod forward;
 pub mod forward_multipass;
 pub mod frame;
 pub mod gpu_types;
+pub mod mesh_memo;
 pub mod objectspace;
 pub mod passes;
 pub mod report;
@@ -402,7 +403,7 @@ impl Renderer {
             shadow_refresh: ShadowRefresh::default(),
             sun_shadow: false,
             shading: ShadingModel::Phong,
-            culling: Culling::default(),
+            culling: Culling::for_scene(scene.objects.len()),
             jitter: glam::Vec2::ZERO,
             shadows,
             lights_hash: None,

@@ -5,13 +5,13 @@ use glam::{Mat4, Vec4};
 use image::imageops::FilterType;
 use wgpu::util::DeviceExt;
 
-use super::clusters::{self, Culling, GpuCluster};
+use super::clusters::{Culling, GpuCluster};
 use super::culling::LightLists;
 use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView, NO_TEXTURE};
+use super::mesh_memo;
 use super::passes::environment::{self, EnvironmentMaps};
 use super::passes::shadows::{ShadowAtlas, ShadowPlan};
 use super::passes::{Binding, bind_group_layout_for};
-use crate::charts::islands::triangle_islands;
 use crate::materials::{GpuLayer, LayerKind};
 use crate::scene::{Aabb, Camera, Light, Scene};
 
@@ -73,11 +73,11 @@ pub struct SceneGpu {
     pub object_data: Vec<GpuObject>,
     pub triangle_count: u64,
     /// Per triangle of the index buffer: its chart island in its mesh's
-    /// chart UVs ([`triangle_islands`]; object space filters within it).
+    /// chart UVs ([`triangle_islands`](crate::charts::islands::triangle_islands); object space filters within it).
     pub triangle_charts: wgpu::Buffer,
     /// The scene's [`Scene::cull_back_faces`].
     pub cull_back_faces: bool,
-    /// Every mesh's clusters ([`clusters::build`]), mesh after mesh.
+    /// Every mesh's clusters ([`clusters::build`](super::clusters::build)), mesh after mesh.
     pub clusters: wgpu::Buffer,
     /// The clusters' triangles (indices of their mesh's triangles), cluster
     /// after cluster.
@@ -214,8 +214,10 @@ impl SceneGpu {
         let indices_buf = storage("indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
         // Chart island of every triangle, in index-buffer order (at least one
         // entry: empty buffers cannot be bound).
-        let mut islands: Vec<u32> =
-            scene.meshes.iter().flat_map(|m| triangle_islands(&m.indices, m.uv1.as_ref().unwrap_or(&m.uv0))).collect();
+        let mut islands: Vec<u32> = Vec::new();
+        for m in &scene.meshes {
+            islands.extend_from_slice(&mesh_memo::islands(&m.indices, m.uv1.as_ref().unwrap_or(&m.uv0)));
+        }
         if islands.is_empty() {
             islands.push(0);
         }
@@ -459,7 +461,7 @@ impl SceneGpu {
 fn upload_clusters(scene: &Scene) -> (Vec<GpuCluster>, Vec<u32>, Vec<(u32, u32)>) {
     let (mut gpu, mut triangles, mut ranges) = (Vec::new(), Vec::new(), Vec::new());
     for mesh in &scene.meshes {
-        let mc = clusters::build(&mesh.positions, &mesh.indices);
+        let mc = mesh_memo::clusters(&mesh.positions, &mesh.indices);
         ranges.push((gpu.len() as u32, mc.clusters.len() as u32));
         let base = triangles.len() as u32;
         gpu.extend(mc.clusters.iter().map(|c| GpuCluster::new(c, base + c.first)));

@@ -401,13 +401,15 @@ pub enum PagingChain {
     /// Six passes, eleven dispatches: paging (age, offsets, list), allocate
     /// (allocate, release chunks, claim blocks, bind pages), backed args,
     /// triangle maps, mark backed, queue (the shade dispatch's arguments).
-    #[default]
     Split,
     /// Three passes, eight dispatches: the offsets write the backed pages'
     /// and the shade's dispatch arguments as bounds (known once marking is
     /// done; extra workgroups return), and the triangle-map workgroup of a
     /// page also marks its requested tiles: no backed args, mark backed or
-    /// queue pass, each a launch and a barrier.
+    /// queue pass, each a launch and a barrier. The default: 0.04 ms less
+    /// a frame along Sponza's path at 1920x1080 on the H200 (BENCHMARKS.md,
+    /// "Object space's variants").
+    #[default]
     Fused,
 }
 
@@ -428,6 +430,11 @@ pub enum GatherInput {
 
 /// The triangle-map pass's invocations per texel (`--os-trimap-lanes`).
 pub const TRIMAP_LANES: [u32; 4] = [1, 2, 4, 8];
+/// [`ObjectSpaceConfig::trimap_lanes`]'s default: the triangle-map pass
+/// took 0.061 ms with 4 lanes against 0.177 with 1 and 0.051 with 8 along
+/// Sponza's path at 1920x1080 on the H200; 4 lanes make workgroups of 256
+/// invocations, the most every adapter must allow (8 make 512).
+pub const DEFAULT_TRIMAP_LANES: u32 = 4;
 
 /// Settings of the object-space pipeline.
 #[derive(Clone, Debug, Serialize)]
@@ -527,8 +534,8 @@ impl Default for ObjectSpaceConfig {
             shade_budget_texels: None,
             extra_views: ExtraViews::None,
             slot_timeout: DEFAULT_SLOT_TIMEOUT,
-            paging_chain: PagingChain::Split,
-            trimap_lanes: 1,
+            paging_chain: PagingChain::Fused,
+            trimap_lanes: DEFAULT_TRIMAP_LANES,
             gather_input: GatherInput::Surface,
         }
     }
