@@ -146,13 +146,12 @@ fn covering_triangle(o: Object, g: ChartGrid, size: u32, texel: vec2u) -> u32 {
     return select(n.near_id, n.touching_id, n.touching_id != 0u);
 }
 
-#ifndef TRIMAP_LANES
-@compute @workgroup_size(8, 8)
-fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
-         @builtin(local_invocation_id) lid: vec3u, @builtin(local_invocation_index) li: u32) {
-    let index = wg.y * groups.x + wg.x;
+/// Whether workgroup `index` has a page backed this frame to map: if so it
+/// is counted and (with the fused paging chain) its requested tiles marked.
+/// Both `build` variants start so.
+fn claim_page(index: u32, li: u32) -> bool {
     if index >= min(atomicLoad(&counters[COUNT_PAGES_BACKED]), params.physical_pages) {
-        return;
+        return false;
     }
     if li == 0u {
         atomicAdd(&counters[COUNT_TRIMAP_PAGES], 1u);
@@ -160,6 +159,17 @@ fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
 #ifdef MARK_BACKED
     mark_backed_page(index, li);
 #endif
+    return true;
+}
+
+#ifndef TRIMAP_LANES
+@compute @workgroup_size(8, 8)
+fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+         @builtin(local_invocation_id) lid: vec3u, @builtin(local_invocation_index) li: u32) {
+    let index = wg.y * groups.x + wg.x;
+    if !claim_page(index, li) {
+        return;
+    }
     let b = backed[index];
     let object = b.y >> 8u;
     let l = entry_level(object, b.y & 0xffu);
@@ -240,15 +250,9 @@ fn nearer(a: Nearest, b: Nearest) -> Nearest {
 fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
          @builtin(local_invocation_id) lid: vec3u, @builtin(local_invocation_index) li: u32) {
     let index = wg.y * groups.x + wg.x;
-    if index >= min(atomicLoad(&counters[COUNT_PAGES_BACKED]), params.physical_pages) {
+    if !claim_page(index, li) {
         return;
     }
-    if li == 0u {
-        atomicAdd(&counters[COUNT_TRIMAP_PAGES], 1u);
-    }
-#ifdef MARK_BACKED
-    mark_backed_page(index, li);
-#endif
     let b = backed[index];
     let object = b.y >> 8u;
     let l = entry_level(object, b.y & 0xffu);
