@@ -64,6 +64,7 @@ pub mod experiments;
 pub mod gpu;
 pub mod hash;
 pub mod materials;
+pub mod memo;
 pub mod metrics;
 pub mod reference;
 pub mod render;

@@ -1,6 +1,8 @@
 //! The scene on the GPU: vertices, indices, objects, material textures, view,
 //! lights and the shadow atlas, bound as group 0 by every pipeline.
 
+use std::sync::Arc;
+
 use glam::{Mat4, Vec4};
 use image::imageops::FilterType;
 use wgpu::util::DeviceExt;
@@ -12,7 +14,9 @@ use super::mesh_memo;
 use super::passes::environment::{self, EnvironmentMaps};
 use super::passes::shadows::{ShadowAtlas, ShadowPlan};
 use super::passes::{Binding, bind_group_layout_for};
+use crate::hash::Fnv1a;
 use crate::materials::{GpuLayer, LayerKind};
+use crate::memo::Memo;
 use crate::scene::{Aabb, Camera, Light, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
@@ -602,6 +606,38 @@ fn upload_textures(
     (albedo, scene.textures.len() as u32, linear_maps, linear_layers)
 }
 
+/// Texture mip chains remembered at most (bytes): Sponza with detailed
+/// textures holds about 300 MiB of them.
+const MIP_CHAIN_BUDGET: usize = 512 << 20;
+
+static MIP_CHAINS: Memo<Vec<image::RgbaImage>> =
+    Memo::new(MIP_CHAIN_BUDGET, |chain| chain.iter().map(|level| level.as_raw().len()).sum());
+
+/// The image of `width` x `height` RGBA8 texels `rgba8` resized to `size`
+/// x `size` and its mip chain down to 1 x 1, each level filtered from the
+/// one above (triangle filter), remembered by content ([`crate::memo`]): a
+/// renderer built again over the same scene filters nothing.
+fn mip_chain(width: u32, height: u32, rgba8: &[u8], size: u32) -> Arc<Vec<image::RgbaImage>> {
+    let mut h = Fnv1a::default();
+    h.write_pod(&[size, width, height]);
+    h.write_pod(rgba8);
+    MIP_CHAINS.get(h.finish(), || {
+        let image = image::RgbaImage::from_raw(width, height, rgba8.to_vec()).expect("4 bytes a texel");
+        let mut level = if (width, height) == (size, size) {
+            image
+        } else {
+            image::imageops::resize(&image, size, size, FilterType::Triangle)
+        };
+        let mut chain = Vec::with_capacity(size.ilog2() as usize + 1);
+        for mip in 1..=size.ilog2() {
+            let next = image::imageops::resize(&level, size >> mip, size >> mip, FilterType::Triangle);
+            chain.push(std::mem::replace(&mut level, next));
+        }
+        chain.push(level);
+        chain
+    })
+}
+
 /// One layer per texture (resized to `size`), then `last`.
 fn upload_array(
     device: &wgpu::Device,
@@ -624,30 +660,23 @@ fn upload_array(
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    let images = textures
+    let chains = textures
         .iter()
         .map(|t| {
-            image::RgbaImage::from_raw(t.width, t.height, t.rgba8.clone())
-                .map(|img| {
-                    if t.width == size && t.height == size {
-                        img
-                    } else {
-                        image::imageops::resize(&img, size, size, FilterType::Triangle)
-                    }
-                })
-                .unwrap_or_else(|| last.clone())
-        })
-        .chain(std::iter::once(last.clone()));
-    for (layer, mut img) in images.enumerate() {
-        for mip in 0..mip_count {
-            let s = (size >> mip).max(1);
-            if mip > 0 {
-                img = image::imageops::resize(&img, s, s, FilterType::Triangle);
+            if t.rgba8.len() == 4 * t.width as usize * t.height as usize {
+                mip_chain(t.width, t.height, &t.rgba8, size)
+            } else {
+                mip_chain(last.width(), last.height(), last.as_raw(), size)
             }
+        })
+        .chain(std::iter::once(mip_chain(last.width(), last.height(), last.as_raw(), size)));
+    for (layer, chain) in chains.enumerate() {
+        for (mip, img) in chain.iter().enumerate() {
+            let s = img.width();
             queue.write_texture(
                 wgpu::TexelCopyTextureInfo {
                     texture: &texture,
-                    mip_level: mip,
+                    mip_level: mip as u32,
                     origin: wgpu::Origin3d { x: 0, y: 0, z: layer as u32 },
                     aspect: wgpu::TextureAspect::All,
                 },

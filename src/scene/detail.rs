@@ -8,11 +8,14 @@
 //! Both textures tile (every noise lattice wraps at the texture's edge), as
 //! the scenes' world-scaled `uv0` repeats them.
 
+use std::sync::Arc;
+
 use glam::{Vec2, Vec3};
 
 use super::{Scene, Texture};
 use crate::color::{linear_to_srgb8, srgb8_to_linear};
 use crate::hash::fnv1a;
+use crate::memo::Memo;
 
 /// Side of the generated textures.
 pub const DETAIL_SIZE: u32 = 512;
@@ -29,7 +32,7 @@ const BRICKS: (u32, u32) = (4, 8);
 /// Textures the materials no longer use stay in the list (their indices are
 /// unchanged).
 pub fn add_detailed_textures(scene: &mut Scene) {
-    let relief = Relief::new(DETAIL_SIZE);
+    let relief = Relief::remembered(DETAIL_SIZE);
     let normal = scene.textures.len();
     scene.textures.push(relief.normal_map("detail normal map"));
     let mut albedos: Vec<(Option<usize>, usize)> = Vec::new();
@@ -57,7 +60,7 @@ pub fn add_detailed_textures(scene: &mut Scene) {
 /// `(name, linear tint)` and its normal map (named `normal_name`), for
 /// generated scenes that want brick facades and paving of their own.
 pub(crate) fn brick_textures(size: u32, tints: &[(&str, Vec3)], normal_name: &str) -> (Vec<Texture>, Texture) {
-    let relief = Relief::new(size);
+    let relief = Relief::remembered(size);
     let albedos = tints.iter().map(|(name, tint)| relief.albedo(name, *tint)).collect();
     (albedos, relief.normal_map(normal_name))
 }
@@ -79,7 +82,16 @@ struct Relief {
     shade: Vec<f32>,
 }
 
+/// Reliefs remembered at most: one per size the scenes use.
+static RELIEFS: Memo<Relief> = Memo::new(8, |_| 1);
+
 impl Relief {
+    /// The relief of `size` texels, made once a process ([`crate::memo`]):
+    /// every load of a scene with detailed textures asks for it.
+    fn remembered(size: u32) -> Arc<Self> {
+        RELIEFS.get(size.into(), || Self::new(size))
+    }
+
     fn new(size: u32) -> Self {
         let n = (size * size) as usize;
         let (mut height, mut shade) = (Vec::with_capacity(n), Vec::with_capacity(n));
