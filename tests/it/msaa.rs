@@ -20,7 +20,7 @@ use shadespace::render::{
     Counters, DeferredComputeConfig, Exposure, ObjectSpaceConfig, PipelineConfig, RenderError, RenderOptions, Renderer,
     ShadingModel, VisibilityMethod, check_samples,
 };
-use shadespace::scene::{Camera, Light, LightKind, Scene, path};
+use shadespace::scene::{Camera, Light, LightKind, Scene, Texture, path};
 
 use crate::common;
 
@@ -240,6 +240,19 @@ fn compute_samples_hold_the_hardware_ids() {
     let raster = sample_ids(&ctx, &scene, &camera, size, VisibilityMethod::Raster, Culling::None);
     let compute = sample_ids(&ctx, &scene, &camera, size, VisibilityMethod::Compute, Culling::None);
     compare_samples("fence", &raster, &compute, size);
+    // Alpha masks: the fence's materials cut into stripes (alpha 1 and 0, 16
+    // texels each of 64), tested once per pixel as the hardware's discard.
+    let mut masked = scene.clone();
+    let alpha = |x: u32| if (x / 16).is_multiple_of(2) { 255 } else { 0 };
+    let rgba8 = (0..64 * 64).flat_map(|i| [200, 200, 200, alpha(i % 64)]).collect();
+    masked.textures.push(Texture { name: "stripes".into(), width: 64, height: 64, rgba8 });
+    let stripes = masked.textures.len() - 1;
+    for m in &mut masked.materials {
+        (m.base_color_texture, m.alpha_cutoff) = (Some(stripes), Some(0.5));
+    }
+    let raster = sample_ids(&ctx, &masked, &camera, size, VisibilityMethod::Raster, Culling::None);
+    let compute = sample_ids(&ctx, &masked, &camera, size, VisibilityMethod::Compute, Culling::None);
+    compare_samples("fence, alpha-masked", &raster, &compute, size);
     if !Path::new(SPONZA).is_dir() {
         eprintln!("SKIPPED Sponza: {SPONZA} is absent");
         return;

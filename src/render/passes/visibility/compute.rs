@@ -313,6 +313,10 @@ pub enum ComputeVisibilityError {
         "compute visibility needs 64-bit atomics (SHADER_INT64, SHADER_INT64_ATOMIC_MIN_MAX), which this adapter lacks"
     )]
     NoInt64Atomics,
+    #[error(
+        "compute visibility at {width}x{height} with {samples} samples per pixel needs a {needed} MiB buffer; this adapter binds at most {max} MiB (take fewer samples or --visibility raster)"
+    )]
+    TooLarge { width: u32, height: u32, samples: u32, needed: u64, max: u64 },
 }
 
 /// The compute rasterizer's pipelines, buffers and bind groups, for one
@@ -369,7 +373,14 @@ impl ComputeVisibility {
             buffer("vis resolve params", size_of::<GpuResolveParams>() as u64, U::UNIFORM | U::COPY_DST);
         let ranges = buffer("vis ranges", (scene.draws.len().max(1) * 16) as u64, U::STORAGE | U::COPY_DST);
         let samples = targets.samples;
-        let depth_ids = buffer("vis depth and ids", width as u64 * height as u64 * u64::from(samples) * 8, U::STORAGE);
+        let depth_bytes = width as u64 * height as u64 * u64::from(samples) * 8;
+        let limits = device.limits();
+        let max = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        if depth_bytes > max {
+            let (needed, max) = (depth_bytes.div_ceil(1 << 20), max >> 20);
+            return Err(ComputeVisibilityError::TooLarge { width, height, samples, needed, max });
+        }
+        let depth_ids = buffer("vis depth and ids", depth_bytes, U::STORAGE);
         // Room for big triangles' tiles covering every pixel 128 times over (a
         // tile holds up to 1024 pixels; boxes of thin triangles and hidden
         // layers count too: on the H100, Sponza at 1080p overflowed a
