@@ -138,12 +138,13 @@ fn shade_texel(texel: GbufferTexel, count: u32, globals: bool) -> vec3f {
     return shade_listed(texel, count);
 }
 
-// A pixel's `shade_texel`: once at its centre where its samples see one
-// surface, else the mean over its samples, each shaded at its own position
-// (background samples black, as forward's cleared samples are).
-fn shade_msaa(pixel: vec2u, samples: PixelSamples, count: u32, globals: bool) -> vec3f {
+// A pixel's `shade_texel`: once at its centre (`centre`, read once for all
+// the lights) where its samples see one surface, else the mean over its
+// samples, each shaded at its own position (background samples black, as
+// forward's cleared samples are).
+fn shade_msaa(pixel: vec2u, samples: PixelSamples, centre: GbufferTexel, count: u32, globals: bool) -> vec3f {
     if !samples.edge {
-        return shade_texel(gbuffer_centre_texel(pixel, samples), count, globals);
+        return shade_texel(centre, count, globals);
     }
     let n = gbuffer_samples();
     var sum = vec3f(0.0);
@@ -226,8 +227,14 @@ fn tiled_lighting(
     let frustum = tile_frustum(lo, hi, range);
     var color = vec3f(0.0);
 #ifdef MSAA
+    // Without edges the surface is rebuilt (the visibility buffer) or read
+    // once, not per light list.
+    var centre: GbufferTexel;
+    if lit && !samples.edge {
+        centre = gbuffer_centre_texel(id.xy, samples);
+    }
     if lit {
-        color = shade_msaa(id.xy, samples, 0u, true);
+        color = shade_msaa(id.xy, samples, centre, 0u, true);
     }
 #else
     var texel: GbufferTexel;
@@ -279,7 +286,7 @@ fn tiled_lighting(
         if filled > TILED_LIST_CAPACITY - TILED_CHUNK || (last && filled > 0u) {
             if lit {
 #ifdef MSAA
-                color += shade_msaa(id.xy, samples, filled, false);
+                color += shade_msaa(id.xy, samples, centre, filled, false);
 #else
                 color += shade_listed(texel, filled);
 #endif
