@@ -49,8 +49,8 @@ pub struct SceneArgs {
     /// MSAA samples per pixel: 1 (default, none), 2, 4 or 8, at the standard
     /// sample positions, resolved (averaged in linear HDR) before exposure,
     /// bloom and tone mapping, in every pipeline (deferred-compute and object
-    /// space with raster visibility). A count the adapter cannot render exits
-    /// with status 2.
+    /// space with either --visibility). A count the adapter cannot render
+    /// exits with status 2.
     #[arg(long, default_value_t = 1, value_parser = parse::msaa)]
     pub msaa: u32,
     /// `path`: the scene's camera path (from cameras.json beside a shared
@@ -132,8 +132,10 @@ pub struct SceneArgs {
     /// rasterizer with 64-bit atomics; surfaces rebuilt from triangle ids) or
     /// `auto` (default: compute where the adapter has 64-bit atomics, which
     /// on the H100 is 1.7x (object space) to 2.2x (deferred-compute) faster
-    /// at 1920x1080, else raster; raster under --msaa above 1, since the
-    /// compute rasterizer writes one sample per pixel).
+    /// at 1920x1080, else raster; raster under --msaa above 1, until the
+    /// H100 has measured the compute rasterizer's samples against it:
+    /// `--visibility compute --msaa N` rasterizes N samples per pixel at the
+    /// standard positions, the same ids as the hardware's).
     #[arg(long, default_value = "auto", value_parser = parse::visibility)]
     pub visibility: VisibilityChoice,
     /// Compute visibility: count the rasterizer's work every frame

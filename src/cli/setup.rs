@@ -52,7 +52,7 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
     }
     if os.views.is_some() && a.msaa > 1 {
         return input(Err(anyhow::anyhow!(
-            "--views needs compute visibility, which has one sample per pixel: not with --msaa {}",
+            "--views renders its views at one sample per pixel: not with --msaa {}",
             a.msaa
         )));
     }

@@ -63,7 +63,7 @@ impl VisibilityRenderer {
             .iter()
             .map(|&(w, h)| -> Result<Target, RenderError> {
                 let targets = Targets::new(device, w, h, 1, false);
-                let buffer = VisibilityBuffer::new(device, &targets);
+                let buffer = VisibilityBuffer::new(device, &targets, method);
                 let pass = match method {
                     VisibilityMethod::Raster => {
                         Pass::Raster(VisibilityPass::new(device, &mut shaders, &scene_gpu, false, 1)?)

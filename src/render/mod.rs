@@ -108,6 +108,16 @@ impl PipelineConfig {
         matches!(self, Self::Forward(_) | Self::ForwardMultipass(_) | Self::Clustered(_))
     }
 
+    /// How the pipeline fills its visibility buffer, for the pipelines
+    /// that have one (`--visibility`); `None` for the others.
+    pub fn visibility(&self) -> Option<VisibilityMethod> {
+        match self {
+            Self::ObjectSpace(c) => Some(c.visibility),
+            Self::DeferredCompute(c) => Some(c.visibility),
+            _ => None,
+        }
+    }
+
     /// The name `--pipeline` takes and reports carry.
     pub fn name(&self) -> &'static str {
         match self {
@@ -147,22 +157,19 @@ pub fn check_samples(ctx: &GpuContext, samples: u32) -> Result<(), RenderError> 
 }
 
 /// [`check_samples`] for a renderer of `pipeline`: also its own targets'
-/// formats (the G-buffer's, the visibility buffer's), and under MSAA raster
-/// visibility (the compute rasterizer writes one sample per pixel).
+/// formats (the G-buffer's, the raster pass's visibility buffer's; the
+/// compute rasterizer's samples are layers, not multisampled).
 pub fn check_samples_for(ctx: &GpuContext, samples: u32, pipeline: &PipelineConfig) -> Result<(), RenderError> {
     check_samples(ctx, samples)?;
     if samples == 1 {
         return Ok(());
     }
-    let (visibility, formats): (_, &[wgpu::TextureFormat]) = match pipeline {
-        PipelineConfig::DeferredCompute(c) => (c.visibility, &passes::gbuffer::BASE_FORMATS),
-        PipelineConfig::Deferred(_) => (VisibilityMethod::Raster, &passes::gbuffer::BASE_FORMATS),
-        PipelineConfig::ObjectSpace(c) => (c.visibility, &[passes::visibility::FORMAT]),
-        _ => (VisibilityMethod::Raster, &[]),
+    let formats: &[wgpu::TextureFormat] = match (pipeline, pipeline.visibility()) {
+        (_, Some(VisibilityMethod::Compute)) => &[],
+        (PipelineConfig::DeferredCompute(_) | PipelineConfig::Deferred(_), _) => &passes::gbuffer::BASE_FORMATS,
+        (PipelineConfig::ObjectSpace(_), _) => &[passes::visibility::FORMAT],
+        _ => &[],
     };
-    if visibility == VisibilityMethod::Compute {
-        return Err(RenderError::SamplesNeedRasterVisibility { samples, pipeline: pipeline.name() });
-    }
     check_sample_formats(ctx, samples, formats)
 }
 
@@ -261,10 +268,6 @@ pub enum RenderError {
         "--msaa {samples}: {adapter} cannot render {format} targets with {samples} samples per pixel (it offers {offered})"
     )]
     SamplesUnsupported { samples: u32, format: String, adapter: String, offered: String },
-    #[error(
-        "--msaa {samples}: the compute rasterizer writes one sample per pixel; {pipeline} takes MSAA with --visibility raster (which --visibility auto picks under MSAA)"
-    )]
-    SamplesNeedRasterVisibility { samples: u32, pipeline: &'static str },
 }
 
 impl RenderError {
@@ -278,7 +281,6 @@ impl RenderError {
                 | Self::BloomUnsupported(_)
                 | Self::BadSamples(_)
                 | Self::SamplesUnsupported { .. }
-                | Self::SamplesNeedRasterVisibility { .. }
         )
     }
 }
@@ -359,6 +361,9 @@ impl Renderer {
         if samples > 1 {
             // The passes reading ids or the G-buffer read every sample.
             shaders.define(crate::shaders::MSAA);
+            if options.pipeline.visibility() == Some(VisibilityMethod::Compute) {
+                shaders.define(crate::shaders::VISIBILITY_LAYERS);
+            }
         }
         let targets = Targets::new(&ctx.device, width, height, samples, options.pipeline.resolves_msaa_colour());
         let (device, queue) = (&ctx.device, &ctx.queue);

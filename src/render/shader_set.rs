@@ -57,6 +57,9 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     {
         use passes::visibility::compute::*;
         all.extend([RASTER, RASTER_CULLING, RASTER_COUNTING, RASTER_CULLING_COUNTING, RESOLVE, CULL, HIZ]);
+        let msaa = &[crate::shaders::MSAA];
+        let all_defs = &["CULL_BACK", "COUNT", crate::shaders::MSAA];
+        all.extend([RASTER.with_defs(msaa), RASTER.with_defs(all_defs), RESOLVE.with_defs(msaa)]);
     }
     all.extend_from_slice(objectspace::PASS_SHADERS);
     all.extend(objectspace::mark::VARIANTS);
@@ -69,10 +72,13 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         deferred_compute::SHADER,
         deferred_compute::SHADER_VISIBILITY,
         deferred_compute::SHADER_MSAA,
+        deferred_compute::SHADER_VISIBILITY_MSAA,
     ]);
     all.extend([
         objectspace::mark::SHADER.with_defs(&[crate::shaders::MSAA]),
         objectspace::gather::SHADER.with_defs(&[crate::shaders::MSAA]),
+        objectspace::mark::SHADER.with_defs(&[crate::shaders::MSAA, crate::shaders::VISIBILITY_LAYERS]),
+        objectspace::gather::SHADER.with_defs(&[crate::shaders::MSAA, crate::shaders::VISIBILITY_LAYERS]),
         objectspace::gather::SHADER.with_defs(&[objectspace::mark::PIXEL_RECORD]),
         deferred::GLOBALS_SHADER.with_defs(&[crate::shaders::MSAA]),
         deferred::volumes::VOLUMES_SHADER.with_defs(&[crate::shaders::MSAA]),
@@ -81,7 +87,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     all.push(passes::environment::SHADER);
     {
         use passes::background::*;
-        all.extend([SHADER, SHADER_SAMPLES, SHADER_IDS]);
+        all.extend([SHADER, SHADER_SAMPLES, SHADER_IDS, SHADER_ID_LAYERS]);
     }
     all
 }

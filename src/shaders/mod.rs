@@ -97,6 +97,12 @@ pub const ENVIRONMENT: &str = "ENVIRONMENT";
 /// buffer are multisampled, and the passes reading them read every sample.
 pub const MSAA: &str = "MSAA";
 
+/// Defined with [`MSAA`] when the compute rasterizer fills the visibility
+/// buffer: it is then a 2D array with a layer per sample (multisampled
+/// textures cannot be written by compute passes), and the passes reading it
+/// read the layers.
+pub const VISIBILITY_LAYERS: &str = "VISIBILITY_LAYERS";
+
 /// Defined in the variant of a scene raster pass that draws the alpha-masked
 /// objects (`render::passes::ScenePipeline`): its fragment stage
 /// discards their cut-away fragments (`shared/alpha_mask.wgsl`); a depth-only

@@ -163,8 +163,7 @@ fn composites_in_order(pipeline: PipelineConfig) {
     };
     let lights = [light(LightKind::Ambient, 1.0)];
     let pixels = analytic_pixels();
-    // The compute rasterizer has one sample per pixel.
-    let samples = [1, 4].into_iter().filter(|&n| n == 1 || (!compute && check_samples(&ctx, n).is_ok()));
+    let samples = [1, 4].into_iter().filter(|&n| n == 1 || check_samples(&ctx, n).is_ok());
     for n in samples {
         let hdr = render(&ctx, &scene, &lights, pipeline.clone(), n);
         let worst = pixels.iter().map(|(i, expected, _)| (hdr[*i] - *expected).abs().max_element()).fold(0.0, f32::max);

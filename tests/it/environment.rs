@@ -342,7 +342,8 @@ fn uniform_environment_gives_the_analytic_radiance_in_every_pipeline() {
 /// samples, surface (0.8 L) and background (L): every pixel lies between
 /// the two, and edge pixels strictly between them exist, in every pipeline
 /// (a background drawn over whole pixels would leave none between; one
-/// missing from the uncovered samples, pixels darker than 0.8 L).
+/// missing from the uncovered samples, pixels darker than 0.8 L), and with
+/// compute visibility (the background reads the ids' sample layers).
 #[test]
 fn msaa_edges_against_the_environment_resolve_in_every_pipeline() {
     let ctx = common::gpu();
@@ -352,8 +353,8 @@ fn msaa_edges_against_the_environment_resolve_in_every_pipeline() {
     scene.environment = Some(Environment::Sky(Sky::uniform(l)));
     let (scene, sizes) = common::charted_for(&scene, &camera, SIZE, SIZE);
     let lights = [environment_light()];
-    for pipeline in common::every_pipeline(sizes) {
-        let name = pipeline.name();
+    for pipeline in every_pipeline_and_compute_visibility(sizes) {
+        let name = label(&pipeline);
         let options = RenderOptions { samples: 4, ..RenderOptions::new(SIZE, SIZE, pipeline) };
         let mut r = Renderer::new(&ctx, &scene, &options).unwrap();
         let (hdr, _) = frame(&ctx, &mut r, &camera, &lights, ShadingModel::Phong);

@@ -12,11 +12,11 @@
 //! visibility pass, and each pixel's surface is rebuilt from its triangle
 //! ids (`shadespace::visibility_read`), as object space rebuilds it.
 //!
-//! Under MSAA the G-buffer is multisampled (the compute rasterizer has one
-//! sample per pixel, so MSAA takes the G-buffer pass) and the lighting pass
-//! shades a pixel once where all its samples see one surface (same object,
-//! normals within 8 degrees, depths within 1 %), else each sample at its own
-//! position, and writes their mean: the resolve, in linear HDR. It counts
+//! Under MSAA the G-buffer is multisampled (or, with compute visibility,
+//! the compute rasterizer writes ids and depth per sample) and the lighting
+//! pass shades a pixel once where all its samples see one surface (same
+//! object, normals within 8 degrees, depths within 1 %), else each sample at
+//! its own position, and writes their mean: the resolve, in linear HDR. It counts
 //! the frame's lit and edge pixels (counters `msaa_lit_pixels`,
 //! `msaa_edge_pixels`, `msaa_edge_share`).
 //!
@@ -53,6 +53,8 @@ pub const SHADER: ShaderSource = ShaderSource::new("tiled.wgsl", include_str!("t
 pub const SHADER_VISIBILITY: ShaderSource = SHADER.with_defs(&["VISIBILITY_BUFFER"]);
 /// `tiled.wgsl` reading a multisampled G-buffer.
 pub const SHADER_MSAA: ShaderSource = SHADER.with_defs(&[crate::shaders::MSAA]);
+/// `tiled.wgsl` reading the compute visibility pass's samples.
+pub const SHADER_VISIBILITY_MSAA: ShaderSource = SHADER.with_defs(&["VISIBILITY_BUFFER", crate::shaders::MSAA]);
 
 /// Tile side in pixels (one workgroup of `TILE_SIZE`² threads per tile).
 pub const TILE_SIZE: u32 = 16;
@@ -121,8 +123,7 @@ pub struct DeferredCompute {
 }
 
 impl DeferredCompute {
-    /// Builds its passes for `scene` and `targets` (under MSAA, with raster
-    /// visibility only: the renderer refuses compute).
+    /// Builds its passes for `scene` and `targets`.
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
@@ -136,7 +137,7 @@ impl DeferredCompute {
                 Surfaces::Gbuffer(Box::new(GbufferStage::new(device, shaders, scene, targets, config.depth_prepass)?))
             }
             VisibilityMethod::Compute => {
-                let ids = VisibilityBuffer::new(device, targets);
+                let ids = VisibilityBuffer::new(device, targets, VisibilityMethod::Compute);
                 let pass = ComputeVisibility::new(device, shaders, scene, targets, &ids, config.count_visibility)?;
                 Surfaces::Visibility { ids, pass: Box::new(pass) }
             }
@@ -168,6 +169,7 @@ impl DeferredCompute {
         let (shader, read_layout) = match &surfaces {
             Surfaces::Gbuffer(stage) if msaa => (SHADER_MSAA, &stage.gbuffer.read_layout),
             Surfaces::Gbuffer(stage) => (SHADER, &stage.gbuffer.read_layout),
+            Surfaces::Visibility { pass, .. } if msaa => (SHADER_VISIBILITY_MSAA, &pass.read_layout),
             Surfaces::Visibility { pass, .. } => (SHADER_VISIBILITY, &pass.read_layout),
         };
         let groups = [&scene.layout, read_layout, &layout];

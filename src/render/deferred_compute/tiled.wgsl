@@ -17,7 +17,7 @@
 // 5. each pixel adds emission and the ambient and directional lights.
 // Pixels come from the G-buffer, or, with VISIBILITY_BUFFER defined, from the
 // compute visibility pass (`shadespace::visibility_read`). With MSAA defined
-// the G-buffer is multisampled: the depth range spans every sample, a pixel
+// the G-buffer is multisampled (or the visibility buffer has a layer per sample): the depth range spans every sample, a pixel
 // whose samples see one surface is shaded once at its centre, an edge pixel
 // (`gbuffer_pixel`) sample by sample and averaged, and the frame's lit and
 // edge pixels are counted.
@@ -30,10 +30,14 @@
 #import shadespace::layers::{layer_at, layer_mask, layer_surface}
 #endif
 #ifdef VISIBILITY_BUFFER
+#ifdef MSAA
+#import shadespace::visibility_read::{GbufferTexel, PixelSamples, gbuffer_pixel, gbuffer_samples, gbuffer_depth_sample, gbuffer_sample_texel, gbuffer_centre_texel}
+#else
 #import shadespace::visibility_read::{GbufferTexel, gbuffer_depth_at, gbuffer_texel}
+#endif
 #else
 #ifdef MSAA
-#import shadespace::gbuffer::{GbufferTexel, PixelSamples, gbuffer_pixel, gbuffer_samples, gbuffer_depth_sample, gbuffer_sample_texel, gbuffer_texel_at, world_position}
+#import shadespace::gbuffer::{GbufferTexel, PixelSamples, gbuffer_pixel, gbuffer_samples, gbuffer_depth_sample, gbuffer_sample_texel, gbuffer_centre_texel}
 #else
 #import shadespace::gbuffer::{GbufferTexel, gbuffer_depth_at, gbuffer_texel}
 #endif
@@ -134,12 +138,13 @@ fn shade_texel(texel: GbufferTexel, count: u32, globals: bool) -> vec3f {
     return shade_listed(texel, count);
 }
 
-// A pixel's `shade_texel`: once at its centre where its samples see one
-// surface, else the mean over its samples, each shaded at its own position
-// (background samples black, as forward's cleared samples are).
-fn shade_msaa(pixel: vec2u, samples: PixelSamples, count: u32, globals: bool) -> vec3f {
+// A pixel's `shade_texel`: once at its centre (`centre`, read once for all
+// the lights) where its samples see one surface, else the mean over its
+// samples, each shaded at its own position (background samples black, as
+// forward's cleared samples are).
+fn shade_msaa(pixel: vec2u, samples: PixelSamples, centre: GbufferTexel, count: u32, globals: bool) -> vec3f {
     if !samples.edge {
-        return shade_texel(gbuffer_texel_at(pixel, 0u, world_position(pixel, samples.depth_mean)), count, globals);
+        return shade_texel(centre, count, globals);
     }
     let n = gbuffer_samples();
     var sum = vec3f(0.0);
@@ -222,8 +227,14 @@ fn tiled_lighting(
     let frustum = tile_frustum(lo, hi, range);
     var color = vec3f(0.0);
 #ifdef MSAA
+    // Without edges the surface is rebuilt (the visibility buffer) or read
+    // once, not per light list.
+    var centre: GbufferTexel;
+    if lit && !samples.edge {
+        centre = gbuffer_centre_texel(id.xy, samples);
+    }
     if lit {
-        color = shade_msaa(id.xy, samples, 0u, true);
+        color = shade_msaa(id.xy, samples, centre, 0u, true);
     }
 #else
     var texel: GbufferTexel;
@@ -275,7 +286,7 @@ fn tiled_lighting(
         if filled > TILED_LIST_CAPACITY - TILED_CHUNK || (last && filled > 0u) {
             if lit {
 #ifdef MSAA
-                color += shade_msaa(id.xy, samples, filled, false);
+                color += shade_msaa(id.xy, samples, centre, filled, false);
 #else
                 color += shade_listed(texel, filled);
 #endif

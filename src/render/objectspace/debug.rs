@@ -6,6 +6,7 @@ use super::atlas::BLOCK_PAGES;
 use super::resources::{ATLAS_FORMAT, TRIANGLE_MAP_FORMAT};
 use crate::color::reinhard_srgb8;
 use crate::gpu::{GpuContext, GpuError, readback};
+use crate::render::passes::visibility::VisibilityBuffer;
 
 /// Per virtual page backed: its triangle map's and its shades' texel bytes
 /// ([`ObjectSpace::read_backed_pages`]).
@@ -147,6 +148,12 @@ impl ObjectSpace {
             variable_rate: o.variable_rate,
             level_blend: o.level_blend,
         }
+    }
+
+    /// The main view's visibility buffer (for tests: its ids per sample
+    /// through [`VisibilityBuffer::read_samples`]).
+    pub fn visibility_buffer(&self) -> &VisibilityBuffer {
+        &self.res.visibility
     }
 
     /// The marking state after the last frame, for tests that check tile

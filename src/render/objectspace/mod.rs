@@ -728,7 +728,8 @@ impl ObjectSpace {
                 mapped_at_creation: false,
             })
         });
-        let mut res = Resources::new(device, &layout, pool, &scene.triangle_charts, targets, view_count);
+        let mut res =
+            Resources::new(device, &layout, pool, &scene.triangle_charts, targets, view_count, config.visibility);
         let visibility = match config.visibility {
             VisibilityMethod::Raster => Visibility::Raster {
                 prepass: config
@@ -753,7 +754,7 @@ impl ObjectSpace {
         let mut gather = GatherPass::new(device, shaders, scene, &res, targets, &grid.grid, records.as_ref())?;
         let mut extra_views = Vec::new();
         for _ in 1..view_count {
-            let ids = VisibilityBuffer::new(device, targets);
+            let ids = VisibilityBuffer::new(device, targets, VisibilityMethod::Compute);
             res.add_view(device, &ids.view);
             let hdr = Targets::hdr_texture(device, targets.width, targets.height);
             gather.add_view(device, &res, &hdr.create_view(&Default::default()));

@@ -73,11 +73,36 @@ struct Params {
 // Indexed by the `COUNT_*` constants.
 @group(1) @binding(5) var<storage, read_write> counters: array<atomic<u32>, TILE_COUNTER_SLOTS>;
 // Visibility buffer: (object + 1, triangle); 0 = background. Under MSAA one
-// per sample (`textureLoad`'s last argument is then the sample).
+// per sample: multisampled from the raster pass, a layer per sample from
+// the compute rasterizer (`VISIBILITY_LAYERS`). Read with `visibility_ids`.
 #ifdef MSAA
+#ifdef VISIBILITY_LAYERS
+@group(1) @binding(6) var visibility: texture_2d_array<u32>;
+#else
 @group(1) @binding(6) var visibility: texture_multisampled_2d<u32>;
+#endif
 #else
 @group(1) @binding(6) var visibility: texture_2d<u32>;
+#endif
+
+// The ids of sample `s` of `pixel` (without MSAA, where `s` is 0: the pixel's).
+fn visibility_ids(pixel: vec2u, s: u32) -> vec2u {
+#ifdef VISIBILITY_LAYERS
+    return textureLoad(visibility, pixel, s, 0).xy;
+#else
+    return textureLoad(visibility, pixel, s).xy;
+#endif
+}
+
+#ifdef MSAA
+// Samples per pixel of the visibility buffer.
+fn visibility_samples() -> u32 {
+#ifdef VISIBILITY_LAYERS
+    return textureNumLayers(visibility);
+#else
+    return textureNumSamples(visibility);
+#endif
+}
 #endif
 // Per triangle of the scene's index buffer: its chart island (a number
 // shared by the triangles of one island of its mesh's chart UVs).

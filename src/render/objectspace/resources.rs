@@ -8,7 +8,7 @@ use wgpu::util::DeviceExt;
 
 use super::atlas::{AtlasLayout, GpuAtlasEntry, PagePool};
 use super::{ObjectSpaceConfig, TileCounter};
-use crate::render::passes::visibility::VisibilityBuffer;
+use crate::render::passes::visibility::{VisibilityBuffer, VisibilityMethod};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, bind_group_layout_for, view_as};
 use crate::render::targets::Targets;
 use crate::shaders::gpu_struct;
@@ -222,8 +222,9 @@ impl Resources {
         triangle_charts: &wgpu::Buffer,
         targets: &Targets,
         view_count: u32,
+        method: VisibilityMethod,
     ) -> Self {
-        let visibility = VisibilityBuffer::new(device, targets);
+        let visibility = VisibilityBuffer::new(device, targets, method);
         let none = wgpu::BufferUsages::empty();
         let storage = |label, size, extra| storage(device, label, size, extra);
         let virtual_pages = atlas_layout.page_count as u64;
@@ -270,8 +271,11 @@ impl Resources {
                 rw,
                 rw,
                 rw,
-                // Under MSAA one id pair per sample (`MSAA` in the shaders).
-                if targets.samples > 1 {
+                // Under MSAA one id pair per sample (`MSAA` in the shaders):
+                // the compute rasterizer's in a layer each (`VISIBILITY_LAYERS`).
+                if targets.samples > 1 && method == VisibilityMethod::Compute {
+                    Binding::Texture { sample: uint, dimension: wgpu::TextureViewDimension::D2Array }
+                } else if targets.samples > 1 {
                     Binding::MultisampledTexture { sample: uint }
                 } else {
                     Binding::Texture { sample: uint, dimension: wgpu::TextureViewDimension::D2 }

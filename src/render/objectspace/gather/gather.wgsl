@@ -24,8 +24,9 @@
 #import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
 #ifdef MSAA
 #import shadespace::pixel_surface::{sample_pixel_at, standard_sample_position}
-#import shadespace::objectspace::same_chart_surface
+#import shadespace::objectspace::{same_chart_surface, visibility_samples}
 #endif
+#import shadespace::objectspace::visibility_ids
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_levels,
     bilinear, AtlasTexel, atlas_texel, triangle_charts, physical_page, virtual_page, physical_tile,
@@ -157,17 +158,17 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
     if id.x >= size.x || id.y >= size.y {
         return;
     }
-    let ids = textureLoad(visibility, id.xy, 0).xy;
+    let ids = visibility_ids(id.xy, 0u);
 #ifdef MSAA
-    let n = textureNumSamples(visibility);
+    let n = visibility_samples();
     var edge = false;
     for (var s = 1u; s < n; s++) {
-        edge = edge || !same_chart_surface(textureLoad(visibility, id.xy, s).xy, ids);
+        edge = edge || !same_chart_surface(visibility_ids(id.xy, s), ids);
     }
     if edge {
         var sum = vec3f(0.0);
         for (var s = 0u; s < n; s++) {
-            let sample_ids = textureLoad(visibility, id.xy, s).xy;
+            let sample_ids = visibility_ids(id.xy, s);
             if sample_ids.x != 0u {
                 sum += gather_surface(sample_pixel_at(id.xy, standard_sample_position(n, s), sample_ids)).rgb;
             }

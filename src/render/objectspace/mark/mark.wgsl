@@ -33,8 +33,9 @@
     chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
     page_request_bit, tile_request_bit, page_tile_origin, forget_request, BlendedVertex, blended_vertex}
+#import shadespace::objectspace::visibility_ids
 #ifdef MSAA
-#import shadespace::objectspace::same_chart_surface
+#import shadespace::objectspace::{same_chart_surface, visibility_samples}
 #endif
 
 #ifdef PIXEL_RECORD
@@ -298,19 +299,19 @@ fn mark_pixel(pixel: vec2u) -> u32 {
     if pixel.x >= size.x || pixel.y >= size.y {
         return PIXEL_NOT_IN_ATLAS;
     }
-    let ids = textureLoad(visibility, pixel, 0).xy;
+    let ids = visibility_ids(pixel, 0u);
 #ifdef MSAA
     // A pixel whose samples see different chart surfaces marks each
     // sample's footprint at its own position, where the gather reads it.
-    let n = textureNumSamples(visibility);
+    let n = visibility_samples();
     var edge = false;
     for (var s = 1u; s < n; s++) {
-        edge = edge || !same_chart_surface(textureLoad(visibility, pixel, s).xy, ids);
+        edge = edge || !same_chart_surface(visibility_ids(pixel, s), ids);
     }
     if edge {
         var kind = PIXEL_NOT_IN_ATLAS;
         for (var s = 0u; s < n; s++) {
-            let sample_ids = textureLoad(visibility, pixel, s).xy;
+            let sample_ids = visibility_ids(pixel, s);
             if sample_ids.x != 0u {
                 kind = max(kind, mark_surface(sample_pixel_at(pixel, standard_sample_position(n, s), sample_ids)));
             }

@@ -10,7 +10,8 @@
 //   target resolved from it, the radiance scaled by the share of uncovered
 //   samples (whose resolved colour was black);
 // - COVERAGE_IDS: the visibility buffer's ids (0: background), where the
-//   compute rasterizer left the depth target unwritten.
+//   compute rasterizer left the depth target unwritten; under MSAA a layer
+//   per sample, the radiance scaled by the share of uncovered samples.
 #import shadespace::scene_bindings::view
 #import shadespace::environment::{env_specular, env_sampler}
 
@@ -29,7 +30,11 @@ struct Background {
 @group(1) @binding(1) var depth: texture_depth_multisampled_2d;
 #endif
 #ifdef COVERAGE_IDS
+#ifdef MSAA
+@group(1) @binding(1) var ids: texture_2d_array<u32>;
+#else
 @group(1) @binding(1) var ids: texture_2d<u32>;
+#endif
 #endif
 
 @vertex
@@ -65,9 +70,23 @@ fn fs_background(@builtin(position) p: vec4f) -> @location(0) vec4f {
     share = f32(uncovered) / f32(samples);
 #endif
 #ifdef COVERAGE_IDS
+#ifdef MSAA
+    let samples = textureNumLayers(ids);
+    var uncovered = 0u;
+    for (var s = 0u; s < samples; s++) {
+        if textureLoad(ids, vec2u(p.xy), s, 0).x == 0u {
+            uncovered += 1u;
+        }
+    }
+    if uncovered == 0u {
+        discard;
+    }
+    share = f32(uncovered) / f32(samples);
+#else
     if textureLoad(ids, vec2u(p.xy), 0).x != 0u {
         discard;
     }
+#endif
 #endif
     return vec4f(sky(p.xy) * share, 0.0);
 }

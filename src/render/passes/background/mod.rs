@@ -39,6 +39,8 @@ pub const SHADER: ShaderSource = ShaderSource::new("background.wgsl", include_st
 pub const SHADER_SAMPLES: ShaderSource = SHADER.with_defs(&["COVERAGE_SAMPLES"]);
 /// Reading the visibility buffer's ids.
 pub const SHADER_IDS: ShaderSource = SHADER.with_defs(&["COVERAGE_IDS"]);
+/// [`SHADER_IDS`] for the compute rasterizer's samples (a layer each).
+pub const SHADER_ID_LAYERS: ShaderSource = SHADER.with_defs(&["COVERAGE_IDS", crate::shaders::MSAA]);
 
 gpu_struct! {
     /// The background's per-frame parameters (`Background` in `background.wgsl`).
@@ -74,7 +76,7 @@ impl GpuBackground {
 pub enum Coverage<'a> {
     /// The depth target, which the opaque frame wrote.
     Depth,
-    /// The visibility buffer (compute visibility: one sample per pixel).
+    /// The compute rasterizer's visibility buffer (under MSAA a layer per sample).
     Ids(&'a VisibilityBuffer),
 }
 
@@ -114,11 +116,16 @@ impl Background {
         });
         let (shader, coverage_binding, coverage_view) = match coverage {
             Coverage::Ids(ids) => {
+                let layers = ids.texture.depth_or_array_layers() > 1;
                 let texture = Binding::Texture {
                     sample: wgpu::TextureSampleType::Uint,
-                    dimension: wgpu::TextureViewDimension::D2,
+                    dimension: if layers {
+                        wgpu::TextureViewDimension::D2Array
+                    } else {
+                        wgpu::TextureViewDimension::D2
+                    },
                 };
-                (SHADER_IDS, Some(texture), Some(&ids.view))
+                (if layers { SHADER_ID_LAYERS } else { SHADER_IDS }, Some(texture), Some(&ids.view))
             }
             Coverage::Depth if targets.samples > 1 && !into_samples => {
                 let texture = Binding::MultisampledTexture { sample: wgpu::TextureSampleType::Depth };

@@ -114,6 +114,14 @@ fn gbuffer_texel_at(pixel: vec2u, s: u32, position: vec3f) -> GbufferTexel {
     return t;
 }
 
+#ifdef MSAA
+// The surface of a pixel whose samples see one (`samples`): sample 0's at
+// the pixel centre, at the samples' mean depth.
+fn gbuffer_centre_texel(pixel: vec2u, samples: PixelSamples) -> GbufferTexel {
+    return gbuffer_texel_at(pixel, 0u, world_position(pixel, samples.depth_mean));
+}
+#endif
+
 // The surface at `pixel`, whose depth `depth` is not background.
 fn gbuffer_texel(pixel: vec2u, depth: f32) -> GbufferTexel {
     return gbuffer_texel_at(pixel, 0u, world_position(pixel, depth));

@@ -10,6 +10,14 @@
 //! 32x32 tiles), `vis: raster big` (one workgroup per queued tile: its 8x8
 //! squares are tested against the triangle's edges, then every pixel of the
 //! squares that pass) and `vis: resolve` (payload to (object + 1, triangle)).
+//!
+//! Under MSAA (the targets' samples, shaders built with `MSAA`) each pixel
+//! has one 64-bit entry per sample, tested at Vulkan's standard sample
+//! positions as the hardware tests them (coverage and depth per sample; an
+//! alpha-masked triangle's cut once per pixel, at its centre, as a fragment
+//! shader's discard), and the output visibility buffer is a 2D array with a
+//! layer per sample (multisampled textures cannot be written by compute
+//! passes; the consumers read it with `VISIBILITY_LAYERS`).
 //! For scenes with alpha-masked materials the raster passes are compiled
 //! with `ALPHA_MASK`: a masked triangle keeps a pixel only where its base
 //! colour alpha passes the cutoff (the other scenes run the same code as
@@ -96,6 +104,11 @@ gpu_struct! {
         pub big_capacity: u32,
         /// Entries of the big-triangle setups.
         pub setup_capacity: u32,
+        /// Samples per pixel (1 without MSAA).
+        pub samples: u32,
+        pub pad_a: u32,
+        pub pad_b: u32,
+        pub pad_c: u32,
     }
 }
 
@@ -136,7 +149,8 @@ gpu_struct! {
         pub dst_height: u32,
         /// 1: the source is the pixels.
         pub from_pixels: u32,
-        pub pad: u32,
+        /// Entries of the 64-bit buffer per pixel: its samples.
+        pub samples: u32,
     }
 }
 
@@ -194,7 +208,8 @@ gpu_struct! {
         pub height: u32,
         /// Visible objects (entries of the range list).
         pub range_count: u32,
-        pub pad: u32,
+        /// Samples per pixel (1 without MSAA).
+        pub samples: u32,
     }
 }
 
@@ -298,6 +313,10 @@ pub enum ComputeVisibilityError {
         "compute visibility needs 64-bit atomics (SHADER_INT64, SHADER_INT64_ATOMIC_MIN_MAX), which this adapter lacks"
     )]
     NoInt64Atomics,
+    #[error(
+        "compute visibility at {width}x{height} with {samples} samples per pixel needs a {needed} MiB buffer; this adapter binds at most {max} MiB (take fewer samples or --visibility raster)"
+    )]
+    TooLarge { width: u32, height: u32, samples: u32, needed: u64, max: u64 },
 }
 
 /// The compute rasterizer's pipelines, buffers and bind groups, for one
@@ -325,6 +344,8 @@ pub struct ComputeVisibility {
     pub read_group: wgpu::BindGroup,
     width: u32,
     height: u32,
+    /// Per pixel: entries of the 64-bit buffer, layers of the output.
+    samples: u32,
     counting: Option<RasterCounting>,
 }
 
@@ -351,7 +372,15 @@ impl ComputeVisibility {
         let resolve_params =
             buffer("vis resolve params", size_of::<GpuResolveParams>() as u64, U::UNIFORM | U::COPY_DST);
         let ranges = buffer("vis ranges", (scene.draws.len().max(1) * 16) as u64, U::STORAGE | U::COPY_DST);
-        let depth_ids = buffer("vis depth and ids", width as u64 * height as u64 * 8, U::STORAGE);
+        let samples = targets.samples;
+        let depth_bytes = width as u64 * height as u64 * u64::from(samples) * 8;
+        let limits = device.limits();
+        let max = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        if depth_bytes > max {
+            let (needed, max) = (depth_bytes.div_ceil(1 << 20), max >> 20);
+            return Err(ComputeVisibilityError::TooLarge { width, height, samples, needed, max });
+        }
+        let depth_ids = buffer("vis depth and ids", depth_bytes, U::STORAGE);
         // Room for big triangles' tiles covering every pixel 128 times over (a
         // tile holds up to 1024 pixels; boxes of thin triangles and hidden
         // layers count too: on the H100, Sponza at 1080p overflowed a
@@ -398,7 +427,7 @@ impl ComputeVisibility {
         // Chunks of up to CULL_CHUNK clusters: at most one partial chunk per object.
         let chunks_capacity = scene.draws.len() as u64 + u64::from(capacity) / CULL_CHUNK as u64 + 1;
         let chunks = buffer("vis cull chunks", chunks_capacity * 8, U::STORAGE | U::COPY_DST);
-        let (levels, hiz_texels) = hiz_levels(width, height);
+        let (levels, hiz_texels) = hiz_levels(width, height, samples);
         let hiz = buffer("vis depth pyramid", hiz_texels.max(1) * 4, U::STORAGE);
         let align = device.limits().min_uniform_buffer_offset_alignment.max(size_of::<GpuHizLevel>() as u32);
         let levels: Vec<(GpuHizLevel, u32)> =
@@ -435,7 +464,7 @@ impl ComputeVisibility {
             raster_bindings.push(rw);
         }
         let raster_layout = bind_group_layout(device, "vis raster", &raster_bindings);
-        let dimension = wgpu::TextureViewDimension::D2;
+        let dimension = if samples > 1 { wgpu::TextureViewDimension::D2Array } else { wgpu::TextureViewDimension::D2 };
         let out_binding = Binding::StorageTexture { format: super::FORMAT, dimension };
         let resolve_layout = bind_group_layout(device, "vis resolve", &[Binding::Uniform, read, rw, out_binding]);
         let raster_group = |list: &wgpu::Buffer| {
@@ -566,6 +595,7 @@ impl ComputeVisibility {
             read_group,
             width,
             height,
+            samples,
             counting,
         })
     }
@@ -626,7 +656,7 @@ impl ComputeVisibility {
     /// Bytes of its buffers (the 64-bit one, the big-tile queue and setups,
     /// the ranges, and culling's cluster lists, history and depth pyramid).
     pub fn bytes(&self) -> u64 {
-        self.width as u64 * self.height as u64 * 8
+        self.width as u64 * self.height as u64 * u64::from(self.samples) * 8
             + self.big_capacity as u64 * 8
             + self.setup_bytes
             + self.ranges.size()
@@ -635,8 +665,8 @@ impl ComputeVisibility {
 }
 
 /// The depth pyramid's levels at `width` x `height` (each half the last,
-/// rounded up, down to 1x1; level 0 from the pixels) and its texels.
-fn hiz_levels(width: u32, height: u32) -> (Vec<GpuHizLevel>, u64) {
+/// rounded up, down to 1x1; level 0 from the pixels' `samples`) and its texels.
+fn hiz_levels(width: u32, height: u32, samples: u32) -> (Vec<GpuHizLevel>, u64) {
     let mut levels = Vec::new();
     let (mut src, mut src_offset, mut offset) = ((width, height), 0, 0u32);
     loop {
@@ -649,7 +679,7 @@ fn hiz_levels(width: u32, height: u32) -> (Vec<GpuHizLevel>, u64) {
             dst_width: dst.0,
             dst_height: dst.1,
             from_pixels: u32::from(levels.is_empty()),
-            pad: 0,
+            samples,
         });
         src_offset = offset;
         offset += dst.0 * dst.1;
@@ -694,9 +724,13 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         triangle_count: triangles,
         big_capacity: pass.big_capacity,
         setup_capacity: pass.setup_capacity,
+        samples: pass.samples,
+        pad_a: 0,
+        pad_b: 0,
+        pad_c: 0,
     };
     frame.queue.write_buffer(&pass.raster_params, 0, bytemuck::bytes_of(&raster));
-    let resolve = GpuResolveParams { width: pass.width, height: pass.height, range_count, pad: 0 };
+    let resolve = GpuResolveParams { width: pass.width, height: pass.height, range_count, samples: pass.samples };
     frame.queue.write_buffer(&pass.resolve_params, 0, bytemuck::bytes_of(&resolve));
     let culling = frame.scene.culling;
     let mut chunks: Vec<[u32; 2]> = Vec::new();

@@ -1,7 +1,7 @@
 // The depth pyramid of two-pass occlusion culling (`cull.wgsl`), one
 // dispatch per level: level 0's texel is the farthest depth (reversed Z:
 // the least) of a 2x2 block of pixels of the compute rasterizer's 64-bit
-// buffer, level k + 1's of a 2x2 block of level k's texels. Sides round up
+// buffer (under MSAA of every sample of them), level k + 1's of a 2x2 block of level k's texels. Sides round up
 // and blocks past the edge use the texels they have, so a texel of level k
 // covers exactly the pixels [2^(k+1) t, 2^(k+1) (t + 1)) inside the screen.
 
@@ -16,11 +16,12 @@ struct HizLevel {
     dst_height: u32,
     // 1: the source is the pixels (`depth_ids`).
     from_pixels: u32,
-    pad: u32,
+    // Entries of `depth_ids` per pixel: its samples.
+    samples: u32,
 }
 
 @group(0) @binding(0) var<uniform> level: HizLevel;
-// Per pixel: (payload, depth bits), the halves of `raster.wgsl`'s `depth_ids`.
+// Per pixel (sample): (payload, depth bits), the halves of `raster.wgsl`'s `depth_ids`.
 @group(0) @binding(1) var<storage, read> depth_ids: array<vec2u>;
 @group(0) @binding(2) var<storage, read_write> hiz: array<f32>;
 
@@ -37,7 +38,9 @@ fn reduce(@builtin(global_invocation_id) id: vec3u) {
         }
         let i = p.y * level.src_width + p.x;
         if level.from_pixels != 0u {
-            farthest = min(farthest, bitcast<f32>(depth_ids[i].y));
+            for (var s = 0u; s < level.samples; s++) {
+                farthest = min(farthest, bitcast<f32>(depth_ids[i * level.samples + s].y));
+            }
         } else {
             farthest = min(farthest, hiz[level.src_offset + i]);
         }

@@ -12,6 +12,7 @@ use serde::Serialize;
 use super::{
     DepthMode, ScenePipeline, SceneRaster, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline_from,
 };
+use crate::gpu::{GpuContext, GpuError, readback};
 use crate::render::frame::Frame;
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::targets::Targets;
@@ -43,7 +44,8 @@ impl VisibilityMethod {
     }
 
     /// [`VisibilityMethod::preferred`] at `samples` per pixel: under MSAA
-    /// raster, since the compute rasterizer writes one sample per pixel.
+    /// raster, until the H100 has measured the compute rasterizer's samples
+    /// against it (`scripts/bench-msvis`).
     pub fn preferred_for(features: wgpu::Features, samples: u32) -> Self {
         if samples > 1 { Self::Raster } else { Self::preferred(features) }
     }
@@ -68,25 +70,37 @@ impl FromStr for VisibilityMethod {
 /// Per pixel: (object + 1, triangle); (0, 0) is background.
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 
-/// The visibility buffer, one texel per pixel of the targets (under MSAA one
-/// per sample: written by the raster pass only, not copied).
+/// The visibility buffer, one texel per pixel of the targets. Under MSAA
+/// one per sample: for the raster pass a multisampled texture (not copied),
+/// for the compute rasterizer a 2D array with a layer per sample (its
+/// resolve writes it; multisampled textures cannot be storage).
 pub struct VisibilityBuffer {
     pub texture: wgpu::Texture,
     pub view: wgpu::TextureView,
 }
 
 impl VisibilityBuffer {
-    pub fn new(device: &wgpu::Device, targets: &Targets) -> Self {
+    /// The buffer `method` writes.
+    pub fn new(device: &wgpu::Device, targets: &Targets, method: VisibilityMethod) -> Self {
+        let layers = targets.samples > 1 && method == VisibilityMethod::Compute;
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("visibility"),
-            size: wgpu::Extent3d { width: targets.width, height: targets.height, depth_or_array_layers: 1 },
+            size: wgpu::Extent3d {
+                width: targets.width,
+                height: targets.height,
+                depth_or_array_layers: if layers { targets.samples } else { 1 },
+            },
             mip_level_count: 1,
-            sample_count: targets.samples,
+            sample_count: if layers { 1 } else { targets.samples },
             dimension: wgpu::TextureDimension::D2,
             format: FORMAT,
             // STORAGE_BINDING: the compute rasterizer's resolve writes it
             // (multisampled textures can be neither storage nor copied).
-            usage: if targets.samples > 1 {
+            usage: if layers {
+                wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC
+            } else if targets.samples > 1 {
                 wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING
             } else {
                 wgpu::TextureUsages::RENDER_ATTACHMENT
@@ -96,12 +110,73 @@ impl VisibilityBuffer {
             },
             view_formats: &[],
         });
-        let view = texture.create_view(&Default::default());
+        let dimension = layers.then_some(wgpu::TextureViewDimension::D2Array);
+        let view = texture.create_view(&wgpu::TextureViewDescriptor { dimension, ..Default::default() });
         Self { texture, view }
     }
 
+    /// Samples per pixel (of either layout).
+    pub fn samples(&self) -> u32 {
+        self.texture.sample_count() * self.texture.depth_or_array_layers()
+    }
+
+    /// Reads the ids back, per pixel (row by row) its samples side by side,
+    /// whichever pass wrote them (for tests: it waits for the GPU).
+    pub fn read_samples(&self, ctx: &GpuContext) -> Result<Vec<[u32; 2]>, GpuError> {
+        let (width, height, samples) = (self.texture.width(), self.texture.height(), self.samples());
+        let pairs = |bytes: Vec<u8>| -> Vec<[u32; 2]> {
+            bytemuck::pod_collect_to_vec::<u8, u32>(&bytes).chunks_exact(2).map(|c| [c[0], c[1]]).collect()
+        };
+        if self.texture.sample_count() == 1 {
+            let layers = (0..samples)
+                .map(|layer| readback::read_texture_level(ctx, &self.texture, 8, 0, layer, (width, height)).map(pairs))
+                .collect::<Result<Vec<_>, _>>()?;
+            let pixels = (width * height) as usize;
+            return Ok((0..pixels * samples as usize)
+                .map(|i| layers[i % samples as usize][i / samples as usize])
+                .collect());
+        }
+        let device = &ctx.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("visibility read-back"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("read_samples.wgsl").into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("visibility read-back"),
+            layout: None,
+            module: &module,
+            entry_point: Some("copy_samples"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let out = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("visibility read-back"),
+            size: u64::from(width * height * samples) * 8,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("visibility read-back"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&self.view) },
+                wgpu::BindGroupEntry { binding: 1, resource: out.as_entire_binding() },
+            ],
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut cp = encoder.begin_compute_pass(&Default::default());
+            cp.set_pipeline(&pipeline);
+            cp.set_bind_group(0, &group, &[]);
+            cp.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        readback::read_whole_buffer(ctx, &out).map(pairs)
+    }
+
     pub fn bytes(&self) -> u64 {
-        self.texture.width() as u64 * self.texture.height() as u64 * u64::from(self.texture.sample_count()) * 8
+        let per_pixel = self.texture.sample_count() * self.texture.depth_or_array_layers();
+        self.texture.width() as u64 * self.texture.height() as u64 * u64::from(per_pixel) * 8
     }
 }
 

@@ -8,10 +8,20 @@
 // (background) is no triangle's. The resolve pass turns it back into
 // (object, triangle) through `ranges`.
 //
+// Under MSAA (`MSAA` defined, `params.samples` per pixel) each pixel holds
+// one such value per sample, at Vulkan's standard sample positions (as the
+// hardware places them): coverage and depth are tested per sample, an
+// alpha-masked triangle is tested once per pixel at its centre (as the
+// hardware runs a fragment once per pixel and applies its discard to every
+// covered sample).
+//
 // Two ways to find the triangles: `raster` runs one thread per triangle of
 // the visible objects (`ranges`); `raster_clusters` one workgroup per entry of
 // a list of clusters that `cull.wgsl` kept, one thread per triangle of it.
 #import shadespace::scene_bindings::{view, object_clip_position, objects, triangle_vertices}
+#ifdef MSAA
+#import shadespace::pixel_surface::standard_sample_position
+#endif
 #ifdef ALPHA_MASK
 #import shadespace::scene::{alpha_cut, vertex_uv0}
 #import shadespace::scene_bindings::{vertices, albedo, albedo_sampler}
@@ -27,6 +37,11 @@ struct RasterParams {
     big_capacity: u32,
     // Entries of `big_setups`.
     setup_capacity: u32,
+    // Samples per pixel (1 without MSAA).
+    samples: u32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: RasterParams;
@@ -34,7 +49,8 @@ struct RasterParams {
 // this frame's list of visible triangles, index of its first triangle in the
 // scene's numbering, 0).
 @group(1) @binding(1) var<storage, read> ranges: array<vec4u>;
-// Per pixel: depth bits << 32 | payload; 0 = background.
+// Per pixel (under MSAA per sample of a pixel, a pixel's samples side by
+// side): depth bits << 32 | payload; 0 = background.
 @group(1) @binding(2) var<storage, read_write> depth_ids: array<atomic<u64>>;
 // Big triangles' work: (entry of `big_setups`, tile of the triangle's
 // bounding box).
@@ -120,6 +136,7 @@ const BIG_WORKGROUPS: u32 = 1024u;
 // beyond which a triangle is rasterized in homogeneous coordinates (keeps the
 // fixed-point edge functions below 2^46).
 const SUBPIXELS: f32 = 256.0;
+const SUBPIXEL_BITS: u32 = 8u;
 const GUARD_BAND: f32 = 8192.0;
 
 // A triangle ready to rasterize (members ordered to fill the 32-byte
@@ -404,8 +421,17 @@ fn inside(e: f32, owns: bool) -> bool {
 }
 
 fn fixed_depth(s: Setup, p: vec2i) -> f32 {
-    let offset = vec2f(p * i32(SUBPIXELS) + i32(SUBPIXELS / 2.0) - s.depth_origin);
+    return fixed_depth_at(s, p, vec2i(i32(SUBPIXELS / 2.0)));
+}
+
+// The depth at sub-pixel `sub` (from the pixel's top-left corner) of pixel p.
+fn fixed_depth_at(s: Setup, p: vec2i, sub: vec2i) -> f32 {
+    let offset = vec2f(p * i32(SUBPIXELS) + sub - s.depth_origin);
     return dot(s.depth, vec3f(offset, 1.0));
+}
+
+fn pixel_index(p: vec2i) -> u32 {
+    return u32(p.y) * u32(view.viewport.x) + u32(p.x);
 }
 
 #ifdef ALPHA_MASK
@@ -459,7 +485,7 @@ fn keep_nearest(payload: u32, owns: u32, p: vec2i, depth: f32) -> u32 {
     if !(depth > 0.0 && depth <= 1.0) {
         return 0u;
     }
-    let pixel = u32(p.y) * u32(view.viewport.x) + u32(p.x);
+    let pixel = pixel_index(p);
     let value = (u64(bitcast<u32>(depth)) << 32u) | u64(payload);
 #ifdef ALPHA_MASK
     // The texture is read only where the triangle would be kept.
@@ -471,29 +497,126 @@ fn keep_nearest(payload: u32, owns: u32, p: vec2i, depth: f32) -> u32 {
     return 1u;
 }
 
+// (NDC x, y, 1) of the point `xy` pixels from the image's top-left corner.
+fn ndc_point(xy: vec2f) -> vec3f {
+    let uv = xy * view.viewport.zw;
+    return vec3f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0);
+}
+
+// Whether a triangle with homogeneous edges covers NDC point q.
+fn inside_homogeneous(s: Setup, q: vec3f) -> bool {
+    return inside(dot(s.edge_a, q), (s.owns & 1u) != 0u) && inside(dot(s.edge_b, q), (s.owns & 2u) != 0u)
+        && inside(dot(s.edge_c, q), (s.owns & 4u) != 0u);
+}
+
 // Tests pixel p against a triangle with homogeneous edges and keeps the
 // nearest surface; returns the atomics it issued.
 fn raster_pixel_homogeneous(s: Setup, p: vec2i) -> u32 {
-    let uv = (vec2f(p) + 0.5) * view.viewport.zw;
-    let q = vec3f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0);
-    let a = dot(s.edge_a, q);
-    let b = dot(s.edge_b, q);
-    let c = dot(s.edge_c, q);
-    if inside(a, (s.owns & 1u) != 0u) && inside(b, (s.owns & 2u) != 0u) && inside(c, (s.owns & 4u) != 0u) {
+    let q = ndc_point(vec2f(p) + 0.5);
+    if inside_homogeneous(s, q) {
         return keep_nearest(s.payload, s.owns, p, dot(s.depth, q));
     }
     return 0u;
 }
+
+#ifdef MSAA
+// A triangle's per-sample steps, set up once: each sample's position (0..1
+// from the pixel's top-left corner) and sub-pixel position, and what its
+// fixed-point edge functions add to the pixel centre's (exact: the standard
+// positions are sixteenths of a pixel).
+struct SampleSteps {
+    at: array<vec2f, 8>,
+    sub: array<vec2i, 8>,
+    edge: array<vec4<i64>, 8>,
+    // Per edge, the most any sample adds: a pixel whose centre's edge
+    // functions plus this are not all >= 0 has no covered sample.
+    reach: vec4<i64>,
+}
+
+fn sample_steps(s: Setup) -> SampleSteps {
+    var t: SampleSteps;
+    t.reach = vec4<i64>(-(1li << 62u));
+    for (var k = 0u; k < params.samples; k++) {
+        let at = standard_sample_position(params.samples, k);
+        let sub = vec2i(round(at * SUBPIXELS));
+        t.at[k] = at;
+        t.sub[k] = sub;
+        // A pixel's step is SUBPIXELS sub-pixels' (a multiple of it).
+        let o = vec2<i64>(sub - i32(SUBPIXELS / 2.0));
+        t.edge[k] = (s.fixed_dx * o.x + s.fixed_dy * o.y) >> vec4u(SUBPIXEL_BITS);
+        t.reach = max(t.reach, t.edge[k]);
+    }
+    return t;
+}
+
+// Tests the samples of pixel p against a triangle (`e`: its fixed-point
+// edge functions at the pixel centre; unused with homogeneous edges) and
+// keeps, per covered sample, the nearer surface; returns the atomics it
+// issued.
+fn raster_samples(s: Setup, t: ptr<function, SampleSteps>, p: vec2i, e: vec4<i64>) -> u32 {
+    if s.fixed != 0u && any(e + (*t).reach < vec4<i64>(0li)) {
+        return 0u;
+    }
+    let base = pixel_index(p) * params.samples;
+    var written = 0u;
+#ifdef ALPHA_MASK
+    var masked = (s.owns & MASKED) != 0u;
+#endif
+    for (var k = 0u; k < params.samples; k++) {
+        var depth = 0.0;
+        if s.fixed != 0u {
+            if any(e + (*t).edge[k] < vec4<i64>(0li)) {
+                continue;
+            }
+            depth = fixed_depth_at(s, p, (*t).sub[k]);
+        } else {
+            let q = ndc_point(vec2f(p) + (*t).at[k]);
+            if !inside_homogeneous(s, q) {
+                continue;
+            }
+            depth = dot(s.depth, q);
+        }
+        // Clip to the depth range, as the hardware does (the background is 0).
+        if !(depth > 0.0 && depth <= 1.0) {
+            continue;
+        }
+        let value = (u64(bitcast<u32>(depth)) << 32u) | u64(s.payload);
+#ifdef ALPHA_MASK
+        // The texture is read once, where the triangle would first be kept
+        // (`written` is still 0): its cut decides every sample of the pixel.
+        if masked {
+            if atomicLoad(&depth_ids[base + k]) >= value {
+                continue;
+            }
+            if cut_away(s.payload, p) {
+                return 0u;
+            }
+            masked = false;
+        }
+#endif
+        atomicMax(&depth_ids[base + k], value);
+        written++;
+    }
+    return written;
+}
+#endif
 
 // Rasterizes the pixels of [lo, hi]; fixed-point edges step by additions
 // (64-bit multiplies are several instructions on GPUs). Returns the atomics
 // it issued.
 fn raster_rect(s: Setup, lo: vec2i, hi: vec2i) -> u32 {
     var written = 0u;
+#ifdef MSAA
+    var t = sample_steps(s);
+#endif
     if s.fixed == 0u {
         for (var y = lo.y; y <= hi.y; y++) {
             for (var x = lo.x; x <= hi.x; x++) {
+#ifdef MSAA
+                written += raster_samples(s, &t, vec2i(x, y), vec4<i64>(0li));
+#else
                 written += raster_pixel_homogeneous(s, vec2i(x, y));
+#endif
             }
         }
         return written;
@@ -502,9 +625,13 @@ fn raster_rect(s: Setup, lo: vec2i, hi: vec2i) -> u32 {
     for (var y = lo.y; y <= hi.y; y++) {
         var e = row;
         for (var x = lo.x; x <= hi.x; x++) {
+#ifdef MSAA
+            written += raster_samples(s, &t, vec2i(x, y), e);
+#else
             if all(e >= vec4<i64>(0li)) {
                 written += keep_nearest(s.payload, s.owns, vec2i(x, y), fixed_depth(s, vec2i(x, y)));
             }
+#endif
             e += s.fixed_dx;
         }
         row += s.fixed_dy;
@@ -609,11 +736,17 @@ fn raster_triangle(s: Setup) {
 fn edge_max(s: Setup, i: u32, lo: vec2i, hi: vec2i) -> i64 {
     let x = select(lo.x, hi.x, s.fixed_dx[i] > 0li);
     let y = select(lo.y, hi.y, s.fixed_dy[i] > 0li);
-    return s.fixed_origin[i] + s.fixed_dx[i] * i64(x) + s.fixed_dy[i] * i64(y);
+    let at_centre = s.fixed_origin[i] + s.fixed_dx[i] * i64(x) + s.fixed_dy[i] * i64(y);
+#ifdef MSAA
+    // Samples lie up to half a pixel from the centre along each axis.
+    return at_centre + ((abs(s.fixed_dx[i]) + abs(s.fixed_dy[i])) >> 1u);
+#else
+    return at_centre;
+#endif
 }
 
 // Whether a triangle may cover a pixel of [lo, hi]: every edge has a pixel of
-// the rectangle inside its half-plane (conservative: near a triangle's
+// the rectangle inside its half-plane (under MSAA a sample of one; conservative: near a triangle's
 // corners a rectangle can pass and hold no covered pixel).
 fn may_cover(s: Setup, lo: vec2i, hi: vec2i) -> bool {
     if any(lo > hi) {
@@ -649,6 +782,9 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_ind
         let item = big_tiles[i];
         let s = big_setups[item.x];
         let r = big_tile_rect(s.bounds, item.y);
+#ifdef MSAA
+        var t = sample_steps(s);
+#endif
         if local < u32(SUB_TILES * SUB_TILES) {
             let lo = r.xy + vec2i(i32(local) % SUB_TILES, i32(local) / SUB_TILES) * SUB_TILE;
             square_live[local] = select(0u, 1u, may_cover(s, lo, min(lo + SUB_TILE - 1, r.zw)));
@@ -668,18 +804,24 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_ind
                 continue;
             }
             tested++;
+            let e = e0 + step_x * i64(square.x) + step_y * i64(square.y);
+#ifdef MSAA
+            let w = raster_samples(s, &t, p, e);
+            written += w;
+            back_facing += w * s.back_facing;
+#else
             if s.fixed == 0u {
                 let w = raster_pixel_homogeneous(s, p);
                 written += w;
                 back_facing += w * s.back_facing;
                 continue;
             }
-            let e = e0 + step_x * i64(square.x) + step_y * i64(square.y);
             if all(e >= vec4<i64>(0li)) {
                 let w = keep_nearest(s.payload, s.owns, p, fixed_depth(s, p));
                 written += w;
                 back_facing += w * s.back_facing;
             }
+#endif
         }
         // `square_live` is rewritten next iteration.
         workgroupBarrier();

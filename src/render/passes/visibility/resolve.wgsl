@@ -3,6 +3,9 @@
 // the visibility buffer every consumer reads: (object + 1, triangle), 0 =
 // background. Here the buffer is read as plain (payload, depth bits) pairs:
 // 64-bit atomics other than min/max are optional (`SHADER_INT64_ATOMIC_ALL_OPS`).
+// Under MSAA (`MSAA` defined) a pixel has `params.samples` entries side by
+// side, and the visibility buffer one layer per sample (multisampled
+// textures cannot be written by compute passes).
 
 // Mirrors `visibility::compute::GpuResolveParams`.
 struct ResolveParams {
@@ -10,21 +13,29 @@ struct ResolveParams {
     height: u32,
     // Entries of `ranges`.
     range_count: u32,
-    pad: u32,
+    // Samples per pixel (1 without MSAA).
+    samples: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: ResolveParams;
 // Per visible object: (object, index of its first triangle in this frame's
 // list, index of its first triangle in the scene's numbering, 0).
 @group(0) @binding(1) var<storage, read> ranges: array<vec4u>;
-// Per pixel: (payload, depth bits), the halves of `raster.wgsl`'s `depth_ids`.
+// Per pixel (sample): (payload, depth bits), the halves of `raster.wgsl`'s `depth_ids`.
 @group(0) @binding(2) var<storage, read_write> depth_ids: array<vec2u>;
+#ifdef MSAA
+@group(0) @binding(3) var visibility: texture_storage_2d_array<rg32uint, write>;
+#else
 @group(0) @binding(3) var visibility: texture_storage_2d<rg32uint, write>;
+#endif
 
 @compute @workgroup_size(8, 8)
 fn clear(@builtin(global_invocation_id) id: vec3u) {
     if all(id.xy < vec2u(params.width, params.height)) {
-        depth_ids[id.y * params.width + id.x] = vec2u(0u);
+        let first = (id.y * params.width + id.x) * params.samples;
+        for (var s = 0u; s < params.samples; s++) {
+            depth_ids[first + s] = vec2u(0u);
+        }
     }
 }
 
@@ -33,7 +44,18 @@ fn resolve(@builtin(global_invocation_id) id: vec3u) {
     if any(id.xy >= vec2u(params.width, params.height)) {
         return;
     }
-    let payload = depth_ids[id.y * params.width + id.x].x;
+    let first = (id.y * params.width + id.x) * params.samples;
+    for (var s = 0u; s < params.samples; s++) {
+#ifdef MSAA
+        textureStore(visibility, id.xy, s, vec4u(ids_of(depth_ids[first + s].x), 0u, 0u));
+#else
+        textureStore(visibility, id.xy, vec4u(ids_of(depth_ids[first + s].x), 0u, 0u));
+#endif
+    }
+}
+
+// (object + 1, triangle) of a payload; (0, 0) for background.
+fn ids_of(payload: u32) -> vec2u {
     var ids = vec2u(0u);
     if payload != 0u {
         // The payload is the complement of the scene's triangle index; the
@@ -51,5 +73,5 @@ fn resolve(@builtin(global_invocation_id) id: vec3u) {
         }
         ids = vec2u(ranges[lo].x + 1u, index - ranges[lo].z);
     }
-    textureStore(visibility, id.xy, vec4u(ids, 0u, 0u));
+    return ids;
 }
