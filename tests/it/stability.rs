@@ -51,8 +51,9 @@ fn flicker(
 /// object space adds over forward; FLIP 0.02728 and 0.02687 (forward
 /// 0.02523). The bound, measured less 25 %: at least 0.008 steps less.
 /// With the B-spline filter (rounded level) 1.1736: 0.0315 steps (74 %) off,
-/// FLIP 0.02787 (2 % more); the bound, measured less 25 %: 0.023. About
-/// 22 s on lavapipe (the 4x4 references are most of it).
+/// FLIP 0.02787 (2 % more); the bound, measured less 25 %: 0.023. On
+/// lavapipe 18 s idle before the B-spline run was added, 34 s with it on
+/// a loaded machine (the 4x4 references are most of it).
 #[test]
 fn level_blending_and_the_bspline_filter_cut_the_flicker_object_space_adds() {
     let ctx = common::gpu();
