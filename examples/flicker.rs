@@ -9,8 +9,10 @@
 //! Lights `small:8` (seed 1), placed as the quality experiment places them;
 //! path frames FIRST..FIRST+FRAMES measured after one warm-up frame (FIRST
 //! at least 1). CONFIG: `forward`, `deferred-compute`, or `os` with options
-//! `os:blend=W,reuse=N,hz=N,vr=V,bias=B` (`hz=N`: reuse N spread over the
-//! frames, as `--shade-hz`). Prints per configuration: mean FLIP and PSNR,
+//! `os:blend=W,reuse=N,hz=N,vr=V,bias=B,filter=bilinear|bspline|mitchell,texel=1|4`
+//! (`hz=N`: reuse N spread over the frames, as `--shade-hz`; `filter`:
+//! `--os-filter`; `texel`: `--os-texel-samples`).
+//! Prints per configuration: mean FLIP and PSNR,
 //! mean flicker (8-bit steps a channel), and per frame the shaded and visible
 //! tiles, shaded texels and the share of atlas pixels whose level holds
 //! fewer than one texel per pixel (`under_shaded_share`).
@@ -20,6 +22,7 @@ use shadespace::charts::ChartCache;
 use shadespace::experiments::census::StudyScene;
 use shadespace::metrics::temporal::path_quality;
 use shadespace::reference::{ReferenceCache, ReferenceSettings, ReferenceView, References};
+use shadespace::render::objectspace::GatherFilter;
 use shadespace::render::{
     DeferredComputeConfig, Exposure, ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer,
     ShadingModel, VisibilityMethod,
@@ -107,7 +110,16 @@ fn main() -> anyhow::Result<()> {
                         }
                         "vr" => os.variable_rate = v.parse()?,
                         "bias" => os.mip_bias = v.parse()?,
-                        _ => bail!("'{k}' is not blend, reuse, hz, vr or bias"),
+                        "filter" => {
+                            os.gather_filter = match v {
+                                "bilinear" => GatherFilter::Bilinear,
+                                "bspline" => GatherFilter::Bspline,
+                                "mitchell" => GatherFilter::Mitchell,
+                                _ => bail!("filter '{v}' is not bilinear, bspline or mitchell"),
+                            }
+                        }
+                        "texel" => os.texel_samples = v.parse()?,
+                        _ => bail!("'{k}' is not blend, reuse, hz, vr, bias, filter or texel"),
                     }
                 }
                 PipelineConfig::ObjectSpace(os)

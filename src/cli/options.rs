@@ -7,7 +7,7 @@ use std::str::FromStr;
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 use shadespace::render::objectspace::{
-    DEFAULT_PAGE_SIZE, DEFAULT_TRIMAP_LANES, GatherInput, MAX_ATLAS_BUDGET_MI, Marking, PagingChain,
+    DEFAULT_PAGE_SIZE, DEFAULT_TRIMAP_LANES, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, Marking, PagingChain,
 };
 use shadespace::render::{Culling, Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
@@ -313,6 +313,18 @@ pub struct ObjectSpaceArgs {
     /// view, no MSAA). Both give the same image.
     #[arg(long, value_enum, default_value = "surface")]
     pub os_gather: GatherInput,
+    /// How the gather filters each level's shades: `bilinear` (default: the
+    /// 2x2 texels around the point), `bspline` (the cubic B-spline over the
+    /// 4x4 around it: a blur that changes less with the texel grid's phase
+    /// as the camera moves) or `mitchell` (the Mitchell-Netravali cubic over
+    /// the 4x4: sharper); the cubics mark one texel more each side.
+    #[arg(long, value_enum, default_value = "bilinear")]
+    pub os_filter: GatherFilter,
+    /// Points each shaded texel averages: 1 (its centre, default) or 4
+    /// (2x2 over the texel: shading pre-filtered over the texel's footprint,
+    /// against specular aliasing; 4x the shading work, the same tiles).
+    #[arg(long, default_value_t = 1, value_parser = parse::texel_samples)]
+    pub os_texel_samples: u32,
     /// Shade these objects (comma-separated names) forward instead of in object space.
     #[arg(long, value_delimiter = ',')]
     pub forward_only: Vec<String>,

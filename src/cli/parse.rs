@@ -165,6 +165,14 @@ pub fn level_blend(s: &str) -> Result<f32, String> {
     finite_in(s, 0.0..=1.0, "a band from 0 to 1 levels")
 }
 
+/// `--os-texel-samples`: 1 or 4.
+pub fn texel_samples(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(n @ (1 | 4)) => Ok(n),
+        _ => Err(format!("'{s}' is not 1 or 4 samples a texel")),
+    }
+}
+
 /// `--cap-ms`: a frame time above 0.
 pub fn cap_ms(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {

@@ -186,6 +186,8 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             paging_chain: a.objectspace.os_paging,
             trimap_lanes: a.objectspace.os_trimap_lanes,
             gather_input: a.objectspace.os_gather,
+            gather_filter: a.objectspace.os_filter,
+            texel_samples: a.objectspace.os_texel_samples,
             ..Default::default()
         }),
         PipelineName::Deferred => PipelineConfig::Deferred(DeferredConfig { depth_prepass: !a.no_depth_prepass }),

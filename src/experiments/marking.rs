@@ -13,7 +13,7 @@ use serde::Serialize;
 use crate::render::objectspace::atlas::MAX_TEXTURE_SIZE;
 use crate::render::objectspace::atlas::{AtlasError, AtlasLayout, GpuAtlasEntry};
 use crate::render::objectspace::cpu::{self, ChartFootprint, MarkParams};
-use crate::render::objectspace::{COARSEST_LEVEL, DEFAULT_PAGE_SIZE};
+use crate::render::objectspace::{COARSEST_LEVEL, DEFAULT_PAGE_SIZE, GatherFilter};
 
 /// The study's shading-texture side for every object (12 levels).
 pub const STUDY_TEXTURE_SIZE: u32 = 4096;
@@ -164,8 +164,16 @@ impl StudyLayout {
 }
 
 /// Our marking's parameters: no bias, no variable rate (the renderer's defaults).
-const OUR_MARKING: MarkParams =
-    MarkParams { stamp: 1, reuse: 1, view_since: 1, tile_size: 8, mip_bias: 0.0, variable_rate: 0.0, level_blend: 0.0 };
+const OUR_MARKING: MarkParams = MarkParams {
+    stamp: 1,
+    reuse: 1,
+    view_since: 1,
+    tile_size: 8,
+    mip_bias: 0.0,
+    variable_rate: 0.0,
+    level_blend: 0.0,
+    gather_filter: GatherFilter::Bilinear,
+};
 
 /// The atlas tiles our marking gives a pixel of an object (entry `e`) with
 /// footprint `f`: the tiles of its bilinear footprint at its rounded level,

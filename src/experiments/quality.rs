@@ -27,6 +27,7 @@ use super::{ExperimentError, ExperimentOptions, Findings, Outcome, Output, diffe
 use crate::gpu::GpuContext;
 use crate::metrics::temporal::path_quality;
 use crate::reference::{ReferenceCache, ReferenceSettings, ReferenceView, References};
+use crate::render::objectspace::GatherFilter;
 use crate::render::{Exposure, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
 use crate::scene::gloss::{self, Gloss};
 use crate::scene::lights::build_lights;
@@ -81,15 +82,18 @@ pub struct Config {
     pub mip_bias: f32,
     /// Object space: `--level-blend`.
     pub level_blend: f32,
+    /// Object space: `--os-filter`.
+    pub filter: GatherFilter,
 }
 
 impl Config {
     fn plain(shading: Shading) -> Self {
-        Self { shading, spread: false, mip_bias: 0.0, level_blend: 0.0 }
+        Self { shading, spread: false, mip_bias: 0.0, level_blend: 0.0, filter: GatherFilter::Bilinear }
     }
 
     /// `objectspace-hz30` (shading at 30 Hz of 60, spread), `objectspace-bias1`,
-    /// `objectspace-blend1` (level blend 1: trilinear), ...
+    /// `objectspace-blend1` (level blend 1: trilinear), `objectspace-bspline`
+    /// (the B-spline gather), ...
     pub fn label(&self) -> String {
         match self.shading {
             Shading::ObjectSpace { reuse, variable_rate } if self.spread => {
@@ -104,6 +108,11 @@ impl Config {
         .to_string()
             + &if self.mip_bias != 0.0 { format!("-bias{}", self.mip_bias) } else { String::new() }
             + &if self.level_blend != 0.0 { format!("-blend{}", self.level_blend) } else { String::new() }
+            + match self.filter {
+                GatherFilter::Bilinear => "",
+                GatherFilter::Bspline => "-bspline",
+                GatherFilter::Mitchell => "-mitchell",
+            }
     }
 
     /// The pipeline's name (a curve of the cost-error plot).
@@ -117,6 +126,7 @@ impl Config {
             os.spread_reshading = self.spread;
             os.mip_bias = self.mip_bias;
             os.level_blend = self.level_blend;
+            os.gather_filter = self.filter;
         }
         config
     }
@@ -134,8 +144,9 @@ pub struct Axes {
 }
 
 /// The configurations of a grid: its shadings, then object space at 30 Hz
-/// (reuse 2, spread over the frames) and, but in quick mode, with mip bias 1
-/// and with level blend 1 (trilinear gathering).
+/// (reuse 2, spread over the frames) and, but in quick mode, with mip bias 1,
+/// with level blend 1 (trilinear gathering), with the B-spline gather, and
+/// with both (the least flicker on lavapipe: BENCHMARKS.md).
 pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
     let mut all: Vec<Config> = grid.shadings.iter().map(|&s| Config::plain(s)).collect();
     if grid.shadings.iter().any(|s| !s.is_conventional()) {
@@ -143,6 +154,9 @@ pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
         if !quick {
             all.push(Config { mip_bias: 1.0, ..Config::plain(Shading::OBJECT_SPACE) });
             all.push(Config { level_blend: 1.0, ..Config::plain(Shading::OBJECT_SPACE) });
+            let bspline = Config { filter: GatherFilter::Bspline, ..Config::plain(Shading::OBJECT_SPACE) };
+            all.push(bspline);
+            all.push(Config { level_blend: 1.0, ..bspline });
         }
     }
     all
@@ -762,7 +776,9 @@ mod tests {
                 "objectspace-vr1",
                 "objectspace-hz30",
                 "objectspace-bias1",
-                "objectspace-blend1"
+                "objectspace-blend1",
+                "objectspace-bspline",
+                "objectspace-blend1-bspline"
             ]
         );
         let all = cells(&full, false);
@@ -771,7 +787,7 @@ mod tests {
             labels.len() * 3 * 2 * 2,
             "full: two textures, two gloss settings, one light set, MSAA 1, 4, 8"
         );
-        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 6 * 4 * 3);
+        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 8 * 4 * 3);
         assert_eq!(all.iter().filter(|c| c.msaa == 8).count(), labels.len() * 4);
         let quick = grid(true);
         let labels: Vec<String> = configs(&quick, true).iter().map(Config::label).collect();

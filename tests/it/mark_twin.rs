@@ -12,7 +12,7 @@ use glam::Vec3;
 use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::atlas::GpuAtlasEntry;
 use shadespace::render::objectspace::cpu::{self, MarkInputs, TileState};
-use shadespace::render::objectspace::{Marking, ObjectSpace, TileCounter};
+use shadespace::render::objectspace::{GatherFilter, Marking, ObjectSpace, TileCounter};
 use shadespace::render::scene_gpu::gpu_view;
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
 use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
@@ -28,6 +28,8 @@ struct Run<'a> {
     variable_rate: f32,
     /// `ObjectSpaceConfig::level_blend`.
     level_blend: f32,
+    /// `ObjectSpaceConfig::gather_filter` (what marking marks around each footprint).
+    gather_filter: GatherFilter,
     /// How the visibility buffer the twin reads is filled.
     visibility: VisibilityMethod,
     /// One camera per frame.
@@ -69,6 +71,7 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
         reuse: run.reuse,
         variable_rate: run.variable_rate,
         level_blend: run.level_blend,
+        gather_filter: run.gather_filter,
         visibility: run.visibility,
         texture_sizes: run.texture_sizes.clone(),
         ..Default::default()
@@ -222,6 +225,7 @@ fn static_floor_reuses_shades_until_they_age_and_the_camera_moves_or_the_lights_
             reuse: 3,
             variable_rate: 0.0,
             level_blend: 0.0,
+            gather_filter: GatherFilter::Bilinear,
             visibility: VisibilityMethod::Raster,
             cameras,
             lights,
@@ -252,6 +256,7 @@ fn moving_floor_marks_new_tiles() {
                 reuse,
                 variable_rate,
                 level_blend: 0.0,
+                gather_filter: GatherFilter::Bilinear,
                 visibility: VisibilityMethod::Raster,
                 // Low over the floor and nearing it: finer levels come into view.
                 cameras: floor_cameras(Vec3::new(0.0, 2.5, 5.0), Vec3::new(0.3, -0.2, -0.5), 5),
@@ -277,14 +282,17 @@ fn atrium_along_its_camera_path() {
     let spec: LightSpec = "small:8".parse().unwrap();
     let lights = lights::build_lights(&spec, &bounds, &cameras[0], width as f32 / height as f32, 7).unwrap();
     let (scene, texture_sizes) = common::charted(&scene);
+    let (bilinear, bspline) = (GatherFilter::Bilinear, GatherFilter::Bspline);
     let runs = [
-        ("atrium, reuse 1", 1, 0.0, 0.0, VisibilityMethod::Raster),
-        ("atrium, reuse 3, variable rate 1", 3, 1.0, 0.0, VisibilityMethod::Raster),
-        ("atrium, reuse 2, compute visibility", 2, 0.0, 0.0, VisibilityMethod::Compute),
+        ("atrium, reuse 1", 1, 0.0, 0.0, bilinear, VisibilityMethod::Raster),
+        ("atrium, reuse 3, variable rate 1", 3, 1.0, 0.0, bilinear, VisibilityMethod::Raster),
+        ("atrium, reuse 2, compute visibility", 2, 0.0, 0.0, bilinear, VisibilityMethod::Compute),
         // Two levels per pixel between levels: both marked.
-        ("atrium, reuse 2, level blend 1", 2, 0.0, 1.0, VisibilityMethod::Raster),
+        ("atrium, reuse 2, level blend 1", 2, 0.0, 1.0, bilinear, VisibilityMethod::Raster),
+        // The B-spline's 4x4 taps: one texel more each side marked.
+        ("atrium, reuse 2, B-spline filter", 2, 0.0, 0.0, bspline, VisibilityMethod::Raster),
     ];
-    for (name, reuse, variable_rate, level_blend, visibility) in runs {
+    for (name, reuse, variable_rate, level_blend, gather_filter, visibility) in runs {
         check(
             &ctx,
             Run {
@@ -296,6 +304,7 @@ fn atrium_along_its_camera_path() {
                 reuse,
                 variable_rate,
                 level_blend,
+                gather_filter,
                 visibility,
                 cameras: cameras.clone(),
                 lights: lights.clone(),

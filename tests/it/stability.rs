@@ -2,12 +2,15 @@
 //! path frames, its flicker against the supersampled reference
 //! (`metrics::temporal`) falls when a pixel blends the two levels around its
 //! footprint (`--level-blend 1`, trilinear) instead of reading the rounded
-//! level alone, whose shade jumps where the level changes.
+//! level alone, whose shade jumps where the level changes, and when the
+//! gather filters each level with the cubic B-spline (`--os-filter
+//! bspline`) instead of bilinearly.
 
 use crate::common;
 
 use shadespace::metrics::temporal::path_quality;
 use shadespace::reference::{ReferenceCache, ReferenceSettings, ReferenceView, References};
+use shadespace::render::objectspace::GatherFilter;
 use shadespace::render::{
     Exposure, ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, ShadingModel,
 };
@@ -46,10 +49,13 @@ fn flicker(
 /// forward 1.1624, object space 1.2051 with the rounded level and 1.1940
 /// with level blend 1: blending takes 0.0112 steps (26 %) off the 0.0428
 /// object space adds over forward; FLIP 0.02728 and 0.02687 (forward
-/// 0.02523). The bound, measured less 25 %: at least 0.008 steps less. About
-/// 18 s on lavapipe (the 4x4 references are most of it).
+/// 0.02523). The bound, measured less 25 %: at least 0.008 steps less.
+/// With the B-spline filter (rounded level) 1.1736: 0.0315 steps (74 %) off,
+/// FLIP 0.02787 (2 % more); the bound, measured less 25 %: 0.023. On
+/// lavapipe 18 s idle before the B-spline run was added, 34 s with it on
+/// a loaded machine (the 4x4 references are most of it).
 #[test]
-fn blending_levels_cuts_the_flicker_object_space_adds() {
+fn level_blending_and_the_bspline_filter_cut_the_flicker_object_space_adds() {
     let ctx = common::gpu();
     let mut scene = scene::load(SCENE).unwrap();
     scene::detail::add_detailed_textures(&mut scene);
@@ -74,12 +80,21 @@ fn blending_levels_cuts_the_flicker_object_space_adds() {
     let forward =
         flicker(&ctx, &scene, PipelineConfig::Forward(ForwardConfig::default()), &cameras, &lights, &reference);
     let (charted, texture_sizes) = common::charted(&scene);
-    let objectspace = |level_blend| {
-        let config = ObjectSpaceConfig { texture_sizes: texture_sizes.clone(), level_blend, ..Default::default() };
+    let objectspace = |level_blend, gather_filter| {
+        let config = ObjectSpaceConfig {
+            texture_sizes: texture_sizes.clone(),
+            level_blend,
+            gather_filter,
+            ..Default::default()
+        };
         flicker(&ctx, &charted, PipelineConfig::ObjectSpace(config), &cameras, &lights, &reference)
     };
-    let (nearest, blended) = (objectspace(0.0), objectspace(1.0));
-    eprintln!("flicker, FLIP: forward {forward:?}, object space nearest level {nearest:?}, level blend 1 {blended:?}");
+    let (nearest, blended) = (objectspace(0.0, GatherFilter::Bilinear), objectspace(1.0, GatherFilter::Bilinear));
+    let bspline = objectspace(0.0, GatherFilter::Bspline);
+    eprintln!(
+        "flicker, FLIP: forward {forward:?}, object space nearest level {nearest:?}, level blend 1 {blended:?}, \
+         B-spline filter {bspline:?}"
+    );
     assert!(nearest.0 > forward.0, "object space adds no flicker over forward here: nothing to show");
     assert!(
         nearest.0 - blended.0 >= 0.008,
@@ -90,4 +105,15 @@ fn blending_levels_cuts_the_flicker_object_space_adds() {
     );
     // Blending does not cost error against the reference.
     assert!(blended.1 <= nearest.1, "FLIP: nearest {}, blended {}", nearest.1, blended.1);
+    // The B-spline's blur, which hardly follows the texel grid's phase,
+    // takes most of the rest off (bilinear's blur follows it).
+    assert!(
+        nearest.0 - bspline.0 >= 0.023,
+        "flicker: bilinear {}, B-spline {} (forward {}): the B-spline should take at least 0.023 steps off",
+        nearest.0,
+        bspline.0,
+        forward.0
+    );
+    // For a little more error (its blur).
+    assert!(bspline.1 <= nearest.1 * 1.05, "FLIP: bilinear {}, B-spline {}", nearest.1, bspline.1);
 }

@@ -23,9 +23,9 @@ use glam::{UVec2, Vec3};
 use shadespace::charts::islands::triangle_islands;
 use shadespace::gpu::{GpuContext, readback};
 use shadespace::render::gpu_types::GpuLight;
-use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::objectspace::cpu::gather::{self, GatherOutcome, GatherTaps, PixelGather};
 use shadespace::render::objectspace::cpu::{self, LevelTexels, MarkInputs, shade};
+use shadespace::render::objectspace::{GatherFilter, ObjectSpace};
 use shadespace::render::scene_gpu::{gpu_view, order_lights};
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
@@ -42,6 +42,10 @@ struct Case<'a> {
     mip_bias: f32,
     /// `ObjectSpaceConfig::level_blend`.
     level_blend: f32,
+    /// `ObjectSpaceConfig::gather_filter`.
+    gather_filter: GatherFilter,
+    /// `ObjectSpaceConfig::texel_samples`.
+    texel_samples: u32,
     /// Check the shade stage too (the scene has no textures).
     shade: bool,
 }
@@ -89,12 +93,14 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
         texture_sizes: case.texture_sizes.clone(),
         mip_bias: case.mip_bias,
         level_blend: case.level_blend,
+        gather_filter: case.gather_filter,
+        texel_samples: case.texel_samples,
         ..Default::default()
     };
     let options = RenderOptions {
         width: case.width,
         height: case.height,
-        pipeline: PipelineConfig::ObjectSpace(objectspace),
+        pipeline: PipelineConfig::ObjectSpace(objectspace.clone()),
         samples: 1,
     };
     let mut renderer = Renderer::new(ctx, case.scene, &options).unwrap();
@@ -160,8 +166,18 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
                     assert_eq!(got, Vec3::ZERO, "{where_}: no triangle covers it, yet it is not black");
                     continue;
                 }
+                // The texel's centre, for the failure message.
                 let s = shade::texel_surface(case.scene, object, l.size, texel, id as usize - 1);
-                let want = shade::shade(&s, &lights, case.camera.position);
+                let side = objectspace.texel_sample_side();
+                let want = shade::texel_shade(
+                    case.scene,
+                    object,
+                    (l.size, side),
+                    texel,
+                    id as usize - 1,
+                    &lights,
+                    case.camera.position,
+                );
                 let ulps = shade::shade_ulps(got, want);
                 report.worst_shade = report.worst_shade.max(ulps);
                 assert!(
@@ -232,17 +248,22 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
 }
 
 /// The floor scene (checker texture: neighbouring texels differ, which a
-/// wrong filter cannot hide) seen from its camera, at two levels, and with
+/// wrong filter cannot hide) seen from its camera, at two levels, with
 /// trilinear gathering (level blend 1: two levels per pixel but where the
-/// last level clamps).
+/// last level clamps), and with the Mitchell cubic.
 #[test]
 fn gather_on_the_floor() {
     let ctx = common::gpu();
     let (scene, camera, lights) = common::floor_scene();
     let mut levels = BTreeMap::new();
-    for (name, mip_bias, level_blend) in
-        [("floor", 0.0, 0.0), ("floor, mip bias -2.5", -2.5, 0.0), ("floor, mip bias -2.5, trilinear", -2.5, 1.0)]
-    {
+    let cases = [
+        ("floor", 0.0, 0.0, GatherFilter::Bilinear),
+        ("floor, mip bias -2.5", -2.5, 0.0, GatherFilter::Bilinear),
+        ("floor, mip bias -2.5, trilinear", -2.5, 1.0, GatherFilter::Bilinear),
+        // Negative lobes on a checker: a wrong weight or tap shows.
+        ("floor, mip bias -2.5, Mitchell", -2.5, 0.0, GatherFilter::Mitchell),
+    ];
+    for (name, mip_bias, level_blend, gather_filter) in cases {
         let report = check(
             &ctx,
             Case {
@@ -255,6 +276,8 @@ fn gather_on_the_floor() {
                 height: 96,
                 mip_bias,
                 level_blend,
+                gather_filter,
+                texel_samples: 1,
                 shade: false,
             },
         );
@@ -292,6 +315,8 @@ fn shade_and_gather_on_the_untextured_floor() {
             height: 64,
             mip_bias: 0.0,
             level_blend: 0.0,
+            gather_filter: GatherFilter::Bilinear,
+            texel_samples: 1,
             shade: true,
         },
     );
@@ -300,9 +325,9 @@ fn shade_and_gather_on_the_untextured_floor() {
     assert!(report.texels > 3000 && report.pixels > 3000 && report.levels.len() >= 3, "{report:?}");
 }
 
-/// The atrium without textures: many objects, chart islands and levels.
-#[test]
-fn shade_and_gather_in_the_atrium() {
+/// The atrium without textures (many objects, chart islands and levels),
+/// gathered with `filter` and shaded with `texel_samples` points a texel.
+fn atrium(name: &'static str, gather_filter: GatherFilter, texel_samples: u32) -> Report {
     let ctx = common::gpu();
     let mut scene = scene::load("atrium").unwrap();
     for m in &mut scene.materials {
@@ -325,7 +350,7 @@ fn shade_and_gather_in_the_atrium() {
     let report = check(
         &ctx,
         Case {
-            name: "atrium",
+            name,
             scene: &scene,
             texture_sizes,
             camera,
@@ -336,10 +361,25 @@ fn shade_and_gather_in_the_atrium() {
             // Half the pixels between two levels blend them: both kinds of
             // pixel, and island filtering in both levels of a blend.
             level_blend: 0.5,
+            gather_filter,
+            texel_samples,
             shade: true,
         },
     );
     // Several levels, blends, and island filtering at chart borders, were exercised.
     assert!(report.levels.len() >= 3 && report.filtered_pixels > 20, "{report:?}");
     assert!(report.blended_pixels > 100 && report.blended_pixels < report.pixels, "{report:?}");
+    report
+}
+
+#[test]
+fn shade_and_gather_in_the_atrium() {
+    atrium("atrium", GatherFilter::Bilinear, 1);
+}
+
+/// The B-spline gather (4x4 taps a level, island-filtered, across page
+/// edges) and pre-filtered shading (2x2 points a texel) against their twins.
+#[test]
+fn bspline_gather_and_four_points_a_texel_in_the_atrium() {
+    atrium("atrium, B-spline, 4 points a texel", GatherFilter::Bspline, 4);
 }

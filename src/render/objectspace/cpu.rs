@@ -23,6 +23,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use glam::{IVec2, Mat4, UVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
+use super::GatherFilter;
 use super::atlas::{GpuAtlasEntry, GpuAtlasLevel};
 use crate::render::gpu_types::GpuView;
 use crate::scene::{Mesh, Scene};
@@ -58,6 +59,9 @@ pub struct MarkParams {
     pub variable_rate: f32,
     /// Width of the band over which a pixel blends two levels (0: none).
     pub level_blend: f32,
+    /// How the gather filters a level: marking marks the tiles of the
+    /// texels it reads ([`GatherFilter::margin`] beyond the bilinear pair).
+    pub gather_filter: GatherFilter,
 }
 
 /// Everything the marking pass reads besides the visibility buffer.
@@ -240,6 +244,15 @@ pub fn bilinear_taps(size: u32, base: IVec2) -> (IVec2, IVec2) {
     (base.clamp(IVec2::ZERO, high), (base + 1).clamp(IVec2::ZERO, high))
 }
 
+/// Mirrors `mark_footprint`'s span: the first and last texels (clamped into
+/// the level) that a filter reading `margin` texels beyond the bilinear pair
+/// of top-left texel `base` reads.
+pub fn filter_span(size: u32, base: IVec2, margin: u32) -> (IVec2, IVec2) {
+    let high = IVec2::splat(size as i32 - 1);
+    let m = margin as i32;
+    ((base - m).clamp(IVec2::ZERO, high), (base + 1 + m).clamp(IVec2::ZERO, high))
+}
+
 /// Mirrors the tile index of `mark_tile`: the global tile holding a texel of a level.
 pub fn tile_of(l: &GpuAtlasLevel, tile_size: u32, texel: IVec2) -> u32 {
     let tiles_per_row = l.size / tile_size;
@@ -247,8 +260,10 @@ pub fn tile_of(l: &GpuAtlasLevel, tile_size: u32, texel: IVec2) -> u32 {
     l.tile_base + t.y * tiles_per_row + t.x
 }
 
-/// Mirrors the calls of `mark_tile` in `mark`: the tiles of a bilinear
-/// footprint (the top-left tap's, plus those the other taps cross into).
+/// Mirrors the calls of `mark_tile` in `mark`: the tiles of a filter's
+/// footprint from `texel` to `texel_hi` (at most 4 texels a side, so at
+/// most two tiles along each axis: the top-left texel's, plus those the
+/// others cross into).
 pub fn footprint_tiles(l: &GpuAtlasLevel, tile_size: u32, texel: IVec2, texel_hi: IVec2) -> Vec<u32> {
     let lo = texel.as_uvec2() / tile_size;
     let hi = texel_hi.as_uvec2() / tile_size;
@@ -353,7 +368,7 @@ pub fn pixel_tiles(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Option<P
         let mut outcomes: Vec<Vec<u32>> = Vec::new();
         for x in floor_candidates(t.x, tolerance) {
             for y in floor_candidates(t.y, tolerance) {
-                let (texel, texel_hi) = bilinear_taps(l.size, IVec2::new(x, y));
+                let (texel, texel_hi) = filter_span(l.size, IVec2::new(x, y), inputs.params.gather_filter.margin());
                 outcomes.push(footprint_tiles(l, inputs.params.tile_size, texel, texel_hi));
             }
         }
@@ -527,7 +542,16 @@ mod tests {
     }
 
     fn params(mip_bias: f32, variable_rate: f32) -> MarkParams {
-        MarkParams { stamp: 1, reuse: 1, view_since: 1, tile_size: 8, mip_bias, variable_rate, level_blend: 0.0 }
+        MarkParams {
+            stamp: 1,
+            reuse: 1,
+            view_since: 1,
+            tile_size: 8,
+            mip_bias,
+            variable_rate,
+            level_blend: 0.0,
+            gather_filter: GatherFilter::Bilinear,
+        }
     }
 
     /// One object of texture side 256 in tiles of 8, levels 256 down to 32.
@@ -618,6 +642,20 @@ mod tests {
         assert_eq!((bottom_right.texel, bottom_right.texel_hi), (IVec2::splat(15), IVec2::splat(15)));
         let outside = bilinear(16, Vec2::new(-3.0, 7.0));
         assert_eq!((outside.texel, outside.texel_hi), (IVec2::new(0, 15), IVec2::new(0, 15)));
+    }
+
+    #[test]
+    fn cubic_filters_span_one_texel_more_each_side() {
+        // Bilinear's span is its pair; a cubic's is clamped into the level.
+        assert_eq!(filter_span(32, IVec2::new(7, 3), 0), (IVec2::new(7, 3), IVec2::new(8, 4)));
+        assert_eq!(filter_span(32, IVec2::new(7, 3), 1), (IVec2::new(6, 2), IVec2::new(9, 5)));
+        assert_eq!(filter_span(32, IVec2::new(-1, 31), 1), (IVec2::new(0, 30), IVec2::new(1, 31)));
+        // Bilinear's texels 6-7 lie in tile 0; the cubic's 5-8 reach tile 1.
+        let l = GpuAtlasLevel { size: 32, page_base: 0, tile_base: 100, pad: 0 };
+        let (lo, hi) = filter_span(32, IVec2::new(6, 3), 0);
+        assert_eq!(footprint_tiles(&l, 8, lo, hi), vec![100]);
+        let (lo, hi) = filter_span(32, IVec2::new(6, 3), 1);
+        assert_eq!(footprint_tiles(&l, 8, lo, hi), vec![100, 101]);
     }
 
     #[test]
@@ -749,6 +787,7 @@ mod tests {
             mip_bias: 0.0,
             variable_rate: 0.0,
             level_blend: 0.0,
+            gather_filter: GatherFilter::Bilinear,
         };
         let visible: BTreeSet<u32> = [0, 1, 2, 3, 21].into();
         let marks = mark_frame(&previous, &visible, &params, &entries);

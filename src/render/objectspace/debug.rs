@@ -147,6 +147,7 @@ impl ObjectSpace {
             mip_bias: o.mip_bias,
             variable_rate: o.variable_rate,
             level_blend: o.level_blend,
+            gather_filter: o.gather_filter,
         }
     }
 

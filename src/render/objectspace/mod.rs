@@ -428,6 +428,43 @@ pub enum GatherInput {
     Record,
 }
 
+/// How the gather reconstructs a pixel's shade from a level's texels
+/// (`--os-filter`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum GatherFilter {
+    /// The 2x2 texels around the chart point, weighted bilinearly: a pixel
+    /// on a texel's centre reads that texel alone and one between texels the
+    /// mean of two or four, so how much it blurs follows the grid's
+    /// sub-pixel phase, which moves with the camera.
+    #[default]
+    Bilinear,
+    /// The 4x4 texels around it, weighted by the cubic B-spline: a blur that
+    /// changes little with the phase (and more of it). Marking marks one
+    /// texel more on each side, so a few more tiles are shaded.
+    Bspline,
+    /// The 4x4 texels around it, weighted by the Mitchell-Netravali cubic
+    /// (B = C = 1/3): sharper than the B-spline (small negative lobes), its
+    /// blur between B-spline's and bilinear's in how it follows the phase.
+    /// Marks as `bspline`.
+    Mitchell,
+}
+
+impl GatherFilter {
+    /// Texels a pixel reads beyond the bilinear pair, on each side.
+    pub fn margin(self) -> u32 {
+        match self {
+            Self::Bilinear => 0,
+            Self::Bspline | Self::Mitchell => 1,
+        }
+    }
+
+    /// The filter's code in `Params::gather_filter` (`objectspace.wgsl`).
+    pub fn code(self) -> u32 {
+        self as u32
+    }
+}
+
 /// The triangle-map pass's invocations per texel (`--os-trimap-lanes`).
 pub const TRIMAP_LANES: [u32; 4] = [1, 2, 4, 8];
 /// [`ObjectSpaceConfig::trimap_lanes`]'s default: the triangle-map pass
@@ -461,6 +498,13 @@ pub struct ObjectSpaceConfig {
     /// jumps where its level changes between frames; 1 is trilinear
     /// filtering (every pixel between two levels reads both). 0 to 1.
     pub level_blend: f32,
+    /// How the gather filters each level's texels (marking marks what it reads).
+    pub gather_filter: GatherFilter,
+    /// Points each shaded texel averages, spread over it on a square grid:
+    /// 1 (its centre) or 4 (pre-filtered shading: the shade over the
+    /// texel's footprint, so a highlight narrower than a texel is not
+    /// sampled in or out as the texel grid moves; 4x the shading work).
+    pub texel_samples: u32,
     pub view: DebugView,
     /// Virtual shading-texture side per scene object; `None` shades the
     /// object forward (per pixel, in the gather). Reported per object instead.
@@ -522,6 +566,8 @@ impl Default for ObjectSpaceConfig {
             mip_bias: 0.0,
             variable_rate: 0.0,
             level_blend: 0.0,
+            gather_filter: GatherFilter::Bilinear,
+            texel_samples: 1,
             view: DebugView::Shade,
             texture_sizes: Vec::new(),
             page_size: DEFAULT_PAGE_SIZE,
@@ -541,6 +587,13 @@ impl Default for ObjectSpaceConfig {
     }
 }
 
+impl ObjectSpaceConfig {
+    /// Points per side of a shaded texel: 2 for [`Self::texel_samples`] 4, else 1.
+    pub fn texel_sample_side(&self) -> u32 {
+        if self.texel_samples == 4 { 2 } else { 1 }
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum ObjectSpaceError {
     #[error(transparent)]
@@ -555,6 +608,8 @@ pub enum ObjectSpaceError {
     BadBias(f32, f32),
     #[error("the level blend must be from 0 to 1 (got {0})")]
     BadLevelBlend(f32),
+    #[error("samples per shaded texel must be 1 or 4 (got {0})")]
+    BadTexelSamples(u32),
     #[error("the object-space pipeline needs the PRIMITIVE_INDEX feature, which {0} lacks")]
     NoPrimitiveIndex(String),
     #[error("{0} texture sizes given for {1} objects")]
@@ -667,6 +722,9 @@ impl ObjectSpace {
         }
         if !(0.0..=1.0).contains(&config.level_blend) {
             return Err(ObjectSpaceError::BadLevelBlend(config.level_blend));
+        }
+        if ![1, 4].contains(&config.texel_samples) {
+            return Err(ObjectSpaceError::BadTexelSamples(config.texel_samples));
         }
         if !TRIMAP_LANES.contains(&config.trimap_lanes) {
             return Err(ObjectSpaceError::BadTrimapLanes(config.trimap_lanes));

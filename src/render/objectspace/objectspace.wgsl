@@ -60,6 +60,21 @@ struct Params {
     // Width of the band of levels over which a pixel blends the two levels
     // around its footprint (0: the rounded level alone; 1: trilinear).
     level_blend: f32,
+    // How the gather filters a level (`GatherFilter::code`): FILTER_BILINEAR
+    // over 2x2 texels, else a cubic over 4x4 (marking marks one texel more
+    // each side).
+    gather_filter: u32,
+    // Points per side of a texel that shading averages (1: its centre alone).
+    texel_sample_side: u32,
+}
+
+const FILTER_BILINEAR: u32 = 0u;
+const FILTER_BSPLINE: u32 = 1u;
+const FILTER_MITCHELL: u32 = 2u;
+
+// Texels the gather's filter reads beyond the bilinear pair on each side.
+fn filter_margin() -> u32 {
+    return select(1u, 0u, params.gather_filter == FILTER_BILINEAR);
 }
 
 @group(1) @binding(0) var<uniform> params: Params;

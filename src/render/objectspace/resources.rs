@@ -47,6 +47,11 @@ gpu_struct! {
         pub view_since: u32,
         /// [`ObjectSpaceConfig::level_blend`].
         pub level_blend: f32,
+        /// [`ObjectSpaceConfig::gather_filter`] ([`super::GatherFilter::code`]).
+        pub gather_filter: u32,
+        /// Points per side of a texel that shading averages
+        /// ([`ObjectSpaceConfig::texel_samples`]: 1 or 2).
+        pub texel_sample_side: u32,
     }
 }
 
@@ -507,6 +512,8 @@ impl Resources {
             request_capacity: self.budget_pages,
             view_since,
             level_blend: config.level_blend,
+            gather_filter: config.gather_filter.code(),
+            texel_sample_side: config.texel_sample_side(),
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(&self.counters, 0, None);

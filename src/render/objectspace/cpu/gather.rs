@@ -1,6 +1,7 @@
 //! CPU twin of shade gathering (`gather/gather.wgsl`): for a pixel of the
 //! visibility buffer, the levels marking chose (one, or two blended), the
-//! bilinear taps in each, their weights, the taps kept (those in the pixel's
+//! filter's taps in each (bilinear, or the cubic B-spline's 4x4 with
+//! `--os-filter bspline`), their weights, the taps kept (those in the pixel's
 //! chart island) and the colour filtered from the shades the GPU holds
 //! ([`LevelTexels`]), in `f32` and in the WGSL's order.
 //!
@@ -13,6 +14,8 @@
 //! [`LOD_TOLERANCE`]: super::LOD_TOLERANCE
 
 use glam::{IVec2, UVec2, Vec2, Vec3};
+
+use crate::render::objectspace::GatherFilter;
 
 use super::{
     LOD_TOLERANCE, LevelPair, LevelTexels, MarkInputs, TEXEL_TOLERANCE, bilinear_taps, chart_footprint,
@@ -33,14 +36,15 @@ pub const COLOR_ULPS: f32 = 2.0;
 #[derive(Clone, Debug, PartialEq)]
 pub struct GatherTaps {
     pub level: u32,
-    /// Level-local texels of the taps, clamped into the level: top-left,
-    /// right, lower, lower right (`taps` in `gather.wgsl`).
-    pub taps: [IVec2; 4],
-    /// Bilinear weights of the taps, before island filtering.
-    pub weights: [f32; 4],
+    /// Level-local texels of the taps, clamped into the level: bilinear's
+    /// top-left, right, lower, lower right (`taps` in `gather.wgsl`), or the
+    /// B-spline's 4x4 row by row ([`level_taps`]).
+    pub taps: Vec<IVec2>,
+    /// The filter's weights of the taps, before island filtering.
+    pub weights: Vec<f32>,
     /// Which taps lie in the pixel's chart island (their triangle map names
     /// a triangle of its island).
-    pub kept: [bool; 4],
+    pub kept: Vec<bool>,
     /// The filtered colour; `None` when a tap's page has no physical page
     /// (the GPU shades the pixel forward then).
     pub color: Option<Vec3>,
@@ -177,6 +181,54 @@ pub fn tap_weights(w: Vec2) -> [f32; 4] {
     [(1.0 - w.x) * (1.0 - w.y), w.x * (1.0 - w.y), (1.0 - w.x) * w.y, w.x * w.y]
 }
 
+/// The cubic B-spline weights of `bspline_weights` in `gather.wgsl`: the
+/// four texels around a point at fraction `f` past the second one's centre.
+pub fn bspline_weights(f: f32) -> [f32; 4] {
+    let g = 1.0 - f;
+    let (f2, f3) = (f * f, f * f * f);
+    [g * g * g, 3.0 * f3 - 6.0 * f2 + 4.0, -3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0, f3].map(|w| w / 6.0)
+}
+
+/// The Mitchell-Netravali cubic (B = C = 1/3) at distance `x` (0 to 2), as
+/// `mitchell` in `gather.wgsl`.
+fn mitchell(x: f32) -> f32 {
+    if x < 1.0 {
+        ((7.0 * x - 12.0) * x * x + 16.0 / 3.0) / 6.0
+    } else {
+        (((-7.0 / 3.0 * x + 12.0) * x - 20.0) * x + 32.0 / 3.0) / 6.0
+    }
+}
+
+/// The weights of `cubic_weights` in `gather.wgsl` for `filter` (a cubic).
+pub fn cubic_weights(filter: GatherFilter, f: f32) -> [f32; 4] {
+    match filter {
+        GatherFilter::Mitchell => [mitchell(1.0 + f), mitchell(f), mitchell(1.0 - f), mitchell(2.0 - f)],
+        _ => bspline_weights(f),
+    }
+}
+
+/// The taps and weights `gather.wgsl` reads in a level of side `size` for
+/// the unclamped top-left bilinear texel `base` and fractions `w`: bilinear's
+/// four, or a cubic's 4x4 from `base - 1`, row by row
+/// (`filter_level_cubic`); clamped into the level.
+pub fn level_taps(filter: GatherFilter, size: u32, base: IVec2, w: Vec2) -> (Vec<IVec2>, Vec<f32>) {
+    if filter == GatherFilter::Bilinear {
+        let (lo, hi) = bilinear_taps(size, base);
+        return (vec![lo, IVec2::new(hi.x, lo.y), IVec2::new(lo.x, hi.y), hi], tap_weights(w).to_vec());
+    }
+    let high = IVec2::splat(size as i32 - 1);
+    let (wx, wy) = (cubic_weights(filter, w.x), cubic_weights(filter, w.y));
+    let mut taps = Vec::with_capacity(16);
+    let mut weights = Vec::with_capacity(16);
+    for (j, wy) in wy.iter().enumerate() {
+        for (i, wx) in wx.iter().enumerate() {
+            taps.push((base + IVec2::new(i as i32 - 1, j as i32 - 1)).clamp(IVec2::ZERO, high));
+            weights.push(wx * wy);
+        }
+    }
+    (taps, weights)
+}
+
 /// The colour of one outcome: `gather.wgsl`'s island filter and weighted
 /// sum over the taps' shades.
 pub fn filter_taps(
@@ -184,36 +236,38 @@ pub fn filter_taps(
     own_island: u32,
     islands: &[u32],
     level_index: u32,
-    taps: [IVec2; 4],
-    weights: [f32; 4],
+    taps: &[IVec2],
+    weights: &[f32],
 ) -> GatherTaps {
-    let texels = taps.map(|t| level.index(t));
-    let shades = texels.map(|i| level.shades[i]);
-    let kept = texels.map(|i| level.triangles[i].is_some_and(|id| id != 0 && islands[id as usize - 1] == own_island));
-    let keep = kept.map(f32::from);
-    let kept_weight = weights[0] * keep[0] + weights[1] * keep[1] + weights[2] * keep[2] + weights[3] * keep[3];
-    let mut w = weights;
-    if kept_weight > 0.0 {
-        w = std::array::from_fn(|i| weights[i] * keep[i] / kept_weight);
-    }
-    let color = shades.iter().all(Option::is_some).then(|| {
-        let s = shades.map(|s| Vec3::from_slice(&s.expect("checked")[..3]));
-        s[0] * w[0] + s[1] * w[1] + s[2] * w[2] + s[3] * w[3]
-    });
+    let texels: Vec<usize> = taps.iter().map(|&t| level.index(t)).collect();
+    let shades: Vec<Option<[f32; 4]>> = texels.iter().map(|&i| level.shades[i]).collect();
+    let kept: Vec<bool> = texels
+        .iter()
+        .map(|&i| level.triangles[i].is_some_and(|id| id != 0 && islands[id as usize - 1] == own_island))
+        .collect();
+    let kept_weight: f32 = weights.iter().zip(&kept).map(|(w, &k)| w * f32::from(k)).sum();
+    let w: Vec<f32> = if kept_weight > 0.0 {
+        weights.iter().zip(&kept).map(|(w, &k)| w * f32::from(k) / kept_weight).collect()
+    } else {
+        weights.to_vec()
+    };
+    let rgb = |s: &Option<[f32; 4]>| Vec3::from_slice(&s.expect("checked")[..3]);
+    let color = shades.iter().all(Option::is_some).then(|| shades.iter().zip(&w).map(|(s, &w)| rgb(s) * w).sum());
     // The colour moves by at most the spread of the taps' shades per texel
-    // the bilinear coordinate moves, along each axis, divided by the kept
-    // weight it is renormalized by.
+    // the filter's coordinate moves, along each axis (the weights' slopes
+    // sum to at most 2 along an axis, bilinear's; the B-spline's to 1.5),
+    // divided by the kept weight it is renormalized by.
     let delta = level.size as f32 * TEXEL_TOLERANCE;
     let spread = color.map_or(0.0, |_| {
-        let s = shades.map(|s| Vec3::from_slice(&s.expect("checked")[..3]));
+        let s: Vec<Vec3> = shades.iter().map(rgb).collect();
         (s.iter().copied().fold(Vec3::MIN, Vec3::max) - s.iter().copied().fold(Vec3::MAX, Vec3::min)).max_element()
     });
     let any_kept = kept.iter().any(|&k| k);
     let norm = if kept_weight > 0.0 { kept_weight } else { 1.0 };
     GatherTaps {
         level: level_index,
-        taps,
-        weights,
+        taps: taps.to_vec(),
+        weights: weights.to_vec(),
         kept,
         color,
         weight_tolerance: 4.0 * delta * spread / norm,
@@ -255,10 +309,8 @@ pub fn gather_pixel<'a>(
         for x in floor_candidates(t.x, tolerance) {
             for y in floor_candidates(t.y, tolerance) {
                 let base = IVec2::new(x, y);
-                let (lo, hi) = bilinear_taps(size, base);
-                let taps = [lo, IVec2::new(hi.x, lo.y), IVec2::new(lo.x, hi.y), hi];
-                let weights = tap_weights(t - base.as_vec2());
-                out.push(filter_taps(texels, own, islands, level_index, taps, weights));
+                let (taps, weights) = level_taps(inputs.params.gather_filter, size, base, t - base.as_vec2());
+                out.push(filter_taps(texels, own, islands, level_index, &taps, &weights));
             }
         }
         out
@@ -316,7 +368,7 @@ mod tests {
     fn weights_interpolate_along_each_axis() {
         assert_eq!(tap_weights(Vec2::new(0.25, 0.5)), [0.375, 0.125, 0.375, 0.125]);
         // Inside one island: the bilinear interpolation of x + 10 y.
-        let g = filter_taps(&level(), 0, &ISLANDS, 0, taps(0, 0), tap_weights(Vec2::new(0.25, 0.5)));
+        let g = filter_taps(&level(), 0, &ISLANDS, 0, &taps(0, 0), &tap_weights(Vec2::new(0.25, 0.5)));
         assert_eq!(g.kept, [true; 4]);
         assert_eq!(g.color, Some(Vec3::new(0.25 + 5.0, 0.0, 0.0)));
         // Swapping the right and lower taps' weights is a different colour.
@@ -327,25 +379,59 @@ mod tests {
     #[test]
     fn taps_outside_the_island_are_left_out() {
         // Columns 1-2 straddle the islands: the pixel of island 0 keeps column 1 only.
-        let g = filter_taps(&level(), 0, &ISLANDS, 0, taps(1, 0), tap_weights(Vec2::new(0.5, 0.5)));
+        let g = filter_taps(&level(), 0, &ISLANDS, 0, &taps(1, 0), &tap_weights(Vec2::new(0.5, 0.5)));
         assert_eq!(g.kept, [true, false, true, false]);
         assert_eq!(g.color, Some(Vec3::new(1.0 + 5.0, 0.0, 0.0)));
         // Row 3 has no triangle: taps there are left out too.
-        let g = filter_taps(&level(), 5, &ISLANDS, 0, taps(2, 2), tap_weights(Vec2::new(0.5, 0.25)));
+        let g = filter_taps(&level(), 5, &ISLANDS, 0, &taps(2, 2), &tap_weights(Vec2::new(0.5, 0.25)));
         assert_eq!(g.kept, [true, true, false, false]);
         assert_eq!(g.color, Some(Vec3::new(22.5, 0.0, 0.0)));
         // No tap in the island: all four, unfiltered.
-        let g = filter_taps(&level(), 7, &ISLANDS, 0, taps(0, 0), tap_weights(Vec2::new(0.5, 0.5)));
-        assert_eq!((g.kept, g.color), ([false; 4], Some(Vec3::new(5.5, 0.0, 0.0))));
+        let g = filter_taps(&level(), 7, &ISLANDS, 0, &taps(0, 0), &tap_weights(Vec2::new(0.5, 0.5)));
+        assert_eq!((g.kept, g.color), (vec![false; 4], Some(Vec3::new(5.5, 0.0, 0.0))));
         // Kept taps of weight 0 only: the GPU's rounding decides, unchecked.
-        let g = filter_taps(&level(), 5, &ISLANDS, 0, taps(1, 0), tap_weights(Vec2::new(0.0, 0.5)));
+        let g = filter_taps(&level(), 5, &ISLANDS, 0, &taps(1, 0), &tap_weights(Vec2::new(0.0, 0.5)));
         assert!(g.fragile && !g.matches(g.color.unwrap()));
+    }
+
+    #[test]
+    fn bspline_taps_reproduce_a_linear_ramp() {
+        // One triangle over an 8x8 level of shades x + 10 y.
+        let l = LevelTexels {
+            size: 8,
+            shades: (0..64).map(|i| Some([(i % 8 + 10 * (i / 8)) as f32, 0.0, 0.0, 1.0])).collect(),
+            triangles: vec![Some(1); 64],
+        };
+        let w = bspline_weights(0.3);
+        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6 && w.iter().all(|&w| w > 0.0), "{w:?}");
+        // The point 3.25, 3.5 (base 3, 3): the 4x4 from texel 2, 2, and the
+        // cubic B-spline reproduces a linear function exactly.
+        let (taps, weights) = level_taps(GatherFilter::Bspline, 8, IVec2::new(3, 3), Vec2::new(0.25, 0.5));
+        assert_eq!((taps.len(), taps[0], taps[15]), (16, IVec2::new(2, 2), IVec2::new(5, 5)));
+        let g = filter_taps(&l, 0, &[0], 0, &taps, &weights);
+        assert!((g.color.unwrap().x - 38.25).abs() < 1e-4, "{:?}", g.color);
+        // At the level's corner the taps clamp into it (the ramp bends there).
+        let (taps, _) = level_taps(GatherFilter::Bspline, 8, IVec2::new(-1, 7), Vec2::ZERO);
+        assert_eq!((taps[0], taps[15]), (IVec2::new(0, 6), IVec2::new(1, 7)));
+        // Mitchell's weights sum to 1 too, with small negative outer lobes.
+        let m = cubic_weights(GatherFilter::Mitchell, 0.5);
+        assert!((m.iter().sum::<f32>() - 1.0).abs() < 1e-6 && m[0] < 0.0 && m[3] < 0.0, "{m:?}");
+        assert!((cubic_weights(GatherFilter::Mitchell, 0.0)[1] - 8.0 / 9.0).abs() < 1e-6);
+        // Bilinear's four are unchanged.
+        assert_eq!(
+            level_taps(GatherFilter::Bilinear, 8, IVec2::new(3, 3), Vec2::new(0.25, 0.5)),
+            (taps4(3, 3), tap_weights(Vec2::new(0.25, 0.5)).to_vec())
+        );
+    }
+
+    fn taps4(x: i32, y: i32) -> Vec<IVec2> {
+        taps(x, y).to_vec()
     }
 
     #[test]
     fn unbacked_taps_have_no_colour() {
         let mut l = level();
         l.shades[5] = None;
-        assert_eq!(filter_taps(&l, 0, &ISLANDS, 0, taps(0, 0), tap_weights(Vec2::ZERO)).color, None);
+        assert_eq!(filter_taps(&l, 0, &ISLANDS, 0, &taps(0, 0), &tap_weights(Vec2::ZERO)).color, None);
     }
 }

@@ -73,13 +73,39 @@ pub struct TexelSurface {
 /// The surface of `object` at the centre of texel `texel` of a level
 /// `size` texels wide, whose triangle map names `triangle` (id - 1).
 pub fn texel_surface(scene: &Scene, object: usize, size: u32, texel: UVec2, triangle: usize) -> TexelSurface {
+    surface_at(scene, object, (texel.as_vec2() + 0.5) / size as f32, triangle)
+}
+
+/// Mirrors `shade` in `shade.wgsl`: the shade of texel `texel` (of a level
+/// `size` texels wide, covered by `triangle`), the mean over `side` x
+/// `side` points spread over it (its centre alone for 1).
+pub fn texel_shade(
+    scene: &Scene,
+    object: usize,
+    (size, side): (u32, u32),
+    texel: UVec2,
+    triangle: usize,
+    lights: &[GpuLight],
+    camera: Vec3,
+) -> Vec3 {
+    let step = 1.0 / (size * side) as f32;
+    let mut color = Vec3::ZERO;
+    for sy in 0..side {
+        for sx in 0..side {
+            let uv = ((texel * side + UVec2::new(sx, sy)).as_vec2() + 0.5) * step;
+            color += shade(&surface_at(scene, object, uv, triangle), lights, camera);
+        }
+    }
+    color / (side * side) as f32
+}
+
+/// The surface of `object` at chart point `uv` of `triangle`'s plane.
+fn surface_at(scene: &Scene, object: usize, uv: Vec2, triangle: usize) -> TexelSurface {
     let o = &scene.objects[object];
     let mesh = &scene.meshes[o.mesh];
     let material = &scene.materials[o.material];
     let tri = [0, 1, 2].map(|k| mesh.indices[3 * triangle + k] as usize);
     let charts = chart_uvs(mesh);
-    let inv = 1.0 / size as f32;
-    let uv = (texel.as_vec2() + 0.5) * inv;
     let b = chart_barycentrics(charts[tri[0]], charts[tri[1]], charts[tri[2]], uv);
     let local = mesh.positions[tri[0]] * b.x + mesh.positions[tri[1]] * b.y + mesh.positions[tri[2]] * b.z;
     let n = mesh.normals[tri[0]] * b.x + mesh.normals[tri[1]] * b.y + mesh.normals[tri[2]] * b.z;

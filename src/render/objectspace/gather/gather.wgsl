@@ -30,7 +30,7 @@
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_levels,
     bilinear, AtlasTexel, atlas_texel, triangle_charts, physical_page, virtual_page, physical_tile,
-    NOT_BACKED, BlendedVertex, blended_vertex}
+    NOT_BACKED, BlendedVertex, blended_vertex, FILTER_BILINEAR, FILTER_MITCHELL}
 #import shadespace::alpha_mask::opacity
 #import shadespace::objectspace::LevelPair
 #ifdef PIXEL_RECORD
@@ -102,6 +102,9 @@ fn shade_forward(p: PixelSample) -> vec4f {
 // texels, all four are kept). Alpha -1 when a tap's page has no physical
 // page (the atlas was full this frame).
 fn filter_level(own: OwnSurface, level_index: u32, uv: vec2f) -> vec4f {
+    if params.gather_filter != FILTER_BILINEAR {
+        return filter_level_cubic(own, level_index, uv);
+    }
     let l = entry_level(own.object, level_index);
     let b = bilinear(l, uv);
     let lo = vec2u(b.texel);
@@ -150,6 +153,94 @@ fn filter_level(own: OwnSurface, level_index: u32, uv: vec2f) -> vec4f {
         w = w * keep / kept;
     }
     return vec4f(fetch(taps[0]) * w.x + fetch(taps[1]) * w.y + fetch(taps[2]) * w.z + fetch(taps[3]) * w.w, 1.0);
+}
+
+// Cubic B-spline weights of the four texels around a point at fraction `f`
+// past the second one's centre (they sum to 1 and are C2 in the point).
+fn bspline_weights(f: f32) -> vec4f {
+    let g = 1.0 - f;
+    let f2 = f * f;
+    let f3 = f2 * f;
+    return vec4f(g * g * g, 3.0 * f3 - 6.0 * f2 + 4.0, -3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0, f3) / 6.0;
+}
+
+// The Mitchell-Netravali cubic (B = C = 1/3) at distance `x` (0 to 2) from a texel.
+fn mitchell(x: f32) -> f32 {
+    if x < 1.0 {
+        return ((7.0 * x - 12.0) * x * x + 16.0 / 3.0) / 6.0;
+    }
+    return (((-7.0 / 3.0 * x + 12.0) * x - 20.0) * x + 32.0 / 3.0) / 6.0;
+}
+
+// The weights of the four texels around a point at fraction `f` past the
+// second one's centre, for the cubic filter `params.gather_filter`.
+fn cubic_weights(f: f32) -> vec4f {
+    if params.gather_filter == FILTER_MITCHELL {
+        return vec4f(mitchell(1.0 + f), mitchell(f), mitchell(1.0 - f), mitchell(2.0 - f));
+    }
+    return bspline_weights(f);
+}
+
+// `filter_level` with a cubic over the 4x4 texels around the point
+// (`--os-filter bspline` or `mitchell`): the B-spline's blur hardly changes
+// with the point's phase in the texel grid, where bilinear's goes from none
+// (on a texel's centre) to the mean of four (between centres). Taps are
+// clamped into the level and island-filtered as bilinear's; marking marked
+// their tiles (`filter_margin`). The 4 texels along an axis cross at most
+// one page edge, so at most four pages are looked up.
+fn filter_level_cubic(own: OwnSurface, level_index: u32, uv: vec2f) -> vec4f {
+    let l = entry_level(own.object, level_index);
+    let b = bilinear(l, uv);
+    let base = vec2i(floor(uv * f32(l.size) - 0.5));
+    let last = vec2i(i32(l.size) - 1);
+    let first = vec2u(clamp(base - 1, vec2i(0), last));
+    let end = vec2u(clamp(base + 2, vec2i(0), last));
+    let crosses = end / params.page_size != first / params.page_size;
+    let page_00 = physical_page(virtual_page(l, first));
+    var page_10 = page_00;
+    var page_01 = page_00;
+    var page_11 = page_00;
+    if crosses.x {
+        page_10 = physical_page(virtual_page(l, vec2u(end.x, first.y)));
+    }
+    if crosses.y {
+        page_01 = physical_page(virtual_page(l, vec2u(first.x, end.y)));
+    }
+    if crosses.x && crosses.y {
+        page_11 = physical_page(virtual_page(l, end));
+    } else if crosses.x {
+        page_11 = page_10;
+    } else if crosses.y {
+        page_11 = page_01;
+    }
+    if page_00 == NOT_BACKED || page_10 == NOT_BACKED || page_01 == NOT_BACKED || page_11 == NOT_BACKED {
+        return vec4f(0.0, 0.0, 0.0, -1.0);
+    }
+    let wx = cubic_weights(b.weight.x);
+    let wy = cubic_weights(b.weight.y);
+    let first_page = first / params.page_size;
+    var all = vec3f(0.0);
+    var sum = vec3f(0.0);
+    var kept = 0.0;
+    for (var j = 0; j < 4; j++) {
+        for (var i = 0; i < 4; i++) {
+            let texel = vec2u(clamp(base + vec2i(i - 1, j - 1), vec2i(0), last));
+            let second = texel / params.page_size != first_page;
+            let page = select(select(page_00, page_10, second.x), select(page_01, page_11, second.x), second.y);
+            let at = atlas_texel(page, texel);
+            let w = wx[i] * wy[j];
+            let c = fetch(at) * w;
+            let keep = in_island(own, at);
+            all += c;
+            sum += c * keep;
+            kept += w * keep;
+        }
+    }
+    // As bilinear's: the kept taps renormalized, or all of them when none is kept.
+    if kept > 0.0 {
+        return vec4f(sum / kept, 1.0);
+    }
+    return vec4f(all, 1.0);
 }
 
 @compute @workgroup_size(8, 8)

@@ -32,7 +32,7 @@
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
-    page_request_bit, tile_request_bit, page_tile_origin, forget_request, BlendedVertex, blended_vertex}
+    page_request_bit, tile_request_bit, page_tile_origin, forget_request, BlendedVertex, blended_vertex, filter_margin}
 #import shadespace::objectspace::visibility_ids
 #ifdef MSAA
 #import shadespace::objectspace::{same_chart_surface, visibility_samples}
@@ -273,23 +273,29 @@ fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_inde
     }
 }
 
-// Marks the tiles of the bilinear footprint of chart point `uv` in level
-// `level_index` of `object`.
+// Marks the tiles of the gather's footprint of chart point `uv` in level
+// `level_index` of `object`: the bilinear pair of texels along each axis,
+// widened by the filter's margin (`filter_margin`: at most 4 texels,
+// so at most two tiles along each axis).
 fn mark_footprint(object: u32, level_index: u32, valid_since: u32, uv: vec2f) {
     let l = entry_level(object, level_index);
     let b = bilinear(l, uv);
-    mark_tile_once(object, level_index, l, valid_since, b.texel);
+    let m = i32(filter_margin());
+    let last = i32(l.size) - 1;
+    let first_texel = clamp(b.texel - m, vec2i(0), vec2i(last));
+    let last_texel = clamp(b.texel_hi + m, vec2i(0), vec2i(last));
+    mark_tile_once(object, level_index, l, valid_since, first_texel);
     // The other taps only add a tile when they cross a tile edge.
-    let lo = vec2u(b.texel) / params.tile_size;
-    let hi = vec2u(b.texel_hi) / params.tile_size;
+    let lo = vec2u(first_texel) / params.tile_size;
+    let hi = vec2u(last_texel) / params.tile_size;
     if hi.x != lo.x {
-        mark_tile_once(object, level_index, l, valid_since, vec2i(b.texel_hi.x, b.texel.y));
+        mark_tile_once(object, level_index, l, valid_since, vec2i(last_texel.x, first_texel.y));
     }
     if hi.y != lo.y {
-        mark_tile_once(object, level_index, l, valid_since, vec2i(b.texel.x, b.texel_hi.y));
+        mark_tile_once(object, level_index, l, valid_since, vec2i(first_texel.x, last_texel.y));
     }
     if hi.x != lo.x && hi.y != lo.y {
-        mark_tile_once(object, level_index, l, valid_since, b.texel_hi);
+        mark_tile_once(object, level_index, l, valid_since, last_texel);
     }
 }
 

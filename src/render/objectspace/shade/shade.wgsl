@@ -3,6 +3,11 @@
 // in the triangle-index map, interpolates the vertex attributes at the texel
 // centre in chart space, applies the object's current transform, and runs the
 // shared lighting model with the global lights and its world-grid cell's lights.
+// With `params.texel_sample_side` n > 1 (`--os-texel-samples`), a texel's
+// shade is the mean of n x n points spread over it (each on the texel's
+// triangle, extrapolated past its edges as the centre is): the shade
+// filtered over the texel's footprint instead of sampled at its centre.
+
 #import shadespace::scene::vertex_uv0
 #import shadespace::scene_bindings::{objects, vertices, triangle_vertices}
 #import shadespace::surface::{surface_point, albedo_lod}
@@ -58,20 +63,27 @@ fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
                 let a = vertices[tri.x].chart_uv;
                 let c = vertices[tri.y].chart_uv;
                 let d = vertices[tri.z].chart_uv;
-                let inv = 1.0 / f32(l.size);
-                let uv = (vec2f(texel) + 0.5) * inv;
-                let b = chart_barycentrics(a, c, d, uv);
-                // UV0 change across one texel, for the albedo mip.
-                let bx1 = chart_barycentrics(a, c, d, uv + vec2f(inv, 0.0));
-                let by1 = chart_barycentrics(a, c, d, uv + vec2f(0.0, inv));
                 let t0 = vertex_uv0(vertices[tri.x]);
                 let t1 = vertex_uv0(vertices[tri.y]);
                 let t2 = vertex_uv0(vertices[tri.z]);
-                let u = t0 * b.x + t1 * b.y + t2 * b.z;
-                let du = t0 * bx1.x + t1 * bx1.y + t2 * bx1.z - u;
-                let dv = t0 * by1.x + t1 * by1.y + t2 * by1.z - u;
-                let s = surface_point(o, tri, b, albedo_lod(du, dv));
-                color = light_surface_in_cell(o, s, world_cell_of(s.position));
+                let side = params.texel_sample_side;
+                // Chart UV step between the texel's points (one texel with one point).
+                let step = 1.0 / f32(l.size * side);
+                for (var sy = 0u; sy < side; sy++) {
+                    for (var sx = 0u; sx < side; sx++) {
+                        let uv = (vec2f(texel * side + vec2u(sx, sy)) + 0.5) * step;
+                        let b = chart_barycentrics(a, c, d, uv);
+                        // UV0 change across one point's share of the texel, for the albedo mip.
+                        let bx1 = chart_barycentrics(a, c, d, uv + vec2f(step, 0.0));
+                        let by1 = chart_barycentrics(a, c, d, uv + vec2f(0.0, step));
+                        let u = t0 * b.x + t1 * b.y + t2 * b.z;
+                        let du = t0 * bx1.x + t1 * bx1.y + t2 * bx1.z - u;
+                        let dv = t0 * by1.x + t1 * by1.y + t2 * by1.z - u;
+                        let s = surface_point(o, tri, b, albedo_lod(du, dv));
+                        color += light_surface_in_cell(o, s, world_cell_of(s.position));
+                    }
+                }
+                color /= f32(side * side);
             }
             textureStore(atlas, at.xy, at.layer, vec4f(color, 1.0));
         }
