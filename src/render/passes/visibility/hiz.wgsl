@@ -4,6 +4,8 @@
 // buffer, level k + 1's of a 2x2 block of level k's texels. Sides round up
 // and blocks past the edge use the texels they have, so a texel of level k
 // covers exactly the pixels [2^(k+1) t, 2^(k+1) (t + 1)) inside the screen.
+// With DEPTH_TEXTURE level 0 reads the depth target of the hardware raster
+// passes instead (`passes::cluster_draws`).
 
 // Mirrors `visibility::compute::GpuHizLevel`.
 struct HizLevel {
@@ -20,8 +22,20 @@ struct HizLevel {
 }
 
 @group(0) @binding(0) var<uniform> level: HizLevel;
+#ifdef DEPTH_TEXTURE
+@group(0) @binding(1) var depth: texture_depth_2d;
+
+fn pixel_depth(p: vec2u, i: u32) -> f32 {
+    return textureLoad(depth, p, 0);
+}
+#else
 // Per pixel: (payload, depth bits), the halves of `raster.wgsl`'s `depth_ids`.
 @group(0) @binding(1) var<storage, read> depth_ids: array<vec2u>;
+
+fn pixel_depth(p: vec2u, i: u32) -> f32 {
+    return bitcast<f32>(depth_ids[i].y);
+}
+#endif
 @group(0) @binding(2) var<storage, read_write> hiz: array<f32>;
 
 @compute @workgroup_size(8, 8)
@@ -37,7 +51,7 @@ fn reduce(@builtin(global_invocation_id) id: vec3u) {
         }
         let i = p.y * level.src_width + p.x;
         if level.from_pixels != 0u {
-            farthest = min(farthest, bitcast<f32>(depth_ids[i].y));
+            farthest = min(farthest, pixel_depth(p, i));
         } else {
             farthest = min(farthest, hiz[level.src_offset + i]);
         }
