@@ -48,7 +48,7 @@ use super::culling::Frustum;
 use super::frame::Frame;
 use super::gpu_types::GpuView;
 use super::passes::background::{Background, Coverage, background};
-use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
+use super::passes::depth_prepass::{DepthPrepass, culled_depth_prepass};
 use super::passes::light_grid::LightGrid;
 use super::passes::light_grid::world::{WorldGrid, build_world_grid};
 use super::passes::visibility::VisibilityBuffer;
@@ -1000,9 +1000,9 @@ impl Pipeline for ObjectSpace {
         match &mut self.visibility {
             Visibility::Raster { prepass, ids } => {
                 if let Some(prepass) = prepass {
-                    depth_prepass(frame, prepass);
+                    culled_depth_prepass(frame, prepass);
                 }
-                visibility(frame, ids, &self.res.visibility);
+                visibility(frame, ids, &self.res.visibility, prepass.as_ref().and_then(DepthPrepass::cull));
             }
             Visibility::Compute(pass) => compute_visibility(frame, pass),
         }
@@ -1044,7 +1044,26 @@ impl Pipeline for ObjectSpace {
         false
     }
 
+    /// With raster visibility after its depth pre-pass (the compute
+    /// rasterizer culls on its own).
+    fn enable_cluster_culling(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+    ) -> Result<(), ShaderError> {
+        if let Visibility::Raster { prepass: Some(prepass), ids } = &mut self.visibility {
+            prepass.enable_cluster_culling(device, shaders, scene, targets)?;
+            ids.add_cluster_draws(device, shaders, scene)?;
+        }
+        Ok(())
+    }
+
     fn after_submit(&mut self) {
+        if let Visibility::Raster { prepass: Some(prepass), .. } = &mut self.visibility {
+            prepass.after_submit();
+        }
         self.readback.after_submit();
         self.grid.grid.after_submit();
         if let Visibility::Compute(pass) = &mut self.visibility {
@@ -1076,7 +1095,8 @@ impl Pipeline for ObjectSpace {
     fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
         let counts = match &mut self.visibility {
             Visibility::Compute(pass) => pass.collect_counts(device, wait),
-            Visibility::Raster { .. } => Vec::new(),
+            Visibility::Raster { prepass: Some(prepass), .. } => prepass.collect_counts(device, wait),
+            Visibility::Raster { prepass: None, .. } => Vec::new(),
         };
         let tile_texels = (self.layout.tile_size * self.layout.tile_size) as f64;
         let page_texels = (self.res.pool.page_size as f64).powi(2);

@@ -48,11 +48,12 @@ impl DepthMode {
 pub struct ScenePipeline {
     opaque: wgpu::RenderPipeline,
     masked: Option<wgpu::RenderPipeline>,
-    /// How the two were built, for their cluster-draw variants.
-    recipe: RasterRecipe,
+    /// How the two were built, for their cluster-draw variants (boxed, as
+    /// is what follows: rarely used, and pass structs are held inline).
+    recipe: Box<RasterRecipe>,
     /// The [`cluster_draws::CLUSTER_DRAW`] variants of `opaque` and
     /// `masked` ([`Self::add_cluster_draws`]).
-    clustered: Option<(wgpu::RenderPipeline, Option<wgpu::RenderPipeline>)>,
+    clustered: Option<Box<(wgpu::RenderPipeline, Option<wgpu::RenderPipeline>)>>,
 }
 
 /// A [`SceneRaster`] with owned parts.
@@ -83,7 +84,7 @@ impl ScenePipeline {
 
     /// The cluster-draw variants (none before [`Self::add_cluster_draws`]).
     pub fn clustered_pipelines(&self) -> impl Iterator<Item = &wgpu::RenderPipeline> {
-        self.clustered.iter().flat_map(|(opaque, masked)| std::iter::once(opaque).chain(masked))
+        self.clustered.iter().flat_map(|c| std::iter::once(&c.0).chain(&c.1))
     }
 
     /// Builds the variants that draw cluster lists
@@ -128,7 +129,7 @@ impl ScenePipeline {
         } else {
             None
         };
-        self.clustered = Some((opaque, masked));
+        self.clustered = Some(Box::new((opaque, masked)));
         Ok(())
     }
 }
@@ -187,7 +188,7 @@ pub fn scene_raster_pipeline_from(
     } else {
         None
     };
-    let recipe = RasterRecipe {
+    let recipe = Box::new(RasterRecipe {
         shader: raster.shader,
         vertex_entry: raster.vertex_entry.to_string(),
         fragment: raster.fragment.map(|(entry, formats)| (entry.to_string(), formats.to_vec())),
@@ -195,7 +196,7 @@ pub fn scene_raster_pipeline_from(
         groups: raster.groups.iter().map(|g| g.cloned()).collect(),
         blend: raster.blend,
         samples: raster.samples,
-    };
+    });
     Ok(ScenePipeline { opaque, masked, recipe, clustered: None })
 }
 

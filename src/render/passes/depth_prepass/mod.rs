@@ -16,7 +16,8 @@ pub const SHADER: ShaderSource = ShaderSource::new("depth.wgsl", include_str!("d
 
 pub struct DepthPrepass {
     pipeline: ScenePipeline,
-    cull: Option<ClusterCull>,
+    /// Boxed: pass structs are held inline, culling is rarely built.
+    cull: Option<Box<ClusterCull>>,
 }
 
 impl DepthPrepass {
@@ -56,14 +57,14 @@ impl DepthPrepass {
             return Ok(());
         }
         self.pipeline.add_cluster_draws(device, shaders, scene)?;
-        self.cull = Some(ClusterCull::new(device, shaders, scene, targets)?);
+        self.cull = Some(Box::new(ClusterCull::new(device, shaders, scene, targets)?));
         Ok(())
     }
 
     /// The culling the passes after it draw with (active only in frames
     /// that culled).
     pub fn cull(&self) -> Option<&ClusterCull> {
-        self.cull.as_ref()
+        self.cull.as_deref()
     }
 
     /// Starts the read-back of the frame's cull counts.
@@ -85,7 +86,7 @@ impl DepthPrepass {
 
     /// GPU memory of culling's buffers (0 without culling).
     pub fn bytes(&self) -> u64 {
-        self.cull.as_ref().map_or(0, ClusterCull::bytes)
+        self.cull.as_ref().map_or(0, |c| c.bytes())
     }
 }
 
