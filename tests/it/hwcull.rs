@@ -1,15 +1,18 @@
 //! Cluster culling in the hardware raster pipelines (`--culling`,
 //! `render::passes::cluster_draws`): forward and deferred give the same
-//! image with culling `none`, `frustum` and `occlusion`, pixel for pixel,
-//! along the tiny city's street (with a jump, after which the late pass must
-//! draw what became visible) and Sponza's path; and the counters show most
-//! clusters culled down the street.
+//! image, and object space's raster visibility the same ids, with culling
+//! and without, pixel for pixel, along the tiny city's street (with a jump,
+//! after which the late pass must draw what became visible) and Sponza's
+//! path; and the counters show most clusters culled down the street.
 
 use crate::common;
 use std::path::Path;
 
 use shadespace::gpu::GpuContext;
-use shadespace::render::{Counters, Culling, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::objectspace::ObjectSpace;
+use shadespace::render::{
+    Counters, Culling, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
+};
 use shadespace::scene::{self, Camera, Light, Scene, path};
 
 const SPONZA: &str = "../shared/scenes/sponza-thesis";
@@ -25,56 +28,72 @@ fn path_views(spec: &str, scene: &Scene, frames: &[u32]) -> (Vec<Camera>, Vec<Li
     (cameras, lights)
 }
 
-/// Per camera, the image in each culling mode ([`Culling::ALL`] order) from
-/// one renderer of `pipeline` (occlusion keeps its history across the
-/// cameras, as along a path), and the occlusion frame's counters.
-fn images(
+/// One view: per culling mode, what `read` read (the image or the ids) and
+/// the pixels it covers; the last mode's counters.
+struct View {
+    frames: Vec<(Vec<u32>, usize)>,
+    counters: Counters,
+}
+
+/// Per camera, the frame in each of `modes` (`none` first) from one renderer
+/// of `pipeline` (occlusion keeps its history across the cameras, as along a
+/// path), read by `read` as (pixels, covered pixels).
+fn views(
     ctx: &GpuContext,
     scene: &Scene,
-    pipeline: &str,
-    cameras: &[Camera],
-    lights: &[Light],
-) -> Vec<(Vec<image::RgbaImage>, Counters)> {
-    let config = PipelineConfig::from_name(pipeline).unwrap();
-    let mut renderer = Renderer::new(ctx, scene, &RenderOptions::new(SIZE.0, SIZE.1, config)).unwrap();
+    pipeline: PipelineConfig,
+    (cameras, lights): &(Vec<Camera>, Vec<Light>),
+    modes: &[Culling],
+    read: impl Fn(&Renderer) -> (Vec<u32>, usize),
+) -> Vec<View> {
+    let name = pipeline.name();
+    let mut renderer = Renderer::new(ctx, scene, &RenderOptions::new(SIZE.0, SIZE.1, pipeline)).unwrap();
     let mut out = Vec::new();
     for (i, camera) in cameras.iter().enumerate() {
-        let mut images = Vec::new();
-        for (k, culling) in Culling::ALL.into_iter().enumerate() {
+        let mut frames = Vec::new();
+        for (k, &culling) in modes.iter().enumerate() {
             renderer.culling = culling;
-            renderer.render(ctx, camera, lights, (i * Culling::ALL.len() + k) as u64).unwrap();
-            images.push(renderer.read_image(ctx).unwrap());
+            renderer.render(ctx, camera, lights, (i * modes.len() + k) as u64).unwrap();
+            frames.push(read(&renderer));
         }
-        let occlusion_frame = (i * Culling::ALL.len() + 2) as u64;
+        let last = (i * modes.len() + modes.len() - 1) as u64;
         let counters: Counters = renderer
             .collect_counters(ctx, true)
             .into_iter()
-            .filter(|(frame, _)| *frame == occlusion_frame)
+            .filter(|(frame, c)| *frame == last && c.contains_key("cull_tested"))
             .flat_map(|(_, c)| c)
             .collect();
-        assert!(counters.contains_key("cull_tested"), "{pipeline}: no cull counters: {counters:?}");
-        // The pre-pass and the shading (or G-buffer) pass draw the lists.
-        assert_eq!(renderer.report().setup["cluster_draw_passes"], 2, "{pipeline}");
-        out.push((images, counters));
+        assert!(counters.contains_key("cull_tested"), "{name}: no cull counters: {counters:?}");
+        out.push(View { frames, counters });
+    }
+    // The depth pre-pass and the pass after it draw the lists.
+    if let Some(passes) = renderer.report().setup.get("cluster_draw_passes") {
+        assert_eq!(*passes, 2, "{name}");
     }
     ctx.check_errors().unwrap();
     out
 }
 
-/// Asserts that every culling mode gave the image of `none`, which is lit.
-fn same_images(name: &str, views: &[(Vec<image::RgbaImage>, Counters)]) {
-    for (i, (images, c)) in views.iter().enumerate() {
-        let lit = images[0].pixels().filter(|p| p.0[..3].iter().any(|&v| v > 8)).count();
-        assert!(lit > 1000, "{name} view {i}: {lit} pixels lit");
-        for (k, culling) in Culling::ALL.into_iter().enumerate().skip(1) {
-            let differ = images[0].pixels().zip(images[k].pixels()).filter(|(a, b)| a != b).count();
-            if differ > 0 {
-                let dir = common::out_dir();
-                images[0].save(dir.join(format!("hwcull-{name}-{i}-none.png"))).unwrap();
-                images[k].save(dir.join(format!("hwcull-{name}-{i}-{}.png", culling.name()))).unwrap();
-            }
-            assert_eq!(differ, 0, "{name} view {i}: culling {} changes {differ} of {lit} lit pixels", culling.name());
+/// The image as RGBA words, and its lit pixels.
+fn image(ctx: &GpuContext) -> impl Fn(&Renderer) -> (Vec<u32>, usize) + '_ {
+    |r| {
+        let image = r.read_image(ctx).unwrap();
+        let lit = image.pixels().filter(|p| p.0[..3].iter().any(|&v| v > 8)).count();
+        (image.pixels().map(|p| u32::from_le_bytes(p.0)).collect(), lit)
+    }
+}
+
+/// Asserts that every mode gave the frame of the first (`none`), which
+/// covers some pixels.
+fn same_frames(name: &str, modes: &[Culling], views: &[View]) {
+    for (i, v) in views.iter().enumerate() {
+        let (none, covered) = &v.frames[0];
+        assert!(*covered > 1000, "{name} view {i}: {covered} pixels covered");
+        for (k, culling) in modes.iter().enumerate().skip(1) {
+            let differ = none.iter().zip(&v.frames[k].0).filter(|(a, b)| a != b).count();
+            assert_eq!(differ, 0, "{name} view {i}: culling {} changes {differ} of {covered} pixels", culling.name());
         }
+        let c = &v.counters;
         eprintln!(
             "{name} view {i}: clusters tested {}, frustum {}, occlusion {}, drawn {} ({} late)",
             c["cull_tested"], c["cull_frustum"], c["cull_occlusion"], c["cull_drawn"], c["cull_drawn_late"]
@@ -82,30 +101,51 @@ fn same_images(name: &str, views: &[(Vec<image::RgbaImage>, Counters)]) {
     }
 }
 
-/// The tiny city down its street (frames 0, 2, 4, then a jump to 60), in
-/// forward and deferred: the same image in every mode; once occlusion has
-/// two frames of history (the first frame's early pass draws nothing, so
-/// the late one draws all it does not cull and the second frame draws all
-/// early), most clusters are culled, by the frustum and by occlusion, and
-/// after the jump the late pass draws clusters.
+/// The tiny city down its street: forward along frames 0, 2, 4 and a jump
+/// to 60 in every mode, the same image; once occlusion has two frames of
+/// history (the first frame's early pass draws nothing, so the late one
+/// draws all it does not cull and the second frame draws all early), most
+/// clusters are culled, by the frustum and by occlusion, and after the jump
+/// the late pass draws clusters. Deferred, and object space's raster
+/// visibility ids, at frames 0, 2 and 60 with and without occlusion (the
+/// jump draws late in each).
 #[test]
 fn raster_culling_keeps_the_image_and_culls_most_clusters_down_the_city_street() {
     let ctx = common::gpu();
     let scene = scene::load("city:2").unwrap();
-    let (cameras, lights) = path_views("city:2", &scene, &[0, 2, 4, 60]);
-    for pipeline in ["forward", "deferred"] {
-        let views = images(&ctx, &scene, pipeline, &cameras, &lights);
-        same_images(&format!("city-{pipeline}"), &views);
-        for (_, c) in &views[2..] {
-            assert!(c["cull_frustum"] > 0.0 && c["cull_occlusion"] > 0.0, "{pipeline}: {c:?}");
-            assert!(c["cull_drawn"] < 0.5 * c["cull_tested"], "{pipeline}: most clusters drawn on the street: {c:?}");
-        }
-        assert!(views[3].1["cull_drawn_late"] > 0.0, "{pipeline}: the jump drew nothing late");
+    let street = path_views("city:2", &scene, &[0, 2, 4, 60]);
+    let forward = PipelineConfig::from_name("forward").unwrap();
+    let v = views(&ctx, &scene, forward, &street, &Culling::ALL, image(&ctx));
+    same_frames("city forward", &Culling::ALL, &v);
+    for View { counters: c, .. } in &v[2..] {
+        assert!(c["cull_frustum"] > 0.0 && c["cull_occlusion"] > 0.0, "{c:?}");
+        assert!(c["cull_drawn"] < 0.5 * c["cull_tested"], "most clusters drawn on the street: {c:?}");
     }
+    assert!(v[3].counters["cull_drawn_late"] > 0.0, "the jump drew nothing late");
+
+    let jump = path_views("city:2", &scene, &[0, 2, 60]);
+    let modes = [Culling::None, Culling::Occlusion];
+    let deferred = PipelineConfig::from_name("deferred").unwrap();
+    let v = views(&ctx, &scene, deferred, &jump, &modes, image(&ctx));
+    same_frames("city deferred", &modes, &v);
+    assert!(v[2].counters["cull_drawn_late"] > 0.0, "deferred: the jump drew nothing late");
+    // Object space's ids need no atlas: every object but the first is shaded forward.
+    let mut texture_sizes = vec![None; scene.objects.len()];
+    texture_sizes[0] = Some(64);
+    let config = ObjectSpaceConfig { texture_sizes, visibility: VisibilityMethod::Raster, ..Default::default() };
+    let ids = |r: &Renderer| {
+        let ids = r.pipeline::<ObjectSpace>().unwrap().read_mark_state(&ctx).unwrap().visibility;
+        let covered = ids.iter().filter(|p| p[0] != 0).count();
+        (ids.into_iter().flatten().collect(), covered)
+    };
+    let v = views(&ctx, &scene, PipelineConfig::ObjectSpace(config), &jump, &modes, ids);
+    same_frames("city object space raster ids", &modes, &v);
+    assert!(v[2].counters["cull_drawn_late"] > 0.0, "object space: the jump drew nothing late");
 }
 
 /// Sponza (alpha-masked leaves: the lists are drawn by both pipelines of
-/// each pass) along its path with a jump, in forward and deferred.
+/// each pass) along its path with a jump, in forward and deferred, with and
+/// without occlusion.
 #[test]
 fn raster_culling_keeps_the_image_along_sponzas_path() {
     if !Path::new(SPONZA).is_dir() {
@@ -114,8 +154,10 @@ fn raster_culling_keeps_the_image_along_sponzas_path() {
     }
     let ctx = common::gpu();
     let scene = scene::load(SPONZA).unwrap();
-    let (cameras, lights) = path_views(SPONZA, &scene, &[0, 120]);
-    for pipeline in ["forward", "deferred"] {
-        same_images(&format!("sponza-{pipeline}"), &images(&ctx, &scene, pipeline, &cameras, &lights));
+    let cameras = path_views(SPONZA, &scene, &[0, 120]);
+    let modes = [Culling::None, Culling::Occlusion];
+    for name in ["forward", "deferred"] {
+        let pipeline = PipelineConfig::from_name(name).unwrap();
+        same_frames(&format!("sponza {name}"), &modes, &views(&ctx, &scene, pipeline, &cameras, &modes, image(&ctx)));
     }
 }
