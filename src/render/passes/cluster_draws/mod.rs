@@ -237,7 +237,7 @@ impl ClusterCull {
     }
 
     /// Whether this frame's pre-pass culled: the passes after it draw the
-    /// lists ([`Self::draw`]) instead of the objects.
+    /// lists ([`Self::draw_list`]) instead of the objects.
     pub fn active(&self) -> bool {
         self.active
     }

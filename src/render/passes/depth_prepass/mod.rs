@@ -1,6 +1,6 @@
 //! Depth pre-pass: lays down the scene's depth, so that the pass after it
 //! (forward shading, the visibility ids) tests `Equal` and runs one fragment
-//! per pixel. With cluster culling ([`Self::enable_cluster_culling`]) it
+//! per pixel. With cluster culling ([`DepthPrepass::enable_cluster_culling`]) it
 //! also culls: it draws only the clusters that survive, and the passes
 //! after it draw the same lists ([`DepthPrepass::cull`], [`culled_depth_prepass`]).
 
