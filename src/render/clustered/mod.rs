@@ -100,7 +100,10 @@ impl Pipeline for Clustered {
         targets: &Targets,
     ) -> Result<(), ShaderError> {
         self.prepass.enable_cluster_culling(device, shaders, scene, targets)?;
-        self.shade.add_cluster_draws(device, shaders, scene)
+        if self.prepass.culls() {
+            self.shade.add_cluster_draws(device, shaders, scene)?;
+        }
+        Ok(())
     }
 
     fn after_submit(&mut self) {

@@ -98,7 +98,9 @@ impl Pipeline for Forward {
     ) -> Result<(), ShaderError> {
         if let Some(prepass) = &mut self.prepass {
             prepass.enable_cluster_culling(device, shaders, scene, targets)?;
-            self.shade.add_cluster_draws(device, shaders, scene)?;
+            if prepass.culls() {
+                self.shade.add_cluster_draws(device, shaders, scene)?;
+            }
         }
         Ok(())
     }

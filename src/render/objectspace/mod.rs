@@ -1055,7 +1055,9 @@ impl Pipeline for ObjectSpace {
     ) -> Result<(), ShaderError> {
         if let Visibility::Raster { prepass: Some(prepass), ids } = &mut self.visibility {
             prepass.enable_cluster_culling(device, shaders, scene, targets)?;
-            ids.add_cluster_draws(device, shaders, scene)?;
+            if prepass.culls() {
+                ids.add_cluster_draws(device, shaders, scene)?;
+            }
         }
         Ok(())
     }
@@ -1091,12 +1093,19 @@ impl Pipeline for ObjectSpace {
     /// backed before this frame, marked once for all views) and
     /// `view_tiles` (the same summed over the views: what independent views
     /// would mark); with `count_visibility`, the compute rasterizer's counts
-    /// too (in entries of their own).
+    /// too (in entries of their own); with raster visibility culling
+    /// clusters, the `cull_*` counts in the frame's entry.
     fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
         let counts = match &mut self.visibility {
             Visibility::Compute(pass) => pass.collect_counts(device, wait),
-            Visibility::Raster { prepass: Some(prepass), .. } => prepass.collect_counts(device, wait),
-            Visibility::Raster { prepass: None, .. } => Vec::new(),
+            Visibility::Raster { .. } => Vec::new(),
+        };
+        // Raster visibility's cluster culling counts join their frame's entry.
+        let mut culled: std::collections::BTreeMap<u64, Counters> = match &mut self.visibility {
+            Visibility::Raster { prepass: Some(prepass), .. } => {
+                prepass.collect_counts(device, wait).into_iter().collect()
+            }
+            _ => Default::default(),
         };
         let tile_texels = (self.layout.tile_size * self.layout.tile_size) as f64;
         let page_texels = (self.res.pool.page_size as f64).powi(2);
@@ -1183,9 +1192,14 @@ impl Pipeline for ObjectSpace {
                     counters.push(("shared_view_tiles", visible - backed_tiles));
                     counters.push(("view_tiles", count(TileCounter::ViewTiles)));
                 }
-                (frame, counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect())
+                let mut counters: Counters = counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+                counters.extend(culled.remove(&frame).unwrap_or_default());
+                (frame, counters)
             })
+            .collect::<Vec<_>>()
+            .into_iter()
             .chain(counts)
+            .chain(culled)
             .collect()
     }
 

@@ -339,7 +339,9 @@ impl GbufferStage {
     ) -> Result<(), ShaderError> {
         if let Some(prepass) = &mut self.prepass {
             prepass.enable_cluster_culling(device, shaders, scene, targets)?;
-            self.pass.pipeline.add_cluster_draws(device, shaders, scene)?;
+            if prepass.culls() {
+                self.pass.pipeline.add_cluster_draws(device, shaders, scene)?;
+            }
         }
         Ok(())
     }

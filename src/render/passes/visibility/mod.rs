@@ -145,11 +145,6 @@ impl VisibilityPass {
     ) -> Result<(), ShaderError> {
         self.pipeline.add_cluster_draws(device, shaders, scene)
     }
-
-    /// Whether it has them.
-    pub fn draws_clusters(&self) -> bool {
-        self.pipeline.draws_clusters()
-    }
 }
 
 /// Reads: the depth target when built `after_prepass`. Writes: `out`
