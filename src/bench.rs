@@ -91,13 +91,26 @@ pub struct FrameReport {
 
 /// Whether a pass belongs to the floor every pipeline pays on top of its
 /// shading: visibility (the compute rasterizer's `vis: ...` passes, the
-/// raster `visibility` or `depth prepass`) and the post-processing of the
+/// raster `visibility` or `depth prepass`, with cluster culling also
+/// `depth prepass late` and culling's `cull`, `cull hiz` and `cull late`)
+/// and the post-processing of the
 /// HDR frame (`exposure`, `bloom`, `tonemap`). What a frame costs over the
 /// floor is the pipeline's own work (for object space: marking, paging,
 /// triangle maps, shading and gathering), so a regression in any of its
 /// passes shows there.
 pub fn is_floor_pass(name: &str) -> bool {
-    name.starts_with("vis") || matches!(name, "depth prepass" | "exposure" | "bloom" | "tonemap")
+    name.starts_with("vis")
+        || matches!(
+            name,
+            "depth prepass"
+                | "depth prepass late"
+                | "cull"
+                | "cull hiz"
+                | "cull late"
+                | "exposure"
+                | "bloom"
+                | "tonemap"
+        )
 }
 
 /// Medians over the measured frames.
@@ -348,6 +361,7 @@ mod tests {
         assert_eq!(s.gpu_passes_per_frame_ms["shade"], 0.5);
         assert_eq!(s.gpu_passes_ms["shade"].median, 1.0);
         assert!(["vis: clear", "visibility", "depth prepass", "bloom", "exposure"].iter().all(|p| is_floor_pass(p)));
+        assert!(["cull", "cull hiz", "cull late", "depth prepass late"].iter().all(|p| is_floor_pass(p)));
         assert!(
             !["mark", "gather", "tiled lighting", "forward shade", "triangle maps"].iter().any(|p| is_floor_pass(p))
         );

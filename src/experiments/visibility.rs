@@ -113,7 +113,7 @@ impl VisibilityRenderer {
                 profiler: &self.profiler,
             };
             match pass {
-                Pass::Raster(pass) => visibility(&mut frame, pass, buffer),
+                Pass::Raster(pass) => visibility(&mut frame, pass, buffer, None),
                 Pass::Compute(pass) => compute_visibility(&mut frame, pass),
             }
         }

@@ -34,7 +34,7 @@ use crate::gpu::timing::{FrameTimings, GpuTimer};
 use crate::gpu::{GpuContext, GpuError, readback};
 use crate::hash::fnv1a;
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
-use crate::shaders::ShaderError;
+use crate::shaders::{ShaderError, ShaderLibrary};
 pub use clustered::ClusteredConfig;
 pub use clusters::Culling;
 use culling::Frustum;
@@ -223,6 +223,19 @@ pub trait Pipeline: Any {
     fn uses_object_light_lists(&self) -> bool {
         true
     }
+    /// Builds cluster culling for its hardware raster passes
+    /// ([`passes::cluster_draws`]); the renderer calls it before the first
+    /// frame whose [`Renderer::culling`] is not none (building nothing for
+    /// runs that never cull). Pipelines that cull no raster pass do nothing.
+    fn enable_cluster_culling(
+        &mut self,
+        _device: &wgpu::Device,
+        _shaders: &mut ShaderLibrary,
+        _scene: &SceneGpu,
+        _targets: &Targets,
+    ) -> Result<(), ShaderError> {
+        Ok(())
+    }
     /// Called right after the frame's submit (to start read-backs).
     fn after_submit(&mut self) {}
     /// Counters of finished frames, by frame number, oldest first; `wait`
@@ -317,6 +330,11 @@ pub struct Renderer {
     /// frames rendered at a grid of such offsets.
     pub jitter: glam::Vec2,
     shadows: ShadowMaps,
+    /// The library the pipelines were built with (cluster culling builds
+    /// its variants from it when first needed).
+    shaders: ShaderLibrary,
+    /// Whether [`Pipeline::enable_cluster_culling`] was called.
+    cluster_culling_built: bool,
     /// Hash of the previous frame's lights, to tell when they change.
     lights_hash: Option<u64>,
     /// Submissions of the frames the GPU may still be working on.
@@ -411,6 +429,8 @@ impl Renderer {
             culling: Culling::for_scene(scene.objects.len()),
             jitter: glam::Vec2::ZERO,
             shadows,
+            shaders,
+            cluster_culling_built: false,
             lights_hash: None,
             in_flight: Default::default(),
         })
@@ -522,6 +542,10 @@ impl Renderer {
         self.shadows.set_plan(&ctx.device, &ctx.queue, &mut self.scene, &lights, &shadow_plan);
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         self.scene.culling = self.culling;
+        if self.culling != Culling::None && !self.cluster_culling_built {
+            self.pipeline.enable_cluster_culling(&ctx.device, &mut self.shaders, &self.scene, &self.targets)?;
+            self.cluster_culling_built = true;
+        }
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         {
             let mut f = Frame {

@@ -21,6 +21,7 @@ pub const SHARED: &[ShaderSource] = &[
     objectspace::SHARED_WGSL[2],
     passes::gbuffer::SHARED_WGSL,
     passes::visibility::compute::SHARED_WGSL,
+    passes::cluster_draws::SHARED_WGSL,
     deferred::SHARED_WGSL,
 ];
 
@@ -85,6 +86,14 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     ]);
     all.extend_from_slice(deferred::PASS_SHADERS);
     all.push(passes::environment::SHADER);
+    {
+        use passes::cluster_draws::*;
+        all.extend([ARGS, HIZ_DEPTH]);
+        // The cluster-draw variants of the passes that cull.
+        let draw: &'static [&'static str] = &["CLUSTER_DRAW"];
+        all.extend([forward::SHADER, clustered::SHADER, passes::gbuffer::SHADER].map(|s| s.with_defs(draw)));
+        all.extend([passes::depth_prepass::SHADER, passes::visibility::SHADER].map(|s| s.with_defs(draw)));
+    }
     {
         use passes::background::*;
         all.extend([SHADER, SHADER_SAMPLES, SHADER_IDS, SHADER_ID_LAYERS]);

@@ -25,6 +25,7 @@ mod forward;
 mod forward_multipass;
 mod fuzz_regressions;
 mod golden;
+mod hwcull;
 mod layered_materials;
 mod layers;
 mod light_grid;

@@ -4,6 +4,7 @@
 #import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, sample_material,
     fragment_surface}
 #import shadespace::scene_bindings::objects
+#import shadespace::cluster_draws::scene_vertex
 #import shadespace::light_grid::{cluster_of, light_surface_in_cell}
 #import shadespace::alpha_mask::opacity
 #ifdef ALPHA_MASK
@@ -11,7 +12,10 @@
 #endif
 
 @vertex
-fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
+fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) instance_index: u32) -> VertexOut {
+    let d = scene_vertex(vertex_index, instance_index);
+    let vi = d.vertex;
+    let object = d.object;
     return object_vertex(object, vi, object);
 }
 

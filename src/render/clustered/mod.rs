@@ -8,18 +8,19 @@ use serde::Serialize;
 use super::frame::Frame;
 use super::passes::background::{Background, Coverage, background};
 use super::passes::blended::{BlendedPass, blended_pass};
-use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
+use super::passes::cluster_draws::ClusterCull;
+use super::passes::depth_prepass::{DepthPrepass, culled_depth_prepass};
 use super::passes::light_grid::clusters::{ClusterDims, Clusters, build_clusters};
 use super::passes::light_grid::{LightGrid, READ_GROUP};
 use super::passes::{
-    DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_objects, hdr_attachment_then,
+    DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_scene, hdr_attachment_then,
     scene_raster_pipeline_from,
 };
-use super::report::PipelineReport;
+use super::report::{Counters, PipelineReport};
 use super::scene_gpu::SceneGpu;
 use super::targets::{HDR_FORMAT, Targets};
 use super::{Pipeline, PipelineConfig, RenderError};
-use crate::shaders::{ShaderLibrary, ShaderSource};
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("clustered.wgsl", include_str!("clustered.wgsl"));
 
@@ -76,9 +77,9 @@ impl Clustered {
 
 impl Pipeline for Clustered {
     fn encode(&mut self, frame: &mut Frame) {
-        depth_prepass(frame, &self.prepass);
+        culled_depth_prepass(frame, &mut self.prepass);
         build_clusters(frame, &mut self.clusters);
-        clustered_shade(frame, &self.shade, &self.clusters.grid, self.blended.is_some());
+        clustered_shade(frame, &self.shade, &self.clusters.grid, self.blended.is_some(), self.prepass.cull());
         if let Some(pass) = &self.background {
             background(frame, pass);
         }
@@ -91,14 +92,39 @@ impl Pipeline for Clustered {
         false
     }
 
+    fn enable_cluster_culling(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+    ) -> Result<(), ShaderError> {
+        self.prepass.enable_cluster_culling(device, shaders, scene, targets)?;
+        if self.prepass.culls() {
+            self.shade.add_cluster_draws(device, shaders, scene)?;
+        }
+        Ok(())
+    }
+
     fn after_submit(&mut self) {
         self.clusters.grid.after_submit();
+        self.prepass.after_submit();
+    }
+
+    /// The cull counts of the frames that culled clusters.
+    fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        self.prepass.collect_counts(device, wait)
     }
 
     fn report(&self) -> PipelineReport {
         let grid = &self.clusters.grid;
         PipelineReport::new(PipelineConfig::Clustered(self.config))
             .memory("clusters", grid.bytes())
+            .memory("cluster_culling", self.prepass.bytes())
+            .setup(
+                "cluster_draw_passes",
+                u64::from(self.prepass.culls()) + u64::from(self.prepass.culls() && self.shade.draws_clusters()),
+            )
             .setup("cluster_count", self.config.clusters.cell_count() as u64)
             .setup("cluster_list_capacity", grid.capacity())
             .setup("cluster_list_peak", grid.peak_entries())
@@ -107,11 +133,18 @@ impl Pipeline for Clustered {
 
 /// Reads: the scene, its lights, the clusters and the depth target. Writes:
 /// `targets.hdr` (cleared first; under MSAA resolved from the samples, or
-/// with `blended_after` left in them for the blended pass).
-fn clustered_shade(frame: &mut Frame, pipeline: &ScenePipeline, grid: &LightGrid, blended_after: bool) {
+/// with `blended_after` left in them for the blended pass). Draws what
+/// `cull` kept where it culled.
+fn clustered_shade(
+    frame: &mut Frame,
+    pipeline: &ScenePipeline,
+    grid: &LightGrid,
+    blended_after: bool,
+    cull: Option<&ClusterCull>,
+) {
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
     let color = [hdr_attachment_then(targets, blended_after)];
     let mut rp = frame.render_pass("clustered shade", &color, Some(depth_attachment(targets, false)));
     rp.set_bind_group(READ_GROUP, grid.bind_group(), &[]);
-    draw_objects(&mut rp, scene, visible, pipeline);
+    draw_scene(&mut rp, scene, visible, pipeline, cull);
 }

@@ -42,11 +42,11 @@ use super::passes::background::{Background, Coverage, background};
 use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::gbuffer::{GBuffer, GbufferStage, geometry};
 use super::passes::{compute_pipeline, hdr_output};
-use super::report::PipelineReport;
+use super::report::{Counters, PipelineReport};
 use super::scene_gpu::SceneGpu;
 use super::targets::Targets;
 use super::{Pipeline, PipelineConfig, RenderError};
-use crate::shaders::{ShaderLibrary, ShaderSource};
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 use volumes::{LightVolumes, VolumeList, classify_volumes, draw_volumes};
 
 /// The module the light-volume shaders import (`shadespace::deferred`).
@@ -114,8 +114,8 @@ impl Deferred {
 
 impl Pipeline for Deferred {
     fn encode(&mut self, frame: &mut Frame) {
+        geometry(frame, &mut self.geometry);
         let gbuffer = &self.geometry.gbuffer;
-        geometry(frame, &self.geometry);
         lights_globals(frame, &self.globals, gbuffer, &self.output);
         classify_volumes(frame, &mut self.volumes);
         let (point, spot) =
@@ -135,6 +135,27 @@ impl Pipeline for Deferred {
         false
     }
 
+    fn enable_cluster_culling(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+    ) -> Result<(), ShaderError> {
+        self.geometry.enable_cluster_culling(device, shaders, scene, targets)
+    }
+
+    fn after_submit(&mut self) {
+        if let Some(p) = self.geometry.prepass_mut() {
+            p.after_submit();
+        }
+    }
+
+    /// The cull counts of the frames that culled clusters.
+    fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        self.geometry.prepass_mut().map(|p| p.collect_counts(device, wait)).unwrap_or_default()
+    }
+
     /// Memory: the G-buffer and the light volumes (meshes, lists, draws);
     /// setup: the G-buffer's bytes per pixel (with depth) and the meshes'
     /// triangles.
@@ -143,6 +164,8 @@ impl Pipeline for Deferred {
         PipelineReport::new(PipelineConfig::Deferred(self.config))
             .memory("gbuffer", self.geometry.gbuffer.bytes())
             .memory("light_volumes", self.volumes.bytes())
+            .memory("cluster_culling", self.geometry.prepass().map_or(0, |p| p.bytes()))
+            .setup("cluster_draw_passes", self.geometry.cluster_draw_passes())
             .setup("gbuffer_bytes_per_pixel", self.geometry.gbuffer.bytes_per_pixel_with_depth())
             .setup("sphere_triangles", sphere)
             .setup("cone_triangles", cone)

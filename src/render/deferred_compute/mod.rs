@@ -46,7 +46,7 @@ use super::scene_gpu::SceneGpu;
 use super::targets::Targets;
 use super::{Pipeline, PipelineConfig, RenderError};
 use crate::gpu::readback::ReadbackRing;
-use crate::shaders::{ShaderLibrary, ShaderSource};
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("tiled.wgsl", include_str!("tiled.wgsl"));
 /// `tiled.wgsl` reading the compute visibility pass instead of the G-buffer.
@@ -218,9 +218,28 @@ impl Pipeline for DeferredCompute {
         false
     }
 
+    /// With the G-buffer and its depth pre-pass (the compute rasterizer culls on its own).
+    fn enable_cluster_culling(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+    ) -> Result<(), ShaderError> {
+        match &mut self.surfaces {
+            Surfaces::Gbuffer(stage) => stage.enable_cluster_culling(device, shaders, scene, targets),
+            Surfaces::Visibility { .. } => Ok(()),
+        }
+    }
+
     fn after_submit(&mut self) {
-        if let Surfaces::Visibility { pass, .. } = &mut self.surfaces {
-            pass.after_submit();
+        match &mut self.surfaces {
+            Surfaces::Visibility { pass, .. } => pass.after_submit(),
+            Surfaces::Gbuffer(stage) => {
+                if let Some(p) = stage.prepass_mut() {
+                    p.after_submit();
+                }
+            }
         }
         if let Some(counts) = &mut self.edge_counts {
             counts.readback.after_submit();
@@ -230,6 +249,14 @@ impl Pipeline for DeferredCompute {
     /// With `count_visibility`, the compute rasterizer's counts; under MSAA
     /// the lit pixels, the edge pixels and their share of the lit ones.
     fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        if let Surfaces::Gbuffer(stage) = &mut self.surfaces
+            && let Some(p) = stage.prepass_mut()
+        {
+            let culled = p.collect_counts(device, wait);
+            if !culled.is_empty() {
+                return culled;
+            }
+        }
         if let Some(counts) = &mut self.edge_counts {
             return counts
                 .readback

@@ -3,6 +3,7 @@
 #import shadespace::raster_surface::{VertexOut, object_vertex, sample_albedo, sample_normal_map, sample_material,
     fragment_surface}
 #import shadespace::scene_bindings::objects
+#import shadespace::cluster_draws::scene_vertex
 #import shadespace::surface::light_surface
 #import shadespace::alpha_mask::opacity
 #ifdef ALPHA_MASK
@@ -10,9 +11,13 @@
 #endif
 
 // The index buffer holds mesh-local indices; `vertex_index` includes the
-// draw's base vertex. `instance_index` is the object.
+// draw's base vertex. `instance_index` is the object (`scene_vertex`: or
+// the cluster drawn, with culling).
 @vertex
-fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
+fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) instance_index: u32) -> VertexOut {
+    let d = scene_vertex(vertex_index, instance_index);
+    let vi = d.vertex;
+    let object = d.object;
     return object_vertex(object, vi, object);
 }
 

@@ -7,16 +7,17 @@ use serde::Serialize;
 use super::frame::Frame;
 use super::passes::background::{Background, Coverage, background};
 use super::passes::blended::{BlendedPass, blended_pass};
-use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
+use super::passes::cluster_draws::ClusterCull;
+use super::passes::depth_prepass::{DepthPrepass, culled_depth_prepass};
 use super::passes::{
-    DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_objects, hdr_attachment_then,
+    DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_scene, hdr_attachment_then,
     scene_raster_pipeline_from,
 };
-use super::report::PipelineReport;
+use super::report::{Counters, PipelineReport};
 use super::scene_gpu::SceneGpu;
 use super::targets::{HDR_FORMAT, Targets};
 use super::{Pipeline, RenderError};
-use crate::shaders::{ShaderLibrary, ShaderSource};
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("forward.wgsl", include_str!("forward.wgsl"));
 
@@ -72,10 +73,11 @@ impl Forward {
 
 impl Pipeline for Forward {
     fn encode(&mut self, frame: &mut Frame) {
-        if let Some(prepass) = &self.prepass {
-            depth_prepass(frame, prepass);
+        if let Some(prepass) = &mut self.prepass {
+            culled_depth_prepass(frame, prepass);
         }
-        forward_shade(frame, &self.shade, self.prepass.is_none(), self.blended.is_some());
+        let cull = self.prepass.as_ref().and_then(DepthPrepass::cull);
+        forward_shade(frame, &self.shade, self.prepass.is_none(), self.blended.is_some(), cull);
         if let Some(pass) = &self.background {
             background(frame, pass);
         }
@@ -84,18 +86,58 @@ impl Pipeline for Forward {
         }
     }
 
+    /// With the depth pre-pass only (culling draws what it drew).
+    /// Report: `cluster_culling` memory, and `cluster_draw_passes`, the
+    /// passes that draw the cluster lists (the pre-pass and the shading).
+    fn enable_cluster_culling(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+    ) -> Result<(), ShaderError> {
+        if let Some(prepass) = &mut self.prepass {
+            prepass.enable_cluster_culling(device, shaders, scene, targets)?;
+            if prepass.culls() {
+                self.shade.add_cluster_draws(device, shaders, scene)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn after_submit(&mut self) {
+        if let Some(prepass) = &mut self.prepass {
+            prepass.after_submit();
+        }
+    }
+
+    /// The cull counts of the frames that culled clusters.
+    fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        self.prepass.as_mut().map(|p| p.collect_counts(device, wait)).unwrap_or_default()
+    }
+
     fn report(&self) -> PipelineReport {
+        let culling = self.prepass.as_ref().map_or(0, DepthPrepass::bytes);
+        let culls = self.prepass.as_ref().is_some_and(DepthPrepass::culls);
         PipelineReport::new(super::PipelineConfig::Forward(self.config))
+            .memory("cluster_culling", culling)
+            .setup("cluster_draw_passes", u64::from(culls) + u64::from(culls && self.shade.draws_clusters()))
     }
 }
 
 /// Reads: the scene, its lights and per-object light lists, and the depth
 /// target unless `clear_depth`. Writes: `targets.hdr` (cleared first;
 /// under MSAA resolved from the samples, or with `blended_after` left in
-/// them for the blended pass) and depth.
-fn forward_shade(frame: &mut Frame, pipeline: &ScenePipeline, clear_depth: bool, blended_after: bool) {
+/// them for the blended pass) and depth. Draws what `cull` kept where it culled.
+fn forward_shade(
+    frame: &mut Frame,
+    pipeline: &ScenePipeline,
+    clear_depth: bool,
+    blended_after: bool,
+    cull: Option<&ClusterCull>,
+) {
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
     let color = [hdr_attachment_then(targets, blended_after)];
     let mut rp = frame.render_pass("forward shade", &color, Some(depth_attachment(targets, clear_depth)));
-    draw_objects(&mut rp, scene, visible, pipeline);
+    draw_scene(&mut rp, scene, visible, pipeline, cull);
 }

@@ -48,7 +48,7 @@ use super::culling::Frustum;
 use super::frame::Frame;
 use super::gpu_types::GpuView;
 use super::passes::background::{Background, Coverage, background};
-use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
+use super::passes::depth_prepass::{DepthPrepass, culled_depth_prepass};
 use super::passes::light_grid::LightGrid;
 use super::passes::light_grid::world::{WorldGrid, build_world_grid};
 use super::passes::visibility::VisibilityBuffer;
@@ -1059,9 +1059,9 @@ impl Pipeline for ObjectSpace {
         match &mut self.visibility {
             Visibility::Raster { prepass, ids } => {
                 if let Some(prepass) = prepass {
-                    depth_prepass(frame, prepass);
+                    culled_depth_prepass(frame, prepass);
                 }
-                visibility(frame, ids, &self.res.visibility);
+                visibility(frame, ids, &self.res.visibility, prepass.as_ref().and_then(DepthPrepass::cull));
             }
             Visibility::Compute(pass) => compute_visibility(frame, pass),
         }
@@ -1103,7 +1103,28 @@ impl Pipeline for ObjectSpace {
         false
     }
 
+    /// With raster visibility after its depth pre-pass (the compute
+    /// rasterizer culls on its own).
+    fn enable_cluster_culling(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+    ) -> Result<(), ShaderError> {
+        if let Visibility::Raster { prepass: Some(prepass), ids } = &mut self.visibility {
+            prepass.enable_cluster_culling(device, shaders, scene, targets)?;
+            if prepass.culls() {
+                ids.add_cluster_draws(device, shaders, scene)?;
+            }
+        }
+        Ok(())
+    }
+
     fn after_submit(&mut self) {
+        if let Visibility::Raster { prepass: Some(prepass), .. } = &mut self.visibility {
+            prepass.after_submit();
+        }
         self.readback.after_submit();
         self.grid.grid.after_submit();
         if let Visibility::Compute(pass) = &mut self.visibility {
@@ -1131,11 +1152,19 @@ impl Pipeline for ObjectSpace {
     /// backed before this frame, marked once for all views) and
     /// `view_tiles` (the same summed over the views: what independent views
     /// would mark); with `count_visibility`, the compute rasterizer's counts
-    /// too (in entries of their own).
+    /// too (in entries of their own); with raster visibility culling
+    /// clusters, the `cull_*` counts in the frame's entry.
     fn collect_counters(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
         let counts = match &mut self.visibility {
             Visibility::Compute(pass) => pass.collect_counts(device, wait),
             Visibility::Raster { .. } => Vec::new(),
+        };
+        // Raster visibility's cluster culling counts join their frame's entry.
+        let mut culled: std::collections::BTreeMap<u64, Counters> = match &mut self.visibility {
+            Visibility::Raster { prepass: Some(prepass), .. } => {
+                prepass.collect_counts(device, wait).into_iter().collect()
+            }
+            _ => Default::default(),
         };
         let tile_texels = (self.layout.tile_size * self.layout.tile_size) as f64;
         let page_texels = (self.res.pool.page_size as f64).powi(2);
@@ -1222,9 +1251,14 @@ impl Pipeline for ObjectSpace {
                     counters.push(("shared_view_tiles", visible - backed_tiles));
                     counters.push(("view_tiles", count(TileCounter::ViewTiles)));
                 }
-                (frame, counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect())
+                let mut counters: Counters = counters.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+                counters.extend(culled.remove(&frame).unwrap_or_default());
+                (frame, counters)
             })
+            .collect::<Vec<_>>()
+            .into_iter()
             .chain(counts)
+            .chain(culled)
             .collect()
     }
 

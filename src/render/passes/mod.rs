@@ -6,6 +6,7 @@
 pub mod background;
 pub mod blended;
 pub mod bloom;
+pub mod cluster_draws;
 pub mod depth_prepass;
 pub mod environment;
 pub mod exposure;
@@ -47,6 +48,23 @@ impl DepthMode {
 pub struct ScenePipeline {
     opaque: wgpu::RenderPipeline,
     masked: Option<wgpu::RenderPipeline>,
+    /// How the two were built, for their cluster-draw variants (boxed, as
+    /// is what follows: rarely used, and pass structs are held inline).
+    recipe: Box<RasterRecipe>,
+    /// The [`cluster_draws::CLUSTER_DRAW`] variants of `opaque` and
+    /// `masked` ([`Self::add_cluster_draws`]).
+    clustered: Option<Box<(wgpu::RenderPipeline, Option<wgpu::RenderPipeline>)>>,
+}
+
+/// A [`SceneRaster`] with owned parts.
+struct RasterRecipe {
+    shader: ShaderSource,
+    vertex_entry: String,
+    fragment: Option<(String, Vec<wgpu::TextureFormat>)>,
+    depth: DepthMode,
+    groups: Vec<Option<wgpu::BindGroupLayout>>,
+    blend: Option<wgpu::BlendState>,
+    samples: u32,
 }
 
 impl ScenePipeline {
@@ -57,6 +75,62 @@ impl ScenePipeline {
     /// test), else the plain one.
     pub fn for_every_object(self) -> wgpu::RenderPipeline {
         self.masked.unwrap_or(self.opaque)
+    }
+
+    /// Whether it has its cluster-draw variants ([`Self::add_cluster_draws`]).
+    pub fn draws_clusters(&self) -> bool {
+        self.clustered.is_some()
+    }
+
+    /// The cluster-draw variants (none before [`Self::add_cluster_draws`]).
+    pub fn clustered_pipelines(&self) -> impl Iterator<Item = &wgpu::RenderPipeline> {
+        self.clustered.iter().flat_map(|c| std::iter::once(&c.0).chain(&c.1))
+    }
+
+    /// Builds the variants that draw cluster lists
+    /// ([`cluster_draws::ClusterCull::draw_list`]) if not built yet. A pass
+    /// using group [`cluster_draws::CLUSTER_DRAW_GROUP`] itself has none.
+    pub fn add_cluster_draws(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+    ) -> Result<(), ShaderError> {
+        let r = &self.recipe;
+        let group = cluster_draws::CLUSTER_DRAW_GROUP as usize;
+        if self.clustered.is_some() || r.groups.get(group - 1).is_some_and(Option::is_some) {
+            return Ok(());
+        }
+        let layout = cluster_draws::draw_layout(device);
+        let mut groups: Vec<Option<&wgpu::BindGroupLayout>> = r.groups.iter().map(Option::as_ref).collect();
+        groups.resize(groups.len().max(group), None);
+        groups[group - 1] = Some(&layout);
+        let fragment = r.fragment.as_ref().map(|(entry, formats)| (entry.as_str(), formats.as_slice()));
+        let raster = SceneRaster {
+            shader: r.shader,
+            vertex_entry: &r.vertex_entry,
+            fragment,
+            depth: r.depth,
+            groups: &groups,
+            blend: r.blend,
+            samples: r.samples,
+        };
+        let draw = cluster_draws::CLUSTER_DRAW;
+        let opaque = raster_pipeline_with(device, shaders, scene, &raster, &[draw])?;
+        let masked = if self.masked.is_some() {
+            let fragment = raster.fragment.or(Some(("fs_alpha_mask", &[])));
+            Some(raster_pipeline_with(
+                device,
+                shaders,
+                scene,
+                &SceneRaster { fragment, ..raster },
+                &[ALPHA_MASK, draw],
+            )?)
+        } else {
+            None
+        };
+        self.clustered = Some(Box::new((opaque, masked)));
+        Ok(())
     }
 }
 
@@ -114,7 +188,16 @@ pub fn scene_raster_pipeline_from(
     } else {
         None
     };
-    Ok(ScenePipeline { opaque, masked })
+    let recipe = Box::new(RasterRecipe {
+        shader: raster.shader,
+        vertex_entry: raster.vertex_entry.to_string(),
+        fragment: raster.fragment.map(|(entry, formats)| (entry.to_string(), formats.to_vec())),
+        depth: raster.depth,
+        groups: raster.groups.iter().map(|g| g.cloned()).collect(),
+        blend: raster.blend,
+        samples: raster.samples,
+    });
+    Ok(ScenePipeline { opaque, masked, recipe, clustered: None })
 }
 
 /// One pipeline of [`scene_raster_pipeline_from`]: the shader's
@@ -126,8 +209,18 @@ pub(crate) fn raster_pipeline(
     raster: &SceneRaster,
     alpha_mask: bool,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
+    raster_pipeline_with(device, shaders, scene, raster, if alpha_mask { &[ALPHA_MASK] } else { &[] })
+}
+
+/// [`raster_pipeline`] with `defs` defined.
+fn raster_pipeline_with(
+    device: &wgpu::Device,
+    shaders: &mut ShaderLibrary,
+    scene: &SceneGpu,
+    raster: &SceneRaster,
+    defs: &[&str],
+) -> Result<wgpu::RenderPipeline, ShaderError> {
     let shader = raster.shader;
-    let defs: &[&str] = if alpha_mask { &[ALPHA_MASK] } else { &[] };
     let state = (
         (raster.vertex_entry, raster.fragment, raster.depth, raster.groups.len()),
         (raster.blend, raster.samples, scene.cull_back_faces),
@@ -193,6 +286,29 @@ fn build_raster_pipeline(
         multiview_mask: None,
         cache: None,
     }))
+}
+
+/// Draws the scene with `pipeline`: the cluster lists of `cull` where this
+/// frame's depth pre-pass culled with it and the pipeline has its
+/// cluster-draw variants, else every visible object ([`draw_objects`]).
+pub fn draw_scene(
+    pass: &mut wgpu::RenderPass,
+    scene: &SceneGpu,
+    visible: &[bool],
+    pipeline: &ScenePipeline,
+    cull: Option<&cluster_draws::ClusterCull>,
+) {
+    match (cull.filter(|c| c.active()), &pipeline.clustered) {
+        (Some(cull), Some(_)) => {
+            pass.set_bind_group(0, scene.bind_group(), &[]);
+            for p in pipeline.clustered_pipelines() {
+                pass.set_pipeline(p);
+                cull.draw_list(pass, 0);
+                cull.draw_list(pass, 1);
+            }
+        }
+        _ => draw_objects(pass, scene, visible, pipeline),
+    }
 }
 
 /// Draws every visible object with `pipeline`: one instanced draw per object,

@@ -3,6 +3,7 @@
 // their positions from `object_clip_position` with `@invariant`, so equal
 // depths compare equal bit for bit.
 #import shadespace::scene_bindings::object_clip_position
+#import shadespace::cluster_draws::scene_vertex
 
 #ifdef ALPHA_MASK
 #import shadespace::alpha_mask::masked_out
@@ -17,8 +18,9 @@ struct VertexOut {
 }
 
 @vertex
-fn vs_depth(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
-    return VertexOut(object_clip_position(object, vi), vertex_uv0(vertices[vi]), object);
+fn vs_depth(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) instance_index: u32) -> VertexOut {
+    let d = scene_vertex(vertex_index, instance_index);
+    return VertexOut(object_clip_position(d.object, d.vertex), vertex_uv0(vertices[d.vertex]), d.object);
 }
 
 @fragment
@@ -29,7 +31,8 @@ fn fs_alpha_mask(in: VertexOut) {
 }
 #else
 @vertex
-fn vs_depth(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> @builtin(position) @invariant vec4f {
-    return object_clip_position(object, vi);
+fn vs_depth(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) instance_index: u32) -> @builtin(position) @invariant vec4f {
+    let d = scene_vertex(vertex_index, instance_index);
+    return object_clip_position(d.object, d.vertex);
 }
 #endif

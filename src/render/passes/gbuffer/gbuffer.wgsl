@@ -10,6 +10,7 @@
 #import shadespace::scene::vertex_uv0
 #import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, linear_maps, object_clip_position}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
+#import shadespace::cluster_draws::scene_vertex
 #import shadespace::surface::{material_texels_grad, albedo_lod}
 #ifdef ALPHA_MASK
 #import shadespace::alpha_mask::masked_out
@@ -46,7 +47,10 @@ struct GbufferOut {
 }
 
 @vertex
-fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
+fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) instance_index: u32) -> VertexOut {
+    let d = scene_vertex(vertex_index, instance_index);
+    let vi = d.vertex;
+    let object = d.object;
     let v = vertices[vi];
     var out: VertexOut;
     out.clip = object_clip_position(object, vi);

@@ -42,10 +42,11 @@ pub mod octahedral;
 
 use glam::{DVec4, Mat4};
 
-use super::depth_prepass::{DepthPrepass, depth_prepass};
+use super::cluster_draws::ClusterCull;
+use super::depth_prepass::{DepthPrepass, culled_depth_prepass};
 use super::{
     Binding, DepthMode, ScenePipeline, SceneRaster, bind_group, bind_group_layout_for, color_attachment,
-    depth_attachment, draw_objects, scene_raster_pipeline_from,
+    depth_attachment, draw_scene, scene_raster_pipeline_from,
 };
 use crate::render::frame::Frame;
 use crate::render::gpu_types::GpuView;
@@ -306,7 +307,8 @@ impl GbufferPass {
 /// Reads: the visible objects, and the depth target when built after a
 /// pre-pass. Writes: `out`'s targets (cleared first) and unproject uniform
 /// (this frame's view), and the depth target.
-pub fn gbuffer(frame: &mut Frame, pass: &GbufferPass, out: &GBuffer) {
+/// Draws what `cull` kept where it culled.
+pub fn gbuffer(frame: &mut Frame, pass: &GbufferPass, out: &GBuffer, cull: Option<&ClusterCull>) {
     frame.queue.write_buffer(&out.unproject, 0, bytemuck::bytes_of(&GpuUnproject::new(frame.view)));
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
     let color: Vec<_> = written(out.material_textures, out.layers)
@@ -314,7 +316,7 @@ pub fn gbuffer(frame: &mut Frame, pass: &GbufferPass, out: &GBuffer) {
         .map(|i| color_attachment(&out.views[i], wgpu::Color::TRANSPARENT))
         .collect();
     let mut rp = frame.render_pass("gbuffer", &color, Some(depth_attachment(targets, !pass.after_prepass)));
-    draw_objects(&mut rp, scene, visible, &pass.pipeline);
+    draw_scene(&mut rp, scene, visible, &pass.pipeline, cull);
 }
 
 /// The geometry stage both deferred pipelines share: an optional depth
@@ -326,6 +328,41 @@ pub struct GbufferStage {
 }
 
 impl GbufferStage {
+    /// Cluster culling in the depth pre-pass, if the stage has one
+    /// ([`DepthPrepass::enable_cluster_culling`]).
+    pub fn enable_cluster_culling(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+    ) -> Result<(), ShaderError> {
+        if let Some(prepass) = &mut self.prepass {
+            prepass.enable_cluster_culling(device, shaders, scene, targets)?;
+            if prepass.culls() {
+                self.pass.pipeline.add_cluster_draws(device, shaders, scene)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The passes that draw cluster lists: the pre-pass and the G-buffer
+    /// pass once culling is enabled, else none.
+    pub fn cluster_draw_passes(&self) -> u64 {
+        let culls = self.prepass.as_ref().is_some_and(DepthPrepass::culls);
+        u64::from(culls) + u64::from(culls && self.pass.pipeline.draws_clusters())
+    }
+
+    /// The depth pre-pass (with its culling), if the stage has one.
+    pub fn prepass(&self) -> Option<&DepthPrepass> {
+        self.prepass.as_ref()
+    }
+
+    /// [`Self::prepass`], to record with.
+    pub fn prepass_mut(&mut self) -> Option<&mut DepthPrepass> {
+        self.prepass.as_mut()
+    }
+
     /// With `depth_prepass`, depth is laid down first and the G-buffer pass
     /// runs one fragment per pixel. As many samples per pixel as `targets`.
     pub fn new(
@@ -344,11 +381,12 @@ impl GbufferStage {
 
 /// Reads: the visible objects. Writes: the depth target and the G-buffer
 /// (the depth pre-pass, when the stage has one, then the G-buffer pass).
-pub fn geometry(frame: &mut Frame, stage: &GbufferStage) {
-    if let Some(prepass) = &stage.prepass {
-        depth_prepass(frame, prepass);
+pub fn geometry(frame: &mut Frame, stage: &mut GbufferStage) {
+    if let Some(prepass) = &mut stage.prepass {
+        culled_depth_prepass(frame, prepass);
     }
-    gbuffer(frame, &stage.pass, &stage.gbuffer);
+    let cull = stage.prepass.as_ref().and_then(DepthPrepass::cull);
+    gbuffer(frame, &stage.pass, &stage.gbuffer, cull);
 }
 
 #[cfg(test)]

@@ -67,7 +67,8 @@ pub const RASTER_CULLING: ShaderSource = RASTER.with_defs(&["CULL_BACK"]);
 pub const RASTER_COUNTING: ShaderSource = RASTER.with_defs(&["COUNT"]);
 pub const RASTER_CULLING_COUNTING: ShaderSource = RASTER.with_defs(&["CULL_BACK", "COUNT"]);
 pub const RESOLVE: ShaderSource = ShaderSource::new("resolve.wgsl", include_str!("resolve.wgsl"));
-/// Cluster culling (`cull_early`, `cull_late`, `finish`).
+/// Cluster culling (`cull_early`, `cull_late`, `finish`), shared with the
+/// hardware raster passes' ([`crate::render::passes::cluster_draws`]).
 pub const CULL: ShaderSource = ShaderSource::new("cull.wgsl", include_str!("cull.wgsl"));
 /// The depth pyramid of occlusion culling.
 pub const HIZ: ShaderSource = ShaderSource::new("hiz.wgsl", include_str!("hiz.wgsl"));
@@ -81,7 +82,7 @@ const RASTER_WORKGROUP: u32 = 64;
 const _: () = assert!(crate::render::clusters::CLUSTER_TRIANGLES as u32 == RASTER_WORKGROUP);
 /// Clusters per workgroup of `cull.wgsl` (`CULL_WORKGROUP`): one object's,
 /// a thread each (an object with more takes several).
-const CULL_CHUNK: u32 = 64;
+pub(crate) const CULL_CHUNK: u32 = 64;
 
 /// Workgroups of `raster_big`, which loop over the queued tiles
 /// (`BIG_WORKGROUPS` in `raster.wgsl`).
@@ -666,7 +667,7 @@ impl ComputeVisibility {
 
 /// The depth pyramid's levels at `width` x `height` (each half the last,
 /// rounded up, down to 1x1; level 0 from the pixels' `samples`) and its texels.
-fn hiz_levels(width: u32, height: u32, samples: u32) -> (Vec<GpuHizLevel>, u64) {
+pub(crate) fn hiz_levels(width: u32, height: u32, samples: u32) -> (Vec<GpuHizLevel>, u64) {
     let mut levels = Vec::new();
     let (mut src, mut src_offset, mut offset) = ((width, height), 0, 0u32);
     loop {
@@ -706,7 +707,7 @@ pub fn visible_ranges(scene: &SceneGpu, visible: &[bool]) -> (Vec<[u32; 4]>, u32
 }
 
 /// A 2D dispatch of `groups` workgroups (at most [`MAX_GROUPS_X`] along x).
-fn split(groups: u32) -> (u32, u32) {
+pub(crate) fn split(groups: u32) -> (u32, u32) {
     let x = groups.clamp(1, MAX_GROUPS_X);
     (x, groups.div_ceil(x))
 }

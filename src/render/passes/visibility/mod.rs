@@ -9,8 +9,9 @@ use std::str::FromStr;
 
 use serde::Serialize;
 
+use super::cluster_draws::ClusterCull;
 use super::{
-    DepthMode, ScenePipeline, SceneRaster, color_attachment, depth_attachment, draw_objects, scene_raster_pipeline_from,
+    DepthMode, ScenePipeline, SceneRaster, color_attachment, depth_attachment, draw_scene, scene_raster_pipeline_from,
 };
 use crate::gpu::{GpuContext, GpuError, readback};
 use crate::render::frame::Frame;
@@ -208,13 +209,25 @@ impl VisibilityPass {
         let pipeline = scene_raster_pipeline_from(device, shaders, scene, &raster)?;
         Ok(Self { pipeline, after_prepass })
     }
+
+    /// Its variants that draw cluster lists, for a pass after a culling
+    /// depth pre-pass ([`super::depth_prepass::DepthPrepass::enable_cluster_culling`]).
+    pub fn add_cluster_draws(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+    ) -> Result<(), ShaderError> {
+        self.pipeline.add_cluster_draws(device, shaders, scene)
+    }
 }
 
 /// Reads: the depth target when built `after_prepass`. Writes: `out`
-/// (cleared to background) and the depth target.
-pub fn visibility(frame: &mut Frame, pass: &VisibilityPass, out: &VisibilityBuffer) {
+/// (cleared to background) and the depth target. Draws what `cull` kept
+/// where it culled.
+pub fn visibility(frame: &mut Frame, pass: &VisibilityPass, out: &VisibilityBuffer, cull: Option<&ClusterCull>) {
     let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
     let color = [color_attachment(&out.view, wgpu::Color::TRANSPARENT)];
     let mut rp = frame.render_pass("visibility", &color, Some(depth_attachment(targets, !pass.after_prepass)));
-    draw_objects(&mut rp, scene, visible, &pass.pipeline);
+    draw_scene(&mut rp, scene, visible, &pass.pipeline, cull);
 }

@@ -3,6 +3,7 @@
 // everything else from these ids. After a depth pre-pass it tests `Equal`.
 enable primitive_index;
 #import shadespace::scene_bindings::object_clip_position
+#import shadespace::cluster_draws::scene_vertex
 #ifdef ALPHA_MASK
 #import shadespace::alpha_mask::masked_out
 #import shadespace::scene::vertex_uv0
@@ -15,11 +16,22 @@ struct VertexOut {
 #ifdef ALPHA_MASK
     @location(1) uv0: vec2f,
 #endif
+#ifdef CLUSTER_DRAW
+    // The triangle among its mesh's (a cluster draw's `primitive_index`
+    // counts the list's triangle slots).
+    @location(2) @interpolate(flat) triangle: u32,
+#endif
 }
 
 @vertex
-fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
+fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) instance_index: u32) -> VertexOut {
+    let d = scene_vertex(vertex_index, instance_index);
+    let vi = d.vertex;
+    let object = d.object;
     var out: VertexOut;
+#ifdef CLUSTER_DRAW
+    out.triangle = d.triangle;
+#endif
     out.clip = object_clip_position(object, vi);
     out.object = object;
 #ifdef ALPHA_MASK
@@ -35,5 +47,9 @@ fn fs_main(in: VertexOut, @builtin(primitive_index) triangle: u32) -> @location(
         discard;
     }
 #endif
+#ifdef CLUSTER_DRAW
+    return vec2u(in.object + 1u, in.triangle);
+#else
     return vec2u(in.object + 1u, triangle);
+#endif
 }

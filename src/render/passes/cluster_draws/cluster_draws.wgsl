@@ -1,0 +1,75 @@
+// The hardware raster passes' cluster draws (`passes::cluster_draws`): with
+// cluster culling, a scene raster pass draws the clusters that `cull.wgsl`
+// listed, one instanced draw per list: an instance per listed cluster, three
+// vertices for each of its up to CLUSTER_TRIANGLES triangles. `scene_vertex`
+// maps (vertex index, instance index) to the scene's vertex and object, in
+// every pass the same way (so depths compare equal bit for bit); without
+// CLUSTER_DRAW it is the plain draw's (the vertex index already holds the
+// base vertex, the instance index is the object).
+#define_import_path shadespace::cluster_draws
+#ifdef CLUSTER_DRAW
+#import shadespace::scene_bindings::{objects, indices}
+#endif
+
+struct SceneVertex {
+    // Index into the scene's vertices.
+    vertex: u32,
+    object: u32,
+    // Its triangle among its mesh's (the visibility ids); cluster draws only
+    // (a plain draw's fragment takes `primitive_index`).
+    triangle: u32,
+}
+
+#ifdef CLUSTER_DRAW
+// Mirrors `clusters::GpuCluster`.
+struct Cluster {
+    min: vec3f,
+    first: u32,
+    max: vec3f,
+    count: u32,
+    center: vec3f,
+    radius: f32,
+    cone_axis: vec3f,
+    cone_cutoff: f32,
+}
+
+// Mirrors `cluster_draws::CLUSTER_DRAW_GROUP` and `CLUSTER_TRIANGLES`.
+const TRIANGLES: u32 = 64u;
+
+// First entry of the drawn list in `cluster_lists`.
+@group(2) @binding(0) var<uniform> list_base: vec4u;
+// Per visible object: (object, ...), as `cull.wgsl` reads them.
+@group(2) @binding(1) var<storage, read> ranges: array<vec4u>;
+// `cull.wgsl`'s lists of (entry of `ranges`, cluster).
+@group(2) @binding(2) var<storage, read> cluster_lists: array<vec2u>;
+@group(2) @binding(3) var<storage, read> clusters: array<Cluster>;
+// The clusters' triangles (indices of their mesh's triangles).
+@group(2) @binding(4) var<storage, read> cluster_triangles: array<u32>;
+
+fn scene_vertex(vertex_index: u32, instance_index: u32) -> SceneVertex {
+    let entry = cluster_lists[list_base.x + instance_index];
+    let object = ranges[entry.x].x;
+    let c = clusters[entry.y];
+    let o = objects[object];
+    let t = vertex_index / 3u;
+    // The passes draw opaque and alpha-masked objects with pipelines of
+    // their own (`passes::ScenePipeline`); the list holds both.
+#ifdef ALPHA_MASK
+    let drawn = o.alpha_cutoff > 0.0;
+#else
+    let drawn = !(o.alpha_cutoff > 0.0);
+#endif
+    // Past the cluster's triangles, or another pipeline's object: the first
+    // corner of its first triangle, three times (zero area, no fragment).
+    let kept = drawn && t < c.count;
+    let local = select(0u, t, kept);
+    let corner = select(0u, vertex_index % 3u, kept);
+    let triangle = cluster_triangles[c.first + local];
+    let vertex = indices[o.first_index + 3u * triangle + corner] + o.base_vertex;
+    return SceneVertex(vertex, object, triangle);
+}
+#else
+fn scene_vertex(vertex_index: u32, instance_index: u32) -> SceneVertex {
+    return SceneVertex(vertex_index, instance_index, 0u);
+}
+#endif

@@ -1,0 +1,347 @@
+//! Cluster culling for the hardware raster pipelines (forward, clustered,
+//! deferred, raster visibility): the compute rasterizer's culling pass
+//! (`visibility/cull.wgsl`, the same shader and bindings) lists the
+//! surviving clusters, and every scene raster pass draws the lists with one
+//! indirect instanced draw each per pipeline state (`cluster_draws.wgsl`:
+//! an instance per cluster, three vertices per triangle slot, the unused
+//! slots zero-area), instead of every triangle of every object in view.
+//!
+//! Where: in the depth pre-pass ([`super::depth_prepass`]), so the passes
+//! after it (testing `Equal`) draw what it drew. With `--culling occlusion`
+//! it is two-pass: `cull` lists the clusters visible last frame, `depth
+//! prepass` draws them, `cull hiz` builds the depth pyramid from the depth
+//! target (`hiz.wgsl` with `DEPTH_TEXTURE`), `cull late` tests the rest and
+//! `depth prepass late` draws what became visible. Pipelines run without a
+//! pre-pass, and multisampled targets, draw every object as before.
+//!
+//! Why instanced draws of the lists rather than one `multi_draw_indexed_indirect`
+//! entry per cluster: a cluster's triangles are indices into its mesh's
+//! triangles, not a range of the index buffer, so per-cluster indexed draws
+//! would need a second, cluster-ordered index buffer, and their
+//! `first_instance` (to carry the object) needs `INDIRECT_FIRST_INSTANCE`;
+//! the draw of the list needs neither, nor a count buffer
+//! (`MULTI_DRAW_INDIRECT_COUNT`), and runs on every adapter the compute
+//! culling runs on. Its cost: vertices are not shared between triangles
+//! (three vertex invocations per triangle).
+//!
+//! The image is the same as without culling (tested) unless two triangles
+//! of the scene write the same depth at a pixel: culling draws the clusters
+//! in the order the culling pass listed them, so a different one of the two
+//! may win the `Greater` test.
+
+use crate::gpu::readback::ReadbackRing;
+use crate::render::clusters::{CLUSTER_TRIANGLES, Culling};
+use crate::render::frame::Frame;
+use crate::render::passes::visibility::compute::{
+    CULL, CULL_CHUNK, CULL_CONE, CULL_OCCLUSION, CullCount, GpuCullParams, GpuHizLevel, HIZ, hiz_levels, split,
+    visible_ranges,
+};
+use crate::render::passes::{Binding, bind_group, bind_group_layout, bind_group_layout_for, compute_pipeline};
+use crate::render::report::Counters;
+use crate::render::scene_gpu::SceneGpu;
+use crate::render::targets::Targets;
+use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
+
+/// The module scene raster passes import (`shadespace::cluster_draws`).
+pub const SHARED_WGSL: ShaderSource = ShaderSource::new("cluster_draws.wgsl", include_str!("cluster_draws.wgsl"));
+/// The compute shader that sizes the lists' draws.
+pub const ARGS: ShaderSource = ShaderSource::new("draw_args.wgsl", include_str!("draw_args.wgsl"));
+/// `hiz.wgsl` reading the depth target.
+pub const HIZ_DEPTH: ShaderSource = HIZ.with_defs(&["DEPTH_TEXTURE"]);
+/// Defined in the scene raster passes' variant that draws cluster lists.
+pub const CLUSTER_DRAW: &str = "CLUSTER_DRAW";
+/// The bind group of the cluster draws (`cluster_draws.wgsl`'s group 2):
+/// one that none of the passes that cull uses (clustered shading's light
+/// grid is group 3, the others have none but the scene's).
+pub const CLUSTER_DRAW_GROUP: u32 = 2;
+/// Vertices per listed cluster (`cluster_draws.wgsl`).
+const _: () = assert!(CLUSTER_TRIANGLES == 64, "cluster_draws.wgsl and draw_args.wgsl draw 64 triangles a cluster");
+
+const CULL_COUNTS_BYTES: u64 = CullCount::ALL.len() as u64 * 4;
+
+/// The layout of [`CLUSTER_DRAW_GROUP`].
+pub fn draw_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let read = Binding::Storage { read_only: true };
+    let stages = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
+    bind_group_layout_for(device, "cluster draws", stages, &[Binding::Uniform, read, read, read, read])
+}
+
+/// Culling's pipelines and buffers for one depth target, and the lists'
+/// draws.
+pub struct ClusterCull {
+    early: wgpu::ComputePipeline,
+    late: wgpu::ComputePipeline,
+    reduce: wgpu::ComputePipeline,
+    args: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    ranges: wgpu::Buffer,
+    chunks: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    draw_args: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    hiz_group: wgpu::BindGroup,
+    args_group: wgpu::BindGroup,
+    /// [`CLUSTER_DRAW_GROUP`] drawing list 0 and list 1.
+    draw_groups: [wgpu::BindGroup; 2],
+    levels: Vec<(GpuHizLevel, u32)>,
+    capacity: u32,
+    width: u32,
+    height: u32,
+    readback: ReadbackRing<u64>,
+    /// Whether this frame's pre-pass culled (the passes after it draw the lists).
+    active: bool,
+    bytes: u64,
+}
+
+impl ClusterCull {
+    /// Culling into `targets`' depth (one sample per pixel).
+    pub fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        targets: &Targets,
+    ) -> Result<Self, ShaderError> {
+        let (width, height) = (targets.width, targets.height);
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+        };
+        let init = |label, contents: &[u8], usage| {
+            wgpu::util::DeviceExt::create_buffer_init(
+                device,
+                &wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage },
+            )
+        };
+        use wgpu::BufferUsages as U;
+        let capacity = scene.instance_clusters.max(1).next_multiple_of(32);
+        let lists = buffer("cull lists", 2 * capacity as u64 * 8, U::STORAGE);
+        let history = buffer("cull history", capacity as u64 * 4, U::STORAGE);
+        let object_clusters = {
+            let data: Vec<[u32; 4]> =
+                if scene.object_clusters.is_empty() { vec![[0; 4]] } else { scene.object_clusters.clone() };
+            init("cull object clusters", bytemuck::cast_slice(&data), U::STORAGE)
+        };
+        let ranges = buffer("cull ranges", (scene.draws.len().max(1) * 16) as u64, U::STORAGE | U::COPY_DST);
+        let counts = buffer("cull counts", CULL_COUNTS_BYTES, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+        // `cull.wgsl`'s `finish` sizes dispatches for the compute rasterizer; unused here.
+        let dispatch = buffer("cull dispatch", 24, U::STORAGE);
+        let draw_args = buffer("cull draw args", 32, U::STORAGE | U::INDIRECT);
+        let chunks_capacity = scene.draws.len() as u64 + u64::from(capacity) / CULL_CHUNK as u64 + 1;
+        let chunks = buffer("cull chunks", chunks_capacity * 8, U::STORAGE | U::COPY_DST);
+        let (levels, hiz_texels) = hiz_levels(width, height, 1);
+        let hiz = buffer("cull depth pyramid", hiz_texels.max(1) * 4, U::STORAGE);
+        let align = device.limits().min_uniform_buffer_offset_alignment.max(size_of::<GpuHizLevel>() as u32);
+        let levels: Vec<(GpuHizLevel, u32)> =
+            levels.into_iter().enumerate().map(|(i, l)| (l, i as u32 * align)).collect();
+        let mut level_bytes = vec![0u8; levels.len().max(1) * align as usize];
+        for (l, offset) in &levels {
+            let at = *offset as usize;
+            level_bytes[at..at + size_of::<GpuHizLevel>()].copy_from_slice(bytemuck::bytes_of(l));
+        }
+        let hiz_level_buffer = init("cull pyramid levels", &level_bytes, U::UNIFORM);
+        let params = buffer("cull params", size_of::<GpuCullParams>() as u64, U::UNIFORM | U::COPY_DST);
+
+        let read = Binding::Storage { read_only: true };
+        let rw = Binding::Storage { read_only: false };
+        // The same layout as the compute rasterizer's (`cull.wgsl`'s group 1).
+        let cull_layout =
+            bind_group_layout(device, "cull", &[Binding::Uniform, read, read, read, rw, rw, rw, read, rw, read]);
+        let group = bind_group(
+            device,
+            "cull",
+            &cull_layout,
+            &[
+                params.as_entire_binding(),
+                ranges.as_entire_binding(),
+                scene.clusters.as_entire_binding(),
+                object_clusters.as_entire_binding(),
+                history.as_entire_binding(),
+                lists.as_entire_binding(),
+                counts.as_entire_binding(),
+                hiz.as_entire_binding(),
+                dispatch.as_entire_binding(),
+                chunks.as_entire_binding(),
+            ],
+        );
+        let depth =
+            Binding::Texture { sample: wgpu::TextureSampleType::Depth, dimension: wgpu::TextureViewDimension::D2 };
+        let hiz_layout = bind_group_layout(
+            device,
+            "cull depth pyramid",
+            &[Binding::DynamicUniform { size: size_of::<GpuHizLevel>() as u64 }, depth, rw],
+        );
+        let hiz_group = bind_group(
+            device,
+            "cull depth pyramid",
+            &hiz_layout,
+            &[
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &hiz_level_buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(size_of::<GpuHizLevel>() as u64),
+                }),
+                wgpu::BindingResource::TextureView(&targets.depth_view),
+                hiz.as_entire_binding(),
+            ],
+        );
+        let args_layout = bind_group_layout(device, "cull draw args", &[read, rw]);
+        let args_group = bind_group(
+            device,
+            "cull draw args",
+            &args_layout,
+            &[counts.as_entire_binding(), draw_args.as_entire_binding()],
+        );
+        let layout = draw_layout(device);
+        let draw_group = |list: u32| {
+            let base = init("cluster draw list", bytemuck::bytes_of(&[list * capacity, 0, 0, 0]), U::UNIFORM);
+            bind_group(
+                device,
+                "cluster draws",
+                &layout,
+                &[
+                    base.as_entire_binding(),
+                    ranges.as_entire_binding(),
+                    lists.as_entire_binding(),
+                    scene.clusters.as_entire_binding(),
+                    scene.cluster_triangles.as_entire_binding(),
+                ],
+            )
+        };
+        let cull_layouts = [&scene.layout, &cull_layout];
+        Ok(Self {
+            early: compute_pipeline(device, shaders, CULL, "cull_early", &cull_layouts)?,
+            late: compute_pipeline(device, shaders, CULL, "cull_late", &cull_layouts)?,
+            reduce: compute_pipeline(device, shaders, HIZ_DEPTH, "reduce", &[&hiz_layout])?,
+            args: compute_pipeline(device, shaders, ARGS, "draw_args", &[&args_layout])?,
+            draw_groups: [draw_group(0), draw_group(1)],
+            bytes: lists.size() + history.size() + hiz.size() + object_clusters.size() + chunks.size() + ranges.size(),
+            params,
+            ranges,
+            chunks,
+            counts,
+            draw_args,
+            group,
+            hiz_group,
+            args_group,
+            levels,
+            capacity,
+            width,
+            height,
+            readback: ReadbackRing::new("cull counts", CULL_COUNTS_BYTES),
+            active: false,
+        })
+    }
+
+    /// Bytes of its buffers (lists, history, pyramid, per-object tables).
+    pub fn bytes(&self) -> u64 {
+        self.bytes
+    }
+
+    /// Whether this frame's pre-pass culled: the passes after it draw the
+    /// lists ([`Self::draw_list`]) instead of the objects.
+    pub fn active(&self) -> bool {
+        self.active
+    }
+
+    /// Culls the frame's visible objects' clusters with `frame.scene.culling`
+    /// (none: nothing, and [`Self::active`] is false), drawing depth with
+    /// `draw_depth(frame, self, list, clear)`: list 0 (the clusters that
+    /// pass the frustum and cone tests; with occlusion only those visible
+    /// last frame), then with occlusion list 1 (those that became visible).
+    pub fn cull(&mut self, frame: &mut Frame, draw_depth: impl Fn(&mut Frame, &Self, usize, bool)) {
+        let culling = frame.scene.culling;
+        self.active = culling != Culling::None;
+        if !self.active {
+            return;
+        }
+        let (ranges, _) = visible_ranges(frame.scene, frame.visible);
+        let mut chunks: Vec<[u32; 2]> = Vec::new();
+        for (r, range) in ranges.iter().enumerate() {
+            let clusters = frame.scene.object_clusters[range[0] as usize][1];
+            chunks.extend((0..clusters).step_by(CULL_CHUNK as usize).map(|first| [r as u32, first]));
+        }
+        if !ranges.is_empty() {
+            frame.queue.write_buffer(&self.ranges, 0, bytemuck::cast_slice(&ranges));
+        }
+        if !chunks.is_empty() {
+            frame.queue.write_buffer(&self.chunks, 0, bytemuck::cast_slice(&chunks));
+        }
+        let mut level_offsets = [glam::UVec4::ZERO; 4];
+        for (k, (l, _)) in self.levels.iter().enumerate() {
+            level_offsets[k / 4][k % 4] = l.dst_offset;
+        }
+        let flags = if frame.scene.cull_back_faces { CULL_CONE } else { 0 }
+            | if culling == Culling::Occlusion { CULL_OCCLUSION } else { 0 };
+        let params = GpuCullParams {
+            range_count: ranges.len() as u32,
+            flags,
+            capacity: self.capacity,
+            levels: self.levels.len() as u32,
+            width: self.width,
+            height: self.height,
+            chunk_count: chunks.len() as u32,
+            pad: 0,
+            level_offsets,
+        };
+        frame.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        frame.encoder.clear_buffer(&self.counts, 0, None);
+        let groups = split(chunks.len() as u32);
+        self.cull_pass(frame, &self.early, "cull", groups);
+        draw_depth(frame, self, 0, true);
+        if culling == Culling::Occlusion {
+            {
+                let mut cp = frame.compute_pass("cull hiz");
+                cp.set_pipeline(&self.reduce);
+                for (l, offset) in &self.levels {
+                    cp.set_bind_group(0, &self.hiz_group, &[*offset]);
+                    cp.dispatch_workgroups(l.dst_width.div_ceil(8), l.dst_height.div_ceil(8), 1);
+                }
+            }
+            self.cull_pass(frame, &self.late, "cull late", groups);
+            draw_depth(frame, self, 1, false);
+        }
+        self.readback.copy(frame.device, frame.encoder, &self.counts, CULL_COUNTS_BYTES, frame.number);
+    }
+
+    /// `entry` of `cull.wgsl` over the chunks (`groups`), then the lists' draws.
+    fn cull_pass(&self, frame: &mut Frame, entry: &wgpu::ComputePipeline, label: &str, groups: (u32, u32)) {
+        let scene = frame.scene_group;
+        let mut cp = frame.compute_pass(label);
+        if groups.0 * groups.1 > 0 {
+            cp.set_bind_group(0, scene, &[]);
+            cp.set_bind_group(1, &self.group, &[]);
+            cp.set_pipeline(entry);
+            cp.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        cp.set_pipeline(&self.args);
+        cp.set_bind_group(0, &self.args_group, &[]);
+        cp.dispatch_workgroups(1, 1, 1);
+    }
+
+    /// Draws list `list` with the bound pipeline (a [`CLUSTER_DRAW`] variant).
+    pub fn draw_list(&self, pass: &mut wgpu::RenderPass, list: usize) {
+        pass.set_bind_group(CLUSTER_DRAW_GROUP, &self.draw_groups[list], &[]);
+        pass.draw_indirect(&self.draw_args, list as u64 * 16);
+    }
+
+    /// Starts the read-back of the frame's counts. Call right after the submit.
+    pub fn after_submit(&mut self) {
+        self.readback.after_submit();
+    }
+
+    /// The [`CullCount`]s of finished frames that culled, with `cull_drawn`
+    /// (clusters drawn by both passes), by frame number.
+    pub fn collect_counts(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        self.readback
+            .collect(device, wait)
+            .into_iter()
+            .map(|(frame, bytes)| {
+                let raw: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+                let mut counters: Counters =
+                    CullCount::ALL.iter().map(|&k| (k.name().to_string(), raw[k as usize] as f64)).collect();
+                let drawn = raw[CullCount::DrawnEarly as usize] as f64 + raw[CullCount::DrawnLate as usize] as f64;
+                counters.insert("cull_drawn".into(), drawn);
+                (frame, counters)
+            })
+            .collect()
+    }
+}
