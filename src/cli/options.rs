@@ -7,7 +7,8 @@ use std::str::FromStr;
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 use shadespace::render::objectspace::{
-    DEFAULT_PAGE_SIZE, DEFAULT_TRIMAP_LANES, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, Marking, PagingChain,
+    DEFAULT_PAGE_SIZE, DEFAULT_TRIMAP_LANES, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, MAX_TRIMAP_GRID, Marking,
+    PagingChain, TrimapSearch,
 };
 use shadespace::render::{Culling, Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
@@ -307,6 +308,19 @@ pub struct ObjectSpaceArgs {
     /// the most triangles. The maps are the same.
     #[arg(long, default_value_t = DEFAULT_TRIMAP_LANES, value_parser = parse::trimap_lanes)]
     pub os_trimap_lanes: u32,
+    /// How the triangle-map pass searches a texel's cells of the chart grid
+    /// when its centre's cell does not settle it: `neighbourhood` (default:
+    /// every cell of its 3x3 texels) or `rings` (ring by ring round the
+    /// centre's cell, stopping once no cell left can hold a nearer triangle:
+    /// far fewer triangles at the coarse levels of the city's buildings).
+    /// The maps are the same.
+    #[arg(long, value_enum, default_value = "neighbourhood")]
+    pub os_trimap_search: TrimapSearch,
+    /// The chart grids' cells per side, this many times the default (about
+    /// two triangles per cell), 1 to 4: finer cells list fewer triangles for
+    /// the texels of fine levels to weigh. The maps are the same.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_TRIMAP_GRID as i64))]
+    pub os_trimap_grid: u32,
     /// What the gather reads for each pixel's chart UV and levels: `surface`
     /// (default: it rebuilds the pixel's surface as marking did) or `record`
     /// (marking writes them, 16 bytes a pixel, and the gather reads them; one

@@ -185,6 +185,8 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             count_mark_atomics: a.objectspace.count_marks,
             paging_chain: a.objectspace.os_paging,
             trimap_lanes: a.objectspace.os_trimap_lanes,
+            trimap_search: a.objectspace.os_trimap_search,
+            trimap_grid: a.objectspace.os_trimap_grid,
             gather_input: a.objectspace.os_gather,
             gather_filter: a.objectspace.os_filter,
             texel_samples: a.objectspace.os_texel_samples,

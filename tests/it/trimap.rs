@@ -8,10 +8,11 @@
 
 use crate::common;
 use glam::{Mat4, Vec2, Vec3};
-use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::objectspace::trimap::cpu::covering_triangle;
 use shadespace::render::objectspace::trimap::grid::ChartGrid;
+use shadespace::render::objectspace::{ObjectSpace, TrimapSearch};
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::scene::generate::city::CitySpec;
 use shadespace::scene::{Camera, Light, LightKind, Material, Mesh, Object, Scene};
 
 /// Side of the object's shading texture (level 0) in texels.
@@ -140,4 +141,87 @@ fn every_texel_a_triangle_touches_is_covered() {
     // Only the pages under the slivers are backed (the plane is nothing
     // else): at the default pages of 8x8, 23 of them.
     assert!(compared >= 1024 && covered > 200, "only {compared} texels on backed pages, {covered} covered");
+}
+
+/// The city's `building1` (fine facades, hundreds of small charts) at a
+/// 32-texel texture, its coarse levels' 3x3 neighbourhoods spanning many
+/// chart-grid cells: the ring search, on the default grids and on grids of
+/// twice the cells per side, with 4 lanes and with 1, builds the maps the
+/// neighbourhood search builds and the CPU rule says, weighing fewer
+/// triangles (`trimap_weighed`).
+#[test]
+fn the_ring_search_builds_the_same_maps_weighing_fewer_triangles() {
+    let ctx = common::gpu();
+    let city = CitySpec::DEFAULT.scene();
+    let mesh = city.meshes.iter().find(|m| m.name == "building1").expect("the city has building1").clone();
+    let (uv, indices) = (mesh.uv1.clone().expect("the city's meshes carry their charts"), mesh.indices.clone());
+    let scene = Scene {
+        name: "building".into(),
+        meshes: vec![mesh],
+        materials: vec![Material::default()],
+        objects: vec![Object {
+            name: "building".into(),
+            mesh: 0,
+            material: 0,
+            transform: Mat4::IDENTITY,
+            forward_only: false,
+        }],
+        ..Default::default()
+    };
+    let camera = Camera {
+        position: Vec3::new(12.0, 9.0, 30.0),
+        forward: Vec3::new(-12.0, -1.0, -30.0).normalize(),
+        up: Vec3::Y,
+        fov_y: 60f32.to_radians(),
+        near: 0.1,
+        far: 200.0,
+    };
+    let light = Light {
+        kind: LightKind::Ambient,
+        color: Vec3::ONE,
+        intensity: 1.0,
+        position: Vec3::ZERO,
+        direction: Vec3::NEG_Y,
+        radius: 1.0,
+        cos_inner: 1.0,
+        cos_outer: 1.0,
+        casts_shadows: false,
+    };
+    const SIDE: u32 = 32;
+    let build = |search, grid, lanes| {
+        let config = ObjectSpaceConfig {
+            texture_sizes: vec![Some(SIDE)],
+            trimap_search: search,
+            trimap_grid: grid,
+            trimap_lanes: lanes,
+            ..Default::default()
+        };
+        let pipeline = PipelineConfig::ObjectSpace(config);
+        let options = RenderOptions { width: 128, height: 128, pipeline, samples: 1 };
+        let mut renderer = Renderer::new(&ctx, &scene, &options).unwrap();
+        renderer.render(&ctx, &camera, &[light], 0).unwrap();
+        let weighed = renderer.collect_counters(&ctx, true)[0].1["trimap_weighed"];
+        let os = renderer.pipeline::<ObjectSpace>().unwrap();
+        let (size, map) = os.read_triangle_map(&ctx, 0, 0).unwrap();
+        ctx.check_errors().unwrap();
+        assert_eq!(size, SIDE);
+        (map, weighed)
+    };
+    let (before, before_weighed) = build(TrimapSearch::Neighbourhood, 1, 4);
+    let grid = ChartGrid::new(&uv, &indices);
+    let built = before.iter().enumerate().filter_map(|(i, t)| t.map(|t| (i as u32, t))).collect::<Vec<_>>();
+    assert!(built.len() >= 256, "only {} texels on backed pages", built.len());
+    for &(i, t) in &built {
+        assert_eq!(t, covering_triangle(&grid, &uv, &indices, SIDE, [i % SIDE, i / SIDE]), "texel {i}");
+    }
+    for (grid, lanes) in [(1, 4), (2, 4), (2, 1)] {
+        let (map, weighed) = build(TrimapSearch::Rings, grid, lanes);
+        for &(i, t) in &built {
+            assert_eq!(map[i as usize], Some(t), "texel {i}: grid x{grid}, {lanes} lanes");
+        }
+        assert!(
+            weighed * 2.0 < before_weighed,
+            "grid x{grid}, {lanes} lanes: {weighed} triangles weighed, {before_weighed} by the neighbourhood search"
+        );
+    }
 }

@@ -279,10 +279,14 @@ pub enum TileCounter {
     /// those marks issued (page table, requests, tile and page stamps,
     /// counters; not the per-workgroup pixel counts).
     MarkAtomics = 26,
+    /// Chart-grid entries the triangle-map pass weighed for this frame's
+    /// pages (each a triangle tested against a texel): over
+    /// [`Self::TrimapPages`], the pass's work per page.
+    TrimapWeighed = 27,
 }
 
 impl TileCounter {
-    pub const ALL: [Self; 18] = [
+    pub const ALL: [Self; 19] = [
         Self::Queued,
         Self::Visible,
         Self::New,
@@ -301,6 +305,7 @@ impl TileCounter {
         Self::TrimapPages,
         Self::MarkTiles,
         Self::MarkAtomics,
+        Self::TrimapWeighed,
     ];
     /// First slot of the age buckets (free pages, then unused for 128 or
     /// more frames, 64-127, ..., 1 frame).
@@ -329,6 +334,7 @@ impl TileCounter {
             Self::TrimapPages => "COUNT_TRIMAP_PAGES",
             Self::MarkTiles => "COUNT_MARK_TILES",
             Self::MarkAtomics => "COUNT_MARK_ATOMICS",
+            Self::TrimapWeighed => "COUNT_TRIMAP_WEIGHED",
         }
     }
 }
@@ -472,6 +478,25 @@ pub const TRIMAP_LANES: [u32; 4] = [1, 2, 4, 8];
 /// Sponza's path at 1920x1080 on the H200; 4 lanes make workgroups of 256
 /// invocations, the most every adapter must allow (8 make 512).
 pub const DEFAULT_TRIMAP_LANES: u32 = 4;
+/// Most [`ObjectSpaceConfig::trimap_grid`] (`--os-trimap-grid`).
+pub const MAX_TRIMAP_GRID: u32 = 4;
+
+/// How the triangle-map pass searches the chart grid's cells for a texel
+/// the triangles of its centre's cell do not settle (`--os-trimap-search`);
+/// both give the same maps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum TrimapSearch {
+    /// Ring by ring round the centre's cell, stopping once no cell left can
+    /// hold a nearer triangle: at a coarse level of a mesh of many small
+    /// charts (the city's buildings) a texel's 3x3 neighbourhood spans
+    /// hundreds of cells, most of which need no look.
+    Rings,
+    /// Every cell of the texel's 3x3 neighbourhood (the search before the
+    /// rings, for comparison).
+    #[default]
+    Neighbourhood,
+}
 
 /// Settings of the object-space pipeline.
 #[derive(Clone, Debug, Serialize)]
@@ -549,6 +574,12 @@ pub struct ObjectSpaceConfig {
     /// Invocations weighing each texel's triangles in the triangle-map
     /// pass, one of [`TRIMAP_LANES`] (1: one per texel).
     pub trimap_lanes: u32,
+    /// How the triangle-map pass searches the chart grids.
+    pub trimap_search: TrimapSearch,
+    /// The chart grids' cells per side, this many times the default (about
+    /// two triangles per cell; 1 to [`MAX_TRIMAP_GRID`]): finer cells list
+    /// fewer triangles for the texels of fine levels to weigh.
+    pub trimap_grid: u32,
     /// What the gather reads for a pixel's chart UV and levels.
     pub gather_input: GatherInput,
 }
@@ -582,6 +613,8 @@ impl Default for ObjectSpaceConfig {
             slot_timeout: DEFAULT_SLOT_TIMEOUT,
             paging_chain: PagingChain::Fused,
             trimap_lanes: DEFAULT_TRIMAP_LANES,
+            trimap_search: TrimapSearch::Neighbourhood,
+            trimap_grid: 1,
             gather_input: GatherInput::Surface,
         }
     }
@@ -622,6 +655,8 @@ pub enum ObjectSpaceError {
     RecordNeedsOneSample { views: u32, samples: u32 },
     #[error("triangle-map lanes must be one of 1, 2, 4, 8 (got {0})")]
     BadTrimapLanes(u32),
+    #[error("the chart grid scale must be 1 to {MAX_TRIMAP_GRID} (got {0})")]
+    BadTrimapGrid(u32),
     #[error("{lanes} triangle-map lanes need {invocations} invocations per workgroup; {adapter} allows {max}")]
     TrimapLanesTooMany { lanes: u32, invocations: u32, adapter: String, max: u32 },
     #[error("an atlas of {texels} texels takes {layers} layers of {side}x{side}, more than the adapter's {max} layers")]
@@ -728,6 +763,9 @@ impl ObjectSpace {
         }
         if !TRIMAP_LANES.contains(&config.trimap_lanes) {
             return Err(ObjectSpaceError::BadTrimapLanes(config.trimap_lanes));
+        }
+        if !(1..=MAX_TRIMAP_GRID).contains(&config.trimap_grid) {
+            return Err(ObjectSpaceError::BadTrimapGrid(config.trimap_grid));
         }
         let invocations = 64 * config.trimap_lanes;
         let max = device.limits().max_compute_invocations_per_workgroup;
@@ -846,7 +884,7 @@ impl ObjectSpace {
             )?,
             paging: PagingPass::new(device, shaders, scene, &res, config.paging_chain)?,
             resize: ResizePass::new(device, shaders, scene, &res)?,
-            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res, config.trimap_lanes, config.paging_chain)?,
+            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res, &config)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather,
             atlas_view: (config.view == DebugView::AtlasPages)
@@ -1143,7 +1181,8 @@ impl Pipeline for ObjectSpace {
     /// use), `slotted_objects` and `slot_pages` (objects holding a
     /// page-directory slot, the virtual pages in their slots: [`slots`]),
     /// `unslotted_objects` (in view, no room left in the directory: shaded
-    /// forward), `trimap_pages` (pages whose triangle maps were built), `quiet`
+    /// forward), `trimap_pages` (pages whose triangle maps were built),
+    /// `trimap_weighed` (chart-grid entries that pass weighed), `quiet`
     /// (1: nothing changed and the frame recorded no paging, triangle maps
     /// or shading),
     /// `atlas_pages` and `atlas_texels` (the physical atlas the frame
@@ -1231,6 +1270,7 @@ impl Pipeline for ObjectSpace {
                     ("slot_pages", slot_pages as f64),
                     ("unslotted_objects", unslotted as f64),
                     ("trimap_pages", count(TileCounter::TrimapPages)),
+                    ("trimap_weighed", count(TileCounter::TrimapWeighed)),
                     ("quiet", quiet as u8 as f64),
                     ("budget_bias", used as f64),
                     // Share of the atlas-shaded pixels whose level gives them

@@ -20,8 +20,20 @@ impl ChartGrid {
     /// The grid of a mesh with chart UVs `uv` and `indices` (three per
     /// triangle): about two triangles per cell.
     pub fn new(uv: &[Vec2], indices: &[u32]) -> Self {
+        Self::scaled(uv, indices, 1)
+    }
+
+    /// The grid with `scale` times [`ChartGrid::new`]'s cells per side (and
+    /// as many times its largest side): finer cells list fewer triangles.
+    pub fn scaled(uv: &[Vec2], indices: &[u32], scale: u32) -> Self {
         let count = indices.len() / 3;
         let side = ((count as f64 / 2.0).sqrt().ceil() as u32).clamp(1, MAX_SIDE);
+        Self::with_side(uv, indices, side * scale)
+    }
+
+    /// The grid of `side` x `side` cells.
+    pub fn with_side(uv: &[Vec2], indices: &[u32], side: u32) -> Self {
+        let count = indices.len() / 3;
         let cells = |t: usize| {
             let p = [0, 1, 2].map(|k| uv[indices[3 * t + k] as usize]);
             let lo = p[0].min(p[1]).min(p[2]);

@@ -11,8 +11,8 @@ pub mod grid;
 
 use wgpu::util::DeviceExt;
 
-use super::PagingChain;
 use super::resources::{BACKED_ARGS, Resources, TRIANGLE_MAP_FORMAT};
+use super::{ObjectSpaceConfig, PagingChain, TrimapSearch};
 use crate::render::frame::Frame;
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
@@ -27,17 +27,20 @@ pub const MARK_BACKED: &str = "MARK_BACKED";
 /// Defined for more than one invocation per texel, with `TRIMAP_LANES_4` or
 /// `TRIMAP_LANES_8` for 4 or 8 (else 2).
 pub const LANES: &str = "TRIMAP_LANES";
+/// Defined with [`TrimapSearch::Neighbourhood`].
+pub const NEIGHBOURHOOD: &str = "TRIMAP_NEIGHBOURHOOD";
 /// The variants besides [`SHADER`], for the test that validates every shader.
-pub const VARIANTS: [ShaderSource; 4] = [
+pub const VARIANTS: [ShaderSource; 5] = [
     SHADER.with_defs(&[MARK_BACKED]),
+    SHADER.with_defs(&[NEIGHBOURHOOD]),
     SHADER.with_defs(&[LANES]),
-    SHADER.with_defs(&[LANES, "TRIMAP_LANES_4"]),
+    SHADER.with_defs(&[LANES, "TRIMAP_LANES_4", MARK_BACKED, NEIGHBOURHOOD]),
     SHADER.with_defs(&[LANES, "TRIMAP_LANES_8", MARK_BACKED]),
 ];
 
 /// The definitions composing the pass for `lanes` invocations per texel
-/// (one of [`super::TRIMAP_LANES`]) and the paging `chain`.
-fn defs(lanes: u32, chain: PagingChain) -> Vec<&'static str> {
+/// (one of [`super::TRIMAP_LANES`]), the paging `chain` and the `search`.
+fn defs(lanes: u32, chain: PagingChain, search: TrimapSearch) -> Vec<&'static str> {
     let mut defs = match lanes {
         1 => vec![],
         2 => vec![LANES],
@@ -46,6 +49,9 @@ fn defs(lanes: u32, chain: PagingChain) -> Vec<&'static str> {
     };
     if chain == PagingChain::Fused {
         defs.push(MARK_BACKED);
+    }
+    if search == TrimapSearch::Neighbourhood {
+        defs.push(NEIGHBOURHOOD);
     }
     defs
 }
@@ -70,20 +76,21 @@ pub struct TrimapPass {
 
 impl TrimapPass {
     /// Builds the chart grids of `scene`'s meshes (chart UVs: `uv1`, else
-    /// `uv0`); the pass weighs each texel's triangles with `lanes`
-    /// invocations, and with [`PagingChain::Fused`] also marks the pages.
+    /// `uv0`; `config.trimap_grid` times the default cells per side); the
+    /// pass weighs each texel's triangles with `config.trimap_lanes`
+    /// invocations, searching as `config.trimap_search` says, and with
+    /// [`PagingChain::Fused`] also marks the pages.
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &Scene,
         scene_gpu: &SceneGpu,
         res: &Resources,
-        lanes: u32,
-        chain: PagingChain,
+        config: &ObjectSpaceConfig,
     ) -> Result<Self, ShaderError> {
         let (mut cell_start, mut triangles, mut mesh_grids) = (Vec::new(), Vec::new(), Vec::new());
         for mesh in &scene.meshes {
-            let g = ChartGrid::new(mesh.uv1.as_deref().unwrap_or(&mesh.uv0), &mesh.indices);
+            let g = ChartGrid::scaled(mesh.uv1.as_deref().unwrap_or(&mesh.uv0), &mesh.indices, config.trimap_grid);
             mesh_grids.push(GpuChartGrid { cell_base: cell_start.len() as u32, side: g.side });
             let offset = triangles.len() as u32;
             cell_start.extend(g.cell_start.iter().map(|s| s + offset));
@@ -109,7 +116,8 @@ impl TrimapPass {
             &[Binding::StorageTexture { format: TRIANGLE_MAP_FORMAT, dimension }, read, read, read],
         );
         let groups = [&scene_gpu.layout, &res.layout, &layout];
-        let pipeline = compute_pipeline_with(device, shaders, SHADER, &defs(lanes, chain), "build", &groups)?;
+        let defs = defs(config.trimap_lanes, config.paging_chain, config.trimap_search);
+        let pipeline = compute_pipeline_with(device, shaders, SHADER, &defs, "build", &groups)?;
         let grid_bytes = (grids.len() * 8 + cell_start.len() * 4 + triangles.len() * 4) as u64;
         let grids = [grid_buffer, start_buffer, triangle_buffer];
         let group = Self::group(device, &layout, &grids, res);

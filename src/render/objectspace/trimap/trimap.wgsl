@@ -7,7 +7,7 @@
 // triangle touches takes the nearest triangle touching its 3x3 neighbourhood
 // (one ring of dilation, so that bilinear taps just outside a chart find a
 // triangle to extrapolate); else 0. `cpu.rs` has the same rule in Rust.
-#import shadespace::contract::{COUNT_PAGES_BACKED, COUNT_TRIMAP_PAGES}
+#import shadespace::contract::{COUNT_PAGES_BACKED, COUNT_TRIMAP_PAGES, COUNT_TRIMAP_WEIGHED}
 #import shadespace::scene_bindings::{vertices, objects, triangle_vertices}
 #import shadespace::scene::Object
 #import shadespace::objectspace::{params, entry_level, counters, backed, atlas_texel, page_origin}
@@ -110,17 +110,99 @@ fn weigh(n: Nearest, o: Object, s: f32, lo: vec2f, triangle: u32) -> Nearest {
     return m;
 }
 
-fn search_cells(o: Object, g: ChartGrid, s: f32, lo: vec2f, c0: vec2u, c1: vec2u) -> Nearest {
-    var n = Nearest(3.0e38, 0u, 3.0e38, 0u);
-    for (var cy = c0.y; cy <= c1.y; cy++) {
-        for (var cx = c0.x; cx <= c1.x; cx++) {
-            let cell = g.cell_base + cy * g.side + cx;
-            for (var k = cell_start[cell]; k < cell_start[cell + 1u]; k++) {
-                n = weigh(n, o, s, lo, cell_triangles[k]);
+// A texel's search so far: the nearest triangles found, where this
+// invocation's share of the next cell starts (see `weigh_cell`), and the
+// grid entries it weighed (`COUNT_TRIMAP_WEIGHED`).
+struct Search {
+    n: Nearest,
+    skip: u32,
+    weighed: u32,
+}
+
+fn new_search(skip: u32) -> Search {
+    return Search(Nearest(3.0e38, 0u, 3.0e38, 0u), skip, 0u);
+}
+
+// Weighs entries skip, skip + step, ... of cell `cell`'s list, the share
+// of one of `step` invocations that take the cells' lists one after the
+// other.
+fn weigh_cell(search: ptr<function, Search>, o: Object, g: ChartGrid, s: f32, lo: vec2f, cell: vec2u, step: u32) {
+    let c = g.cell_base + cell.y * g.side + cell.x;
+    let end = cell_start[c + 1u];
+    var k = cell_start[c] + (*search).skip;
+    for (; k < end; k += step) {
+        (*search).n = weigh((*search).n, o, s, lo, cell_triangles[k]);
+        (*search).weighed += 1u;
+    }
+    (*search).skip = k - end;
+}
+
+// Rings of cells round `centre` within [c0, c1]: the last one's number.
+fn ring_count(centre: vec2u, c0: vec2u, c1: vec2u) -> u32 {
+    let m = max(centre - c0, c1 - centre);
+    return max(m.x, m.y);
+}
+
+// Weighs the cells of [c0, c1] `ring` cells from `centre` (Chebyshev
+// distance), row by row.
+fn weigh_ring(search: ptr<function, Search>, o: Object, g: ChartGrid, s: f32, lo: vec2f, centre: vec2u, c0: vec2u,
+              c1: vec2u, ring: u32, step: u32) {
+    let first = max(centre, c0 + ring) - ring;
+    let last = min(centre + ring, c1);
+    for (var y = first.y; y <= last.y; y++) {
+        if y + ring == centre.y || y == centre.y + ring {
+            for (var x = first.x; x <= last.x; x++) {
+                weigh_cell(search, o, g, s, lo, vec2u(x, y), step);
+            }
+        } else {
+            if centre.x >= c0.x + ring {
+                weigh_cell(search, o, g, s, lo, vec2u(centre.x - ring, y), step);
+            }
+            if centre.x + ring <= c1.x {
+                weigh_cell(search, o, g, s, lo, vec2u(centre.x + ring, y), step);
             }
         }
     }
-    return n;
+}
+
+// Whether the search may stop after ring `ring` of cells `width` texels
+// wide, with the nearest triangles `n` found. A triangle's point nearest
+// the texel's centre lies in its bounding box, so in a cell that lists it:
+// a triangle not yet weighed is at least `ring` cells from the centre (less
+// a 64th of a cell for rounding). A triangle holding the centre (distance
+// 0) is listed in the centre's cell (ring 0), so coarse levels, whose 3x3
+// rings span many cells, mostly stop there. Triangles touching the texel
+// are within 0.71 texels of its centre: past 0.75 with none found there is
+// none, and the nearest of the others decides. `cpu.rs`: `search_done`.
+fn search_done(n: Nearest, ring: u32, width: f32) -> bool {
+    let beyond = (f32(ring) - 1.0 / 64.0) * width;
+    if n.touching_id != 0u {
+        return n.touching == 0.0 || n.touching < beyond;
+    }
+    return beyond > 0.75 && n.near_id != 0u && n.near < beyond;
+}
+
+// Weighs the texel's cells past the centre's: ring by ring until
+// `search_done`, or (`TRIMAP_NEIGHBOURHOOD`, the search before the rings)
+// every cell of [c0, c1], the centre's again included, row by row.
+fn weigh_rest(search: ptr<function, Search>, o: Object, g: ChartGrid, s: f32, lo: vec2f, centre: vec2u, c0: vec2u,
+              c1: vec2u, step: u32) {
+#ifdef TRIMAP_NEIGHBOURHOOD
+    for (var y = c0.y; y <= c1.y; y++) {
+        for (var x = c0.x; x <= c1.x; x++) {
+            weigh_cell(search, o, g, s, lo, vec2u(x, y), step);
+        }
+    }
+#else
+    let width = s / f32(g.side);
+    let rings = ring_count(centre, c0, c1);
+    for (var ring = 1u; ring <= rings; ring++) {
+        weigh_ring(search, o, g, s, lo, centre, c0, c1, ring, step);
+        if search_done((*search).n, ring, width) {
+            break;
+        }
+    }
+#endif
 }
 
 // The chart grid cell holding point `p` of a level `s` texels wide.
@@ -129,21 +211,21 @@ fn cell_of(g: ChartGrid, s: f32, p: vec2f) -> vec2u {
     return vec2u(clamp(floor(p / s * side), vec2f(0.0), vec2f(side - 1.0)));
 }
 
-// Triangle + 1 for texel `texel` of a level `size` texels wide, 0 for none.
-fn covering_triangle(o: Object, g: ChartGrid, size: u32, texel: vec2u) -> u32 {
-    let s = f32(size);
-    let lo = vec2f(texel);
-    // A triangle holding the texel's centre (distance 0, the least) is
-    // listed in the centre's cell: when that cell has one, no other cell can
-    // change the answer. Coarse levels, whose 3x3 rings span many cells,
-    // mostly stop here.
-    let centre_cell = cell_of(g, s, lo + 0.5);
-    let own = search_cells(o, g, s, lo, centre_cell, centre_cell);
-    if own.touching_id != 0u && own.touching == 0.0 {
-        return own.touching_id;
-    }
-    let n = search_cells(o, g, s, lo, cell_of(g, s, lo - 1.0), cell_of(g, s, lo + 2.0));
+// The triangle + 1 a search found (0 for none).
+fn found(n: Nearest) -> u32 {
     return select(n.near_id, n.touching_id, n.touching_id != 0u);
+}
+
+// Entries weighed by the workgroup's invocations, counted once per page.
+var<workgroup> page_weighed: atomic<u32>;
+
+// Adds the workgroup's weighed entries to `COUNT_TRIMAP_WEIGHED`.
+fn count_weighed(weighed: u32, li: u32) {
+    atomicAdd(&page_weighed, weighed);
+    workgroupBarrier();
+    if li == 0u {
+        atomicAdd(&counters[COUNT_TRIMAP_WEIGHED], atomicLoad(&page_weighed));
+    }
 }
 
 /// Whether workgroup `index` has a page backed this frame to map: if so it
@@ -163,6 +245,23 @@ fn claim_page(index: u32, li: u32) -> bool {
 }
 
 #ifndef TRIMAP_LANES
+// Triangle + 1 for texel `texel` of a level `size` texels wide (0 for
+// none): the centre's cell, which settles most texels (`search_done`),
+// then the others (`weigh_rest`).
+fn covering_triangle(search: ptr<function, Search>, o: Object, g: ChartGrid, size: u32, texel: vec2u) -> u32 {
+    let s = f32(size);
+    let lo = vec2f(texel);
+    let centre = cell_of(g, s, lo + 0.5);
+    let c0 = cell_of(g, s, lo - 1.0);
+    let c1 = cell_of(g, s, lo + 2.0);
+    (*search).n = Nearest(3.0e38, 0u, 3.0e38, 0u);
+    weigh_ring(search, o, g, s, lo, centre, c0, c1, 0u, 1u);
+    if !search_done((*search).n, 0u, s / f32(g.side)) {
+        weigh_rest(search, o, g, s, lo, centre, c0, c1, 1u);
+    }
+    return found((*search).n);
+}
+
 @compute @workgroup_size(8, 8)
 fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
          @builtin(local_invocation_id) lid: vec3u, @builtin(local_invocation_index) li: u32) {
@@ -177,17 +276,19 @@ fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     let g = grids[object];
     let origin = page_origin(l, b.x);
     let blocks = params.page_size / 8u;
+    var search = new_search(0u);
     for (var by = 0u; by < blocks; by++) {
         for (var bx = 0u; bx < blocks; bx++) {
             let texel = origin + vec2u(bx, by) * 8u + lid.xy;
             var id = 0u;
             if all(texel < vec2u(l.size)) {
-                id = covering_triangle(o, g, l.size, texel);
+                id = covering_triangle(&search, o, g, l.size, texel);
             }
             let at = atlas_texel(b.z, texel);
             textureStore(map, at.xy, at.layer, vec4u(id, 0u, 0u, 0u));
         }
     }
+    count_weighed(search.weighed, li);
 }
 #else
 // Several invocations per texel (`LANES`, adjacent in the workgroup): each
@@ -206,31 +307,10 @@ const LANES: u32 = 2u;
 #endif
 #endif
 
-// Per invocation: the least triangle + 1 holding its texel's centre among
-// its share of the centre's cell (NONE: none), then its share's nearest
-// triangles over the texel's ring of cells.
-const NONE: u32 = 0xffffffffu;
-var<workgroup> own_part: array<u32, 64u * LANES>;
+// Per invocation: the nearest triangles of its share of the centre's
+// cell, then of the texel's search.
+var<workgroup> centre_part: array<Nearest, 64u * LANES>;
 var<workgroup> ring_part: array<Nearest, 64u * LANES>;
-
-// As `search_cells`, over entries lane, lane + LANES, ... of the cells'
-// lists taken one after the other.
-fn search_cells_lane(o: Object, g: ChartGrid, s: f32, lo: vec2f, c0: vec2u, c1: vec2u, lane: u32) -> Nearest {
-    var n = Nearest(3.0e38, 0u, 3.0e38, 0u);
-    var skip = lane;
-    for (var cy = c0.y; cy <= c1.y; cy++) {
-        for (var cx = c0.x; cx <= c1.x; cx++) {
-            let cell = g.cell_base + cy * g.side + cx;
-            let end = cell_start[cell + 1u];
-            var k = cell_start[cell] + skip;
-            for (; k < end; k += LANES) {
-                n = weigh(n, o, s, lo, cell_triangles[k]);
-            }
-            skip = k - end;
-        }
-    }
-    return n;
-}
 
 // The least pairs of `a` and `b`, kind by kind.
 fn nearer(a: Nearest, b: Nearest) -> Nearest {
@@ -246,6 +326,12 @@ fn nearer(a: Nearest, b: Nearest) -> Nearest {
     return n;
 }
 
+// The centre's cell first, its entries shared by the lanes, which merge
+// their least pairs: most texels stop there (`search_done`). The others
+// go on (`weigh_rest`), each lane its share of the entries from the merged
+// pairs; with the rings a lane stops when no entry of its share left can be
+// nearer than what it holds: what a lane skips cannot change the least
+// pair, so the lanes need not wait for each other until the final merge.
 @compute @workgroup_size(LANES, 8, 8)
 fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
          @builtin(local_invocation_id) lid: vec3u, @builtin(local_invocation_index) li: u32) {
@@ -260,44 +346,46 @@ fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     let g = grids[object];
     let origin = page_origin(l, b.x);
     let s = f32(l.size);
+    let width = s / f32(g.side);
     let lane = lid.x;
     let first = li - lane;
     let blocks = params.page_size / 8u;
+    var weighed = 0u;
     for (var by = 0u; by < blocks; by++) {
         for (var bx = 0u; bx < blocks; bx++) {
             let texel = origin + vec2u(bx, by) * 8u + lid.yz;
             let inside = all(texel < vec2u(l.size));
             let lo = vec2f(texel);
-            // The centre's cell first (see `covering_triangle`).
-            var own = NONE;
+            let centre = cell_of(g, s, lo + 0.5);
+            let c0 = cell_of(g, s, lo - 1.0);
+            let c1 = cell_of(g, s, lo + 2.0);
+            var search = new_search(lane);
             if inside {
-                let c = cell_of(g, s, lo + 0.5);
-                let n = search_cells_lane(o, g, s, lo, c, c, lane);
-                own = select(NONE, n.touching_id, n.touching_id != 0u && n.touching == 0.0);
+                weigh_ring(&search, o, g, s, lo, centre, c0, c1, 0u, LANES);
             }
-            own_part[li] = own;
+            centre_part[li] = search.n;
+            workgroupBarrier();
+            var merged = search.n;
+            for (var j = 0u; j < LANES; j++) {
+                merged = nearer(merged, centre_part[first + j]);
+            }
+            // The texel's lanes merged the same pairs: they go on together.
+            if inside && !search_done(merged, 0u, width) {
+                search.n = merged;
+                weigh_rest(&search, o, g, s, lo, centre, c0, c1, LANES);
+            }
+            weighed += search.weighed;
+            ring_part[li] = search.n;
             workgroupBarrier();
             for (var j = 0u; j < LANES; j++) {
-                own = min(own, own_part[first + j]);
-            }
-            var ring = Nearest(3.0e38, 0u, 3.0e38, 0u);
-            if inside && own == NONE {
-                ring = search_cells_lane(o, g, s, lo, cell_of(g, s, lo - 1.0), cell_of(g, s, lo + 2.0), lane);
-            }
-            ring_part[li] = ring;
-            workgroupBarrier();
-            for (var j = 0u; j < LANES; j++) {
-                ring = nearer(ring, ring_part[first + j]);
+                merged = nearer(merged, ring_part[first + j]);
             }
             if lane == 0u {
-                var id = 0u;
-                if inside {
-                    id = select(select(ring.near_id, ring.touching_id, ring.touching_id != 0u), own, own != NONE);
-                }
                 let at = atlas_texel(b.z, texel);
-                textureStore(map, at.xy, at.layer, vec4u(id, 0u, 0u, 0u));
+                textureStore(map, at.xy, at.layer, vec4u(select(0u, found(merged), inside), 0u, 0u, 0u));
             }
         }
     }
+    count_weighed(weighed, li);
 }
 #endif
