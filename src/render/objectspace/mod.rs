@@ -491,10 +491,10 @@ pub enum TrimapSearch {
     /// hold a nearer triangle: at a coarse level of a mesh of many small
     /// charts (the city's buildings) a texel's 3x3 neighbourhood spans
     /// hundreds of cells, most of which need no look.
+    #[default]
     Rings,
     /// Every cell of the texel's 3x3 neighbourhood (the search before the
     /// rings, for comparison).
-    #[default]
     Neighbourhood,
 }
 
@@ -613,7 +613,7 @@ impl Default for ObjectSpaceConfig {
             slot_timeout: DEFAULT_SLOT_TIMEOUT,
             paging_chain: PagingChain::Fused,
             trimap_lanes: DEFAULT_TRIMAP_LANES,
-            trimap_search: TrimapSearch::Neighbourhood,
+            trimap_search: TrimapSearch::Rings,
             trimap_grid: 1,
             gather_input: GatherInput::Surface,
         }
