@@ -303,7 +303,7 @@ pub fn measure(
         let render_options = RenderOptions {
             width: grid.width,
             height: grid.height,
-            // As `--visibility auto` picks it: raster under MSAA.
+            // As `--visibility auto` picks it.
             pipeline: cell
                 .config
                 .render_config(&scene.density_sizes, VisibilityMethod::preferred_for(features, cell.msaa)),
