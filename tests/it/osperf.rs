@@ -93,7 +93,14 @@ fn compare(ctx: &GpuContext, case: &Case, variants: &[Variant]) {
             assert!(a.tile_visible == b.tile_visible, "{at}, frame {frame}: tile_visible differs");
             assert!(a.tile_shaded == b.tile_shaded, "{at}, frame {frame}: tile_shaded differs");
             assert!(a.queue == b.queue, "{at}, frame {frame}: the shade queues differ");
-            assert_eq!(a.counters, b.counters, "{at}, frame {frame}: the counters differ");
+            // Every counter but the triangles weighed, which is work, not
+            // state: the ring search's lanes each stop on their own share.
+            let state = |c: &[u32]| {
+                let mut c = c.to_vec();
+                c[TileCounter::TrimapWeighed as usize] = 0;
+                c
+            };
+            assert_eq!(state(&a.counters), state(&b.counters), "{at}, frame {frame}: the counters differ");
             assert!(a.pages.keys().eq(b.pages.keys()), "{at}, frame {frame}: the backed pages differ");
             for ((page, (ta, sa)), (tb, sb)) in a.pages.iter().zip(b.pages.values()) {
                 assert!(ta == tb, "{at}, frame {frame}: virtual page {page}'s triangle map differs");
