@@ -33,7 +33,7 @@ use crate::gpu::readback::ReadbackRing;
 use crate::render::clusters::{CLUSTER_TRIANGLES, Culling};
 use crate::render::frame::Frame;
 use crate::render::passes::visibility::compute::{
-    CULL, CULL_CHUNK, CULL_CONE, CULL_OCCLUSION, CullCount, GpuCullParams, GpuHizLevel, HIZ, hiz_levels, split,
+    CULL, CULL_CHUNK, CULL_CONE, CULL_OCCLUSION, CullCount, DepthPyramid, GpuCullParams, HIZ, cull_group, split,
     visible_ranges,
 };
 use crate::render::passes::{Binding, bind_group, bind_group_layout, bind_group_layout_for, compute_pipeline};
@@ -71,7 +71,6 @@ pub fn draw_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 pub struct ClusterCull {
     early: wgpu::ComputePipeline,
     late: wgpu::ComputePipeline,
-    reduce: wgpu::ComputePipeline,
     args: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     ranges: wgpu::Buffer,
@@ -79,11 +78,10 @@ pub struct ClusterCull {
     counts: wgpu::Buffer,
     draw_args: wgpu::Buffer,
     group: wgpu::BindGroup,
-    hiz_group: wgpu::BindGroup,
     args_group: wgpu::BindGroup,
     /// [`CLUSTER_DRAW_GROUP`] drawing list 0 and list 1.
     draw_groups: [wgpu::BindGroup; 2],
-    levels: Vec<(GpuHizLevel, u32)>,
+    pyramid: DepthPyramid,
     capacity: u32,
     width: u32,
     height: u32,
@@ -127,60 +125,36 @@ impl ClusterCull {
         let draw_args = buffer("cull draw args", 32, U::STORAGE | U::INDIRECT);
         let chunks_capacity = scene.draws.len() as u64 + u64::from(capacity) / CULL_CHUNK as u64 + 1;
         let chunks = buffer("cull chunks", chunks_capacity * 8, U::STORAGE | U::COPY_DST);
-        let (levels, hiz_texels) = hiz_levels(width, height, 1);
-        let hiz = buffer("cull depth pyramid", hiz_texels.max(1) * 4, U::STORAGE);
-        let align = device.limits().min_uniform_buffer_offset_alignment.max(size_of::<GpuHizLevel>() as u32);
-        let levels: Vec<(GpuHizLevel, u32)> =
-            levels.into_iter().enumerate().map(|(i, l)| (l, i as u32 * align)).collect();
-        let mut level_bytes = vec![0u8; levels.len().max(1) * align as usize];
-        for (l, offset) in &levels {
-            let at = *offset as usize;
-            level_bytes[at..at + size_of::<GpuHizLevel>()].copy_from_slice(bytemuck::bytes_of(l));
-        }
-        let hiz_level_buffer = init("cull pyramid levels", &level_bytes, U::UNIFORM);
         let params = buffer("cull params", size_of::<GpuCullParams>() as u64, U::UNIFORM | U::COPY_DST);
 
         let read = Binding::Storage { read_only: true };
         let rw = Binding::Storage { read_only: false };
-        // The same layout as the compute rasterizer's (`cull.wgsl`'s group 1).
-        let cull_layout =
-            bind_group_layout(device, "cull", &[Binding::Uniform, read, read, read, rw, rw, rw, read, rw, read]);
-        let group = bind_group(
-            device,
-            "cull",
-            &cull_layout,
-            &[
-                params.as_entire_binding(),
-                ranges.as_entire_binding(),
-                scene.clusters.as_entire_binding(),
-                object_clusters.as_entire_binding(),
-                history.as_entire_binding(),
-                lists.as_entire_binding(),
-                counts.as_entire_binding(),
-                hiz.as_entire_binding(),
-                dispatch.as_entire_binding(),
-                chunks.as_entire_binding(),
-            ],
-        );
         let depth =
             Binding::Texture { sample: wgpu::TextureSampleType::Depth, dimension: wgpu::TextureViewDimension::D2 };
-        let hiz_layout = bind_group_layout(
+        let pyramid = DepthPyramid::new(
             device,
+            shaders,
             "cull depth pyramid",
-            &[Binding::DynamicUniform { size: size_of::<GpuHizLevel>() as u64 }, depth, rw],
-        );
-        let hiz_group = bind_group(
+            (width, height, 1),
+            HIZ_DEPTH,
+            depth,
+            wgpu::BindingResource::TextureView(&targets.depth_view),
+        )?;
+        // The compute rasterizer's group (`cull.wgsl`'s group 1).
+        let (cull_layout, group) = cull_group(
             device,
-            "cull depth pyramid",
-            &hiz_layout,
-            &[
-                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &hiz_level_buffer,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(size_of::<GpuHizLevel>() as u64),
-                }),
-                wgpu::BindingResource::TextureView(&targets.depth_view),
-                hiz.as_entire_binding(),
+            "cull",
+            [
+                &params,
+                &ranges,
+                &scene.clusters,
+                &object_clusters,
+                &history,
+                &lists,
+                &counts,
+                &pyramid.texels,
+                &dispatch,
+                &chunks,
             ],
         );
         let args_layout = bind_group_layout(device, "cull draw args", &[read, rw]);
@@ -210,19 +184,22 @@ impl ClusterCull {
         Ok(Self {
             early: compute_pipeline(device, shaders, CULL, "cull_early", &cull_layouts)?,
             late: compute_pipeline(device, shaders, CULL, "cull_late", &cull_layouts)?,
-            reduce: compute_pipeline(device, shaders, HIZ_DEPTH, "reduce", &[&hiz_layout])?,
             args: compute_pipeline(device, shaders, ARGS, "draw_args", &[&args_layout])?,
             draw_groups: [draw_group(0), draw_group(1)],
-            bytes: lists.size() + history.size() + hiz.size() + object_clusters.size() + chunks.size() + ranges.size(),
+            bytes: lists.size()
+                + history.size()
+                + pyramid.texels.size()
+                + object_clusters.size()
+                + chunks.size()
+                + ranges.size(),
             params,
             ranges,
             chunks,
             counts,
             draw_args,
             group,
-            hiz_group,
             args_group,
-            levels,
+            pyramid,
             capacity,
             width,
             height,
@@ -265,17 +242,14 @@ impl ClusterCull {
         if !chunks.is_empty() {
             frame.queue.write_buffer(&self.chunks, 0, bytemuck::cast_slice(&chunks));
         }
-        let mut level_offsets = [glam::UVec4::ZERO; 4];
-        for (k, (l, _)) in self.levels.iter().enumerate() {
-            level_offsets[k / 4][k % 4] = l.dst_offset;
-        }
+        let (levels, level_offsets) = self.pyramid.level_offsets();
         let flags = if frame.scene.cull_back_faces { CULL_CONE } else { 0 }
             | if culling == Culling::Occlusion { CULL_OCCLUSION } else { 0 };
         let params = GpuCullParams {
             range_count: ranges.len() as u32,
             flags,
             capacity: self.capacity,
-            levels: self.levels.len() as u32,
+            levels,
             width: self.width,
             height: self.height,
             chunk_count: chunks.len() as u32,
@@ -288,14 +262,7 @@ impl ClusterCull {
         self.cull_pass(frame, &self.early, "cull", groups);
         draw_depth(frame, self, 0, true);
         if culling == Culling::Occlusion {
-            {
-                let mut cp = frame.compute_pass("cull hiz");
-                cp.set_pipeline(&self.reduce);
-                for (l, offset) in &self.levels {
-                    cp.set_bind_group(0, &self.hiz_group, &[*offset]);
-                    cp.dispatch_workgroups(l.dst_width.div_ceil(8), l.dst_height.div_ceil(8), 1);
-                }
-            }
+            self.pyramid.encode(frame, "cull hiz");
             self.cull_pass(frame, &self.late, "cull late", groups);
             draw_depth(frame, self, 1, false);
         }

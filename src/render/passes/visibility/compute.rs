@@ -281,17 +281,13 @@ struct Cull {
     early: wgpu::ComputePipeline,
     late: wgpu::ComputePipeline,
     finish: wgpu::ComputePipeline,
-    reduce: wgpu::ComputePipeline,
     raster: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     group: wgpu::BindGroup,
     /// `raster.wgsl`'s group 1 reading the early list (also the group of
     /// the unculled path) and the late list.
     raster_groups: [wgpu::BindGroup; 2],
-    /// The pyramid's group at each level's offset into `hiz_levels`.
-    hiz_group: wgpu::BindGroup,
-    /// Per level: its sizes, and its entry's offset in the dynamic uniform.
-    levels: Vec<(GpuHizLevel, u32)>,
+    pyramid: DepthPyramid,
     /// The lists' lengths and the counters (cleared every frame).
     counts: wgpu::Buffer,
     /// Indirect dispatch sizes of both lists.
@@ -428,24 +424,6 @@ impl ComputeVisibility {
         // Chunks of up to CULL_CHUNK clusters: at most one partial chunk per object.
         let chunks_capacity = scene.draws.len() as u64 + u64::from(capacity) / CULL_CHUNK as u64 + 1;
         let chunks = buffer("vis cull chunks", chunks_capacity * 8, U::STORAGE | U::COPY_DST);
-        let (levels, hiz_texels) = hiz_levels(width, height, samples);
-        let hiz = buffer("vis depth pyramid", hiz_texels.max(1) * 4, U::STORAGE);
-        let align = device.limits().min_uniform_buffer_offset_alignment.max(size_of::<GpuHizLevel>() as u32);
-        let levels: Vec<(GpuHizLevel, u32)> =
-            levels.into_iter().enumerate().map(|(i, l)| (l, i as u32 * align)).collect();
-        let mut level_bytes = vec![0u8; levels.len().max(1) * align as usize];
-        for (l, offset) in &levels {
-            let at = *offset as usize;
-            level_bytes[at..at + size_of::<GpuHizLevel>()].copy_from_slice(bytemuck::bytes_of(l));
-        }
-        let hiz_levels = wgpu::util::DeviceExt::create_buffer_init(
-            device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("vis pyramid levels"),
-                contents: &level_bytes,
-                usage: U::UNIFORM,
-            },
-        );
         let list_params = |index: u32| {
             wgpu::util::DeviceExt::create_buffer_init(
                 device,
@@ -488,42 +466,29 @@ impl ComputeVisibility {
             bind_group(device, "vis raster", &raster_layout, &resources)
         };
         let raster_groups = [raster_group(&list_params[0]), raster_group(&list_params[1])];
-        let cull_layout =
-            bind_group_layout(device, "vis cull", &[Binding::Uniform, read, read, read, rw, rw, rw, read, rw, read]);
-        let cull_group = bind_group(
+        let pyramid = DepthPyramid::new(
+            device,
+            shaders,
+            "vis depth pyramid",
+            (width, height, samples),
+            HIZ,
+            read,
+            depth_ids.as_entire_binding(),
+        )?;
+        let (cull_layout, cull_group) = cull_group(
             device,
             "vis cull",
-            &cull_layout,
-            &[
-                cull_params.as_entire_binding(),
-                ranges.as_entire_binding(),
-                scene.clusters.as_entire_binding(),
-                object_clusters.as_entire_binding(),
-                history.as_entire_binding(),
-                lists.as_entire_binding(),
-                cull_counts.as_entire_binding(),
-                hiz.as_entire_binding(),
-                dispatch.as_entire_binding(),
-                chunks.as_entire_binding(),
-            ],
-        );
-        let hiz_layout = bind_group_layout(
-            device,
-            "vis depth pyramid",
-            &[Binding::DynamicUniform { size: size_of::<GpuHizLevel>() as u64 }, read, rw],
-        );
-        let hiz_group = bind_group(
-            device,
-            "vis depth pyramid",
-            &hiz_layout,
-            &[
-                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &hiz_levels,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(size_of::<GpuHizLevel>() as u64),
-                }),
-                depth_ids.as_entire_binding(),
-                hiz.as_entire_binding(),
+            [
+                &cull_params,
+                &ranges,
+                &scene.clusters,
+                &object_clusters,
+                &history,
+                &lists,
+                &cull_counts,
+                &pyramid.texels,
+                &dispatch,
+                &chunks,
             ],
         );
         let resolve_group = bind_group(
@@ -565,14 +530,12 @@ impl ComputeVisibility {
             early: compute_pipeline(device, shaders, CULL, "cull_early", &cull_layouts)?,
             late: compute_pipeline(device, shaders, CULL, "cull_late", &cull_layouts)?,
             finish: compute_pipeline(device, shaders, CULL, "finish", &cull_layouts)?,
-            reduce: compute_pipeline(device, shaders, HIZ, "reduce", &[&hiz_layout])?,
             raster: clustered,
             params: cull_params,
             group: cull_group,
             raster_groups,
-            hiz_group,
-            bytes: lists.size() + history.size() + hiz.size() + object_clusters.size() + chunks.size(),
-            levels,
+            bytes: lists.size() + history.size() + pyramid.texels.size() + object_clusters.size() + chunks.size(),
+            pyramid,
             counts: cull_counts,
             chunks,
             dispatch,
@@ -693,6 +656,114 @@ pub(crate) fn hiz_levels(width: u32, height: u32, samples: u32) -> (Vec<GpuHizLe
     (levels, offset as u64)
 }
 
+/// `cull.wgsl`'s group 1 and its layout, over its buffers in binding order:
+/// parameters, object cluster ranges, the scene's clusters, per-object
+/// cluster tables, the history, the lists, the counts, the depth pyramid's
+/// texels, the dispatch sizes and the chunks.
+pub(crate) fn cull_group(
+    device: &wgpu::Device,
+    label: &str,
+    buffers: [&wgpu::Buffer; 10],
+) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let (read, rw) = (Binding::Storage { read_only: true }, Binding::Storage { read_only: false });
+    let layout = bind_group_layout(device, label, &[Binding::Uniform, read, read, read, rw, rw, rw, read, rw, read]);
+    let resources: Vec<wgpu::BindingResource> = buffers.iter().map(|b| b.as_entire_binding()).collect();
+    let group = bind_group(device, label, &layout, &resources);
+    (layout, group)
+}
+
+/// The depth pyramid of two-pass occlusion culling (`hiz.wgsl`), shared by
+/// the compute rasterizer and the raster pipelines' culling: its levels
+/// ([`hiz_levels`]), each at a dynamic offset of one uniform buffer, its
+/// texels (`cull.wgsl` reads them), and the pass that reduces level 0 from
+/// `source` and every level from the one before.
+pub(crate) struct DepthPyramid {
+    /// Per level: its sizes, and its entry's offset in the dynamic uniform.
+    levels: Vec<(GpuHizLevel, u32)>,
+    /// Every level's texels, one `f32` each.
+    pub(crate) texels: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    reduce: wgpu::ComputePipeline,
+}
+
+impl DepthPyramid {
+    /// The pyramid over `width` x `height` pixels of `samples` each, reduced
+    /// by `shader` from `source` (bound as `source_binding`).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        label: &str,
+        (width, height, samples): (u32, u32, u32),
+        shader: ShaderSource,
+        source_binding: Binding,
+        source: wgpu::BindingResource,
+    ) -> Result<Self, ShaderError> {
+        let (levels, texel_count) = hiz_levels(width, height, samples);
+        let texels = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: texel_count.max(1) * 4,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let entry = size_of::<GpuHizLevel>() as u32;
+        let align = device.limits().min_uniform_buffer_offset_alignment.max(entry);
+        let levels: Vec<(GpuHizLevel, u32)> =
+            levels.into_iter().enumerate().map(|(i, l)| (l, i as u32 * align)).collect();
+        let mut level_bytes = vec![0u8; levels.len().max(1) * align as usize];
+        for (l, offset) in &levels {
+            let at = *offset as usize;
+            level_bytes[at..at + entry as usize].copy_from_slice(bytemuck::bytes_of(l));
+        }
+        let level_buffer = wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &level_bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
+        let rw = Binding::Storage { read_only: false };
+        let layout =
+            bind_group_layout(device, label, &[Binding::DynamicUniform { size: entry as u64 }, source_binding, rw]);
+        let group = bind_group(
+            device,
+            label,
+            &layout,
+            &[
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &level_buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(entry as u64),
+                }),
+                source,
+                texels.as_entire_binding(),
+            ],
+        );
+        let reduce = compute_pipeline(device, shaders, shader, "reduce", &[&layout])?;
+        Ok(Self { levels, texels, group, reduce })
+    }
+
+    /// Its level count and each level's first texel (`GpuCullParams`).
+    pub(crate) fn level_offsets(&self) -> (u32, [glam::UVec4; 4]) {
+        let mut offsets = [glam::UVec4::ZERO; 4];
+        for (k, (l, _)) in self.levels.iter().enumerate() {
+            offsets[k / 4][k % 4] = l.dst_offset;
+        }
+        (self.levels.len() as u32, offsets)
+    }
+
+    /// Builds every level, in one compute pass named `name`.
+    pub(crate) fn encode(&self, frame: &mut Frame, name: &str) {
+        let mut cp = frame.compute_pass(name);
+        cp.set_pipeline(&self.reduce);
+        for (l, offset) in &self.levels {
+            cp.set_bind_group(0, &self.group, &[*offset]);
+            cp.dispatch_workgroups(l.dst_width.div_ceil(8), l.dst_height.div_ceil(8), 1);
+        }
+    }
+}
+
 /// This frame's ranges of the visible objects, (object, first triangle in
 /// the frame's list, first triangle in the scene's numbering, 0), and the
 /// number of visible triangles.
@@ -743,17 +814,14 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         if !chunks.is_empty() {
             frame.queue.write_buffer(&pass.cull.chunks, 0, bytemuck::cast_slice(&chunks));
         }
-        let mut level_offsets = [glam::UVec4::ZERO; 4];
-        for (k, (l, _)) in pass.cull.levels.iter().enumerate() {
-            level_offsets[k / 4][k % 4] = l.dst_offset;
-        }
+        let (levels, level_offsets) = pass.cull.pyramid.level_offsets();
         let flags = if frame.scene.cull_back_faces { CULL_CONE } else { 0 }
             | if culling == Culling::Occlusion { CULL_OCCLUSION } else { 0 };
         let params = GpuCullParams {
             range_count,
             flags,
             capacity: pass.cull.capacity,
-            levels: pass.cull.levels.len() as u32,
+            levels,
             width: pass.width,
             height: pass.height,
             chunk_count: chunks.len() as u32,
@@ -783,14 +851,7 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         cull_pass(frame, pass, &pass.cull.early, "vis: cull", groups);
         raster_passes(frame, pass, &pass.cull.raster, Some(0), groups, "");
         if culling == Culling::Occlusion {
-            {
-                let mut cp = frame.compute_pass("vis: hiz");
-                cp.set_pipeline(&pass.cull.reduce);
-                for (l, offset) in &pass.cull.levels {
-                    cp.set_bind_group(0, &pass.cull.hiz_group, &[*offset]);
-                    cp.dispatch_workgroups(l.dst_width.div_ceil(8), l.dst_height.div_ceil(8), 1);
-                }
-            }
+            pass.cull.pyramid.encode(frame, "vis: hiz");
             cull_pass(frame, pass, &pass.cull.late, "vis: cull late", groups);
             frame.encoder.clear_buffer(&pass.big_count, 0, None);
             raster_passes(frame, pass, &pass.cull.raster, Some(1), groups, " late");
