@@ -99,11 +99,7 @@ impl Pipeline for Clustered {
         scene: &SceneGpu,
         targets: &Targets,
     ) -> Result<(), ShaderError> {
-        self.prepass.enable_cluster_culling(device, shaders, scene, targets)?;
-        if self.prepass.culls() {
-            self.shade.add_cluster_draws(device, shaders, scene)?;
-        }
-        Ok(())
+        self.prepass.enable_cluster_culling(device, shaders, scene, targets, &mut self.shade)
     }
 
     fn after_submit(&mut self) {

@@ -97,10 +97,7 @@ impl Pipeline for Forward {
         targets: &Targets,
     ) -> Result<(), ShaderError> {
         if let Some(prepass) = &mut self.prepass {
-            prepass.enable_cluster_culling(device, shaders, scene, targets)?;
-            if prepass.culls() {
-                self.shade.add_cluster_draws(device, shaders, scene)?;
-            }
+            prepass.enable_cluster_culling(device, shaders, scene, targets, &mut self.shade)?;
         }
         Ok(())
     }

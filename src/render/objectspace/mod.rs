@@ -1151,10 +1151,7 @@ impl Pipeline for ObjectSpace {
         targets: &Targets,
     ) -> Result<(), ShaderError> {
         if let Visibility::Raster { prepass: Some(prepass), ids } = &mut self.visibility {
-            prepass.enable_cluster_culling(device, shaders, scene, targets)?;
-            if prepass.culls() {
-                ids.add_cluster_draws(device, shaders, scene)?;
-            }
+            prepass.enable_cluster_culling(device, shaders, scene, targets, ids.pipeline_mut())?;
         }
         Ok(())
     }

@@ -42,21 +42,23 @@ impl DepthPrepass {
 
     /// Culls clusters from now on, as `scene.culling` says each frame
     /// (single-sampled `targets` only: the depth pyramid reads one sample
-    /// per pixel; under MSAA it stays off), run by [`culled_depth_prepass`].
-    /// The passes after it must draw with [`super::draw_scene`] and
-    /// [`Self::cull`], their pipelines with
-    /// [`ScenePipeline::add_cluster_draws`].
+    /// per pixel; under MSAA it stays off), run by [`culled_depth_prepass`],
+    /// and gives `after`, the pipeline of the pass that draws after it, its
+    /// variants that draw the cluster lists. That pass must draw with
+    /// [`super::draw_scene`] and [`Self::cull`].
     pub fn enable_cluster_culling(
         &mut self,
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &SceneGpu,
         targets: &Targets,
+        after: &mut ScenePipeline,
     ) -> Result<(), ShaderError> {
         if self.cull.is_some() || targets.samples > 1 {
             return Ok(());
         }
         self.pipeline.add_cluster_draws(device, shaders, scene)?;
+        after.add_cluster_draws(device, shaders, scene)?;
         self.cull = Some(Box::new(ClusterCull::new(device, shaders, scene, targets)?));
         Ok(())
     }

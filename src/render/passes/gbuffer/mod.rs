@@ -338,10 +338,7 @@ impl GbufferStage {
         targets: &Targets,
     ) -> Result<(), ShaderError> {
         if let Some(prepass) = &mut self.prepass {
-            prepass.enable_cluster_culling(device, shaders, scene, targets)?;
-            if prepass.culls() {
-                self.pass.pipeline.add_cluster_draws(device, shaders, scene)?;
-            }
+            prepass.enable_cluster_culling(device, shaders, scene, targets, &mut self.pass.pipeline)?;
         }
         Ok(())
     }

@@ -211,15 +211,11 @@ impl VisibilityPass {
         Ok(Self { pipeline, after_prepass })
     }
 
-    /// Its variants that draw cluster lists, for a pass after a culling
-    /// depth pre-pass ([`super::depth_prepass::DepthPrepass::enable_cluster_culling`]).
-    pub fn add_cluster_draws(
-        &mut self,
-        device: &wgpu::Device,
-        shaders: &mut ShaderLibrary,
-        scene: &SceneGpu,
-    ) -> Result<(), ShaderError> {
-        self.pipeline.add_cluster_draws(device, shaders, scene)
+    /// Its pipeline, for a culling depth pre-pass to add the variants that
+    /// draw cluster lists
+    /// ([`super::depth_prepass::DepthPrepass::enable_cluster_culling`]).
+    pub fn pipeline_mut(&mut self) -> &mut ScenePipeline {
+        &mut self.pipeline
     }
 }
 
