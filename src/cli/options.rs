@@ -7,8 +7,8 @@ use std::str::FromStr;
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 use shadespace::render::objectspace::{
-    DEFAULT_PAGE_SIZE, DEFAULT_TRIMAP_LANES, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, MAX_TRIMAP_GRID, Marking,
-    PagingChain, TrimapSearch,
+    DEFAULT_PAGE_SIZE, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, MAX_TRIMAP_GRID, Marking, PagingChain,
+    TrimapSearch,
 };
 use shadespace::render::{Culling, Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
@@ -303,10 +303,12 @@ pub struct ObjectSpaceArgs {
     #[arg(long, value_enum, default_value = "fused")]
     pub os_paging: PagingChain,
     /// Invocations weighing each texel's triangles in the triangle-map pass
-    /// (1, 2, 4 or 8): more lanes shorten the slowest page, whose cells hold
-    /// the most triangles. The maps are the same.
-    #[arg(long, default_value_t = DEFAULT_TRIMAP_LANES, value_parser = parse::trimap_lanes)]
-    pub os_trimap_lanes: u32,
+    /// (1, 2, 4 or 8): on a GPU more lanes shorten the slowest page, whose
+    /// cells hold the most triangles; on a CPU adapter (lavapipe) the lanes
+    /// take turns and their barriers cost more than they save. The maps are
+    /// the same. Default: 4 on a GPU, 1 on a CPU adapter
+    #[arg(long, value_parser = parse::trimap_lanes)]
+    pub os_trimap_lanes: Option<u32>,
     /// How the triangle-map pass searches a texel's cells of the chart grid
     /// when its centre's cell does not settle it: `rings` (default: ring by
     /// ring round the centre's cell, stopping once no cell left can hold a

@@ -55,7 +55,7 @@ fn run(ctx: &GpuContext, case: &Case, (paging_chain, trimap_lanes, gather_input)
         reuse: 2,
         texture_sizes: case.texture_sizes.clone(),
         paging_chain,
-        trimap_lanes,
+        trimap_lanes: Some(trimap_lanes),
         gather_input,
         ..Default::default()
     };

@@ -193,7 +193,7 @@ fn the_ring_search_builds_the_same_maps_weighing_fewer_triangles() {
             texture_sizes: vec![Some(SIDE)],
             trimap_search: search,
             trimap_grid: grid,
-            trimap_lanes: lanes,
+            trimap_lanes: Some(lanes),
             ..Default::default()
         };
         let pipeline = PipelineConfig::ObjectSpace(config);

@@ -473,11 +473,27 @@ impl GatherFilter {
 
 /// The triangle-map pass's invocations per texel (`--os-trimap-lanes`).
 pub const TRIMAP_LANES: [u32; 4] = [1, 2, 4, 8];
-/// [`ObjectSpaceConfig::trimap_lanes`]'s default: the triangle-map pass
-/// took 0.061 ms with 4 lanes against 0.177 with 1 and 0.051 with 8 along
-/// Sponza's path at 1920x1080 on the H200; 4 lanes make workgroups of 256
-/// invocations, the most every adapter must allow (8 make 512).
+/// [`ObjectSpaceConfig::trimap_lanes`]'s default on a GPU: the
+/// triangle-map pass took 0.061 ms with 4 lanes against 0.177 with 1 and
+/// 0.051 with 8 along Sponza's path at 1920x1080 on the H200; 4 lanes make
+/// workgroups of 256 invocations, the most every adapter must allow (8 make
+/// 512).
 pub const DEFAULT_TRIMAP_LANES: u32 = 4;
+/// [`ObjectSpaceConfig::trimap_lanes`]'s default on a CPU adapter
+/// (lavapipe): there a workgroup's invocations run one after another in a
+/// thread and each barrier between the lanes is a switch, so one lane a
+/// texel is fastest (the atrium at 96x54: 0.14-0.19 s of triangle maps
+/// against 1.3-1.5 s with 4 lanes).
+pub const CPU_TRIMAP_LANES: u32 = 1;
+
+/// The triangle-map lanes `config` asks for on `adapter`: its own, else
+/// [`CPU_TRIMAP_LANES`] on a CPU adapter and [`DEFAULT_TRIMAP_LANES`] on others.
+pub fn trimap_lanes(config: &ObjectSpaceConfig, adapter: &wgpu::AdapterInfo) -> u32 {
+    config.trimap_lanes.unwrap_or(match adapter.device_type {
+        wgpu::DeviceType::Cpu => CPU_TRIMAP_LANES,
+        _ => DEFAULT_TRIMAP_LANES,
+    })
+}
 /// Most [`ObjectSpaceConfig::trimap_grid`] (`--os-trimap-grid`).
 pub const MAX_TRIMAP_GRID: u32 = 4;
 
@@ -572,8 +588,9 @@ pub struct ObjectSpaceConfig {
     /// How the paging chain is recorded.
     pub paging_chain: PagingChain,
     /// Invocations weighing each texel's triangles in the triangle-map
-    /// pass, one of [`TRIMAP_LANES`] (1: one per texel).
-    pub trimap_lanes: u32,
+    /// pass, one of [`TRIMAP_LANES`] (1: one per texel); `None`: the
+    /// adapter's ([`trimap_lanes`]). The maps are the same whatever it is.
+    pub trimap_lanes: Option<u32>,
     /// How the triangle-map pass searches the chart grids.
     pub trimap_search: TrimapSearch,
     /// The chart grids' cells per side, this many times the default (about
@@ -612,7 +629,7 @@ impl Default for ObjectSpaceConfig {
             extra_views: ExtraViews::None,
             slot_timeout: DEFAULT_SLOT_TIMEOUT,
             paging_chain: PagingChain::Fused,
-            trimap_lanes: DEFAULT_TRIMAP_LANES,
+            trimap_lanes: None,
             trimap_search: TrimapSearch::Rings,
             trimap_grid: 1,
             gather_input: GatherInput::Surface,
@@ -761,16 +778,17 @@ impl ObjectSpace {
         if ![1, 4].contains(&config.texel_samples) {
             return Err(ObjectSpaceError::BadTexelSamples(config.texel_samples));
         }
-        if !TRIMAP_LANES.contains(&config.trimap_lanes) {
-            return Err(ObjectSpaceError::BadTrimapLanes(config.trimap_lanes));
+        let lanes = trimap_lanes(&config, &ctx.info);
+        if !TRIMAP_LANES.contains(&lanes) {
+            return Err(ObjectSpaceError::BadTrimapLanes(lanes));
         }
         if !(1..=MAX_TRIMAP_GRID).contains(&config.trimap_grid) {
             return Err(ObjectSpaceError::BadTrimapGrid(config.trimap_grid));
         }
-        let invocations = 64 * config.trimap_lanes;
+        let invocations = 64 * lanes;
         let max = device.limits().max_compute_invocations_per_workgroup;
         if invocations > max {
-            let (lanes, adapter) = (config.trimap_lanes, ctx.info.name.clone());
+            let adapter = ctx.info.name.clone();
             return Err(ObjectSpaceError::TrimapLanesTooMany { lanes, invocations, adapter, max });
         }
         if !device.features().contains(wgpu::Features::PRIMITIVE_INDEX) {
@@ -884,7 +902,7 @@ impl ObjectSpace {
             )?,
             paging: PagingPass::new(device, shaders, scene, &res, config.paging_chain)?,
             resize: ResizePass::new(device, shaders, scene, &res)?,
-            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res, &config)?,
+            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res, &config, lanes)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather,
             atlas_view: (config.view == DebugView::AtlasPages)
@@ -1318,6 +1336,7 @@ impl Pipeline for ObjectSpace {
             .setup("physical_pages", pool.pages as u64)
             .setup("budget_pages", self.budget_pool.pages as u64)
             .setup("page_size", pool.page_size as u64)
+            .setup("trimap_lanes", self.trimap.lanes as u64)
             .setup("virtual_pages", self.layout.page_count as u64)
             .setup("virtual_texels", self.layout.virtual_texels())
             .setup("virtual_tiles", self.layout.tile_count as u64)

@@ -72,12 +72,14 @@ pub struct TrimapPass {
     group: wgpu::BindGroup,
     /// Bytes of the chart grids.
     pub grid_bytes: u64,
+    /// Invocations weighing each texel's triangles.
+    pub lanes: u32,
 }
 
 impl TrimapPass {
     /// Builds the chart grids of `scene`'s meshes (chart UVs: `uv1`, else
     /// `uv0`; `config.trimap_grid` times the default cells per side); the
-    /// pass weighs each texel's triangles with `config.trimap_lanes`
+    /// pass weighs each texel's triangles with `lanes`
     /// invocations, searching as `config.trimap_search` says, and with
     /// [`PagingChain::Fused`] also marks the pages.
     pub fn new(
@@ -87,6 +89,7 @@ impl TrimapPass {
         scene_gpu: &SceneGpu,
         res: &Resources,
         config: &ObjectSpaceConfig,
+        lanes: u32,
     ) -> Result<Self, ShaderError> {
         let (mut cell_start, mut triangles, mut mesh_grids) = (Vec::new(), Vec::new(), Vec::new());
         for mesh in &scene.meshes {
@@ -116,12 +119,12 @@ impl TrimapPass {
             &[Binding::StorageTexture { format: TRIANGLE_MAP_FORMAT, dimension }, read, read, read],
         );
         let groups = [&scene_gpu.layout, &res.layout, &layout];
-        let defs = defs(config.trimap_lanes, config.paging_chain, config.trimap_search);
+        let defs = defs(lanes, config.paging_chain, config.trimap_search);
         let pipeline = compute_pipeline_with(device, shaders, SHADER, &defs, "build", &groups)?;
         let grid_bytes = (grids.len() * 8 + cell_start.len() * 4 + triangles.len() * 4) as u64;
         let grids = [grid_buffer, start_buffer, triangle_buffer];
         let group = Self::group(device, &layout, &grids, res);
-        Ok(Self { pipeline, layout, grids, group, grid_bytes })
+        Ok(Self { pipeline, layout, grids, group, grid_bytes, lanes })
     }
 
     /// Binds the triangle maps again after the atlas was resized.
