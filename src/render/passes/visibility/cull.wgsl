@@ -10,6 +10,9 @@
 // frame, and appends the newly visible to list 1, which is drawn after.
 // Every test is conservative: it skips only clusters that could not have
 // written a pixel, so the visibility buffer is the same with and without.
+// With INDEXED_DRAWS (the hardware raster passes' indexed cluster draws,
+// `passes::cluster_draws`) each appended cluster also gets an indexed
+// indirect draw of its range of the cluster-ordered index buffer.
 #import shadespace::scene_bindings::{view, objects}
 
 // Mirrors `clusters::GpuCluster`.
@@ -87,6 +90,27 @@ const MAX_GROUPS_X: u32 = 32768u;
 @group(1) @binding(8) var<storage, read_write> dispatch: array<u32, 6>;
 // The workgroups' work: (entry of `ranges`, first cluster of its object).
 @group(1) @binding(9) var<storage, read> chunks: array<vec2u>;
+
+#ifdef INDEXED_DRAWS
+// `draw_indexed_indirect` arguments.
+struct DrawIndexedArgs {
+    index_count: u32,
+    instance_count: u32,
+    first_index: u32,
+    base_vertex: i32,
+    // The cluster's entry of `cluster_lists` (list * capacity + index): the
+    // vertex shader reads its object and cluster there.
+    first_instance: u32,
+}
+
+// x: the first entry of the alpha-masked objects' draws in each list's
+// `params.capacity` entries of `draws` (the opaque ones' come first).
+@group(2) @binding(0) var<uniform> draw_split: vec4u;
+@group(2) @binding(1) var<storage, read_write> draws: array<DrawIndexedArgs>;
+// Draws per list and kind: list 0 opaque, list 0 masked, list 1 opaque,
+// list 1 masked (the count buffer of `multi_draw_indexed_indirect_count`).
+@group(2) @binding(2) var<storage, read_write> draw_counts: array<atomic<u32>, 4>;
+#endif
 
 var<workgroup> group_counts: array<atomic<u32>, 4>;
 
@@ -172,7 +196,18 @@ fn occluded(mvp: mat4x4f, c: Cluster) -> bool {
 
 fn append(list: u32, range_index: u32, cluster: u32) {
     let at = atomicAdd(&counts[list], 1u);
-    cluster_lists[list * params.capacity + at] = vec2u(range_index, cluster);
+    let entry = list * params.capacity + at;
+    cluster_lists[entry] = vec2u(range_index, cluster);
+#ifdef INDEXED_DRAWS
+    // Opaque and alpha-masked objects are drawn by pipelines of their own
+    // (`passes::ScenePipeline`), each from its own run of draws.
+    let o = objects[ranges[range_index].x];
+    let masked = o.alpha_cutoff > 0.0;
+    let k = atomicAdd(&draw_counts[2u * list + select(0u, 1u, masked)], 1u);
+    let c = clusters[cluster];
+    let first = list * params.capacity + select(0u, draw_split.x, masked);
+    draws[first + k] = DrawIndexedArgs(3u * c.count, 1u, 3u * c.first, i32(o.base_vertex), entry);
+#endif
 }
 
 // Cluster `i` of visible object `range_index`. Early: the frustum and cone
