@@ -104,8 +104,13 @@ fn same_frames(name: &str, modes: &[Culling], views: &[View]) {
         }
         let c = &v.counters;
         eprintln!(
-            "{name} view {i}: clusters tested {}, frustum {}, occlusion {}, drawn {} ({} late)",
-            c["cull_tested"], c["cull_frustum"], c["cull_occlusion"], c["cull_drawn"], c["cull_drawn_late"]
+            "{name} view {i}: clusters tested {}, frustum {}, occlusion {}, drawn {} ({} late), indexed draws {:?}",
+            c["cull_tested"],
+            c["cull_frustum"],
+            c["cull_occlusion"],
+            c["cull_drawn"],
+            c["cull_drawn_late"],
+            c.get("cull_draws")
         );
     }
 }
@@ -129,6 +134,12 @@ fn raster_culling_keeps_the_image_and_culls_most_clusters_down_the_city_street()
     for View { counters: c, .. } in &v[2..] {
         assert!(c["cull_frustum"] > 0.0 && c["cull_occlusion"] > 0.0, "{c:?}");
         assert!(c["cull_drawn"] < 0.5 * c["cull_tested"], "most clusters drawn on the street: {c:?}");
+    }
+    // Indexed draws: one per run of consecutive clusters kept, so fewer
+    // draws than clusters (the first view draws all it keeps late).
+    if ctx.has(INDEXED_FEATURES) {
+        let (draws, drawn) = (v[0].counters["cull_draws"], v[0].counters["cull_drawn"]);
+        assert!(draws > 0.0 && draws < drawn, "{draws} indexed draws of {drawn} clusters");
     }
     assert!(v[3].counters["cull_drawn_late"] > 0.0, "the jump drew nothing late");
 

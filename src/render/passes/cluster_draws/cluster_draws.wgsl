@@ -52,7 +52,8 @@ const TRIANGLES: u32 = 64u;
 
 #ifdef INDEXED_DRAWS
 fn scene_vertex(vertex_index: u32, instance_index: u32) -> SceneVertex {
-    // The draw's index range is the cluster's; its base vertex the object's.
+    // The draw's index range is a run of the object's clusters (the first
+    // at `instance_index`); its base vertex the object's.
     let entry = cluster_lists[instance_index];
     return SceneVertex(vertex_index, ranges[entry.x].x, clusters[entry.y].first);
 }

@@ -6,15 +6,16 @@
 //! ([`ClusterDraws`], `--cluster-draws`):
 //!
 //! - **indexed** (the default): `cull.wgsl` with [`INDEXED_DRAWS`] also
-//!   writes, per surviving cluster, a `draw_indexed_indirect` entry of its
-//!   range of the scene's cluster-ordered index buffer
-//!   (`SceneGpu::cluster_indices`: the meshes' triangles in cluster order,
-//!   so that each cluster is one range; the meshes themselves keep their
-//!   order, so triangle ids, charts and triangle maps are those of the
-//!   plain draws), its first instance the cluster's list entry (the vertex
-//!   shader reads the object there), and counts the draws; each pass draws
-//!   them with one `multi_draw_indexed_indirect_count` per list and pipeline
-//!   state. Vertices are shared within a cluster, as in the plain draws.
+//!   writes, per run of consecutive surviving clusters of a chunk (one
+//!   object's), a `draw_indexed_indirect` entry of its range of the scene's
+//!   cluster-ordered index buffer (`SceneGpu::cluster_indices`: the meshes'
+//!   triangles in cluster order, so that each cluster, and each run of a
+//!   mesh's consecutive clusters, is one range; the meshes themselves keep
+//!   their order, so triangle ids, charts and triangle maps are those of
+//!   the plain draws), its first instance the run's first list entry (the
+//!   vertex shader reads the object there), and counts the draws; each pass
+//!   draws them with one `multi_draw_indexed_indirect_count` per list and
+//!   pipeline state. Vertices are shared within a run, as in the plain draws.
 //!   Needs `INDIRECT_FIRST_INSTANCE` and `MULTI_DRAW_INDIRECT_COUNT` (the
 //!   H100, the H200 and lavapipe have both); without them, or where the
 //!   draws would not fit one storage binding, the renderer logs why and
@@ -87,6 +88,11 @@ pub const CLUSTER_DRAW_GROUP: u32 = 2;
 const _: () = assert!(CLUSTER_TRIANGLES == 64, "cluster_draws.wgsl and draw_args.wgsl draw 64 triangles a cluster");
 
 const CULL_COUNTS_BYTES: u64 = CullCount::ALL.len() as u64 * 4;
+/// The indexed draws' four counts (list 0 opaque, list 0 masked, list 1 ...).
+const DRAW_COUNTS_BYTES: u64 = 16;
+/// Read back each frame: the [`CullCount`]s, then the indexed draws' counts
+/// (copied after them; zero with list draws).
+const READBACK_BYTES: u64 = CULL_COUNTS_BYTES + DRAW_COUNTS_BYTES;
 
 /// Entries of each cluster list (and of each list's indexed draws) for `scene`.
 fn list_capacity(scene: &SceneGpu) -> u32 {
@@ -199,7 +205,7 @@ impl ClusterCull {
             init("cull object clusters", bytemuck::cast_slice(&data), U::STORAGE)
         };
         let ranges = buffer("cull ranges", (scene.draws.len().max(1) * 16) as u64, U::STORAGE | U::COPY_DST);
-        let counts = buffer("cull counts", CULL_COUNTS_BYTES, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+        let counts = buffer("cull counts", READBACK_BYTES, U::STORAGE | U::COPY_DST | U::COPY_SRC);
         // `cull.wgsl`'s `finish` sizes dispatches for the compute rasterizer; unused here.
         let dispatch = buffer("cull dispatch", 24, U::STORAGE);
         let draw_args = buffer("cull draw args", 32, U::STORAGE | U::INDIRECT);
@@ -274,7 +280,11 @@ impl ClusterCull {
             let split = init("cull draw split", bytemuck::bytes_of(&[masked_first, 0, 0, 0]), U::UNIFORM);
             let draws =
                 buffer("cull indexed draws", 2 * u64::from(capacity) * DRAW_INDEXED_BYTES, U::STORAGE | U::INDIRECT);
-            let counts = buffer("cull indexed draw counts", 16, U::STORAGE | U::INDIRECT | U::COPY_DST);
+            let counts = buffer(
+                "cull indexed draw counts",
+                DRAW_COUNTS_BYTES,
+                U::STORAGE | U::INDIRECT | U::COPY_DST | U::COPY_SRC,
+            );
             let layout = bind_group_layout(device, "cull indexed draws", &[Binding::Uniform, rw, rw]);
             let group = bind_group(
                 device,
@@ -321,7 +331,7 @@ impl ClusterCull {
             capacity,
             width,
             height,
-            readback: ReadbackRing::new("cull counts", CULL_COUNTS_BYTES),
+            readback: ReadbackRing::new("cull counts", READBACK_BYTES),
             active: false,
         })
     }
@@ -389,7 +399,10 @@ impl ClusterCull {
             self.cull_pass(frame, late, "cull late", groups);
             draw_depth(frame, self, 1, false);
         }
-        self.readback.copy(frame.device, frame.encoder, &self.counts, CULL_COUNTS_BYTES, frame.number);
+        if let Some(d) = &self.indexed {
+            frame.encoder.copy_buffer_to_buffer(&d.counts, 0, &self.counts, CULL_COUNTS_BYTES, DRAW_COUNTS_BYTES);
+        }
+        self.readback.copy(frame.device, frame.encoder, &self.counts, READBACK_BYTES, frame.number);
     }
 
     /// `entry` of `cull.wgsl` over the chunks (`groups`), then the lists'
@@ -447,8 +460,11 @@ impl ClusterCull {
     }
 
     /// The [`CullCount`]s of finished frames that culled, with `cull_drawn`
-    /// (clusters drawn by both passes), by frame number.
+    /// (clusters drawn by both passes) and, with indexed draws,
+    /// `cull_draws` (the indexed draws of both passes: one per run of
+    /// consecutive clusters), by frame number.
     pub fn collect_counts(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        let indexed = self.indexed.is_some();
         self.readback
             .collect(device, wait)
             .into_iter()
@@ -458,6 +474,10 @@ impl ClusterCull {
                     CullCount::ALL.iter().map(|&k| (k.name().to_string(), raw[k as usize] as f64)).collect();
                 let drawn = raw[CullCount::DrawnEarly as usize] as f64 + raw[CullCount::DrawnLate as usize] as f64;
                 counters.insert("cull_drawn".into(), drawn);
+                if indexed {
+                    let draws: u32 = raw[CullCount::ALL.len()..].iter().sum();
+                    counters.insert("cull_draws".into(), f64::from(draws));
+                }
                 (frame, counters)
             })
             .collect()
