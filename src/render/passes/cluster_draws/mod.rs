@@ -449,11 +449,6 @@ impl ClusterCull {
         }
     }
 
-    /// Whether it draws indexed ([`ClusterDraws::Indexed`]).
-    pub fn indexed(&self) -> bool {
-        self.indexed.is_some()
-    }
-
     /// Starts the read-back of the frame's counts. Call right after the submit.
     pub fn after_submit(&mut self) {
         self.readback.after_submit();
