@@ -10,7 +10,7 @@ use shadespace::render::objectspace::{
     DEFAULT_PAGE_SIZE, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, MAX_TRIMAP_GRID, Marking, PagingChain,
     TrimapSearch,
 };
-use shadespace::render::{Culling, Exposure, ShadingModel, ShadowRefresh};
+use shadespace::render::{ClusterDraws, Culling, Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
 
 use super::parse::{self, Orbit, Views, VisibilityChoice};
@@ -157,6 +157,13 @@ pub struct SceneArgs {
     /// cull_occlusion and cull_drawn (docs/culling.md).
     #[arg(long, value_name = "none|frustum|occlusion", value_parser = parse::culling)]
     pub culling: Option<Culling>,
+    /// How the raster pipelines draw the clusters that --culling keeps:
+    /// `indexed` (default: one indexed indirect draw per cluster, counted on
+    /// the GPU; lists where the adapter lacks INDIRECT_FIRST_INSTANCE or
+    /// MULTI_DRAW_INDIRECT_COUNT) or `list` (one instanced draw per list,
+    /// three vertex invocations per triangle; to compare).
+    #[arg(long, value_name = "indexed|list", value_parser = parse::cluster_draws, default_value = "indexed")]
+    pub cluster_draws: ClusterDraws,
     /// `default`: the scene's materials; `high`: every material with Phong
     /// exponent 1500, GGX roughness 0.05 and specular strength at least 1, to
     /// provoke specular aliasing (normal maps: the file's or --textures detailed).

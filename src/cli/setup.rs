@@ -264,4 +264,5 @@ pub fn configure(renderer: &mut Renderer, a: &SceneArgs, s: &Setup) {
     if let Some(culling) = a.culling {
         renderer.culling = culling;
     }
+    renderer.cluster_draws = a.cluster_draws;
 }

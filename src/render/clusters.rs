@@ -78,6 +78,44 @@ impl FromStr for Culling {
     }
 }
 
+/// How the hardware raster passes draw the clusters that culling keeps
+/// (`--cluster-draws`; `passes::cluster_draws`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ClusterDraws {
+    /// One indexed indirect draw per surviving cluster, of its range of the
+    /// scene's cluster-ordered index buffer (vertices shared within the
+    /// cluster), counted on the GPU (`multi_draw_indexed_indirect_count`).
+    /// Needs `INDIRECT_FIRST_INSTANCE` and `MULTI_DRAW_INDIRECT_COUNT`;
+    /// without them the renderer draws [`ClusterDraws::List`].
+    #[default]
+    Indexed,
+    /// One instanced, non-indexed draw per list: an instance per cluster of
+    /// 64 triangle slots, three vertex invocations per triangle, unused
+    /// slots zero-area (the draws before indexed ones; kept to compare).
+    List,
+}
+
+impl ClusterDraws {
+    pub const ALL: [Self; 2] = [Self::Indexed, Self::List];
+
+    /// The name `--cluster-draws` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Indexed => "indexed",
+            Self::List => "list",
+        }
+    }
+}
+
+impl FromStr for ClusterDraws {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL.into_iter().find(|c| c.name() == s).ok_or_else(|| format!("'{s}' is not indexed or list"))
+    }
+}
+
 gpu_struct! {
     /// A [`Cluster`] as `cull.wgsl` and `raster.wgsl` read it (`Cluster`).
     pub struct GpuCluster as "Cluster" {

@@ -36,7 +36,7 @@ use crate::hash::fnv1a;
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
 use crate::shaders::{ShaderError, ShaderLibrary};
 pub use clustered::ClusteredConfig;
-pub use clusters::Culling;
+pub use clusters::{ClusterDraws, Culling};
 use culling::Frustum;
 pub use deferred::DeferredConfig;
 pub use deferred_compute::DeferredComputeConfig;
@@ -325,6 +325,10 @@ pub struct Renderer {
     /// How the compute rasterizer culls the scene's clusters (default:
     /// two-pass occlusion; the visibility buffer is the same in every mode).
     pub culling: Culling,
+    /// How the hardware raster passes draw the clusters culling keeps
+    /// (default indexed, where the adapter can: [`passes::cluster_draws`]).
+    /// Read when culling is first built, before the first frame that culls.
+    pub cluster_draws: ClusterDraws,
     /// Sub-pixel offset of the projection, in pixels (x right, y down;
     /// default none): supersampled references (`crate::reference`) average
     /// frames rendered at a grid of such offsets.
@@ -427,6 +431,7 @@ impl Renderer {
             sun_shadow: false,
             shading: ShadingModel::Phong,
             culling: Culling::for_scene(scene.objects.len()),
+            cluster_draws: ClusterDraws::default(),
             jitter: glam::Vec2::ZERO,
             shadows,
             shaders,
@@ -543,6 +548,7 @@ impl Renderer {
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         self.scene.culling = self.culling;
         if self.culling != Culling::None && !self.cluster_culling_built {
+            self.scene.cluster_draws = passes::cluster_draws::draws_for(self.cluster_draws, &ctx.device, &self.scene);
             self.pipeline.enable_cluster_culling(&ctx.device, &mut self.shaders, &self.scene, &self.targets)?;
             self.cluster_culling_built = true;
         }
@@ -618,6 +624,10 @@ impl Renderer {
             .setup("shadow_refresh_every_frame", every_frame as u64)
             .setup("sun_shadow", self.sun_shadow as u64)
             .setup("culling", self.culling as u64)
+            .setup(
+                "cluster_draws_indexed",
+                (self.cluster_culling_built && self.scene.cluster_draws == ClusterDraws::Indexed) as u64,
+            )
             .setup("msaa_samples", u64::from(self.targets.samples))
             .memory("msaa_targets", self.targets.msaa_bytes())
             .setup("environment", self.scene.environment.is_set() as u64)

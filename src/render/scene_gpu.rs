@@ -7,7 +7,7 @@ use glam::{Mat4, Vec4};
 use image::imageops::FilterType;
 use wgpu::util::DeviceExt;
 
-use super::clusters::{Culling, GpuCluster};
+use super::clusters::{ClusterDraws, Culling, GpuCluster};
 use super::culling::LightLists;
 use super::gpu_types::{GpuLight, GpuObject, GpuVertex, GpuView, NO_TEXTURE};
 use super::mesh_memo;
@@ -86,6 +86,13 @@ pub struct SceneGpu {
     /// The clusters' triangles (indices of their mesh's triangles), cluster
     /// after cluster.
     pub cluster_triangles: wgpu::Buffer,
+    /// The index buffer in cluster order: entry `k` of `cluster_triangles`
+    /// is the triangle at indices `3k..3k + 3` (mesh-local vertex indices, as
+    /// in `indices`), so each cluster is one range of it, drawn by the
+    /// indexed cluster draws ([`ClusterDraws::Indexed`]). The meshes keep
+    /// their triangle order: triangle ids, charts and triangle maps do not
+    /// change with culling.
+    pub cluster_indices: wgpu::Buffer,
     /// Per object: its mesh's first cluster and cluster count, its first slot
     /// in per-instance cluster state (slots are numbered object after
     /// object), and its first triangle in the scene's numbering (objects'
@@ -96,6 +103,10 @@ pub struct SceneGpu {
     /// How the compute rasterizer culls clusters this frame (the renderer
     /// sets it from [`super::Renderer::culling`]).
     pub culling: Culling,
+    /// How the raster passes draw culled clusters: the renderer sets it from
+    /// [`super::Renderer::cluster_draws`] where the adapter can
+    /// ([`super::passes::cluster_draws::draws_for`]) before culling is built.
+    pub cluster_draws: ClusterDraws,
     /// Per object: whether its material is alpha-masked
     /// ([`crate::scene::Material::alpha_cutoff`]).
     pub masked: Vec<bool>,
@@ -139,7 +150,12 @@ impl SceneGpu {
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
         let mut mesh_ranges = Vec::with_capacity(scene.meshes.len());
-        let (gpu_clusters, cluster_triangles, mesh_clusters) = upload_clusters(scene);
+        let SceneClusters {
+            gpu: gpu_clusters,
+            triangles: cluster_triangles,
+            indices: cluster_indices,
+            ranges: mesh_clusters,
+        } = upload_clusters(scene);
         for mesh in &scene.meshes {
             let charts = mesh.uv1.as_ref().unwrap_or(&mesh.uv0);
             mesh_ranges.push(DrawRange {
@@ -288,6 +304,8 @@ impl SceneGpu {
         let clusters_buf = storage("clusters", bytemuck::cast_slice(&gpu_clusters), wgpu::BufferUsages::empty());
         let cluster_triangles =
             storage("cluster triangles", bytemuck::cast_slice(&cluster_triangles), wgpu::BufferUsages::empty());
+        let cluster_indices =
+            storage("cluster indices", bytemuck::cast_slice(&cluster_indices), wgpu::BufferUsages::INDEX);
         Self {
             vertices: vertices_buf,
             indices: indices_buf,
@@ -301,9 +319,11 @@ impl SceneGpu {
             cull_back_faces: scene.cull_back_faces,
             clusters: clusters_buf,
             cluster_triangles,
+            cluster_indices,
             object_clusters,
             instance_clusters: slots,
             culling: Culling::default(),
+            cluster_draws: ClusterDraws::default(),
             masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),
             blended: scene.objects.iter().map(|o| scene.materials[o.material].blend).collect(),
             emits: scene
@@ -340,7 +360,8 @@ impl SceneGpu {
     /// draw it), `scene_triangle_chart_bytes` (per mesh triangle too),
     /// `scene_object_bytes` (the per-instance table: transform and material)
     /// `scene_texture_bytes` (the colour and linear arrays, mips included)
-    /// and `scene_cluster_bytes` (clusters and their triangle lists, per mesh).
+    /// and `scene_cluster_bytes` (clusters, their triangle lists and the
+    /// cluster-ordered index buffer, per mesh).
     pub fn memory(&self) -> [(&'static str, u64); 6] {
         let texture = |t: &wgpu::Texture| -> u64 {
             let layers = u64::from(t.depth_or_array_layers());
@@ -355,7 +376,7 @@ impl SceneGpu {
             ("scene_triangle_chart_bytes", self.triangle_charts.size()),
             ("scene_object_bytes", self.objects.size()),
             ("scene_texture_bytes", texture(&self.albedo) + texture(&self.linear_maps)),
-            ("scene_cluster_bytes", self.clusters.size() + self.cluster_triangles.size()),
+            ("scene_cluster_bytes", self.clusters.size() + self.cluster_triangles.size() + self.cluster_indices.size()),
         ]
     }
 
@@ -455,21 +476,32 @@ impl SceneGpu {
     }
 }
 
-/// Every mesh's clusters: the GPU clusters (their triangle ranges into the
-/// scene-wide list), that list (mesh-local triangle indices), and per mesh
-/// its (first cluster, cluster count). Both lists hold at least one entry
+/// Every mesh's clusters, mesh after mesh.
+struct SceneClusters {
+    /// The GPU clusters (their triangle ranges into `triangles`).
+    gpu: Vec<GpuCluster>,
+    /// Their triangles (mesh-local triangle indices).
+    triangles: Vec<u32>,
+    /// The meshes' indices in that order (three per entry of `triangles`).
+    indices: Vec<u32>,
+    /// Per mesh its (first cluster, cluster count).
+    ranges: Vec<(u32, u32)>,
+}
+
+/// Every mesh's clusters ([`SceneClusters`]). The lists hold at least one entry
 /// (empty buffers cannot be bound). Built on the calling thread, not with
 /// rayon: renderers are built inside rayon jobs whose pool may be blocked
 /// waiting for them (the speedup experiment's `par_bridge` deadlocked so);
 /// Sponza's 208,221 triangles take a few tens of milliseconds.
-fn upload_clusters(scene: &Scene) -> (Vec<GpuCluster>, Vec<u32>, Vec<(u32, u32)>) {
-    let (mut gpu, mut triangles, mut ranges) = (Vec::new(), Vec::new(), Vec::new());
+fn upload_clusters(scene: &Scene) -> SceneClusters {
+    let (mut gpu, mut triangles, mut indices, mut ranges) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for mesh in &scene.meshes {
         let mc = mesh_memo::clusters(&mesh.positions, &mesh.indices);
         ranges.push((gpu.len() as u32, mc.clusters.len() as u32));
         let base = triangles.len() as u32;
         gpu.extend(mc.clusters.iter().map(|c| GpuCluster::new(c, base + c.first)));
         triangles.extend_from_slice(&mc.triangles);
+        indices.extend(mc.triangles.iter().flat_map(|&t| &mesh.indices[3 * t as usize..3 * t as usize + 3]));
     }
     if gpu.is_empty() {
         gpu.push(GpuCluster::default());
@@ -477,7 +509,10 @@ fn upload_clusters(scene: &Scene) -> (Vec<GpuCluster>, Vec<u32>, Vec<(u32, u32)>
     if triangles.is_empty() {
         triangles.push(0);
     }
-    (gpu, triangles, ranges)
+    if indices.is_empty() {
+        indices.resize(3, 0);
+    }
+    SceneClusters { gpu, triangles, indices, ranges }
 }
 
 /// The view uniform for a camera and a target size (its light counts are

@@ -3,15 +3,18 @@
 //! image, and object space's raster visibility the same ids, with culling
 //! and without, pixel for pixel, along the tiny city's street (with a jump,
 //! after which the late pass must draw what became visible) and Sponza's
-//! path; and the counters show most clusters culled down the street.
+//! path, with the indexed cluster draws where the adapter has their
+//! features (lavapipe has) and, forward on the city, with the list draws;
+//! and the counters show most clusters culled down the street.
 
 use crate::common;
 use std::path::Path;
 
 use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::ObjectSpace;
+use shadespace::render::passes::cluster_draws::INDEXED_FEATURES;
 use shadespace::render::{
-    Counters, Culling, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
+    ClusterDraws, Counters, Culling, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
 };
 use shadespace::scene::{self, Camera, Light, Scene, path};
 
@@ -36,18 +39,20 @@ struct View {
 }
 
 /// Per camera, the frame in each of `modes` (`none` first) from one renderer
-/// of `pipeline` (occlusion keeps its history across the cameras, as along a
-/// path), read by `read` as (pixels, covered pixels).
+/// of `pipeline` drawing culled clusters with `draws` (occlusion keeps its
+/// history across the cameras, as along a path), read by `read` as
+/// (pixels, covered pixels).
 fn views(
     ctx: &GpuContext,
     scene: &Scene,
-    pipeline: PipelineConfig,
+    (pipeline, draws): (PipelineConfig, ClusterDraws),
     (cameras, lights): &(Vec<Camera>, Vec<Light>),
     modes: &[Culling],
     read: impl Fn(&Renderer) -> (Vec<u32>, usize),
 ) -> Vec<View> {
     let name = pipeline.name();
     let mut renderer = Renderer::new(ctx, scene, &RenderOptions::new(SIZE.0, SIZE.1, pipeline)).unwrap();
+    renderer.cluster_draws = draws;
     let mut out = Vec::new();
     for (i, camera) in cameras.iter().enumerate() {
         let mut frames = Vec::new();
@@ -67,9 +72,13 @@ fn views(
         out.push(View { frames, counters });
     }
     // The depth pre-pass and the pass after it draw the lists.
-    if let Some(passes) = renderer.report().setup.get("cluster_draw_passes") {
+    let setup = renderer.report().setup;
+    if let Some(passes) = setup.get("cluster_draw_passes") {
         assert_eq!(*passes, 2, "{name}");
     }
+    // The indexed draws wherever the adapter has their features.
+    let indexed = draws == ClusterDraws::Indexed && ctx.has(INDEXED_FEATURES);
+    assert_eq!(setup["cluster_draws_indexed"], indexed as u64, "{name} {draws:?}");
     ctx.check_errors().unwrap();
     out
 }
@@ -95,8 +104,13 @@ fn same_frames(name: &str, modes: &[Culling], views: &[View]) {
         }
         let c = &v.counters;
         eprintln!(
-            "{name} view {i}: clusters tested {}, frustum {}, occlusion {}, drawn {} ({} late)",
-            c["cull_tested"], c["cull_frustum"], c["cull_occlusion"], c["cull_drawn"], c["cull_drawn_late"]
+            "{name} view {i}: clusters tested {}, frustum {}, occlusion {}, drawn {} ({} late), indexed draws {:?}",
+            c["cull_tested"],
+            c["cull_frustum"],
+            c["cull_occlusion"],
+            c["cull_drawn"],
+            c["cull_drawn_late"],
+            c.get("cull_draws")
         );
     }
 }
@@ -115,18 +129,27 @@ fn raster_culling_keeps_the_image_and_culls_most_clusters_down_the_city_street()
     let scene = scene::load("city:2").unwrap();
     let street = path_views("city:2", &scene, &[0, 2, 4, 60]);
     let forward = PipelineConfig::from_name("forward").unwrap();
-    let v = views(&ctx, &scene, forward, &street, &Culling::ALL, image(&ctx));
+    let v = views(&ctx, &scene, (forward.clone(), ClusterDraws::Indexed), &street, &Culling::ALL, image(&ctx));
     same_frames("city forward", &Culling::ALL, &v);
     for View { counters: c, .. } in &v[2..] {
         assert!(c["cull_frustum"] > 0.0 && c["cull_occlusion"] > 0.0, "{c:?}");
         assert!(c["cull_drawn"] < 0.5 * c["cull_tested"], "most clusters drawn on the street: {c:?}");
     }
+    // Indexed draws: one per run of consecutive clusters kept, so fewer
+    // draws than clusters (the first view draws all it keeps late).
+    if ctx.has(INDEXED_FEATURES) {
+        let (draws, drawn) = (v[0].counters["cull_draws"], v[0].counters["cull_drawn"]);
+        assert!(draws > 0.0 && draws < drawn, "{draws} indexed draws of {drawn} clusters");
+    }
     assert!(v[3].counters["cull_drawn_late"] > 0.0, "the jump drew nothing late");
 
     let jump = path_views("city:2", &scene, &[0, 2, 60]);
     let modes = [Culling::None, Culling::Occlusion];
+    let v = views(&ctx, &scene, (forward, ClusterDraws::List), &jump, &modes, image(&ctx));
+    same_frames("city forward list draws", &modes, &v);
+    assert!(v[2].counters["cull_drawn_late"] > 0.0, "list draws: the jump drew nothing late");
     let deferred = PipelineConfig::from_name("deferred").unwrap();
-    let v = views(&ctx, &scene, deferred, &jump, &modes, image(&ctx));
+    let v = views(&ctx, &scene, (deferred, ClusterDraws::Indexed), &jump, &modes, image(&ctx));
     same_frames("city deferred", &modes, &v);
     assert!(v[2].counters["cull_drawn_late"] > 0.0, "deferred: the jump drew nothing late");
     // Object space's ids need no atlas: every object but the first is shaded forward.
@@ -138,7 +161,8 @@ fn raster_culling_keeps_the_image_and_culls_most_clusters_down_the_city_street()
         let covered = ids.iter().filter(|p| p[0] != 0).count();
         (ids.into_iter().flatten().collect(), covered)
     };
-    let v = views(&ctx, &scene, PipelineConfig::ObjectSpace(config), &jump, &modes, ids);
+    let object_space = (PipelineConfig::ObjectSpace(config), ClusterDraws::Indexed);
+    let v = views(&ctx, &scene, object_space, &jump, &modes, ids);
     same_frames("city object space raster ids", &modes, &v);
     assert!(v[2].counters["cull_drawn_late"] > 0.0, "object space: the jump drew nothing late");
 }
@@ -158,6 +182,7 @@ fn raster_culling_keeps_the_image_along_sponzas_path() {
     let modes = [Culling::None, Culling::Occlusion];
     for name in ["forward", "deferred"] {
         let pipeline = PipelineConfig::from_name(name).unwrap();
-        same_frames(&format!("sponza {name}"), &modes, &views(&ctx, &scene, pipeline, &cameras, &modes, image(&ctx)));
+        let v = views(&ctx, &scene, (pipeline, ClusterDraws::Indexed), &cameras, &modes, image(&ctx));
+        same_frames(&format!("sponza {name}"), &modes, &v);
     }
 }

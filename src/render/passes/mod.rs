@@ -82,14 +82,16 @@ impl ScenePipeline {
         self.clustered.is_some()
     }
 
-    /// The cluster-draw variants (none before [`Self::add_cluster_draws`]).
-    pub fn clustered_pipelines(&self) -> impl Iterator<Item = &wgpu::RenderPipeline> {
-        self.clustered.iter().flat_map(|c| std::iter::once(&c.0).chain(&c.1))
+    /// The cluster-draw variants (none before [`Self::add_cluster_draws`]),
+    /// each with whether it is the alpha-masked objects'.
+    pub fn clustered_pipelines(&self) -> impl Iterator<Item = (&wgpu::RenderPipeline, bool)> {
+        self.clustered.iter().flat_map(|c| std::iter::once((&c.0, false)).chain(c.1.iter().map(|m| (m, true))))
     }
 
     /// Builds the variants that draw cluster lists
-    /// ([`cluster_draws::ClusterCull::draw_list`]) if not built yet. A pass
-    /// using group [`cluster_draws::CLUSTER_DRAW_GROUP`] itself has none.
+    /// ([`cluster_draws::ClusterCull::draw_list`]) if not built yet, drawn
+    /// as `scene.cluster_draws` says. A pass using group
+    /// [`cluster_draws::CLUSTER_DRAW_GROUP`] itself has none.
     pub fn add_cluster_draws(
         &mut self,
         device: &wgpu::Device,
@@ -115,8 +117,13 @@ impl ScenePipeline {
             blend: r.blend,
             samples: r.samples,
         };
-        let draw = cluster_draws::CLUSTER_DRAW;
-        let opaque = raster_pipeline_with(device, shaders, scene, &raster, &[draw])?;
+        let indexed = scene.cluster_draws == crate::render::clusters::ClusterDraws::Indexed;
+        let draw: &[&str] = if indexed {
+            &[cluster_draws::CLUSTER_DRAW, cluster_draws::INDEXED_DRAWS]
+        } else {
+            &[cluster_draws::CLUSTER_DRAW]
+        };
+        let opaque = raster_pipeline_with(device, shaders, scene, &raster, draw)?;
         let masked = if self.masked.is_some() {
             let fragment = raster.fragment.or(Some(("fs_alpha_mask", &[])));
             Some(raster_pipeline_with(
@@ -124,7 +131,7 @@ impl ScenePipeline {
                 shaders,
                 scene,
                 &SceneRaster { fragment, ..raster },
-                &[ALPHA_MASK, draw],
+                &[&[ALPHA_MASK], draw].concat(),
             )?)
         } else {
             None
@@ -301,10 +308,10 @@ pub fn draw_scene(
     match (cull.filter(|c| c.active()), &pipeline.clustered) {
         (Some(cull), Some(_)) => {
             pass.set_bind_group(0, scene.bind_group(), &[]);
-            for p in pipeline.clustered_pipelines() {
+            for (p, masked) in pipeline.clustered_pipelines() {
                 pass.set_pipeline(p);
-                cull.draw_list(pass, 0);
-                cull.draw_list(pass, 1);
+                cull.draw_list(pass, 0, masked);
+                cull.draw_list(pass, 1, masked);
             }
         }
         _ => draw_objects(pass, scene, visible, pipeline),

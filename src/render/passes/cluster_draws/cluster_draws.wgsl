@@ -1,11 +1,13 @@
 // The hardware raster passes' cluster draws (`passes::cluster_draws`): with
 // cluster culling, a scene raster pass draws the clusters that `cull.wgsl`
-// listed, one instanced draw per list: an instance per listed cluster, three
-// vertices for each of its up to CLUSTER_TRIANGLES triangles. `scene_vertex`
-// maps (vertex index, instance index) to the scene's vertex and object, in
-// every pass the same way (so depths compare equal bit for bit); without
-// CLUSTER_DRAW it is the plain draw's (the vertex index already holds the
-// base vertex, the instance index is the object).
+// listed. With INDEXED_DRAWS, one indexed draw per cluster of its range of
+// the cluster-ordered index buffer, its first instance the cluster's entry
+// of the list; else one instanced draw per list: an instance per listed
+// cluster, three vertices for each of its up to CLUSTER_TRIANGLES triangles.
+// `scene_vertex` maps (vertex index, instance index) to the scene's vertex
+// and object, in every pass the same way (so depths compare equal bit for
+// bit); without CLUSTER_DRAW it is the plain draw's (the vertex index
+// already holds the base vertex, the instance index is the object).
 #define_import_path shadespace::cluster_draws
 #ifdef CLUSTER_DRAW
 #import shadespace::scene_bindings::{objects, indices}
@@ -15,8 +17,10 @@ struct SceneVertex {
     // Index into the scene's vertices.
     vertex: u32,
     object: u32,
-    // Its triangle among its mesh's (the visibility ids); cluster draws only
-    // (a plain draw's fragment takes `primitive_index`).
+    // Cluster draws only (a plain draw's fragment takes `primitive_index`):
+    // its triangle among its mesh's (the visibility ids), or with
+    // INDEXED_DRAWS its cluster's first entry of `cluster_triangles`
+    // (`drawn_triangle` turns it into the triangle).
     triangle: u32,
 }
 
@@ -46,6 +50,20 @@ const TRIANGLES: u32 = 64u;
 // The clusters' triangles (indices of their mesh's triangles).
 @group(2) @binding(4) var<storage, read> cluster_triangles: array<u32>;
 
+#ifdef INDEXED_DRAWS
+fn scene_vertex(vertex_index: u32, instance_index: u32) -> SceneVertex {
+    // The draw's index range is a run of the object's clusters (the first
+    // at `instance_index`); its base vertex the object's.
+    let entry = cluster_lists[instance_index];
+    return SceneVertex(vertex_index, ranges[entry.x].x, clusters[entry.y].first);
+}
+
+// The mesh's triangle of a fragment: `triangle` from `scene_vertex`,
+// `primitive` its `primitive_index` (counted from the draw's first index).
+fn drawn_triangle(triangle: u32, primitive: u32) -> u32 {
+    return cluster_triangles[triangle + primitive];
+}
+#else
 fn scene_vertex(vertex_index: u32, instance_index: u32) -> SceneVertex {
     let entry = cluster_lists[list_base.x + instance_index];
     let object = ranges[entry.x].x;
@@ -68,6 +86,11 @@ fn scene_vertex(vertex_index: u32, instance_index: u32) -> SceneVertex {
     let vertex = indices[o.first_index + 3u * triangle + corner] + o.base_vertex;
     return SceneVertex(vertex, object, triangle);
 }
+
+fn drawn_triangle(triangle: u32, primitive: u32) -> u32 {
+    return triangle;
+}
+#endif
 #else
 fn scene_vertex(vertex_index: u32, instance_index: u32) -> SceneVertex {
     return SceneVertex(vertex_index, instance_index, 0u);

@@ -1,10 +1,31 @@
 //! Cluster culling for the hardware raster pipelines (forward, clustered,
 //! deferred, raster visibility): the compute rasterizer's culling pass
 //! (`visibility/cull.wgsl`, the same shader and bindings) lists the
-//! surviving clusters, and every scene raster pass draws the lists with one
-//! indirect instanced draw each per pipeline state (`cluster_draws.wgsl`:
-//! an instance per cluster, three vertices per triangle slot, the unused
-//! slots zero-area), instead of every triangle of every object in view.
+//! surviving clusters, and every scene raster pass draws them instead of
+//! every triangle of every object in view, in one of two ways
+//! ([`ClusterDraws`], `--cluster-draws`):
+//!
+//! - **indexed** (the default): `cull.wgsl` with [`INDEXED_DRAWS`] also
+//!   writes, per run of consecutive surviving clusters of a chunk (one
+//!   object's), a `draw_indexed_indirect` entry of its range of the scene's
+//!   cluster-ordered index buffer (`SceneGpu::cluster_indices`: the meshes'
+//!   triangles in cluster order, so that each cluster, and each run of a
+//!   mesh's consecutive clusters, is one range; the meshes themselves keep
+//!   their order, so triangle ids, charts and triangle maps are those of
+//!   the plain draws), its first instance the run's first list entry (the
+//!   vertex shader reads the object there), and counts the draws; each pass
+//!   draws them with one `multi_draw_indexed_indirect_count` per list and
+//!   pipeline state. Vertices are shared within a run, as in the plain draws.
+//!   Needs `INDIRECT_FIRST_INSTANCE` and `MULTI_DRAW_INDIRECT_COUNT` (the
+//!   H100, the H200 and lavapipe have both); without them, or where the
+//!   draws would not fit one storage binding, the renderer logs why and
+//!   draws lists ([`draws_for`]).
+//! - **list**: one indirect instanced draw per list and pipeline state
+//!   (`cluster_draws.wgsl`: an instance per cluster, three vertices per
+//!   triangle slot, the unused slots zero-area). It needs neither feature,
+//!   but runs the vertex shader three times a triangle: on the H200 the
+//!   city's fly-over (89 % of its clusters drawn) took 1.9 times as long
+//!   as without culling.
 //!
 //! Where: in the depth pre-pass ([`super::depth_prepass`]), so the passes
 //! after it (testing `Equal`) draw what it drew. With `--culling occlusion`
@@ -14,15 +35,12 @@
 //! `depth prepass late` draws what became visible. Pipelines run without a
 //! pre-pass, and multisampled targets, draw every object as before.
 //!
-//! Why instanced draws of the lists rather than one `multi_draw_indexed_indirect`
-//! entry per cluster: a cluster's triangles are indices into its mesh's
-//! triangles, not a range of the index buffer, so per-cluster indexed draws
-//! would need a second, cluster-ordered index buffer, and their
-//! `first_instance` (to carry the object) needs `INDIRECT_FIRST_INSTANCE`;
-//! the draw of the list needs neither, nor a count buffer
-//! (`MULTI_DRAW_INDIRECT_COUNT`), and runs on every adapter the compute
-//! culling runs on. Its cost: vertices are not shared between triangles
-//! (three vertex invocations per triangle).
+//! Why a second index buffer rather than meshes stored in cluster order:
+//! the meshes' triangle order is what triangle ids, the chart cache's keys
+//! (generated charts are keyed by the mesh's indices) and the CPU twins
+//! use; the copy costs the index bytes again (Sponza 2.5 MB, the city's
+//! meshes 1 MB) and the visibility pass one read per fragment
+//! (`drawn_triangle`: the cluster's triangle list at the primitive index).
 //!
 //! The image is the same as without culling (tested) unless two triangles
 //! of the scene write the same depth at a pixel: culling draws the clusters
@@ -30,13 +48,15 @@
 //! may win the `Greater` test.
 
 use crate::gpu::readback::ReadbackRing;
-use crate::render::clusters::{CLUSTER_TRIANGLES, Culling};
+use crate::render::clusters::{CLUSTER_TRIANGLES, ClusterDraws, Culling};
 use crate::render::frame::Frame;
 use crate::render::passes::visibility::compute::{
     CULL, CULL_CHUNK, CULL_CONE, CULL_OCCLUSION, CullCount, DepthPyramid, GpuCullParams, HIZ, cull_group, split,
     visible_ranges,
 };
-use crate::render::passes::{Binding, bind_group, bind_group_layout, bind_group_layout_for, compute_pipeline};
+use crate::render::passes::{
+    Binding, bind_group, bind_group_layout, bind_group_layout_for, compute_pipeline, compute_pipeline_with,
+};
 use crate::render::report::Counters;
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::targets::Targets;
@@ -50,6 +70,16 @@ pub const ARGS: ShaderSource = ShaderSource::new("draw_args.wgsl", include_str!(
 pub const HIZ_DEPTH: ShaderSource = HIZ.with_defs(&["DEPTH_TEXTURE"]);
 /// Defined in the scene raster passes' variant that draws cluster lists.
 pub const CLUSTER_DRAW: &str = "CLUSTER_DRAW";
+/// Defined, besides [`CLUSTER_DRAW`], in the scene raster passes' variant
+/// that draws clusters with indexed draws, and in `cull.wgsl`'s variant
+/// that writes them.
+pub const INDEXED_DRAWS: &str = "INDEXED_DRAWS";
+/// The features the indexed cluster draws need: a draw's first instance
+/// carries its cluster, and the draws are counted on the GPU.
+pub const INDEXED_FEATURES: wgpu::Features =
+    wgpu::Features::INDIRECT_FIRST_INSTANCE.union(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
+/// Bytes of one `draw_indexed_indirect` entry (`cull.wgsl`'s `DrawIndexedArgs`).
+const DRAW_INDEXED_BYTES: u64 = 20;
 /// The bind group of the cluster draws (`cluster_draws.wgsl`'s group 2):
 /// one that none of the passes that cull uses (clustered shading's light
 /// grid is group 3, the others have none but the scene's).
@@ -58,6 +88,60 @@ pub const CLUSTER_DRAW_GROUP: u32 = 2;
 const _: () = assert!(CLUSTER_TRIANGLES == 64, "cluster_draws.wgsl and draw_args.wgsl draw 64 triangles a cluster");
 
 const CULL_COUNTS_BYTES: u64 = CullCount::ALL.len() as u64 * 4;
+/// The indexed draws' four counts (list 0 opaque, list 0 masked, list 1 ...).
+const DRAW_COUNTS_BYTES: u64 = 16;
+/// Read back each frame: the [`CullCount`]s, then the indexed draws' counts
+/// (copied after them; zero with list draws).
+const READBACK_BYTES: u64 = CULL_COUNTS_BYTES + DRAW_COUNTS_BYTES;
+
+/// Entries of each cluster list (and of each list's indexed draws) for `scene`.
+fn list_capacity(scene: &SceneGpu) -> u32 {
+    scene.instance_clusters.max(1).next_multiple_of(32)
+}
+
+/// The cluster draws the raster passes can use for `wanted` on `device`:
+/// [`ClusterDraws::List`] where it lacks [`INDEXED_FEATURES`] or where the
+/// indexed draws of `scene`'s clusters would not fit one storage binding;
+/// says why in a log line when it falls back.
+pub fn draws_for(wanted: ClusterDraws, device: &wgpu::Device, scene: &SceneGpu) -> ClusterDraws {
+    if wanted == ClusterDraws::List {
+        return wanted;
+    }
+    let missing = INDEXED_FEATURES - device.features();
+    if !missing.is_empty() {
+        tracing::warn!("the adapter lacks {missing:?}: cluster culling draws lists (--cluster-draws list)");
+        return ClusterDraws::List;
+    }
+    let bytes = 2 * u64::from(list_capacity(scene)) * DRAW_INDEXED_BYTES;
+    let limits = device.limits();
+    if bytes > limits.max_storage_buffer_binding_size.min(limits.max_buffer_size) {
+        tracing::warn!(
+            "the indexed draws of {} clusters need {} MiB, past the adapter's storage binding: cluster culling draws lists",
+            scene.instance_clusters,
+            bytes >> 20
+        );
+        return ClusterDraws::List;
+    }
+    wanted
+}
+
+/// What the indexed cluster draws add to [`ClusterCull`].
+struct IndexedDraws {
+    early: wgpu::ComputePipeline,
+    late: wgpu::ComputePipeline,
+    /// `cull.wgsl`'s group 2: the split, the draws and their counts.
+    group: wgpu::BindGroup,
+    /// Per list, `capacity` entries: the opaque objects' draws, then from
+    /// `masked_first` the alpha-masked objects'.
+    draws: wgpu::Buffer,
+    /// Draws per list and kind (list 0 opaque, list 0 masked, list 1 ...).
+    counts: wgpu::Buffer,
+    /// The first entry of the masked objects' draws in each list's entries:
+    /// the clusters of every opaque object.
+    masked_first: u32,
+    /// The scene's index buffer in cluster order.
+    indices: wgpu::Buffer,
+}
 
 /// The layout of [`CLUSTER_DRAW_GROUP`].
 pub fn draw_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
@@ -81,6 +165,8 @@ pub struct ClusterCull {
     args_group: wgpu::BindGroup,
     /// [`CLUSTER_DRAW_GROUP`] drawing list 0 and list 1.
     draw_groups: [wgpu::BindGroup; 2],
+    /// With [`ClusterDraws::Indexed`] (boxed: held inline by every pre-pass).
+    indexed: Option<Box<IndexedDraws>>,
     pyramid: DepthPyramid,
     capacity: u32,
     width: u32,
@@ -110,7 +196,7 @@ impl ClusterCull {
             )
         };
         use wgpu::BufferUsages as U;
-        let capacity = scene.instance_clusters.max(1).next_multiple_of(32);
+        let capacity = list_capacity(scene);
         let lists = buffer("cull lists", 2 * capacity as u64 * 8, U::STORAGE);
         let history = buffer("cull history", capacity as u64 * 4, U::STORAGE);
         let object_clusters = {
@@ -119,7 +205,7 @@ impl ClusterCull {
             init("cull object clusters", bytemuck::cast_slice(&data), U::STORAGE)
         };
         let ranges = buffer("cull ranges", (scene.draws.len().max(1) * 16) as u64, U::STORAGE | U::COPY_DST);
-        let counts = buffer("cull counts", CULL_COUNTS_BYTES, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+        let counts = buffer("cull counts", READBACK_BYTES, U::STORAGE | U::COPY_DST | U::COPY_SRC);
         // `cull.wgsl`'s `finish` sizes dispatches for the compute rasterizer; unused here.
         let dispatch = buffer("cull dispatch", 24, U::STORAGE);
         let draw_args = buffer("cull draw args", 32, U::STORAGE | U::INDIRECT);
@@ -181,12 +267,54 @@ impl ClusterCull {
             )
         };
         let cull_layouts = [&scene.layout, &cull_layout];
+        let indexed = if scene.cluster_draws == ClusterDraws::Indexed {
+            // The opaque objects' clusters: the masked ones' draws follow them.
+            let masked_first: u32 = scene
+                .object_data
+                .iter()
+                .zip(&scene.object_clusters)
+                // As `cull.wgsl` tells them apart (`alpha_cutoff > 0`; NaN is opaque).
+                .filter(|(o, _)| o.alpha_cutoff.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater))
+                .map(|(_, c)| c[1])
+                .sum();
+            let split = init("cull draw split", bytemuck::bytes_of(&[masked_first, 0, 0, 0]), U::UNIFORM);
+            let draws =
+                buffer("cull indexed draws", 2 * u64::from(capacity) * DRAW_INDEXED_BYTES, U::STORAGE | U::INDIRECT);
+            let counts = buffer(
+                "cull indexed draw counts",
+                DRAW_COUNTS_BYTES,
+                U::STORAGE | U::INDIRECT | U::COPY_DST | U::COPY_SRC,
+            );
+            let layout = bind_group_layout(device, "cull indexed draws", &[Binding::Uniform, rw, rw]);
+            let group = bind_group(
+                device,
+                "cull indexed draws",
+                &layout,
+                &[split.as_entire_binding(), draws.as_entire_binding(), counts.as_entire_binding()],
+            );
+            let layouts = [&scene.layout, &cull_layout, &layout];
+            let mut variant = |entry| compute_pipeline_with(device, shaders, CULL, &[INDEXED_DRAWS], entry, &layouts);
+            Some(Box::new(IndexedDraws {
+                early: variant("cull_early")?,
+                late: variant("cull_late")?,
+                group,
+                draws,
+                counts,
+                masked_first,
+                indices: scene.cluster_indices.clone(),
+            }))
+        } else {
+            None
+        };
+        let indexed_bytes = indexed.as_ref().map_or(0, |d| d.draws.size());
         Ok(Self {
             early: compute_pipeline(device, shaders, CULL, "cull_early", &cull_layouts)?,
             late: compute_pipeline(device, shaders, CULL, "cull_late", &cull_layouts)?,
             args: compute_pipeline(device, shaders, ARGS, "draw_args", &[&args_layout])?,
             draw_groups: [draw_group(0), draw_group(1)],
+            indexed,
             bytes: lists.size()
+                + indexed_bytes
                 + history.size()
                 + pyramid.texels.size()
                 + object_clusters.size()
@@ -203,12 +331,13 @@ impl ClusterCull {
             capacity,
             width,
             height,
-            readback: ReadbackRing::new("cull counts", CULL_COUNTS_BYTES),
+            readback: ReadbackRing::new("cull counts", READBACK_BYTES),
             active: false,
         })
     }
 
-    /// Bytes of its buffers (lists, history, pyramid, per-object tables).
+    /// Bytes of its buffers (lists, indexed draws, history, pyramid,
+    /// per-object tables).
     pub fn bytes(&self) -> u64 {
         self.bytes
     }
@@ -258,36 +387,66 @@ impl ClusterCull {
         };
         frame.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         frame.encoder.clear_buffer(&self.counts, 0, None);
+        if let Some(d) = &self.indexed {
+            frame.encoder.clear_buffer(&d.counts, 0, None);
+        }
         let groups = split(chunks.len() as u32);
-        self.cull_pass(frame, &self.early, "cull", groups);
+        let (early, late) = self.indexed.as_ref().map_or((&self.early, &self.late), |d| (&d.early, &d.late));
+        self.cull_pass(frame, early, "cull", groups);
         draw_depth(frame, self, 0, true);
         if culling == Culling::Occlusion {
             self.pyramid.encode(frame, "cull hiz");
-            self.cull_pass(frame, &self.late, "cull late", groups);
+            self.cull_pass(frame, late, "cull late", groups);
             draw_depth(frame, self, 1, false);
         }
-        self.readback.copy(frame.device, frame.encoder, &self.counts, CULL_COUNTS_BYTES, frame.number);
+        if let Some(d) = &self.indexed {
+            frame.encoder.copy_buffer_to_buffer(&d.counts, 0, &self.counts, CULL_COUNTS_BYTES, DRAW_COUNTS_BYTES);
+        }
+        self.readback.copy(frame.device, frame.encoder, &self.counts, READBACK_BYTES, frame.number);
     }
 
-    /// `entry` of `cull.wgsl` over the chunks (`groups`), then the lists' draws.
+    /// `entry` of `cull.wgsl` over the chunks (`groups`), then the lists'
+    /// draws (the indexed draws are written by `entry` itself).
     fn cull_pass(&self, frame: &mut Frame, entry: &wgpu::ComputePipeline, label: &str, groups: (u32, u32)) {
         let scene = frame.scene_group;
         let mut cp = frame.compute_pass(label);
         if groups.0 * groups.1 > 0 {
             cp.set_bind_group(0, scene, &[]);
             cp.set_bind_group(1, &self.group, &[]);
+            if let Some(d) = &self.indexed {
+                cp.set_bind_group(2, &d.group, &[]);
+            }
             cp.set_pipeline(entry);
             cp.dispatch_workgroups(groups.0, groups.1, 1);
         }
-        cp.set_pipeline(&self.args);
-        cp.set_bind_group(0, &self.args_group, &[]);
-        cp.dispatch_workgroups(1, 1, 1);
+        if self.indexed.is_none() {
+            cp.set_pipeline(&self.args);
+            cp.set_bind_group(0, &self.args_group, &[]);
+            cp.dispatch_workgroups(1, 1, 1);
+        }
     }
 
-    /// Draws list `list` with the bound pipeline (a [`CLUSTER_DRAW`] variant).
-    pub fn draw_list(&self, pass: &mut wgpu::RenderPass, list: usize) {
+    /// Draws list `list` with the bound pipeline (a [`CLUSTER_DRAW`]
+    /// variant, with [`INDEXED_DRAWS`] where culling draws indexed), the
+    /// opaque objects' clusters, or with `masked` the alpha-masked ones'
+    /// (list draws hold both: each pipeline's vertex shader skips the
+    /// other's).
+    pub fn draw_list(&self, pass: &mut wgpu::RenderPass, list: usize, masked: bool) {
         pass.set_bind_group(CLUSTER_DRAW_GROUP, &self.draw_groups[list], &[]);
-        pass.draw_indirect(&self.draw_args, list as u64 * 16);
+        match &self.indexed {
+            Some(d) => {
+                let (first, max) =
+                    if masked { (d.masked_first, self.capacity - d.masked_first) } else { (0, d.masked_first) };
+                if max == 0 {
+                    return;
+                }
+                pass.set_index_buffer(d.indices.slice(..), wgpu::IndexFormat::Uint32);
+                let offset = (list as u64 * u64::from(self.capacity) + u64::from(first)) * DRAW_INDEXED_BYTES;
+                let count = (2 * list as u64 + u64::from(masked)) * 4;
+                pass.multi_draw_indexed_indirect_count(&d.draws, offset, &d.counts, count, max);
+            }
+            None => pass.draw_indirect(&self.draw_args, list as u64 * 16),
+        }
     }
 
     /// Starts the read-back of the frame's counts. Call right after the submit.
@@ -296,8 +455,11 @@ impl ClusterCull {
     }
 
     /// The [`CullCount`]s of finished frames that culled, with `cull_drawn`
-    /// (clusters drawn by both passes), by frame number.
+    /// (clusters drawn by both passes) and, with indexed draws,
+    /// `cull_draws` (the indexed draws of both passes: one per run of
+    /// consecutive clusters), by frame number.
     pub fn collect_counts(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        let indexed = self.indexed.is_some();
         self.readback
             .collect(device, wait)
             .into_iter()
@@ -307,6 +469,10 @@ impl ClusterCull {
                     CullCount::ALL.iter().map(|&k| (k.name().to_string(), raw[k as usize] as f64)).collect();
                 let drawn = raw[CullCount::DrawnEarly as usize] as f64 + raw[CullCount::DrawnLate as usize] as f64;
                 counters.insert("cull_drawn".into(), drawn);
+                if indexed {
+                    let draws: u32 = raw[CullCount::ALL.len()..].iter().sum();
+                    counters.insert("cull_draws".into(), f64::from(draws));
+                }
                 (frame, counters)
             })
             .collect()

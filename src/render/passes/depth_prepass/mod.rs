@@ -57,9 +57,10 @@ impl DepthPrepass {
         if self.cull.is_some() || targets.samples > 1 {
             return Ok(());
         }
+        let cull = ClusterCull::new(device, shaders, scene, targets)?;
         self.pipeline.add_cluster_draws(device, shaders, scene)?;
         after.add_cluster_draws(device, shaders, scene)?;
-        self.cull = Some(Box::new(ClusterCull::new(device, shaders, scene, targets)?));
+        self.cull = Some(Box::new(cull));
         Ok(())
     }
 
@@ -111,9 +112,9 @@ pub fn culled_depth_prepass(frame: &mut Frame, pass: &mut DepthPrepass) {
             let (scene, targets) = (frame.scene, frame.targets);
             let mut rp = frame.render_pass(label, &[], Some(depth_attachment(targets, clear)));
             rp.set_bind_group(0, scene.bind_group(), &[]);
-            for p in pipeline.clustered_pipelines() {
+            for (p, masked) in pipeline.clustered_pipelines() {
                 rp.set_pipeline(p);
-                cull.draw_list(&mut rp, list);
+                cull.draw_list(&mut rp, list, masked);
             }
         });
         if cull.active() {

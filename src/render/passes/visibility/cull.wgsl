@@ -10,6 +10,10 @@
 // frame, and appends the newly visible to list 1, which is drawn after.
 // Every test is conservative: it skips only clusters that could not have
 // written a pixel, so the visibility buffer is the same with and without.
+// With INDEXED_DRAWS (the hardware raster passes' indexed cluster draws,
+// `passes::cluster_draws`) each run of consecutive clusters of a chunk
+// appended to a list also gets one indexed indirect draw of its range of the
+// cluster-ordered index buffer (a mesh's clusters are consecutive ranges).
 #import shadespace::scene_bindings::{view, objects}
 
 // Mirrors `clusters::GpuCluster`.
@@ -87,6 +91,30 @@ const MAX_GROUPS_X: u32 = 32768u;
 @group(1) @binding(8) var<storage, read_write> dispatch: array<u32, 6>;
 // The workgroups' work: (entry of `ranges`, first cluster of its object).
 @group(1) @binding(9) var<storage, read> chunks: array<vec2u>;
+
+#ifdef INDEXED_DRAWS
+// `draw_indexed_indirect` arguments.
+struct DrawIndexedArgs {
+    index_count: u32,
+    instance_count: u32,
+    first_index: u32,
+    base_vertex: i32,
+    // The entry of `cluster_lists` (list * capacity + index) of the run's
+    // first cluster: the vertex shader reads its object and cluster there.
+    first_instance: u32,
+}
+
+// x: the first entry of the alpha-masked objects' draws in each list's
+// `params.capacity` entries of `draws` (the opaque ones' come first).
+@group(2) @binding(0) var<uniform> draw_split: vec4u;
+@group(2) @binding(1) var<storage, read_write> draws: array<DrawIndexedArgs>;
+// Draws per list and kind: list 0 opaque, list 0 masked, list 1 opaque,
+// list 1 masked (the count buffer of `multi_draw_indexed_indirect_count`).
+@group(2) @binding(2) var<storage, read_write> draw_counts: array<atomic<u32>, 4>;
+
+// Per thread of the chunk: its cluster's list entry + 1, 0 when not appended.
+var<workgroup> appended: array<u32, CULL_WORKGROUP>;
+#endif
 
 var<workgroup> group_counts: array<atomic<u32>, 4>;
 
@@ -170,19 +198,40 @@ fn occluded(mvp: mat4x4f, c: Cluster) -> bool {
     return nearest * (1.0 + DEPTH_MARGIN) < farthest;
 }
 
-fn append(list: u32, range_index: u32, cluster: u32) {
+// Appends the cluster to `list`; returns its entry + 1.
+fn append(list: u32, range_index: u32, cluster: u32) -> u32 {
     let at = atomicAdd(&counts[list], 1u);
-    cluster_lists[list * params.capacity + at] = vec2u(range_index, cluster);
+    let entry = list * params.capacity + at;
+    cluster_lists[entry] = vec2u(range_index, cluster);
+    return entry + 1u;
 }
+
+#ifdef INDEXED_DRAWS
+// One draw of clusters `i0` to `i1` (inclusive) of visible object
+// `range_index`, appended to `list`, the first at `entry`.
+fn append_draw(list: u32, range_index: u32, i0: u32, i1: u32, entry: u32) {
+    let object = ranges[range_index].x;
+    let o = objects[object];
+    let c0 = clusters[object_clusters[object].x + i0];
+    let c1 = clusters[object_clusters[object].x + i1];
+    // Opaque and alpha-masked objects are drawn by pipelines of their own
+    // (`passes::ScenePipeline`), each from its own run of draws.
+    let masked = o.alpha_cutoff > 0.0;
+    let k = atomicAdd(&draw_counts[2u * list + select(0u, 1u, masked)], 1u);
+    let first = list * params.capacity + select(0u, draw_split.x, masked);
+    let count = c1.first + c1.count - c0.first;
+    draws[first + k] = DrawIndexedArgs(3u * count, 1u, 3u * c0.first, i32(o.base_vertex), entry);
+}
+#endif
 
 // Cluster `i` of visible object `range_index`. Early: the frustum and cone
 // tests and the early list; late: the occlusion test, the history and the
-// late list.
-fn cull_cluster(range_index: u32, i: u32, late: bool) {
+// late list. Returns its list entry + 1 where it was appended, else 0.
+fn cull_cluster(range_index: u32, i: u32, late: bool) -> u32 {
     let object = ranges[range_index].x;
     let oc = object_clusters[object];
     if i >= oc.y {
-        return;
+        return 0u;
     }
     let o = objects[object];
     let mvp = view.view_proj * o.model;
@@ -207,38 +256,44 @@ fn cull_cluster(range_index: u32, i: u32, late: bool) {
         } else {
             atomicAdd(&group_counts[select(2u, 1u, outside)], 1u);
         }
-        return;
+        return 0u;
     }
     let was_visible = history[slot] != 0u;
     if !late {
         if (params.flags & CULL_OCCLUSION) == 0u || was_visible {
-            append(LIST_EARLY, range_index, cluster);
+            return append(LIST_EARLY, range_index, cluster);
         }
-        return;
+        return 0u;
     }
     let seen = !occluded(mvp, c);
     history[slot] = select(0u, 1u, seen);
     if !was_visible {
         if seen {
-            append(LIST_LATE, range_index, cluster);
+            return append(LIST_LATE, range_index, cluster);
         } else {
             atomicAdd(&group_counts[3], 1u);
         }
     }
+    return 0u;
 }
 
 // Chunk `chunk` of the frame's list (`chunks`: up to CULL_WORKGROUP clusters
 // of one visible object), a thread per cluster; the workgroup's counts are
-// summed before one global add each.
+// summed before one global add each. With INDEXED_DRAWS, the first thread
+// of each run of consecutive appended clusters writes the run's draw.
 fn cull_chunk(chunk: u32, local: u32, late: bool) {
     if local < 4u {
         atomicStore(&group_counts[local], 0u);
     }
     workgroupBarrier();
+    var entry = 0u;
     if chunk < params.chunk_count {
         let ch = chunks[chunk];
-        cull_cluster(ch.x, ch.y + local, late);
+        entry = cull_cluster(ch.x, ch.y + local, late);
     }
+#ifdef INDEXED_DRAWS
+    appended[local] = entry;
+#endif
     workgroupBarrier();
     if local < 4u {
         let n = atomicLoad(&group_counts[local]);
@@ -246,6 +301,16 @@ fn cull_chunk(chunk: u32, local: u32, late: bool) {
             atomicAdd(&counts[TESTED + local], n);
         }
     }
+#ifdef INDEXED_DRAWS
+    if entry != 0u && (local == 0u || appended[local - 1u] == 0u) {
+        var last = local;
+        while last + 1u < CULL_WORKGROUP && appended[last + 1u] != 0u {
+            last++;
+        }
+        let ch = chunks[chunk];
+        append_draw(select(LIST_EARLY, LIST_LATE, late), ch.x, ch.y + local, ch.y + last, entry - 1u);
+    }
+#endif
 }
 
 @compute @workgroup_size(CULL_WORKGROUP)

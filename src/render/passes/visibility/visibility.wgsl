@@ -4,6 +4,9 @@
 enable primitive_index;
 #import shadespace::scene_bindings::object_clip_position
 #import shadespace::cluster_draws::scene_vertex
+#ifdef CLUSTER_DRAW
+#import shadespace::cluster_draws::drawn_triangle
+#endif
 #ifdef ALPHA_MASK
 #import shadespace::alpha_mask::masked_out
 #import shadespace::scene::vertex_uv0
@@ -17,8 +20,8 @@ struct VertexOut {
     @location(1) uv0: vec2f,
 #endif
 #ifdef CLUSTER_DRAW
-    // The triangle among its mesh's (a cluster draw's `primitive_index`
-    // counts the list's triangle slots).
+    // `SceneVertex::triangle` (a cluster draw's `primitive_index` counts
+    // the list's triangle slots or the cluster's triangles).
     @location(2) @interpolate(flat) triangle: u32,
 #endif
 }
@@ -48,7 +51,7 @@ fn fs_main(in: VertexOut, @builtin(primitive_index) triangle: u32) -> @location(
     }
 #endif
 #ifdef CLUSTER_DRAW
-    return vec2u(in.object + 1u, in.triangle);
+    return vec2u(in.object + 1u, drawn_triangle(in.triangle, triangle));
 #else
     return vec2u(in.object + 1u, triangle);
 #endif
