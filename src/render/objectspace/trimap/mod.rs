@@ -271,3 +271,30 @@ pub fn build_triangle_maps(frame: &mut Frame, pass: &TrimapPass, res: &Resources
         record("triangle map copies", &sharing.copy);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Mesh, Object};
+    use glam::Mat4;
+
+    /// Mesh 0 has two instances in the atlas (textures of 64 and 32), mesh
+    /// 1 one (and one not in the atlas), mesh 2 two of 16: meshes 0 and 2
+    /// share, numbering every page of each size up to their largest, one
+    /// mesh after the other.
+    #[test]
+    fn meshes_with_two_instances_number_their_maps_one_after_the_other() {
+        // Pages of 8: sizes 1 to 8 a page each, 16 four, 32 sixteen, 64 sixty-four.
+        assert_eq!([1, 8, 16, 32, 64, 128].map(|s| keys_below(s, 8)), [0, 3, 4, 8, 24, 88]);
+        let object =
+            |mesh| Object { name: String::new(), mesh, material: 0, transform: Mat4::IDENTITY, forward_only: false };
+        let scene = Scene {
+            meshes: vec![Mesh::default(), Mesh::default(), Mesh::default()],
+            objects: [0, 1, 0, 1, 2, 2].map(object).to_vec(),
+            ..Default::default()
+        };
+        let sizes = [Some(64), Some(32), Some(32), None, Some(16), Some(16)];
+        let layout = AtlasLayout::unplaced(&sizes, 8, 8, 1024, &[8]).unwrap();
+        assert_eq!(mesh_key_bases(&scene, &layout), [0, NO_SHARE, 88]);
+    }
+}
