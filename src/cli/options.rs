@@ -330,6 +330,12 @@ pub struct ObjectSpaceArgs {
     /// the texels of fine levels to weigh. The maps are the same.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_TRIMAP_GRID as i64))]
     pub os_trimap_grid: u32,
+    /// Whether a page copies the triangle map of a page already holding the
+    /// map of the same mesh, level and page (another instance's) instead of
+    /// building it: `on` (default; the city's instances build each map
+    /// once) or `off` (every page builds its own). The maps are the same.
+    #[arg(long, default_value = "on", value_parser = parse::on_off, action = clap::ArgAction::Set)]
+    pub os_trimap_share: bool,
     /// What the gather reads for each pixel's chart UV and levels: `surface`
     /// (default: it rebuilds the pixel's surface as marking did) or `record`
     /// (marking writes them, 16 bytes a pixel, and the gather reads them; one

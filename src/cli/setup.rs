@@ -187,6 +187,7 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             trimap_lanes: a.objectspace.os_trimap_lanes,
             trimap_search: a.objectspace.os_trimap_search,
             trimap_grid: a.objectspace.os_trimap_grid,
+            trimap_share: a.objectspace.os_trimap_share,
             gather_input: a.objectspace.os_gather,
             gather_filter: a.objectspace.os_filter,
             texel_samples: a.objectspace.os_texel_samples,

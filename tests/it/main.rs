@@ -44,4 +44,5 @@ mod stability;
 mod stage_twins;
 mod terrain;
 mod trimap;
+mod trimap_share;
 mod viewer;

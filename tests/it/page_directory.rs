@@ -14,16 +14,23 @@ use shadespace::scene::{self, Camera, Light, Scene, path};
 
 const SIZE: u32 = 64;
 
-struct City {
-    scene: Scene,
-    sizes: Vec<Option<u32>>,
-    street: Camera,
-    above: Camera,
-    lights: Vec<Light>,
+/// The tiny city charted for two cameras (also `trimap_share`'s).
+pub(crate) struct City {
+    pub(crate) scene: Scene,
+    pub(crate) sizes: Vec<Option<u32>>,
+    pub(crate) street: Camera,
+    pub(crate) above: Camera,
+    pub(crate) lights: Vec<Light>,
 }
 
-/// The tiny city charted for both cameras (as the CLI sizes for a path).
-fn city() -> City {
+/// The tiny city charted for both cameras (as the CLI sizes for a path),
+/// made once for the tests that use it (a second each).
+pub(crate) fn city() -> &'static City {
+    static CITY: std::sync::OnceLock<City> = std::sync::OnceLock::new();
+    CITY.get_or_init(make_city)
+}
+
+fn make_city() -> City {
     use shadespace::charts::{self, ChartCache, ChartSettings};
     let scene = scene::load("city:2").unwrap();
     let cameras = path::cameras_for_scene("city:2", &scene, 1.0).unwrap();
@@ -86,7 +93,7 @@ fn the_page_directory_holds_the_instances_in_view() {
     let in_atlas = city.sizes.iter().flatten().count();
     let mut seen = Vec::new();
     for (name, camera) in [("street", city.street), ("above", city.above)] {
-        let mut r = renderer(&ctx, &city, 60);
+        let mut r = renderer(&ctx, city, 60);
         r.render(&ctx, &camera, &city.lights, 0).unwrap();
         ctx.check_errors().unwrap();
         let c = counters(&ctx, &mut r);
@@ -123,7 +130,7 @@ fn the_page_directory_holds_the_instances_in_view() {
 fn an_instance_out_of_view_gives_its_slot_back_after_its_timeout() {
     let ctx = common::gpu();
     let city = city();
-    let mut r = renderer(&ctx, &city, 2);
+    let mut r = renderer(&ctx, city, 2);
     r.render(&ctx, &city.above, &city.lights, 0).unwrap();
     let above: Vec<usize> = slots(&r).iter().map(|(o, _)| *o).collect();
     let mut kept = Vec::new();
@@ -145,7 +152,7 @@ fn an_instance_out_of_view_gives_its_slot_back_after_its_timeout() {
     let c = counters(&ctx, &mut r);
     assert_eq!(c["pages_failed"], 0.0);
     let image = r.read_image(&ctx).unwrap();
-    let mut fresh = renderer(&ctx, &city, 2);
+    let mut fresh = renderer(&ctx, city, 2);
     fresh.render(&ctx, &city.above, &city.lights, 0).unwrap();
     let expected = fresh.read_image(&ctx).unwrap();
     ctx.check_errors().unwrap();

@@ -269,7 +269,8 @@ pub enum TileCounter {
     /// Page-table chunks in use after this frame's paging.
     TableChunks = 14,
     /// Pages whose triangle maps the triangle-map pass built this frame
-    /// (the pages backed this frame: none when none is new).
+    /// (the pages backed this frame that found no map to copy: none when
+    /// none is new).
     TrimapPages = 15,
     /// With [`ObjectSpaceConfig::count_mark_atomics`]: tile marks the mark
     /// pass made in the global buffers (per pixel and tile of its footprint,
@@ -283,10 +284,14 @@ pub enum TileCounter {
     /// pages (each a triangle tested against a texel): over
     /// [`Self::TrimapPages`], the pass's work per page.
     TrimapWeighed = 27,
+    /// With [`ObjectSpaceConfig::trimap_share`]: pages backed this frame
+    /// whose triangle maps were copied from a page holding the map of the
+    /// same mesh, level and page (another instance's, [`trimap`]).
+    TrimapShared = 28,
 }
 
 impl TileCounter {
-    pub const ALL: [Self; 19] = [
+    pub const ALL: [Self; 20] = [
         Self::Queued,
         Self::Visible,
         Self::New,
@@ -306,13 +311,14 @@ impl TileCounter {
         Self::MarkTiles,
         Self::MarkAtomics,
         Self::TrimapWeighed,
+        Self::TrimapShared,
     ];
     /// First slot of the age buckets (free pages, then unused for 128 or
     /// more frames, 64-127, ..., 1 frame).
     pub const AGE_BUCKET_BASE: usize = 16;
     pub const AGE_BUCKETS: usize = 9;
     /// Slots in the counter buffer (a multiple of four: 16-byte rows).
-    pub const SLOTS: usize = 28;
+    pub const SLOTS: usize = 32;
 
     pub fn wgsl_name(self) -> &'static str {
         match self {
@@ -335,6 +341,7 @@ impl TileCounter {
             Self::MarkTiles => "COUNT_MARK_TILES",
             Self::MarkAtomics => "COUNT_MARK_ATOMICS",
             Self::TrimapWeighed => "COUNT_TRIMAP_WEIGHED",
+            Self::TrimapShared => "COUNT_TRIMAP_SHARED",
         }
     }
 }
@@ -597,6 +604,10 @@ pub struct ObjectSpaceConfig {
     /// two triangles per cell; 1 to [`MAX_TRIMAP_GRID`]): finer cells list
     /// fewer triangles for the texels of fine levels to weigh.
     pub trimap_grid: u32,
+    /// A page's triangle map is copied from a page already holding the map
+    /// of the same mesh, level and page (another instance's) where one is
+    /// found, instead of built again ([`trimap`]); the same maps.
+    pub trimap_share: bool,
     /// What the gather reads for a pixel's chart UV and levels.
     pub gather_input: GatherInput,
 }
@@ -632,6 +643,7 @@ impl Default for ObjectSpaceConfig {
             trimap_lanes: None,
             trimap_search: TrimapSearch::Rings,
             trimap_grid: 1,
+            trimap_share: true,
             gather_input: GatherInput::Surface,
         }
     }
@@ -902,7 +914,7 @@ impl ObjectSpace {
             )?,
             paging: PagingPass::new(device, shaders, scene, &res, config.paging_chain)?,
             resize: ResizePass::new(device, shaders, scene, &res)?,
-            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res, &config, lanes)?,
+            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res, &layout, &config, lanes)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather,
             atlas_view: (config.view == DebugView::AtlasPages)
@@ -982,6 +994,10 @@ impl ObjectSpace {
         let device = frame.device;
         let old = self.res.resize(device, &mut frame.scope("atlas copy"), pool);
         copy_pages(frame, &self.resize, &self.res, &old, old_pages, moves.as_ref());
+        if moves.is_some() {
+            // Pages moved onto others: which map a page holds is known no more.
+            self.trimap.forget_maps(frame.encoder);
+        }
         self.rebind(frame.device);
     }
 
@@ -1197,7 +1213,9 @@ impl Pipeline for ObjectSpace {
     /// page-directory slot, the virtual pages in their slots: [`slots`]),
     /// `unslotted_objects` (in view, no room left in the directory: shaded
     /// forward), `trimap_pages` (pages whose triangle maps were built),
-    /// `trimap_weighed` (chart-grid entries that pass weighed), `quiet`
+    /// `trimap_weighed` (chart-grid entries that pass weighed),
+    /// `trimap_shared` (pages whose maps were copied from another
+    /// instance's page instead), `quiet`
     /// (1: nothing changed and the frame recorded no paging, triangle maps
     /// or shading),
     /// `atlas_pages` and `atlas_texels` (the physical atlas the frame
@@ -1286,6 +1304,7 @@ impl Pipeline for ObjectSpace {
                     ("unslotted_objects", unslotted as f64),
                     ("trimap_pages", count(TileCounter::TrimapPages)),
                     ("trimap_weighed", count(TileCounter::TrimapWeighed)),
+                    ("trimap_shared", count(TileCounter::TrimapShared)),
                     ("quiet", quiet as u8 as f64),
                     ("budget_bias", used as f64),
                     // Share of the atlas-shaded pixels whose level gives them
@@ -1319,7 +1338,8 @@ impl Pipeline for ObjectSpace {
 
     /// Memory: the physical atlas (8 B/texel), its triangle maps (4 B/texel),
     /// tile state (two stamps and a queue slot per physical tile), the page
-    /// table and page state, the chart grids, the visibility buffer; per
+    /// table and page state, the chart grids, the shared triangle maps'
+    /// table and page keys, the visibility buffer; per
     /// object: virtual texture size, levels, virtual texels, tiles and pages.
     fn report(&self) -> PipelineReport {
         let pool = &self.res.pool;
@@ -1331,6 +1351,7 @@ impl Pipeline for ObjectSpace {
             .memory("tile_state", physical_tiles * 16)
             .memory("page_table", self.res.page_table_bytes())
             .memory("chart_grids", self.trimap.grid_bytes)
+            .memory("trimap_share", self.trimap.share_bytes)
             .memory("visibility", self.res.visibility.bytes())
             .memory("world_grid", self.grid.grid.bytes())
             .setup("physical_pages", pool.pages as u64)

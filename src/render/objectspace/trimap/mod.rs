@@ -5,12 +5,28 @@
 //! (no conservative rasterization needed): of the triangles touching a
 //! texel, the nearest to its centre; else one ring of dilation. `cpu.rs` is
 //! its CPU twin, `grid.rs` the per-mesh chart grids it searches.
+//!
+//! A page's map depends only on its mesh, level size and page, never on the
+//! instance: with [`ObjectSpaceConfig::trimap_share`] a page backed this
+//! frame copies the map of a page that already holds it (another
+//! instance's, built this frame or before) instead of building it again.
+//! The maps stay one per physical page, so shading and gathering read them
+//! as before. Each physical page's *key* says which map it holds (its
+//! mesh's first map number, the level's, the page's, + 1; 0: none known),
+//! and a hash table from keys to physical pages finds one; a page whose key
+//! no longer matches the entry (freed and backed again elsewhere) is no
+//! source, and a page finding none builds its map: a missed share costs a
+//! build, never a wrong texel. Per frame, one pass forgets the keys of the
+//! pages backed this frame, the build pass claims each page (a source, or
+//! it builds and enters itself in the table) and a last pass copies the
+//! maps of the pages that found a source, after every build.
 
 pub mod cpu;
 pub mod grid;
 
 use wgpu::util::DeviceExt;
 
+use super::atlas::AtlasLayout;
 use super::resources::{BACKED_ARGS, Resources, TRIANGLE_MAP_FORMAT};
 use super::{ObjectSpaceConfig, PagingChain, TrimapSearch};
 use crate::render::frame::Frame;
@@ -29,18 +45,26 @@ pub const MARK_BACKED: &str = "MARK_BACKED";
 pub const LANES: &str = "TRIMAP_LANES";
 /// Defined with [`TrimapSearch::Neighbourhood`].
 pub const NEIGHBOURHOOD: &str = "TRIMAP_NEIGHBOURHOOD";
+/// Defined with [`ObjectSpaceConfig::trimap_share`]: a page copies the map
+/// of a page holding the same one where it finds it.
+pub const SHARE: &str = "TRIMAP_SHARE";
 /// The variants besides [`SHADER`], for the test that validates every shader.
-pub const VARIANTS: [ShaderSource; 5] = [
+pub const VARIANTS: [ShaderSource; 6] = [
     SHADER.with_defs(&[MARK_BACKED]),
     SHADER.with_defs(&[NEIGHBOURHOOD]),
     SHADER.with_defs(&[LANES]),
-    SHADER.with_defs(&[LANES, "TRIMAP_LANES_4", MARK_BACKED, NEIGHBOURHOOD]),
+    SHADER.with_defs(&[LANES, "TRIMAP_LANES_4", MARK_BACKED, NEIGHBOURHOOD, SHARE]),
     SHADER.with_defs(&[LANES, "TRIMAP_LANES_8", MARK_BACKED]),
+    SHADER.with_defs(&[SHARE]),
 ];
 
+/// A mesh whose pages share no maps (one instance, or past the 32-bit keys).
+const NO_SHARE: u32 = u32::MAX;
+
 /// The definitions composing the pass for `lanes` invocations per texel
-/// (one of [`super::TRIMAP_LANES`]), the paging `chain` and the `search`.
-fn defs(lanes: u32, chain: PagingChain, search: TrimapSearch) -> Vec<&'static str> {
+/// (one of [`super::TRIMAP_LANES`]), the paging `chain`, the `search` and
+/// whether pages `share` maps.
+fn defs(lanes: u32, chain: PagingChain, search: TrimapSearch, share: bool) -> Vec<&'static str> {
     let mut defs = match lanes {
         1 => vec![],
         2 => vec![LANES],
@@ -53,25 +77,78 @@ fn defs(lanes: u32, chain: PagingChain, search: TrimapSearch) -> Vec<&'static st
     if search == TrimapSearch::Neighbourhood {
         defs.push(NEIGHBOURHOOD);
     }
+    if share {
+        defs.push(SHARE);
+    }
     defs
 }
 
+/// Map numbers below level size `size` (a power of two) of pages of
+/// `page_size` texels: a page per `page_size` texels each way, every size
+/// from 1 texel up (`level_keys` in `trimap.wgsl`).
+fn keys_below(size: u32, page_size: u32) -> u64 {
+    (0..size.ilog2()).map(|k| ((1u64 << k).div_ceil(page_size as u64)).pow(2)).sum()
+}
+
+/// Per mesh, its first map number ([`NO_SHARE`] for a mesh with fewer than
+/// two instances in the atlas, or once the numbers pass 32 bits): each mesh
+/// numbers the pages of every level size up to its largest instance's.
+fn mesh_key_bases(scene: &Scene, layout: &AtlasLayout) -> Vec<u32> {
+    let mut largest = vec![(0u32, 0u32); scene.meshes.len()];
+    for (object, atlas) in scene.objects.iter().zip(&layout.objects) {
+        if let Some(a) = atlas {
+            let (count, size) = &mut largest[object.mesh];
+            *count += 1;
+            *size = (*size).max(a.size);
+        }
+    }
+    let mut next = 0u64;
+    largest
+        .iter()
+        .map(|&(count, size)| {
+            let span = keys_below(size.max(1) * 2, layout.page_size);
+            // Keys are numbers + 1, 0 meaning none.
+            if count < 2 || next + span >= u32::MAX as u64 {
+                return NO_SHARE;
+            }
+            next += span;
+            (next - span) as u32
+        })
+        .collect()
+}
+
 gpu_struct! {
-    /// One object's chart grid (`ChartGrid` in `trimap.wgsl`).
+    /// One object's chart grid (`ChartGrid` in `trimap.wgsl`) and its
+    /// mesh's first map number for shared maps.
     pub struct GpuChartGrid as "ChartGrid" {
         pub cell_base: u32,
         pub side: u32,
+        pub key_base: u32,
+        pub pad: u32,
     }
+}
+
+/// With shared maps: the passes forgetting the keys of the pages backed
+/// this frame and copying the maps found, the keys' table and the pages' keys.
+struct Sharing {
+    forget: wgpu::ComputePipeline,
+    copy: wgpu::ComputePipeline,
+    keys: wgpu::Buffer,
 }
 
 pub struct TrimapPass {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
-    /// The chart grids, their cells' first triangles and the triangles.
-    grids: [wgpu::Buffer; 3],
+    /// The chart grids, their cells' first triangles, the triangles, the
+    /// shared maps' table (physical page + 1 per slot) and keys (per
+    /// physical page: the key of the map it holds + 1, 0 for none known).
+    buffers: [wgpu::Buffer; 5],
+    sharing: Option<Sharing>,
     group: wgpu::BindGroup,
     /// Bytes of the chart grids.
     pub grid_bytes: u64,
+    /// Bytes of the shared maps' table and keys (0 without sharing).
+    pub share_bytes: u64,
     /// Invocations weighing each texel's triangles.
     pub lanes: u32,
 }
@@ -81,85 +158,146 @@ impl TrimapPass {
     /// `uv0`; `config.trimap_grid` times the default cells per side); the
     /// pass weighs each texel's triangles with `lanes`
     /// invocations, searching as `config.trimap_search` says, and with
-    /// [`PagingChain::Fused`] also marks the pages.
+    /// [`PagingChain::Fused`] also marks the pages; with
+    /// `config.trimap_share` the instances of a mesh in `layout` share maps.
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
         scene: &Scene,
         scene_gpu: &SceneGpu,
         res: &Resources,
+        layout: &AtlasLayout,
         config: &ObjectSpaceConfig,
         lanes: u32,
     ) -> Result<Self, ShaderError> {
         let (mut cell_start, mut triangles, mut mesh_grids) = (Vec::new(), Vec::new(), Vec::new());
-        for mesh in &scene.meshes {
+        let key_bases =
+            if config.trimap_share { mesh_key_bases(scene, layout) } else { vec![NO_SHARE; scene.meshes.len()] };
+        for (mesh, &key_base) in scene.meshes.iter().zip(&key_bases) {
             let g = ChartGrid::scaled(mesh.uv1.as_deref().unwrap_or(&mesh.uv0), &mesh.indices, config.trimap_grid);
-            mesh_grids.push(GpuChartGrid { cell_base: cell_start.len() as u32, side: g.side });
+            let cell_base = cell_start.len() as u32;
+            mesh_grids.push(GpuChartGrid { cell_base, side: g.side, key_base, pad: 0 });
             let offset = triangles.len() as u32;
             cell_start.extend(g.cell_start.iter().map(|s| s + offset));
             triangles.extend(g.triangles);
         }
         let grids: Vec<GpuChartGrid> = scene.objects.iter().map(|o| mesh_grids[o.mesh]).collect();
-        let buffer = |label, contents: &[u8]| {
+        let buffer = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 // Empty buffers cannot be bound.
                 contents: if contents.is_empty() { &[0; 16] } else { contents },
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | usage,
             })
         };
-        let grid_buffer = buffer("chart grids", bytemuck::cast_slice(&grids));
-        let start_buffer = buffer("chart grid cells", bytemuck::cast_slice(&cell_start));
-        let triangle_buffer = buffer("chart grid triangles", bytemuck::cast_slice(&triangles));
+        let none = wgpu::BufferUsages::empty();
+        let grid_buffer = buffer("chart grids", bytemuck::cast_slice(&grids), none);
+        let start_buffer = buffer("chart grid cells", bytemuck::cast_slice(&cell_start), none);
+        let triangle_buffer = buffer("chart grid triangles", bytemuck::cast_slice(&triangles), none);
+        let share = config.trimap_share && key_bases.iter().any(|&b| b != NO_SHARE);
+        // At most half full: each physical page enters the table once per backing.
+        let (table_slots, key_count) =
+            if share { ((res.pool.pages * 2).next_power_of_two().max(64), res.pool.pages) } else { (4, 4) };
+        let table = buffer("shared triangle maps", &vec![0; table_slots as usize * 4], none);
+        let keys = buffer("triangle map keys", &vec![0; key_count as usize * 4], wgpu::BufferUsages::COPY_DST);
         let read = Binding::Storage { read_only: true };
+        let write = Binding::Storage { read_only: false };
         let dimension = wgpu::TextureViewDimension::D2Array;
-        let layout = bind_group_layout(
-            device,
-            "triangle map build",
-            &[Binding::StorageTexture { format: TRIANGLE_MAP_FORMAT, dimension }, read, read, read],
-        );
+        // Read and written: the copy pass reads the maps it copies.
+        let map = Binding::StorageTextureReadWrite { format: TRIANGLE_MAP_FORMAT, dimension };
+        let layout = bind_group_layout(device, "triangle map build", &[map, read, read, read, write, write]);
         let groups = [&scene_gpu.layout, &res.layout, &layout];
-        let defs = defs(lanes, config.paging_chain, config.trimap_search);
+        let defs = defs(lanes, config.paging_chain, config.trimap_search, share);
         let pipeline = compute_pipeline_with(device, shaders, SHADER, &defs, "build", &groups)?;
-        let grid_bytes = (grids.len() * 8 + cell_start.len() * 4 + triangles.len() * 4) as u64;
-        let grids = [grid_buffer, start_buffer, triangle_buffer];
-        let group = Self::group(device, &layout, &grids, res);
-        Ok(Self { pipeline, layout, grids, group, grid_bytes, lanes })
+        let sharing = if share {
+            let defs = [SHARE];
+            Some(Sharing {
+                forget: compute_pipeline_with(device, shaders, SHADER, &defs, "forget_keys", &groups)?,
+                copy: compute_pipeline_with(device, shaders, SHADER, &defs, "copy_shared", &groups)?,
+                keys: keys.clone(),
+            })
+        } else {
+            None
+        };
+        let grid_bytes = (grids.len() * 16 + cell_start.len() * 4 + triangles.len() * 4) as u64;
+        let share_bytes = if share { (table_slots as u64 + key_count as u64) * 4 } else { 0 };
+        let buffers = [grid_buffer, start_buffer, triangle_buffer, table, keys];
+        let group = Self::group(device, &layout, &buffers, res);
+        Ok(Self { pipeline, layout, buffers, sharing, group, grid_bytes, share_bytes, lanes })
     }
 
     /// Binds the triangle maps again after the atlas was resized.
     pub fn rebind(&mut self, device: &wgpu::Device, res: &Resources) {
-        self.group = Self::group(device, &self.layout, &self.grids, res);
+        self.group = Self::group(device, &self.layout, &self.buffers, res);
+    }
+
+    /// Forgets which map every physical page holds (after pages moved onto
+    /// others): their maps are built again, or copied, when next backed.
+    pub fn forget_maps(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(sharing) = &self.sharing {
+            encoder.clear_buffer(&sharing.keys, 0, None);
+        }
     }
 
     fn group(
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
-        grids: &[wgpu::Buffer; 3],
+        buffers: &[wgpu::Buffer; 5],
         res: &Resources,
     ) -> wgpu::BindGroup {
-        bind_group(
-            device,
-            "triangle map build",
-            layout,
-            &[
-                wgpu::BindingResource::TextureView(&res.physical.triangle_map_array),
-                grids[0].as_entire_binding(),
-                grids[1].as_entire_binding(),
-                grids[2].as_entire_binding(),
-            ],
-        )
+        let mut resources = vec![wgpu::BindingResource::TextureView(&res.physical.triangle_map_array)];
+        resources.extend(buffers.iter().map(|b| b.as_entire_binding()));
+        bind_group(device, "triangle map build", layout, &resources)
     }
 }
 
 /// Reads: the backed-page list, the chart grids, the scene's chart UVs.
 /// Writes: the triangle maps of the pages backed this frame (with
 /// [`PagingChain::Fused`], what `mark::mark_backed_pages` writes too).
+/// With shared maps, first forgets the keys of those pages, and after the
+/// build copies the maps of the pages that found a source (reads and
+/// writes the table and the keys; writes the backed pages' sources).
 pub fn build_triangle_maps(frame: &mut Frame, pass: &TrimapPass, res: &Resources) {
     let scene = frame.scene_group;
-    let mut cp = frame.compute_pass("triangle maps");
-    cp.set_pipeline(&pass.pipeline);
-    res.bind(&mut cp, scene);
-    cp.set_bind_group(2, &pass.group, &[]);
-    cp.dispatch_workgroups_indirect(&res.dispatch, BACKED_ARGS);
+    let mut record = |name, pipeline| {
+        let mut cp = frame.compute_pass(name);
+        cp.set_pipeline(pipeline);
+        res.bind(&mut cp, scene);
+        cp.set_bind_group(2, &pass.group, &[]);
+        cp.dispatch_workgroups_indirect(&res.dispatch, BACKED_ARGS);
+    };
+    if let Some(sharing) = &pass.sharing {
+        record("triangle map keys", &sharing.forget);
+    }
+    record("triangle maps", &pass.pipeline);
+    if let Some(sharing) = &pass.sharing {
+        record("triangle map copies", &sharing.copy);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Mesh, Object};
+    use glam::Mat4;
+
+    /// Mesh 0 has two instances in the atlas (textures of 64 and 32), mesh
+    /// 1 one (and one not in the atlas), mesh 2 two of 16: meshes 0 and 2
+    /// share, numbering every page of each size up to their largest, one
+    /// mesh after the other.
+    #[test]
+    fn meshes_with_two_instances_number_their_maps_one_after_the_other() {
+        // Pages of 8: sizes 1 to 8 a page each, 16 four, 32 sixteen, 64 sixty-four.
+        assert_eq!([1, 8, 16, 32, 64, 128].map(|s| keys_below(s, 8)), [0, 3, 4, 8, 24, 88]);
+        let object =
+            |mesh| Object { name: String::new(), mesh, material: 0, transform: Mat4::IDENTITY, forward_only: false };
+        let scene = Scene {
+            meshes: vec![Mesh::default(), Mesh::default(), Mesh::default()],
+            objects: [0, 1, 0, 1, 2, 2].map(object).to_vec(),
+            ..Default::default()
+        };
+        let sizes = [Some(64), Some(32), Some(32), None, Some(16), Some(16)];
+        let layout = AtlasLayout::unplaced(&sizes, 8, 8, 1024, &[8]).unwrap();
+        assert_eq!(mesh_key_bases(&scene, &layout), [0, NO_SHARE, 88]);
+    }
 }

@@ -7,7 +7,9 @@
 // triangle touches takes the nearest triangle touching its 3x3 neighbourhood
 // (one ring of dilation, so that bilinear taps just outside a chart find a
 // triangle to extrapolate); else 0. `cpu.rs` has the same rule in Rust.
-#import shadespace::contract::{COUNT_PAGES_BACKED, COUNT_TRIMAP_PAGES, COUNT_TRIMAP_WEIGHED}
+// With `TRIMAP_SHARE` a page copies the map of a page holding the same
+// (mesh, level, page) where the table of keys finds one (`mod.rs`).
+#import shadespace::contract::{COUNT_PAGES_BACKED, COUNT_TRIMAP_PAGES, COUNT_TRIMAP_WEIGHED, COUNT_TRIMAP_SHARED}
 #import shadespace::scene_bindings::{vertices, objects, triangle_vertices}
 #import shadespace::scene::Object
 #import shadespace::objectspace::{params, entry_level, counters, backed, atlas_texel, page_origin}
@@ -21,14 +23,157 @@ struct ChartGrid {
     cell_base: u32,
     // Cells per side.
     side: u32,
+    // The object's mesh's first map number (NO_SHARE: its pages share none).
+    key_base: u32,
+    pad: u32,
 }
 
-@group(2) @binding(0) var map: texture_storage_2d_array<r32uint, write>;
+// Read and written: `copy_shared` reads the maps it copies.
+@group(2) @binding(0) var map: texture_storage_2d_array<r32uint, read_write>;
 @group(2) @binding(1) var<storage, read> grids: array<ChartGrid>;
 // Per cell: its first entry in `cell_triangles` (one more entry closes the last cell).
 @group(2) @binding(2) var<storage, read> cell_start: array<u32>;
 // Object-local triangle indices, cell after cell.
 @group(2) @binding(3) var<storage, read> cell_triangles: array<u32>;
+// The shared maps' table (a power of two of slots): physical page + 1 of a
+// page holding a map, found from its key's home slot (0: empty).
+@group(2) @binding(4) var<storage, read_write> share_table: array<atomic<u32>>;
+// Per physical page: the key of the map it holds (0: none known).
+@group(2) @binding(5) var<storage, read_write> map_keys: array<atomic<u32>>;
+
+const NO_SHARE: u32 = 0xffffffffu;
+// Slots a key's search looks at from its home slot: past them a page builds.
+const SHARE_PROBES: u32 = 8u;
+
+// Map numbers below level size `size`: a page per `page_size` texels each
+// way, every size from 1 texel up (`keys_below` in `mod.rs`).
+fn level_keys(size: u32) -> u32 {
+    var n = 0u;
+    for (var s = 1u; s < size; s *= 2u) {
+        let per_row = (s + params.page_size - 1u) / params.page_size;
+        n += per_row * per_row;
+    }
+    return n;
+}
+
+// The key of backed page `b`'s map: the first map number of its object's
+// mesh, of its level's size and of its page, + 1 (0: the mesh shares none).
+// It is the same for every instance of the mesh, and the map too.
+fn map_key(b: vec4u) -> u32 {
+    let object = b.y >> 8u;
+    let base = grids[object].key_base;
+    if base == NO_SHARE {
+        return 0u;
+    }
+    let l = entry_level(object, b.y & 0xffu);
+    let page = page_origin(l, b.x) / params.page_size;
+    let per_row = (l.size + params.page_size - 1u) / params.page_size;
+    return base + level_keys(l.size) + page.y * per_row + page.x + 1u;
+}
+
+fn hash(key: u32) -> u32 {
+    var x = key;
+    x ^= x >> 16u;
+    x *= 0x7feb352du;
+    x ^= x >> 15u;
+    x *= 0x846ca68bu;
+    x ^= x >> 16u;
+    return x;
+}
+
+// The physical page + 1 whose map backed page `b` copies, or 0: it builds
+// its own, entered in the table. A slot's page is a source when its key is
+// `b`'s (its map was built before this frame, or by a page building it this
+// frame: keys of the pages backed this frame are forgotten first, and a
+// page copying sets its key only once copied). A slot whose page holds no
+// known map, or one whose search starts too far off to reach the slot, is
+// taken. Races (two pages taking one slot, a key not yet seen) make a page
+// build what it could have copied, never copy what it should not.
+fn find_source(b: vec4u) -> u32 {
+    let key = map_key(b);
+    let page = b.z;
+    let pages = min(params.physical_pages, arrayLength(&map_keys));
+    if key == 0u || page >= pages {
+        return 0u;
+    }
+    let mask = arrayLength(&share_table) - 1u;
+    let home = hash(key) & mask;
+    for (var i = 0u; i < SHARE_PROBES; i++) {
+        let s = (home + i) & mask;
+        let v = atomicLoad(&share_table[s]);
+        if v != 0u && v - 1u < pages {
+            let k = atomicLoad(&map_keys[v - 1u]);
+            if k == key {
+                return v;
+            }
+            if k != 0u && ((s - (hash(k) & mask)) & mask) < SHARE_PROBES {
+                continue;
+            }
+        }
+        atomicStore(&map_keys[page], key);
+        atomicCompareExchangeWeak(&share_table[s], v, page + 1u);
+        return 0u;
+    }
+    atomicStore(&map_keys[page], key);
+    return 0u;
+}
+
+var<workgroup> page_source: u32;
+
+// Backed page `index`'s source (`find_source`, decided by invocation 0 and
+// written to the page's entry for `copy_shared`), the same in every invocation.
+fn share_source(index: u32, b: vec4u, li: u32) -> u32 {
+    if li == 0u {
+        let source = find_source(b);
+        page_source = source;
+        backed[index].w = source;
+        if source != 0u {
+            atomicAdd(&counters[COUNT_TRIMAP_SHARED], 1u);
+        }
+    }
+    return workgroupUniformLoad(&page_source);
+}
+
+// Whether workgroup `index` has a page backed this frame.
+fn backed_this_frame(index: u32) -> bool {
+    return index < min(atomicLoad(&counters[COUNT_PAGES_BACKED]), params.physical_pages);
+}
+
+// Per page backed this frame: which map it holds is not known until it is
+// built or copied.
+@compute @workgroup_size(1)
+fn forget_keys(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let index = wg.y * groups.x + wg.x;
+    if backed_this_frame(index) && backed[index].z < arrayLength(&map_keys) {
+        atomicStore(&map_keys[backed[index].z], 0u);
+    }
+}
+
+// Per page backed this frame that found a source: its map copied from the
+// source's (whole pages: texels past the level's edge are 0 in both), then
+// its key set, so that later frames may copy from it.
+@compute @workgroup_size(8, 8)
+fn copy_shared(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+               @builtin(local_invocation_id) lid: vec3u, @builtin(local_invocation_index) li: u32) {
+    let index = wg.y * groups.x + wg.x;
+    if !backed_this_frame(index) || backed[index].w == 0u {
+        return;
+    }
+    let b = backed[index];
+    let source = b.w - 1u;
+    let blocks = params.page_size / 8u;
+    for (var by = 0u; by < blocks; by++) {
+        for (var bx = 0u; bx < blocks; bx++) {
+            let texel = vec2u(bx, by) * 8u + lid.xy;
+            let read = atlas_texel(source, texel);
+            let write = atlas_texel(b.z, texel);
+            textureStore(map, write.xy, write.layer, textureLoad(map, read.xy, read.layer));
+        }
+    }
+    if li == 0u {
+        atomicStore(&map_keys[b.z], map_key(b));
+    }
+}
 
 fn cross2(a: vec2f, b: vec2f) -> f32 {
     return a.x * b.y - a.y * b.x;
@@ -228,19 +373,25 @@ fn count_weighed(weighed: u32, li: u32) {
     }
 }
 
-/// Whether workgroup `index` has a page backed this frame to map: if so it
-/// is counted and (with the fused paging chain) its requested tiles marked.
-/// Both `build` variants start so.
+/// Whether workgroup `index` has a page backed this frame whose map it
+/// builds: if so (with the fused paging chain) its requested tiles are
+/// marked, and (with `TRIMAP_SHARE`) it has no source to copy from; a page
+/// building its map is counted. Both `build` variants start so.
 fn claim_page(index: u32, li: u32) -> bool {
-    if index >= min(atomicLoad(&counters[COUNT_PAGES_BACKED]), params.physical_pages) {
+    if !backed_this_frame(index) {
         return false;
-    }
-    if li == 0u {
-        atomicAdd(&counters[COUNT_TRIMAP_PAGES], 1u);
     }
 #ifdef MARK_BACKED
     mark_backed_page(index, li);
 #endif
+#ifdef TRIMAP_SHARE
+    if share_source(index, backed[index], li) != 0u {
+        return false;
+    }
+#endif
+    if li == 0u {
+        atomicAdd(&counters[COUNT_TRIMAP_PAGES], 1u);
+    }
     return true;
 }
 
