@@ -914,7 +914,7 @@ impl ObjectSpace {
             )?,
             paging: PagingPass::new(device, shaders, scene, &res, config.paging_chain)?,
             resize: ResizePass::new(device, shaders, scene, &res)?,
-            trimap: TrimapPass::new(device, shaders, scene_cpu, scene, &res, &layout, &config, lanes)?,
+            trimap: TrimapPass::new(ctx, shaders, scene_cpu, scene, &res, &layout, &config)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather,
             atlas_view: (config.view == DebugView::AtlasPages)

@@ -28,7 +28,8 @@ use wgpu::util::DeviceExt;
 
 use super::atlas::AtlasLayout;
 use super::resources::{BACKED_ARGS, Resources, TRIANGLE_MAP_FORMAT};
-use super::{ObjectSpaceConfig, PagingChain, TrimapSearch};
+use super::{ObjectSpaceConfig, PagingChain, TrimapSearch, trimap_lanes};
+use crate::gpu::GpuContext;
 use crate::render::frame::Frame;
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
@@ -156,20 +157,21 @@ pub struct TrimapPass {
 impl TrimapPass {
     /// Builds the chart grids of `scene`'s meshes (chart UVs: `uv1`, else
     /// `uv0`; `config.trimap_grid` times the default cells per side); the
-    /// pass weighs each texel's triangles with `lanes`
-    /// invocations, searching as `config.trimap_search` says, and with
-    /// [`PagingChain::Fused`] also marks the pages; with
-    /// `config.trimap_share` the instances of a mesh in `layout` share maps.
+    /// pass weighs each texel's triangles with the lanes `config` asks for
+    /// on `ctx`'s adapter ([`trimap_lanes`]), searching as
+    /// `config.trimap_search` says, and with [`PagingChain::Fused`] also
+    /// marks the pages; with `config.trimap_share` the instances of a mesh
+    /// in `layout` share maps.
     pub fn new(
-        device: &wgpu::Device,
+        ctx: &GpuContext,
         shaders: &mut ShaderLibrary,
         scene: &Scene,
         scene_gpu: &SceneGpu,
         res: &Resources,
         layout: &AtlasLayout,
         config: &ObjectSpaceConfig,
-        lanes: u32,
     ) -> Result<Self, ShaderError> {
+        let (device, lanes) = (&ctx.device, trimap_lanes(config, &ctx.info));
         let (mut cell_start, mut triangles, mut mesh_grids) = (Vec::new(), Vec::new(), Vec::new());
         let key_bases =
             if config.trimap_share { mesh_key_bases(scene, layout) } else { vec![NO_SHARE; scene.meshes.len()] };
