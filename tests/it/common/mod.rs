@@ -5,22 +5,37 @@ pub mod gltf;
 
 use std::path::{Path, PathBuf};
 use std::sync::LazyLock;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use shadespace::gpu::{GpuContext, GpuOptions};
 use shadespace::scene::{Camera, Light, LightKind, Material, Mesh, Object, Scene, checker};
 
-/// The GPU context of the tests: one device for the whole test binary, as
-/// one program would use it, so that a compute pipeline is compiled once
-/// (`gpu::pipelines`) and not again in every test. Panics when none can be
-/// opened (CI installs lavapipe first, so "no adapter" is a real failure,
-/// not a skip). Tests running at once share its validation errors: one that
-/// calls `check_errors` may report another's, so the suite still fails.
+/// Devices the tests share, as many as the test threads CI runs (its two
+/// cores): lavapipe runs each device's work, and compiles each shader the
+/// first time it runs, on that device's one queue thread, so with a single
+/// device two tests wait on each other's shader compiles.
+const DEVICES: usize = 2;
+
+/// The GPU context of a test: each test thread (libtest runs each test on
+/// its own) takes the next of [`DEVICES`] shared devices in turn and keeps
+/// it, so a test's resources all live on one device and a compute pipeline
+/// is compiled once per device (`gpu::pipelines`), not in every test.
+/// Panics when none can be opened (CI installs lavapipe first, so "no
+/// adapter" is a real failure, not a skip). Tests running at once on one
+/// device share its validation errors: one that calls `check_errors` may
+/// report another's, so the suite still fails.
 pub fn gpu() -> GpuContext {
-    static SHARED: LazyLock<GpuContext> = LazyLock::new(|| {
-        GpuContext::new(&GpuOptions::default()).unwrap_or_else(|e| panic!("cannot open a GPU adapter: {e}"))
-    });
-    SHARED.clone()
+    static SHARED: [LazyLock<GpuContext>; DEVICES] = [const { LazyLock::new(open) }; DEVICES];
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    thread_local! {
+        static MINE: usize = NEXT.fetch_add(1, Ordering::Relaxed) % DEVICES;
+    }
+    MINE.with(|&i| SHARED[i].clone())
+}
+
+fn open() -> GpuContext {
+    GpuContext::new(&GpuOptions::default()).unwrap_or_else(|e| panic!("cannot open a GPU adapter: {e}"))
 }
 
 /// Where tests write images (actual, difference) for inspection.
