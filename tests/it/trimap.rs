@@ -13,7 +13,8 @@ use shadespace::render::objectspace::trimap::grid::ChartGrid;
 use shadespace::render::objectspace::{ObjectSpace, TrimapSearch};
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
 use shadespace::scene::generate::city::CitySpec;
-use shadespace::scene::{Camera, Light, LightKind, Material, Mesh, Object, Scene};
+use shadespace::scene::lights::default_ambient;
+use shadespace::scene::{Camera, Light, Material, Mesh, Object, Scene};
 
 /// Side of the object's shading texture (level 0) in texels.
 const SIZE: u32 = 128;
@@ -114,17 +115,7 @@ fn every_texel_a_triangle_touches_is_covered() {
     let config = ObjectSpaceConfig { texture_sizes: vec![Some(SIZE)], ..Default::default() };
     let options = RenderOptions { width: 256, height: 256, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
     let mut renderer = Renderer::new(&ctx, &scene, &options).unwrap();
-    let light = Light {
-        kind: LightKind::Ambient,
-        color: Vec3::ONE,
-        intensity: 1.0,
-        position: Vec3::ZERO,
-        direction: Vec3::NEG_Y,
-        radius: 1.0,
-        cos_inner: 1.0,
-        cos_outer: 1.0,
-        casts_shadows: false,
-    };
+    let light = Light { color: Vec3::ONE, intensity: 1.0, ..default_ambient() };
     renderer.render(&ctx, &camera, &[light], 0).unwrap();
     let os = renderer.pipeline::<ObjectSpace>().unwrap();
     let (size, gpu) = os.read_triangle_map(&ctx, 0, 0).unwrap();
@@ -176,17 +167,7 @@ fn the_ring_search_builds_the_same_maps_weighing_fewer_triangles() {
         near: 0.1,
         far: 200.0,
     };
-    let light = Light {
-        kind: LightKind::Ambient,
-        color: Vec3::ONE,
-        intensity: 1.0,
-        position: Vec3::ZERO,
-        direction: Vec3::NEG_Y,
-        radius: 1.0,
-        cos_inner: 1.0,
-        cos_outer: 1.0,
-        casts_shadows: false,
-    };
+    let light = Light { color: Vec3::ONE, intensity: 1.0, ..default_ambient() };
     const SIDE: u32 = 32;
     let build = |search, grid, lanes| {
         let config = ObjectSpaceConfig {
