@@ -629,7 +629,8 @@ fn outcome(setup: &Setup, findings: Findings) -> Outcome {
          deferred and deferred-compute light a multisampled G-buffer, each pixel once or, on edges, sample by \
          sample (deferred's light volumes test each sample's depth in the shader); object space marks tiles per \
          pixel footprint (and per sample on edges) and gathers per sample on edges, so its shading does not grow \
-         with the samples. Under MSAA, deferred-compute and object space use raster visibility."
+         with the samples. Deferred-compute's and object space's visibility, at every sample count, is the one \
+         the setup names (the compute rasterizer, where the adapter has it, writes each sample)."
             .to_string(),
         "Reference textures: the reference's sub-pixel frames sample textures at the level of a whole pixel's \
          footprint, as one sample per pixel does; it resolves geometry, shading and specular aliasing, not \

@@ -520,41 +520,43 @@ fn raster_pixel_homogeneous(s: Setup, p: vec2i) -> u32 {
 }
 
 #ifdef MSAA
-// A triangle's per-sample steps, set up once: each sample's position (0..1
-// from the pixel's top-left corner) and sub-pixel position, and what its
-// fixed-point edge functions add to the pixel centre's (exact: the standard
-// positions are sixteenths of a pixel).
-struct SampleSteps {
-    at: array<vec2f, 8>,
-    sub: array<vec2i, 8>,
-    edge: array<vec4<i64>, 8>,
-    // Per edge, the most any sample adds: a pixel whose centre's edge
-    // functions plus this are not all >= 0 has no covered sample.
-    reach: vec4<i64>,
+// Sample k's position (0..1 from the pixel's top-left corner), sub-pixel
+// position, and what its fixed-point edge functions add to the pixel
+// centre's (exact: the standard positions are sixteenths of a pixel).
+// Computed where used rather than kept in per-triangle arrays: arrays
+// indexed by the sample at run time made lavapipe's compile of this shader
+// several times longer (the MSAA tests' largest cost from a cold driver
+// cache) and live in local memory on GPUs.
+struct SampleStep {
+    at: vec2f,
+    sub: vec2i,
+    edge: vec4<i64>,
 }
 
-fn sample_steps(s: Setup) -> SampleSteps {
-    var t: SampleSteps;
-    t.reach = vec4<i64>(-(1li << 62u));
+fn sample_step(s: Setup, k: u32) -> SampleStep {
+    let at = standard_sample_position(params.samples, k);
+    let sub = vec2i(round(at * SUBPIXELS));
+    // A pixel's step is SUBPIXELS sub-pixels' (a multiple of it).
+    let o = vec2<i64>(sub - i32(SUBPIXELS / 2.0));
+    return SampleStep(at, sub, (s.fixed_dx * o.x + s.fixed_dy * o.y) >> vec4u(SUBPIXEL_BITS));
+}
+
+// Per edge, the most any sample adds: a pixel whose centre's edge functions
+// plus this are not all >= 0 has no covered sample. Set up once a triangle.
+fn sample_reach(s: Setup) -> vec4<i64> {
+    var reach = vec4<i64>(-(1li << 62u));
     for (var k = 0u; k < params.samples; k++) {
-        let at = standard_sample_position(params.samples, k);
-        let sub = vec2i(round(at * SUBPIXELS));
-        t.at[k] = at;
-        t.sub[k] = sub;
-        // A pixel's step is SUBPIXELS sub-pixels' (a multiple of it).
-        let o = vec2<i64>(sub - i32(SUBPIXELS / 2.0));
-        t.edge[k] = (s.fixed_dx * o.x + s.fixed_dy * o.y) >> vec4u(SUBPIXEL_BITS);
-        t.reach = max(t.reach, t.edge[k]);
+        reach = max(reach, sample_step(s, k).edge);
     }
-    return t;
+    return reach;
 }
 
 // Tests the samples of pixel p against a triangle (`e`: its fixed-point
-// edge functions at the pixel centre; unused with homogeneous edges) and
-// keeps, per covered sample, the nearer surface; returns the atomics it
-// issued.
-fn raster_samples(s: Setup, t: ptr<function, SampleSteps>, p: vec2i, e: vec4<i64>) -> u32 {
-    if s.fixed != 0u && any(e + (*t).reach < vec4<i64>(0li)) {
+// edge functions at the pixel centre; unused with homogeneous edges;
+// `reach`: its `sample_reach`) and keeps, per covered sample, the nearer
+// surface; returns the atomics it issued.
+fn raster_samples(s: Setup, reach: vec4<i64>, p: vec2i, e: vec4<i64>) -> u32 {
+    if s.fixed != 0u && any(e + reach < vec4<i64>(0li)) {
         return 0u;
     }
     let base = pixel_index(p) * params.samples;
@@ -564,13 +566,14 @@ fn raster_samples(s: Setup, t: ptr<function, SampleSteps>, p: vec2i, e: vec4<i64
 #endif
     for (var k = 0u; k < params.samples; k++) {
         var depth = 0.0;
+        let step = sample_step(s, k);
         if s.fixed != 0u {
-            if any(e + (*t).edge[k] < vec4<i64>(0li)) {
+            if any(e + step.edge < vec4<i64>(0li)) {
                 continue;
             }
-            depth = fixed_depth_at(s, p, (*t).sub[k]);
+            depth = fixed_depth_at(s, p, step.sub);
         } else {
-            let q = ndc_point(vec2f(p) + (*t).at[k]);
+            let q = ndc_point(vec2f(p) + step.at);
             if !inside_homogeneous(s, q) {
                 continue;
             }
@@ -607,13 +610,13 @@ fn raster_samples(s: Setup, t: ptr<function, SampleSteps>, p: vec2i, e: vec4<i64
 fn raster_rect(s: Setup, lo: vec2i, hi: vec2i) -> u32 {
     var written = 0u;
 #ifdef MSAA
-    var t = sample_steps(s);
+    let reach = sample_reach(s);
 #endif
     if s.fixed == 0u {
         for (var y = lo.y; y <= hi.y; y++) {
             for (var x = lo.x; x <= hi.x; x++) {
 #ifdef MSAA
-                written += raster_samples(s, &t, vec2i(x, y), vec4<i64>(0li));
+                written += raster_samples(s, reach, vec2i(x, y), vec4<i64>(0li));
 #else
                 written += raster_pixel_homogeneous(s, vec2i(x, y));
 #endif
@@ -626,7 +629,7 @@ fn raster_rect(s: Setup, lo: vec2i, hi: vec2i) -> u32 {
         var e = row;
         for (var x = lo.x; x <= hi.x; x++) {
 #ifdef MSAA
-            written += raster_samples(s, &t, vec2i(x, y), e);
+            written += raster_samples(s, reach, vec2i(x, y), e);
 #else
             if all(e >= vec4<i64>(0li)) {
                 written += keep_nearest(s.payload, s.owns, vec2i(x, y), fixed_depth(s, vec2i(x, y)));
@@ -783,7 +786,7 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_ind
         let s = big_setups[item.x];
         let r = big_tile_rect(s.bounds, item.y);
 #ifdef MSAA
-        var t = sample_steps(s);
+        let reach = sample_reach(s);
 #endif
         if local < u32(SUB_TILES * SUB_TILES) {
             let lo = r.xy + vec2i(i32(local) % SUB_TILES, i32(local) / SUB_TILES) * SUB_TILE;
@@ -806,7 +809,7 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_ind
             tested++;
             let e = e0 + step_x * i64(square.x) + step_y * i64(square.y);
 #ifdef MSAA
-            let w = raster_samples(s, &t, p, e);
+            let w = raster_samples(s, reach, p, e);
             written += w;
             back_facing += w * s.back_facing;
 #else
