@@ -144,6 +144,12 @@ pub struct SceneArgs {
     /// counters. Adds atomics: for profiling, not for timing.
     #[arg(long)]
     pub count_visibility: bool,
+    /// Compute visibility: issue every covered pixel's 64-bit atomicMax
+    /// without reading the pixel first (by default a load skips the atomic
+    /// where the pixel already holds something nearer; the image is the same
+    /// either way). To measure what the test saves.
+    #[arg(long)]
+    pub no_vis_depth_test: bool,
     /// Compute visibility: how the meshes' clusters (up to 64 triangles) are
     /// culled on the GPU before rasterizing (objects outside the view are
     /// skipped on the CPU in every mode): `none` (every triangle of every

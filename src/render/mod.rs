@@ -325,6 +325,11 @@ pub struct Renderer {
     /// How the compute rasterizer culls the scene's clusters (default:
     /// two-pass occlusion; the visibility buffer is the same in every mode).
     pub culling: Culling,
+    /// Whether the compute rasterizer reads each covered pixel before its
+    /// 64-bit atomicMax and skips the atomic where the pixel already holds
+    /// something nearer (default true; the ids are the same either way:
+    /// off only to measure what the test saves).
+    pub vis_depth_test: bool,
     /// How the hardware raster passes draw the clusters culling keeps
     /// (default indexed, where the adapter can: [`passes::cluster_draws`]).
     /// Read when culling is first built, before the first frame that culls.
@@ -431,6 +436,7 @@ impl Renderer {
             sun_shadow: false,
             shading: ShadingModel::Phong,
             culling: Culling::for_scene(scene.objects.len()),
+            vis_depth_test: true,
             cluster_draws: ClusterDraws::default(),
             jitter: glam::Vec2::ZERO,
             shadows,
@@ -547,6 +553,7 @@ impl Renderer {
         self.shadows.set_plan(&ctx.device, &ctx.queue, &mut self.scene, &lights, &shadow_plan);
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         self.scene.culling = self.culling;
+        self.scene.vis_depth_test = self.vis_depth_test;
         if self.culling != Culling::None && !self.cluster_culling_built {
             self.scene.cluster_draws = passes::cluster_draws::draws_for(self.cluster_draws, &ctx.device, &self.scene);
             self.pipeline.enable_cluster_culling(&ctx.device, &mut self.shaders, &self.scene, &self.targets)?;

@@ -103,6 +103,11 @@ pub struct SceneGpu {
     /// How the compute rasterizer culls clusters this frame (the renderer
     /// sets it from [`super::Renderer::culling`]).
     pub culling: Culling,
+    /// Whether the compute rasterizer reads a pixel before its 64-bit
+    /// atomicMax and skips the atomic where it would not win (the renderer
+    /// sets it from [`super::Renderer::vis_depth_test`]; the ids are the same
+    /// either way).
+    pub vis_depth_test: bool,
     /// How the raster passes draw culled clusters: the renderer sets it from
     /// [`super::Renderer::cluster_draws`] where the adapter can
     /// ([`super::passes::cluster_draws::draws_for`]) before culling is built.
@@ -323,6 +328,7 @@ impl SceneGpu {
             object_clusters,
             instance_clusters: slots,
             culling: Culling::default(),
+            vis_depth_test: true,
             cluster_draws: ClusterDraws::default(),
             masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),
             blended: scene.objects.iter().map(|o| scene.materials[o.material].blend).collect(),

@@ -5,7 +5,8 @@
 //! Passes, each timed under its name: `vis: clear` (the 64-bit buffer to
 //! background), `vis: raster` (one thread per visible triangle: near-plane
 //! clipped bounds, homogeneous edge functions with the top-left rule, and one
-//! 64-bit `atomicMax(depth << 32 | payload)` per covered pixel; triangles
+//! 64-bit `atomicMax(depth << 32 | payload)` per covered pixel where a load
+//! of the pixel finds nothing nearer ([`SceneGpu::vis_depth_test`]); triangles
 //! whose bounds exceed 256 pixels are set up once into a buffer and queued as
 //! 32x32 tiles), `vis: raster big` (one workgroup per queued tile: its 8x8
 //! squares are tested against the triangle's edges, then every pixel of the
@@ -107,7 +108,9 @@ gpu_struct! {
         pub setup_capacity: u32,
         /// Samples per pixel (1 without MSAA).
         pub samples: u32,
-        pub pad_a: u32,
+        /// 1: test each pixel with a load before its atomic
+        /// ([`SceneGpu::vis_depth_test`]).
+        pub depth_test: u32,
         pub pad_b: u32,
         pub pad_c: u32,
     }
@@ -230,17 +233,22 @@ pub enum RasterCount {
     BigSquaresPassed,
     /// Pixels the tile workgroups tested (in squares that passed).
     BigPixelsTested,
-    /// 64-bit atomics issued: covered pixels inside the depth range.
+    /// 64-bit atomicMax issued: covered pixels inside the depth range that
+    /// the depth test before the atomic did not reject.
     PixelsWritten,
     /// Big triangles (partly) rasterized by one thread because a queue was full.
     OverflowTriangles,
     /// Writes by triangles that face away (clockwise on screen): what
     /// back-face culling would save on closed meshes.
     BackFacingWrites,
+    /// Covered pixels inside the depth range whose load found a value at
+    /// least as large, so no atomicMax was issued
+    /// ([`SceneGpu::vis_depth_test`], and alpha-masked triangles always).
+    DepthRejects,
 }
 
 impl RasterCount {
-    pub const ALL: [Self; 9] = [
+    pub const ALL: [Self; 10] = [
         Self::SmallTriangles,
         Self::SmallPixelsTested,
         Self::BigTriangles,
@@ -250,6 +258,7 @@ impl RasterCount {
         Self::PixelsWritten,
         Self::OverflowTriangles,
         Self::BackFacingWrites,
+        Self::DepthRejects,
     ];
 
     /// Its name among the frame counters.
@@ -264,6 +273,7 @@ impl RasterCount {
             Self::PixelsWritten => "vis_pixels_written",
             Self::OverflowTriangles => "vis_overflow_triangles",
             Self::BackFacingWrites => "vis_back_facing_writes",
+            Self::DepthRejects => "vis_depth_rejects",
         }
     }
 }
@@ -576,10 +586,12 @@ impl ComputeVisibility {
     }
 
     /// The counting variant's counts of finished frames, by frame number,
-    /// with three ratios: `vis_atomics_per_pixel` (writes per screen pixel),
+    /// with four ratios: `vis_atomics_per_pixel` (writes per screen pixel),
     /// `vis_tests_per_write` (pixels tested per write) and
-    /// `vis_small_pixels_per_triangle`; with culling, the [`CullCount`]s and
-    /// `cull_drawn` (clusters drawn by both passes). None without counting.
+    /// `vis_small_pixels_per_triangle`, and `vis_covered_per_pixel` (writes
+    /// plus depth rejects: the atomics without the depth test); with culling,
+    /// the [`CullCount`]s and `cull_drawn` (clusters drawn by both passes).
+    /// None without counting.
     pub fn collect_counts(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
         let Some(c) = &mut self.counting else { return Vec::new() };
         let pixels = self.width as f64 * self.height as f64;
@@ -606,6 +618,8 @@ impl ComputeVisibility {
                 let written = get(RasterCount::PixelsWritten);
                 let tested = get(RasterCount::SmallPixelsTested) + get(RasterCount::BigPixelsTested);
                 counters.insert("vis_atomics_per_pixel".into(), written / pixels);
+                // What every covered pixel cost without the test: the atomics before it.
+                counters.insert("vis_covered_per_pixel".into(), (written + get(RasterCount::DepthRejects)) / pixels);
                 counters.insert("vis_tests_per_write".into(), tested / written.max(1.0));
                 counters.insert(
                     "vis_small_pixels_per_triangle".into(),
@@ -797,7 +811,7 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         big_capacity: pass.big_capacity,
         setup_capacity: pass.setup_capacity,
         samples: pass.samples,
-        pad_a: 0,
+        depth_test: u32::from(frame.scene.vis_depth_test),
         pad_b: 0,
         pad_c: 0,
     };

@@ -1,7 +1,9 @@
 // Compute rasterizer of the visibility pass: one thread per triangle writes,
 // per covered pixel, one 64-bit `atomicMax(depth_bits << 32 | payload)`
 // (reversed Z: nearer is greater, and positive floats order like their
-// bits). The payload is the complement of the triangle's index in the
+// bits), after a load of the pixel where `params.depth_test` says, which
+// skips the atomic where the pixel already holds a larger value (most of
+// the covered pixels of a deep scene: the atomic is the costlier access). The payload is the complement of the triangle's index in the
 // scene's numbering (objects' triangles back to back, in object order), so
 // that at equal depth the triangle drawn first without culling wins, as with
 // the raster path's `Greater` test, whichever triangles culling skipped; 0
@@ -39,7 +41,9 @@ struct RasterParams {
     setup_capacity: u32,
     // Samples per pixel (1 without MSAA).
     samples: u32,
-    pad_a: u32,
+    // 1: read a pixel before its atomicMax and skip the atomic where the
+    // pixel already holds a value at least as large (`keep_nearest`).
+    depth_test: u32,
     pad_b: u32,
     pad_c: u32,
 }
@@ -95,7 +99,7 @@ struct ListParams {
 #ifdef COUNT
 // The profiling variant's work counts (`compute::RasterCount`), each added
 // once per thread.
-@group(1) @binding(11) var<storage, read_write> counts: array<atomic<u32>, 9>;
+@group(1) @binding(11) var<storage, read_write> counts: array<atomic<u32>, 10>;
 #endif
 
 // Adds n to work count `k` (nothing unless built with COUNT).
@@ -104,6 +108,17 @@ fn count(k: u32, n: u32) {
     if n > 0u {
         atomicAdd(&counts[k], n);
     }
+#endif
+}
+
+// Adds an invocation's atomicMax writes (`back_facing` of them by triangles
+// facing away) and the pixels `beaten` rejected since its last call.
+fn count_writes(written: u32, back_facing: u32) {
+    count(PIXELS_WRITTEN, written);
+    count(BACK_FACING_WRITES, back_facing);
+#ifdef COUNT
+    count(DEPTH_REJECTS, rejects);
+    rejects = 0u;
 #endif
 }
 
@@ -117,6 +132,7 @@ const BIG_PIXELS_TESTED: u32 = 5u;
 const PIXELS_WRITTEN: u32 = 6u;
 const OVERFLOW_TRIANGLES: u32 = 7u;
 const BACK_FACING_WRITES: u32 = 8u;
+const DEPTH_REJECTS: u32 = 9u;
 
 // Threads per workgroup of `raster` (`compute::RASTER_WORKGROUP`).
 const RASTER_WORKGROUP: u32 = 64u;
@@ -477,9 +493,32 @@ fn cut_away(payload: u32, p: vec2i) -> bool {
 }
 #endif
 
+#ifdef COUNT
+// This invocation's pixels (samples) that `beaten` rejected, added to
+// DEPTH_REJECTS with its other counts.
+var<private> rejects: u32;
+#endif
+
+// Whether entry `index` of `depth_ids` already holds `value` or more, so
+// that an atomicMax of `value` would change nothing (the entries only grow
+// during the pass): a load instead of the read-modify-write, as the
+// hardware's depth test rejects a fragment before it writes.
+fn beaten(index: u32, value: u64) -> bool {
+    if atomicLoad(&depth_ids[index]) >= value {
+#ifdef COUNT
+        rejects++;
+#endif
+        return true;
+    }
+    return false;
+}
+
 // Keeps the nearer of pixel p's surface and a triangle at `depth` (`owns`:
 // its setup's flags; an alpha-masked triangle's cut-away pixels are not
-// kept). Returns 1 when it wrote (one atomic), else 0.
+// kept). With `params.depth_test` (and always for a masked triangle, whose
+// texture is read only where it would be kept) the pixel is read first and
+// the atomic skipped where it would not win. Returns 1 when it issued the
+// atomicMax, else 0.
 fn keep_nearest(payload: u32, owns: u32, p: vec2i, depth: f32) -> u32 {
     // Clip to the depth range, as the hardware does (the background is 0).
     if !(depth > 0.0 && depth <= 1.0) {
@@ -487,9 +526,12 @@ fn keep_nearest(payload: u32, owns: u32, p: vec2i, depth: f32) -> u32 {
     }
     let pixel = pixel_index(p);
     let value = (u64(bitcast<u32>(depth)) << 32u) | u64(payload);
+    let masked = (owns & MASKED) != 0u;
+    if (params.depth_test != 0u || masked) && beaten(pixel, value) {
+        return 0u;
+    }
 #ifdef ALPHA_MASK
-    // The texture is read only where the triangle would be kept.
-    if (owns & MASKED) != 0u && (atomicLoad(&depth_ids[pixel]) >= value || cut_away(payload, p)) {
+    if masked && cut_away(payload, p) {
         return 0u;
     }
 #endif
@@ -561,9 +603,7 @@ fn raster_samples(s: Setup, reach: vec4<i64>, p: vec2i, e: vec4<i64>) -> u32 {
     }
     let base = pixel_index(p) * params.samples;
     var written = 0u;
-#ifdef ALPHA_MASK
     var masked = (s.owns & MASKED) != 0u;
-#endif
     for (var k = 0u; k < params.samples; k++) {
         var depth = 0.0;
         let step = sample_step(s, k);
@@ -584,13 +624,13 @@ fn raster_samples(s: Setup, reach: vec4<i64>, p: vec2i, e: vec4<i64>) -> u32 {
             continue;
         }
         let value = (u64(bitcast<u32>(depth)) << 32u) | u64(s.payload);
+        if (params.depth_test != 0u || masked) && beaten(base + k, value) {
+            continue;
+        }
 #ifdef ALPHA_MASK
         // The texture is read once, where the triangle would first be kept
         // (`written` is still 0): its cut decides every sample of the pixel.
         if masked {
-            if atomicLoad(&depth_ids[base + k]) >= value {
-                continue;
-            }
             if cut_away(s.payload, p) {
                 return 0u;
             }
@@ -697,8 +737,7 @@ fn raster_triangle(s: Setup) {
     let area = u32(extent.x * extent.y);
     if area <= u32(SMALL_AREA) {
         let written = raster_rect(s, s.bounds.xy, s.bounds.zw);
-        count(PIXELS_WRITTEN, written);
-        count(BACK_FACING_WRITES, written * s.back_facing);
+        count_writes(written, written * s.back_facing);
         count(SMALL_TRIANGLES, 1u);
         count(SMALL_PIXELS_TESTED, area);
         return;
@@ -711,8 +750,7 @@ fn raster_triangle(s: Setup) {
     let slot = atomicAdd(&big_count.setups, 1u);
     if slot >= params.setup_capacity {
         let written = raster_rect(s, s.bounds.xy, s.bounds.zw);
-        count(PIXELS_WRITTEN, written);
-        count(BACK_FACING_WRITES, written * s.back_facing);
+        count_writes(written, written * s.back_facing);
         count(OVERFLOW_TRIANGLES, 1u);
         return;
     }
@@ -727,8 +765,7 @@ fn raster_triangle(s: Setup) {
             written += raster_rect(s, r.xy, r.zw);
         }
     }
-    count(PIXELS_WRITTEN, written);
-    count(BACK_FACING_WRITES, written * s.back_facing);
+    count_writes(written, written * s.back_facing);
     count(BIG_TRIANGLES, 1u);
     count(BIG_TILES, min(tile_count, params.big_capacity - min(first, params.big_capacity)));
     count(OVERFLOW_TRIANGLES, select(0u, 1u, first + tile_count > params.big_capacity));
@@ -831,6 +868,5 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_ind
     }
     count(BIG_SQUARES_PASSED, passed);
     count(BIG_PIXELS_TESTED, tested);
-    count(PIXELS_WRITTEN, written);
-    count(BACK_FACING_WRITES, back_facing);
+    count_writes(written, back_facing);
 }
