@@ -266,5 +266,5 @@ pub fn configure(renderer: &mut Renderer, a: &SceneArgs, s: &Setup) {
         renderer.culling = culling;
     }
     renderer.cluster_draws = a.cluster_draws;
-    renderer.vis_depth_test = !a.no_vis_depth_test;
+    renderer.vis_depth_test = a.vis_depth_test;
 }

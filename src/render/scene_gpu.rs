@@ -328,7 +328,7 @@ impl SceneGpu {
             object_clusters,
             instance_clusters: slots,
             culling: Culling::default(),
-            vis_depth_test: true,
+            vis_depth_test: false,
             cluster_draws: ClusterDraws::default(),
             masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),
             blended: scene.objects.iter().map(|o| scene.materials[o.material].blend).collect(),
