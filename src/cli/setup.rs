@@ -266,4 +266,5 @@ pub fn configure(renderer: &mut Renderer, a: &SceneArgs, s: &Setup) {
         renderer.culling = culling;
     }
     renderer.cluster_draws = a.cluster_draws;
+    renderer.cull_plain_above = a.cull_plain_above;
 }
