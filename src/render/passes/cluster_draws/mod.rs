@@ -180,9 +180,10 @@ pub struct ClusterCull {
     readback: ReadbackRing<(u64, Culling, bool)>,
     /// Counters read back and not yet handed out ([`Self::collect_counts`]).
     results: Vec<(u64, Counters)>,
-    /// The newest finished frame that tested clusters: its number, culling
-    /// and the share of the tested clusters culling kept.
-    kept: Option<(u64, Culling, f64)>,
+    /// The last frame read back that tested clusters (frames come back in
+    /// the order they were submitted): its culling and the share of the
+    /// tested clusters culling kept.
+    kept: Option<(Culling, f64)>,
     /// Whether this frame's pre-pass culled (the passes after it draw the lists).
     active: bool,
     bytes: u64,
@@ -392,7 +393,7 @@ impl ClusterCull {
         }
         self.gather(frame.device, false);
         let limit = f64::from(frame.scene.cull_plain_above);
-        let plain = self.kept.is_some_and(|(_, mode, kept)| mode == culling && kept > limit);
+        let plain = self.kept.is_some_and(|(mode, kept)| mode == culling && kept > limit);
         self.active = !plain;
         let (ranges, _) = visible_ranges(frame.scene, frame.visible);
         let mut chunks: Vec<[u32; 2]> = Vec::new();
@@ -520,8 +521,8 @@ impl ClusterCull {
                 counters.insert("cull_draws".into(), f64::from(draws));
             }
             let tested = f64::from(raw[CullCount::Tested as usize]);
-            if tested > 0.0 && self.kept.is_none_or(|(newest, ..)| frame >= newest) {
-                self.kept = Some((frame, culling, drawn / tested));
+            if tested > 0.0 {
+                self.kept = Some((culling, drawn / tested));
             }
             if self.results.len() == MAX_RESULTS {
                 self.results.remove(0);

@@ -92,9 +92,9 @@ pub struct ShadowCull {
     masked: Vec<bool>,
     readback: ReadbackRing<(u64, bool)>,
     results: Vec<(u64, Counters)>,
-    /// The newest finished culling that tested clusters: its frame and the
-    /// share of the tested clusters it kept.
-    kept: Option<(u64, f64)>,
+    /// The share of the tested clusters kept by the last culling read back
+    /// that tested some (they come back in the order they were submitted).
+    kept: Option<f64>,
 }
 
 impl ShadowCull {
@@ -253,7 +253,7 @@ impl ShadowCull {
             return None;
         }
         self.gather(frame.device, false);
-        let plain = self.kept.is_some_and(|(_, kept)| kept > f64::from(scene.cull_plain_above));
+        let plain = self.kept.is_some_and(|kept| kept > f64::from(scene.cull_plain_above));
         let mut ranges: Vec<[u32; 4]> = Vec::new();
         let mut chunks: Vec<[u32; 2]> = Vec::new();
         let mut draws = Vec::with_capacity(faces.len());
@@ -371,8 +371,8 @@ impl ShadowCull {
             .into_iter()
             .map(|(k, v)| (k.to_string(), v))
             .collect();
-            if tested > 0.0 && self.kept.is_none_or(|(newest, _)| frame >= newest) {
-                self.kept = Some((frame, drawn / tested));
+            if tested > 0.0 {
+                self.kept = Some(drawn / tested);
             }
             if self.results.len() == MAX_RESULTS {
                 self.results.remove(0);
