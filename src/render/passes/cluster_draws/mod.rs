@@ -373,18 +373,18 @@ impl ClusterCull {
     /// visible last frame), then with occlusion list 1 (those that became
     /// visible).
     ///
-    /// Unless the newest finished frame culled the same way and kept more
+    /// Unless the last frame read back culled the same way and kept more
     /// than `frame.scene.cull_plain_above` of the clusters it tested: then
     /// the frame draws the plain way (`draw_depth(frame, self, None, true)`:
     /// every visible object; [`Self::active`] is false, so the passes after
     /// draw the objects too), and the culling passes only run to count, and
-    /// with occlusion to keep each cluster's visibility, tested against
-    /// the pyramid of the whole depth, for the frames after ([`CULL_PLAIN`]:
-    /// the late list then holds every cluster seen, the early one none). Where most
-    /// clusters are kept, the cluster draws cost more than they save (their
-    /// many small draws against one instanced draw per run of a mesh's
-    /// instances), and the culling passes cost little (0.06-0.13 ms on the
-    /// H200 at 1920x1080).
+    /// with occlusion to keep each cluster's visibility, tested against the
+    /// pyramid of the whole depth, for the frames after ([`CULL_PLAIN`]:
+    /// the late list then holds every cluster seen, the early one none).
+    /// Where most clusters are kept, the cluster draws cost more than they
+    /// save (their many small draws against one instanced draw per run of a
+    /// mesh's instances), and the culling passes cost little (0.06-0.13 ms
+    /// on the H200 at 1920x1080).
     pub fn cull(&mut self, frame: &mut Frame, draw_depth: impl Fn(&mut Frame, &Self, Option<usize>, bool)) {
         let culling = frame.scene.culling;
         if culling == Culling::None {
@@ -506,7 +506,7 @@ impl ClusterCull {
     }
 
     /// Reads back the counts that have arrived (all with `wait`) into
-    /// `results`, and the newest frame's kept share into `kept`.
+    /// `results`, and the last frame's kept share into `kept`.
     fn gather(&mut self, device: &wgpu::Device, wait: bool) {
         let indexed = self.indexed.is_some();
         for ((frame, culling, plain), bytes) in self.readback.collect(device, wait) {
