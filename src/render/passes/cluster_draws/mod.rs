@@ -176,8 +176,9 @@ pub struct ClusterCull {
     capacity: u32,
     width: u32,
     height: u32,
-    /// Tagged with the frame's number, culling and whether it drew plain.
-    readback: ReadbackRing<(u64, Culling, bool)>,
+    /// Tagged with the frame's number, culling, whether it drew plain and
+    /// the draws a pass drawing plain issues ([`super::plain_draws`]).
+    readback: ReadbackRing<(u64, Culling, bool, u32)>,
     /// Counters read back and not yet handed out ([`Self::collect_counts`]).
     results: Vec<(u64, Counters)>,
     /// The last frame read back that tested clusters (frames come back in
@@ -441,7 +442,7 @@ impl ClusterCull {
         if let Some(d) = &self.indexed {
             frame.encoder.copy_buffer_to_buffer(&d.counts, 0, &self.counts, CULL_COUNTS_BYTES, DRAW_COUNTS_BYTES);
         }
-        let tag = (frame.number, culling, plain);
+        let tag = (frame.number, culling, plain, super::plain_draws(frame.scene, frame.visible));
         self.readback.copy(frame.device, frame.encoder, &self.counts, READBACK_BYTES, tag);
     }
 
@@ -497,7 +498,9 @@ impl ClusterCull {
     /// The [`CullCount`]s of finished frames that culled, with `cull_drawn`
     /// (clusters kept by both passes: drawn, or in a frame drawn the plain
     /// way those culling would have drawn), `cull_plain` (1 where the frame
-    /// drew every object in view, [`Self::cull`]) and, with indexed draws,
+    /// drew every object in view, [`Self::cull`]), `cull_plain_draws` (the
+    /// draws a pass issues drawing the plain way: one per run of
+    /// consecutive visible instances of a mesh) and, with indexed draws,
     /// `cull_draws` (the indexed draws of both passes: one per run of
     /// consecutive clusters; 0 in plain frames), by frame number.
     pub fn collect_counts(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
@@ -509,13 +512,14 @@ impl ClusterCull {
     /// `results`, and the last frame's kept share into `kept`.
     fn gather(&mut self, device: &wgpu::Device, wait: bool) {
         let indexed = self.indexed.is_some();
-        for ((frame, culling, plain), bytes) in self.readback.collect(device, wait) {
+        for ((frame, culling, plain, plain_draws), bytes) in self.readback.collect(device, wait) {
             let raw: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
             let mut counters: Counters =
                 CullCount::ALL.iter().map(|&k| (k.name().to_string(), raw[k as usize] as f64)).collect();
             let drawn = raw[CullCount::DrawnEarly as usize] as f64 + raw[CullCount::DrawnLate as usize] as f64;
             counters.insert("cull_drawn".into(), drawn);
             counters.insert("cull_plain".into(), f64::from(u8::from(plain)));
+            counters.insert("cull_plain_draws".into(), f64::from(plain_draws));
             if indexed {
                 let draws: u32 = raw[CullCount::ALL.len()..].iter().sum();
                 counters.insert("cull_draws".into(), f64::from(draws));

@@ -90,7 +90,9 @@ pub struct ShadowCull {
     sized: Option<Sized>,
     /// The opaque objects' clusters come first in each face's part of the draws.
     masked: Vec<bool>,
-    readback: ReadbackRing<(u64, bool)>,
+    /// Tagged with the frame's number, whether the faces drew plain and the
+    /// draws they issue drawing plain (one per face and caster).
+    readback: ReadbackRing<(u64, bool, u32)>,
     results: Vec<(u64, Counters)>,
     /// The share of the tested clusters kept by the last culling read back
     /// that tested some (they come back in the order they were submitted).
@@ -314,7 +316,8 @@ impl ShadowCull {
             cp.dispatch_workgroups(groups.0, groups.1, 1);
         }
         frame.encoder.copy_buffer_to_buffer(&sized.draw_counts, 0, &self.counts, CULL_COUNTS_BYTES, 4);
-        self.readback.copy(frame.device, frame.encoder, &self.counts, READBACK_BYTES, (frame.number, plain));
+        let tag = (frame.number, plain, ranges.len() as u32);
+        self.readback.copy(frame.device, frame.encoder, &self.counts, READBACK_BYTES, tag);
         (!plain).then_some(draws)
     }
 
@@ -349,14 +352,16 @@ impl ShadowCull {
     /// casters), `shadow_cull_frustum` (outside their face's frustum),
     /// `shadow_cull_drawn` (kept: drawn, or in a frame drawn the plain way
     /// those culling would have drawn), `shadow_cull_draws` (indexed draws
-    /// of every face; 0 when drawn the plain way) and `shadow_cull_plain`.
+    /// of every face; 0 when drawn the plain way), `shadow_cull_plain` and
+    /// `shadow_cull_plain_draws` (the draws of the faces drawn the plain
+    /// way: one per face and caster).
     pub fn collect_counts(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
         self.gather(device, wait);
         std::mem::take(&mut self.results)
     }
 
     fn gather(&mut self, device: &wgpu::Device, wait: bool) {
-        for ((frame, plain), bytes) in self.readback.collect(device, wait) {
+        for ((frame, plain, plain_draws), bytes) in self.readback.collect(device, wait) {
             let raw: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
             let [tested, frustum, drawn] =
                 [CullCount::Tested, CullCount::Frustum, CullCount::DrawnEarly].map(|k| f64::from(raw[k as usize]));
@@ -367,6 +372,7 @@ impl ShadowCull {
                 ("shadow_cull_drawn", drawn),
                 ("shadow_cull_draws", draws),
                 ("shadow_cull_plain", f64::from(u8::from(plain))),
+                ("shadow_cull_plain_draws", f64::from(plain_draws)),
             ]
             .into_iter()
             .map(|(k, v)| (k.to_string(), v))
