@@ -172,6 +172,16 @@ pub struct SceneArgs {
     /// three vertex invocations per triangle; to compare).
     #[arg(long, value_name = "indexed|list", value_parser = parse::cluster_draws, default_value = "indexed")]
     pub cluster_draws: ClusterDraws,
+    /// The raster pipelines draw the plain way (every object in view, one
+    /// instanced draw per run of a mesh's instances) in a frame after one
+    /// whose --culling kept more than this share (0 to 1) of the clusters
+    /// it tested, running the culling passes only to follow that share;
+    /// 1: always draw the clusters culling keeps (the way before). Where
+    /// most clusters are kept the cluster draws cost more than they save
+    /// (the city's fly-over: 89 % kept, 23 % slower on the H200). Same
+    /// image either way; the counter cull_plain says which way a frame drew.
+    #[arg(long, value_name = "SHARE", value_parser = parse::cull_plain_above, default_value = "0.6")]
+    pub cull_plain_above: f32,
     /// `default`: the scene's materials; `high`: every material with Phong
     /// exponent 1500, GGX roughness 0.05 and specular strength at least 1, to
     /// provoke specular aliasing (normal maps: the file's or --textures detailed).

@@ -106,6 +106,11 @@ pub fn cluster_draws(s: &str) -> Result<ClusterDraws, String> {
     ClusterDraws::from_str(s)
 }
 
+/// `--cull-plain-above`: a share from 0 to 1.
+pub fn cull_plain_above(s: &str) -> Result<f32, String> {
+    finite_in(s, 0.0..=1.0, "a share of the clusters from 0 to 1")
+}
+
 /// `--bloom`: a strength from 0 to 1.
 pub fn bloom_strength(s: &str) -> Result<f32, String> {
     finite_in(s, 0.0..=1.0, "a strength from 0 to 1")

@@ -267,4 +267,5 @@ pub fn configure(renderer: &mut Renderer, a: &SceneArgs, s: &Setup) {
     }
     renderer.cluster_draws = a.cluster_draws;
     renderer.vis_depth_test = a.vis_depth_test;
+    renderer.cull_plain_above = a.cull_plain_above;
 }

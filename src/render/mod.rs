@@ -334,6 +334,11 @@ pub struct Renderer {
     /// (default indexed, where the adapter can: [`passes::cluster_draws`]).
     /// Read when culling is first built, before the first frame that culls.
     pub cluster_draws: ClusterDraws,
+    /// The hardware raster passes draw the plain way, every object in view,
+    /// in a frame after one whose culling kept more than this share of the
+    /// clusters it tested (default [`clusters::CULL_PLAIN_ABOVE`]; 1: always
+    /// draw what culling keeps). The image is the same either way.
+    pub cull_plain_above: f32,
     /// Sub-pixel offset of the projection, in pixels (x right, y down;
     /// default none): supersampled references (`crate::reference`) average
     /// frames rendered at a grid of such offsets.
@@ -438,6 +443,7 @@ impl Renderer {
             culling: Culling::for_scene(scene.objects.len()),
             vis_depth_test: false,
             cluster_draws: ClusterDraws::default(),
+            cull_plain_above: clusters::CULL_PLAIN_ABOVE,
             jitter: glam::Vec2::ZERO,
             shadows,
             shaders,
@@ -554,9 +560,13 @@ impl Renderer {
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         self.scene.culling = self.culling;
         self.scene.vis_depth_test = self.vis_depth_test;
+        self.scene.cull_plain_above = self.cull_plain_above;
         if self.culling != Culling::None && !self.cluster_culling_built {
             self.scene.cluster_draws = passes::cluster_draws::draws_for(self.cluster_draws, &ctx.device, &self.scene);
             self.pipeline.enable_cluster_culling(&ctx.device, &mut self.shaders, &self.scene, &self.targets)?;
+            if self.scene.cluster_draws == ClusterDraws::Indexed {
+                self.shadows.enable_culling(&ctx.device, &mut self.shaders, &self.scene)?;
+            }
             self.cluster_culling_built = true;
         }
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
@@ -593,6 +603,7 @@ impl Renderer {
         self.in_flight.push_back(ctx.queue.submit([encoder.finish()]));
         self.timer.end_frame(frame);
         self.pipeline.after_submit();
+        self.shadows.after_submit();
         ctx.check_errors()?;
         Ok(FrameStats {
             frame,
@@ -607,9 +618,18 @@ impl Renderer {
         self.timer.collect(&ctx.device, wait)
     }
 
-    /// Pipeline counters of finished frames; `wait` blocks until all are in.
+    /// Pipeline counters of finished frames, with the shadow maps' culling
+    /// counts ([`passes::shadows::cull::ShadowCull::collect_counts`]) in
+    /// the frames that culled them; `wait` blocks until all are in.
     pub fn collect_counters(&mut self, ctx: &GpuContext, wait: bool) -> Vec<(u64, Counters)> {
-        self.pipeline.collect_counters(&ctx.device, wait)
+        let mut counters = self.pipeline.collect_counters(&ctx.device, wait);
+        for (frame, shadow) in self.shadows.collect_counts(&ctx.device, wait) {
+            match counters.iter_mut().find(|(f, _)| *f == frame) {
+                Some((_, c)) => c.extend(shadow),
+                None => counters.push((frame, shadow)),
+            }
+        }
+        counters
     }
 
     /// The pipeline's settings, memory and setup, with what the renderer
@@ -631,6 +651,8 @@ impl Renderer {
             .setup("shadow_refresh_every_frame", every_frame as u64)
             .setup("sun_shadow", self.sun_shadow as u64)
             .setup("culling", self.culling as u64)
+            .setup("shadow_cluster_culling", self.shadows.culls() as u64)
+            .memory("shadow_culling", self.shadows.cull_bytes())
             .setup(
                 "cluster_draws_indexed",
                 (self.cluster_culling_built && self.scene.cluster_draws == ClusterDraws::Indexed) as u64,

@@ -112,6 +112,11 @@ pub struct SceneGpu {
     /// [`super::Renderer::cluster_draws`] where the adapter can
     /// ([`super::passes::cluster_draws::draws_for`]) before culling is built.
     pub cluster_draws: ClusterDraws,
+    /// The raster passes draw the plain way (every object in view) in a
+    /// frame after one whose culling kept more than this share of the
+    /// clusters it tested (the renderer sets it from
+    /// [`super::Renderer::cull_plain_above`]; 1 or more: never).
+    pub cull_plain_above: f32,
     /// Per object: whether its material is alpha-masked
     /// ([`crate::scene::Material::alpha_cutoff`]).
     pub masked: Vec<bool>,
@@ -330,6 +335,7 @@ impl SceneGpu {
             culling: Culling::default(),
             vis_depth_test: false,
             cluster_draws: ClusterDraws::default(),
+            cull_plain_above: super::clusters::CULL_PLAIN_ABOVE,
             masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),
             blended: scene.objects.iter().map(|o| scene.materials[o.material].blend).collect(),
             emits: scene

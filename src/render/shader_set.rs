@@ -93,6 +93,11 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         let draw: &'static [&'static str] = &["CLUSTER_DRAW"];
         all.extend([forward::SHADER, clustered::SHADER, passes::gbuffer::SHADER].map(|s| s.with_defs(draw)));
         all.extend([passes::depth_prepass::SHADER, passes::visibility::SHADER].map(|s| s.with_defs(draw)));
+        // The culling's indexed draws, for the camera and for the shadow faces.
+        use passes::shadows::cull::SHADOW_FACES;
+        let cull = passes::visibility::compute::CULL;
+        all.extend([cull.with_defs(&[INDEXED_DRAWS]), cull.with_defs(&[INDEXED_DRAWS, SHADOW_FACES])]);
+        all.push(passes::shadows::SHADER.with_defs(&[passes::shadows::cull::CLUSTER_DRAW]));
     }
     {
         use passes::background::*;

@@ -108,7 +108,7 @@ fn bad_options_say_what_is_wrong() {
 /// texture sizes are refused with the flag and the accepted range.
 #[test]
 fn numeric_flags_must_be_finite_and_in_range() {
-    let cases: [(&[&str], &str); 9] = [
+    let cases: [(&[&str], &str); 11] = [
         (&["--mip-bias", "nan"], "-16 to 16"),
         (&["--mip-bias", "inf"], "-16 to 16"),
         (&["--exposure", "inf"], "positive finite"),
@@ -118,6 +118,8 @@ fn numeric_flags_must_be_finite_and_in_range() {
         (&["--variable-rate", "-1"], "0 to 16"),
         (&["--level-blend", "1.5"], "from 0 to 1"),
         (&["--level-blend", "nan"], "from 0 to 1"),
+        (&["--cull-plain-above", "1.5"], "from 0 to 1"),
+        (&["--cull-plain-above", "nan"], "from 0 to 1"),
     ];
     for (flags, expected) in cases {
         let mut args = vec!["render", "--pipeline", "objectspace"];

@@ -17,6 +17,7 @@ mod culling;
 mod deferred;
 mod density;
 mod doc_links;
+mod drawfall;
 mod environment;
 mod examples;
 mod experiments;

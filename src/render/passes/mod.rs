@@ -338,24 +338,34 @@ pub fn draw_objects(pass: &mut wgpu::RenderPass, scene: &SceneGpu, visible: &[bo
 /// instanced draw per run of consecutive such objects of one mesh (the
 /// city's instances come mesh by mesh), else one per object.
 fn draw_visible(pass: &mut wgpu::RenderPass, scene: &SceneGpu, draw: impl Fn(usize) -> bool) {
-    let flush = |pass: &mut wgpu::RenderPass, (d, first, end): (DrawRange, u32, u32)| {
+    for (d, first, end) in visible_runs(scene, draw) {
         pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex as i32, first..end);
-    };
-    let mut run: Option<(DrawRange, u32, u32)> = None;
+    }
+}
+
+/// The runs of consecutive objects `i` of one mesh for which `draw(i)`, as
+/// (the mesh's range, first object, end): [`draw_visible`]'s draws.
+fn visible_runs(scene: &SceneGpu, draw: impl Fn(usize) -> bool) -> Vec<(DrawRange, u32, u32)> {
+    let mut runs: Vec<(DrawRange, u32, u32)> = Vec::new();
     for (i, d) in scene.draws.iter().enumerate().filter(|(i, _)| draw(*i)) {
         let i = i as u32;
-        match &mut run {
+        match runs.last_mut() {
             Some((range, _, end)) if *range == *d && *end == i => *end = i + 1,
-            _ => {
-                if let Some(r) = run.replace((*d, i, i + 1)) {
-                    flush(pass, r);
-                }
-            }
+            _ => runs.push((*d, i, i + 1)),
         }
     }
-    if let Some(r) = run {
-        flush(pass, r);
-    }
+    runs
+}
+
+/// The draws [`draw_objects`] issues for the `visible` objects with a
+/// pipeline of `scene` (opaque and, in scenes with masks, alpha-masked
+/// objects apart): what a pass drawing the plain way issues, beside what
+/// the cluster draws issue.
+pub fn plain_draws(scene: &SceneGpu, visible: &[bool]) -> u32 {
+    let runs =
+        |masked: Option<bool>| visible_runs(scene, |i| visible[i] && masked.is_none_or(|m| scene.masked[i] == m));
+    let n = if scene.has_alpha_masks() { runs(Some(false)).len() + runs(Some(true)).len() } else { runs(None).len() };
+    n as u32
 }
 
 /// The depth target as an attachment: cleared (to far, 0 in reversed Z) or

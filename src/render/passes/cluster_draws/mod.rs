@@ -78,6 +78,11 @@ pub const INDEXED_DRAWS: &str = "INDEXED_DRAWS";
 /// carries its cluster, and the draws are counted on the GPU.
 pub const INDEXED_FEATURES: wgpu::Features =
     wgpu::Features::INDIRECT_FIRST_INSTANCE.union(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
+/// `cull.wgsl`'s flag for a frame drawn the plain way: with occlusion, the
+/// early pass lists nothing and the late pass lists every cluster it sees
+/// (against the pyramid of the whole depth), so the lists count what
+/// culling would draw next frame; no indexed draws are written.
+pub const CULL_PLAIN: u32 = 4;
 /// Bytes of one `draw_indexed_indirect` entry (`cull.wgsl`'s `DrawIndexedArgs`).
 const DRAW_INDEXED_BYTES: u64 = 20;
 /// The bind group of the cluster draws (`cluster_draws.wgsl`'s group 2):
@@ -171,11 +176,23 @@ pub struct ClusterCull {
     capacity: u32,
     width: u32,
     height: u32,
-    readback: ReadbackRing<u64>,
+    /// Tagged with the frame's number, culling, whether it drew plain and
+    /// the draws a pass drawing plain issues ([`super::plain_draws`]).
+    readback: ReadbackRing<(u64, Culling, bool, u32)>,
+    /// Counters read back and not yet handed out ([`Self::collect_counts`]).
+    results: Vec<(u64, Counters)>,
+    /// The last frame read back that tested clusters (frames come back in
+    /// the order they were submitted): its culling and the share of the
+    /// tested clusters culling kept.
+    kept: Option<(Culling, f64)>,
     /// Whether this frame's pre-pass culled (the passes after it draw the lists).
     active: bool,
     bytes: u64,
 }
+
+/// Frames' counters held for [`ClusterCull::collect_counts`] at most (the
+/// oldest go first when nobody collects them).
+const MAX_RESULTS: usize = 1024;
 
 impl ClusterCull {
     /// Culling into `targets`' depth (one sample per pixel).
@@ -332,6 +349,8 @@ impl ClusterCull {
             width,
             height,
             readback: ReadbackRing::new("cull counts", READBACK_BYTES),
+            results: Vec::new(),
+            kept: None,
             active: false,
         })
     }
@@ -350,15 +369,33 @@ impl ClusterCull {
 
     /// Culls the frame's visible objects' clusters with `frame.scene.culling`
     /// (none: nothing, and [`Self::active`] is false), drawing depth with
-    /// `draw_depth(frame, self, list, clear)`: list 0 (the clusters that
-    /// pass the frustum and cone tests; with occlusion only those visible
-    /// last frame), then with occlusion list 1 (those that became visible).
-    pub fn cull(&mut self, frame: &mut Frame, draw_depth: impl Fn(&mut Frame, &Self, usize, bool)) {
+    /// `draw_depth(frame, self, Some(list), clear)`: list 0 (the clusters
+    /// that pass the frustum and cone tests; with occlusion only those
+    /// visible last frame), then with occlusion list 1 (those that became
+    /// visible).
+    ///
+    /// Unless the last frame read back culled the same way and kept more
+    /// than `frame.scene.cull_plain_above` of the clusters it tested: then
+    /// the frame draws the plain way (`draw_depth(frame, self, None, true)`:
+    /// every visible object; [`Self::active`] is false, so the passes after
+    /// draw the objects too), and the culling passes only run to count, and
+    /// with occlusion to keep each cluster's visibility, tested against the
+    /// pyramid of the whole depth, for the frames after ([`CULL_PLAIN`]:
+    /// the late list then holds every cluster seen, the early one none).
+    /// Where most clusters are kept, the cluster draws cost more than they
+    /// save (their many small draws against one instanced draw per run of a
+    /// mesh's instances), and the culling passes cost little (0.06-0.13 ms
+    /// on the H200 at 1920x1080).
+    pub fn cull(&mut self, frame: &mut Frame, draw_depth: impl Fn(&mut Frame, &Self, Option<usize>, bool)) {
         let culling = frame.scene.culling;
-        self.active = culling != Culling::None;
-        if !self.active {
+        if culling == Culling::None {
+            self.active = false;
             return;
         }
+        self.gather(frame.device, false);
+        let limit = f64::from(frame.scene.cull_plain_above);
+        let plain = self.kept.is_some_and(|(mode, kept)| mode == culling && kept > limit);
+        self.active = !plain;
         let (ranges, _) = visible_ranges(frame.scene, frame.visible);
         let mut chunks: Vec<[u32; 2]> = Vec::new();
         for (r, range) in ranges.iter().enumerate() {
@@ -373,7 +410,8 @@ impl ClusterCull {
         }
         let (levels, level_offsets) = self.pyramid.level_offsets();
         let flags = if frame.scene.cull_back_faces { CULL_CONE } else { 0 }
-            | if culling == Culling::Occlusion { CULL_OCCLUSION } else { 0 };
+            | if culling == Culling::Occlusion { CULL_OCCLUSION } else { 0 }
+            | if plain { CULL_PLAIN } else { 0 };
         let params = GpuCullParams {
             range_count: ranges.len() as u32,
             flags,
@@ -393,16 +431,19 @@ impl ClusterCull {
         let groups = split(chunks.len() as u32);
         let (early, late) = self.indexed.as_ref().map_or((&self.early, &self.late), |d| (&d.early, &d.late));
         self.cull_pass(frame, early, "cull", groups);
-        draw_depth(frame, self, 0, true);
+        draw_depth(frame, self, (!plain).then_some(0), true);
         if culling == Culling::Occlusion {
             self.pyramid.encode(frame, "cull hiz");
             self.cull_pass(frame, late, "cull late", groups);
-            draw_depth(frame, self, 1, false);
+            if !plain {
+                draw_depth(frame, self, Some(1), false);
+            }
         }
         if let Some(d) = &self.indexed {
             frame.encoder.copy_buffer_to_buffer(&d.counts, 0, &self.counts, CULL_COUNTS_BYTES, DRAW_COUNTS_BYTES);
         }
-        self.readback.copy(frame.device, frame.encoder, &self.counts, READBACK_BYTES, frame.number);
+        let tag = (frame.number, culling, plain, super::plain_draws(frame.scene, frame.visible));
+        self.readback.copy(frame.device, frame.encoder, &self.counts, READBACK_BYTES, tag);
     }
 
     /// `entry` of `cull.wgsl` over the chunks (`groups`), then the lists'
@@ -455,26 +496,42 @@ impl ClusterCull {
     }
 
     /// The [`CullCount`]s of finished frames that culled, with `cull_drawn`
-    /// (clusters drawn by both passes) and, with indexed draws,
+    /// (clusters kept by both passes: drawn, or in a frame drawn the plain
+    /// way those culling would have drawn), `cull_plain` (1 where the frame
+    /// drew every object in view, [`Self::cull`]), `cull_plain_draws` (the
+    /// draws a pass issues drawing the plain way: one per run of
+    /// consecutive visible instances of a mesh) and, with indexed draws,
     /// `cull_draws` (the indexed draws of both passes: one per run of
-    /// consecutive clusters), by frame number.
+    /// consecutive clusters; 0 in plain frames), by frame number.
     pub fn collect_counts(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, Counters)> {
+        self.gather(device, wait);
+        std::mem::take(&mut self.results)
+    }
+
+    /// Reads back the counts that have arrived (all with `wait`) into
+    /// `results`, and the last frame's kept share into `kept`.
+    fn gather(&mut self, device: &wgpu::Device, wait: bool) {
         let indexed = self.indexed.is_some();
-        self.readback
-            .collect(device, wait)
-            .into_iter()
-            .map(|(frame, bytes)| {
-                let raw: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
-                let mut counters: Counters =
-                    CullCount::ALL.iter().map(|&k| (k.name().to_string(), raw[k as usize] as f64)).collect();
-                let drawn = raw[CullCount::DrawnEarly as usize] as f64 + raw[CullCount::DrawnLate as usize] as f64;
-                counters.insert("cull_drawn".into(), drawn);
-                if indexed {
-                    let draws: u32 = raw[CullCount::ALL.len()..].iter().sum();
-                    counters.insert("cull_draws".into(), f64::from(draws));
-                }
-                (frame, counters)
-            })
-            .collect()
+        for ((frame, culling, plain, plain_draws), bytes) in self.readback.collect(device, wait) {
+            let raw: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+            let mut counters: Counters =
+                CullCount::ALL.iter().map(|&k| (k.name().to_string(), raw[k as usize] as f64)).collect();
+            let drawn = raw[CullCount::DrawnEarly as usize] as f64 + raw[CullCount::DrawnLate as usize] as f64;
+            counters.insert("cull_drawn".into(), drawn);
+            counters.insert("cull_plain".into(), f64::from(u8::from(plain)));
+            counters.insert("cull_plain_draws".into(), f64::from(plain_draws));
+            if indexed {
+                let draws: u32 = raw[CullCount::ALL.len()..].iter().sum();
+                counters.insert("cull_draws".into(), f64::from(draws));
+            }
+            let tested = f64::from(raw[CullCount::Tested as usize]);
+            if tested > 0.0 {
+                self.kept = Some((culling, drawn / tested));
+            }
+            if self.results.len() == MAX_RESULTS {
+                self.results.remove(0);
+            }
+            self.results.push((frame, counters));
+        }
     }
 }

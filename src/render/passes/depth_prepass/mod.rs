@@ -6,6 +6,7 @@
 
 use super::cluster_draws::ClusterCull;
 use super::{DepthMode, ScenePipeline, SceneRaster, depth_attachment, draw_objects, scene_raster_pipeline_from};
+use crate::render::clusters::Culling;
 use crate::render::frame::Frame;
 use crate::render::report::Counters;
 use crate::render::scene_gpu::SceneGpu;
@@ -103,21 +104,26 @@ pub fn depth_prepass(frame: &mut Frame, pass: &DepthPrepass) {
 
 /// [`depth_prepass`], or where culling is enabled and `frame.scene.culling`
 /// is not none, culls ([`ClusterCull::cull`]) and draws the surviving
-/// clusters; the passes after it then draw them too ([`DepthPrepass::cull`]).
+/// clusters (or, in frames that draw the plain way, every visible object);
+/// the passes after it then draw the same ([`DepthPrepass::cull`]).
 pub fn culled_depth_prepass(frame: &mut Frame, pass: &mut DepthPrepass) {
     let pipeline = &pass.pipeline;
     if let Some(cull) = &mut pass.cull {
         cull.cull(frame, |frame, cull, list, clear| {
-            let label = if list == 0 { "depth prepass" } else { "depth prepass late" };
-            let (scene, targets) = (frame.scene, frame.targets);
+            let label = if list == Some(1) { "depth prepass late" } else { "depth prepass" };
+            let (scene, targets, visible) = (frame.scene, frame.targets, frame.visible);
             let mut rp = frame.render_pass(label, &[], Some(depth_attachment(targets, clear)));
+            let Some(list) = list else {
+                draw_objects(&mut rp, scene, visible, pipeline);
+                return;
+            };
             rp.set_bind_group(0, scene.bind_group(), &[]);
             for (p, masked) in pipeline.clustered_pipelines() {
                 rp.set_pipeline(p);
                 cull.draw_list(&mut rp, list, masked);
             }
         });
-        if cull.active() {
+        if frame.scene.culling != Culling::None {
             return;
         }
     }

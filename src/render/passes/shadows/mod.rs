@@ -13,9 +13,11 @@
 //! [`SunView`] is given) gets cascades ([`cascades`]) in a second array of
 //! [`cascades::CASCADE_SIZE`]² layers. Each face draws only its casters:
 //! the objects whose bounds touch both the face's frustum and the light's
-//! volume.
+//! volume. With cluster culling ([`ShadowMaps::enable_culling`]) each face
+//! draws only its casters' clusters inside its frustum ([`cull`]).
 
 pub mod cascades;
+pub mod cull;
 
 use glam::{Mat4, Vec3};
 
@@ -24,6 +26,7 @@ use crate::render::scene_gpu::{GrowableBuffer, SceneGpu};
 use crate::scene::{Aabb, Camera, Light, LightKind};
 use crate::shaders::{ALPHA_MASK, ShaderError, ShaderLibrary, ShaderSource};
 use cascades::{CASCADE_SIZE, CASCADES, cascade_view_projections};
+use cull::ShadowCull;
 
 use super::{Binding, bind_group, bind_group_layout_for};
 use crate::render::culling::{Frustum, light_affects_aabb};
@@ -255,7 +258,10 @@ impl ShadowAtlas {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            // Copied from by tests comparing maps.
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         })
     }
@@ -282,6 +288,11 @@ impl ShadowAtlas {
         let matrices: Vec<Mat4> = plan.faces.iter().map(|f| f.view_proj).collect();
         let grew_faces = self.faces.write(device, queue, bytemuck::cast_slice(&matrices));
         grow_atlas || grow_cascades || grew_faces
+    }
+
+    /// The atlas's texture (one layer per spot or cube face), to read back.
+    pub fn atlas_texture(&self) -> &wgpu::Texture {
+        &self.atlas.texture
     }
 
     /// The atlas's layers, for sampling.
@@ -328,6 +339,9 @@ pub struct ShadowMaps {
     stale: Vec<bool>,
     /// The atlas generation the maps were rendered into.
     generation: u64,
+    /// The faces' cluster culling and the pipelines drawing what it keeps
+    /// (opaque, alpha-masked), once enabled (boxed: rarely built).
+    cull: Option<Box<(ShadowCull, wgpu::RenderPipeline, Option<wgpu::RenderPipeline>)>>,
 }
 
 impl ShadowMaps {
@@ -347,11 +361,11 @@ impl ShadowMaps {
             Binding::Sampler,
         ];
         let layout = bind_group_layout_for(device, "shadow maps", stages, &bindings);
-        let pipeline = shadow_pipeline(device, shaders, &layout, false)?;
+        let pipeline = shadow_pipeline(device, shaders, &[&layout], false)?;
         // Alpha-masked casters get a fragment stage that cuts their depth
         // (kept apart: opaque casters draw with no fragment stage at all).
         let masked_pipeline =
-            if scene.has_alpha_masks() { Some(shadow_pipeline(device, shaders, &layout, true)?) } else { None };
+            if scene.has_alpha_masks() { Some(shadow_pipeline(device, shaders, &[&layout], true)?) } else { None };
         let uniforms = Self::uniforms(device, 1);
         let group = Self::group(device, &layout, scene, &uniforms);
         Ok(Self {
@@ -364,7 +378,51 @@ impl ShadowMaps {
             casters: Vec::new(),
             stale: Vec::new(),
             generation: 0,
+            cull: None,
         })
+    }
+
+    /// Culls the faces' casters by cluster from now on, in frames whose
+    /// `scene.culling` is not none ([`cull`]); `scene` must draw its
+    /// clusters indexed ([`crate::render::ClusterDraws::Indexed`]).
+    pub fn enable_culling(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+    ) -> Result<(), ShaderError> {
+        if self.cull.is_some() {
+            return Ok(());
+        }
+        let cull = ShadowCull::new(device, shaders, scene)?;
+        let layouts = [&self.layout, &cull.draw_layout];
+        let opaque = shadow_pipeline(device, shaders, &layouts, false)?;
+        let masked =
+            if self.masked_pipeline.is_some() { Some(shadow_pipeline(device, shaders, &layouts, true)?) } else { None };
+        self.cull = Some(Box::new((cull, opaque, masked)));
+        Ok(())
+    }
+
+    /// Whether the faces are culled by cluster ([`Self::enable_culling`]).
+    pub fn culls(&self) -> bool {
+        self.cull.is_some()
+    }
+
+    /// GPU bytes of the culling's buffers (0 without culling).
+    pub fn cull_bytes(&self) -> u64 {
+        self.cull.as_ref().map_or(0, |c| c.0.bytes())
+    }
+
+    /// Starts the read-back of the frame's cull counts. Call right after the submit.
+    pub fn after_submit(&mut self) {
+        if let Some(c) = &mut self.cull {
+            c.0.after_submit();
+        }
+    }
+
+    /// The cull counts of finished frames ([`ShadowCull::collect_counts`]).
+    pub fn collect_counts(&mut self, device: &wgpu::Device, wait: bool) -> Vec<(u64, crate::render::Counters)> {
+        self.cull.as_mut().map(|c| c.0.collect_counts(device, wait)).unwrap_or_default()
     }
 
     fn uniforms(device: &wgpu::Device, faces: usize) -> wgpu::Buffer {
@@ -461,19 +519,27 @@ fn draw_casters<'a>(rp: &mut wgpu::RenderPass, scene: &SceneGpu, casters: impl I
     }
 }
 
-/// The shadow-map pipeline over `layout`: depth only, or with the
-/// [`ALPHA_MASK`] fragment stage that cuts alpha-masked casters.
+/// The shadow-map pipeline over `layouts`: depth only, or with the
+/// [`ALPHA_MASK`] fragment stage that cuts alpha-masked casters; with a
+/// second layout, the [`cull::CLUSTER_DRAW`] variant drawing culled clusters.
 fn shadow_pipeline(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,
-    layout: &wgpu::BindGroupLayout,
+    layouts: &[&wgpu::BindGroupLayout],
     alpha_mask: bool,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
-    let defs: &[&str] = if alpha_mask { &[ALPHA_MASK] } else { &[] };
-    let module = shaders.module_with(device, SHADER, defs)?;
+    let mut defs: Vec<&str> = Vec::new();
+    if alpha_mask {
+        defs.push(ALPHA_MASK);
+    }
+    if layouts.len() > 1 {
+        defs.push(cull::CLUSTER_DRAW);
+    }
+    let module = shaders.module_with(device, SHADER, &defs)?;
+    let groups: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(|l| Some(*l)).collect();
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("shadow maps"),
-        bind_group_layouts: &[Some(layout)],
+        bind_group_layouts: &groups,
         immediate_size: 0,
     });
     let fragment = alpha_mask.then(|| wgpu::FragmentState {
@@ -511,15 +577,20 @@ fn shadow_pipeline(
 /// Reads: the casters' vertices and transforms. Writes: the layers of the
 /// stale faces (all faces with `every_frame`), cleared to the far plane
 /// first. Timed as `shadow maps`, each face as `shadow maps/face N` (N: its
-/// index in the plan) or, for the sun, `shadow maps/cascade K`.
+/// index in the plan) or, for the sun, `shadow maps/cascade K`; with
+/// cluster culling, the faces' culling pass before them as `shadow cull`.
 pub fn shadow_maps(frame: &mut Frame, maps: &mut ShadowMaps, every_frame: bool) {
     let faces: Vec<usize> = (0..maps.faces.len()).filter(|i| every_frame || maps.stale[*i]).collect();
     if faces.is_empty() {
         return;
     }
+    let culled = match &mut maps.cull {
+        Some(c) => c.0.cull(frame, &maps.casters, &faces, maps.faces.len()),
+        None => None,
+    };
     let scene = frame.scene;
     let mut scope = frame.scope("shadow maps");
-    for &i in &faces {
+    for (k, &i) in faces.iter().enumerate() {
         let target = maps.faces[i].target;
         let depth = wgpu::RenderPassDepthStencilAttachment {
             view: scene.shadow_atlas.layer(target),
@@ -533,6 +604,16 @@ pub fn shadow_maps(frame: &mut Frame, maps: &mut ShadowMaps, every_frame: bool) 
         };
         let mut rp = scope.scoped_render_pass(label, descriptor);
         rp.set_bind_group(0, &maps.group, &[(i as u64 * FACE_UNIFORM_STRIDE) as u32]);
+        if let (Some(draws), Some(c)) = (&culled, &maps.cull) {
+            let (cull, opaque, masked) = &**c;
+            rp.set_pipeline(opaque);
+            cull.draw_face(&mut rp, scene, &draws[k], false);
+            if let Some(masked) = masked {
+                rp.set_pipeline(masked);
+                cull.draw_face(&mut rp, scene, &draws[k], true);
+            }
+            continue;
+        }
         rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
         let casters = &maps.casters[i];
         let masked = maps.masked_pipeline.as_ref();

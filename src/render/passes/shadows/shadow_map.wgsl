@@ -2,13 +2,31 @@
 // of the shadow atlas (reversed Z, like the camera's depth). Depth only; the
 // ALPHA_MASK variant, for alpha-masked casters, has a fragment stage that cuts
 // them. Not the scene bind group: that one samples the atlas, which this pass
-// renders into.
+// renders into. The CLUSTER_DRAW variant draws the clusters the shadow
+// maps' culling kept (`shadows::cull`): indexed draws of the cluster-ordered
+// index buffer, each draw's first instance its run's entry of the list.
 #import shadespace::scene::{Vertex, Object}
 
 @group(0) @binding(0) var<storage, read> objects: array<Object>;
 @group(0) @binding(1) var<storage, read> vertices: array<Vertex>;
 // The face's view-projection (bound at a dynamic offset per face).
 @group(0) @binding(2) var<uniform> face_view_proj: mat4x4f;
+
+#ifdef CLUSTER_DRAW
+// `cull.wgsl`'s ranges, (caster, ..., face), and its list of (range, cluster).
+@group(1) @binding(0) var<storage, read> ranges: array<vec4u>;
+@group(1) @binding(1) var<storage, read> cluster_lists: array<vec2u>;
+
+// The object an instance draws: the caster of its run's list entry.
+fn caster(instance: u32) -> u32 {
+    return ranges[cluster_lists[instance].x].x;
+}
+#else
+// The object an instance draws: plain draws give it as the instance.
+fn caster(instance: u32) -> u32 {
+    return instance;
+}
+#endif
 
 #ifdef ALPHA_MASK
 #import shadespace::scene::{alpha_cut, vertex_uv0}
@@ -24,7 +42,8 @@ struct VertexOut {
 }
 
 @vertex
-fn vs_shadow(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> VertexOut {
+fn vs_shadow(@builtin(vertex_index) vi: u32, @builtin(instance_index) instance: u32) -> VertexOut {
+    let object = caster(instance);
     let clip = face_view_proj * (objects[object].model * vec4f(vertices[vi].position, 1.0));
     return VertexOut(clip, vertex_uv0(vertices[vi]), object);
 }
@@ -38,7 +57,8 @@ fn fs_alpha_mask(in: VertexOut) {
 }
 #else
 @vertex
-fn vs_shadow(@builtin(vertex_index) vi: u32, @builtin(instance_index) object: u32) -> @builtin(position) vec4f {
+fn vs_shadow(@builtin(vertex_index) vi: u32, @builtin(instance_index) instance: u32) -> @builtin(position) vec4f {
+    let object = caster(instance);
     return face_view_proj * (objects[object].model * vec4f(vertices[vi].position, 1.0));
 }
 #endif

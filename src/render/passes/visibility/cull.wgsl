@@ -14,6 +14,10 @@
 // `passes::cluster_draws`) each run of consecutive clusters of a chunk
 // appended to a list also gets one indexed indirect draw of its range of the
 // cluster-ordered index buffer (a mesh's clusters are consecutive ranges).
+// With SHADOW_FACES as well (the shadow maps' culling, `shadows::cull`),
+// every range is one caster of one shadow face (`ranges[r].w`): its
+// clusters are tested against that face's frustum, and its draws go to
+// that face's part of `draws`, counted per face.
 #import shadespace::scene_bindings::{view, objects}
 
 // Mirrors `clusters::GpuCluster`.
@@ -50,6 +54,11 @@ struct CullParams {
 // `CullParams.flags`.
 const CULL_CONE: u32 = 1u;
 const CULL_OCCLUSION: u32 = 2u;
+// The raster passes draw every object in view this frame (the lists are
+// only counted, `cluster_draws::CULL_PLAIN`): with occlusion the early pass
+// lists nothing and the late pass lists every cluster it sees, so that the
+// lists count what the frame shows; no indexed draws are written.
+const CULL_PLAIN: u32 = 4u;
 
 // Entries of `counts` (`compute::CullCount`).
 const LIST_EARLY: u32 = 0u;
@@ -92,6 +101,21 @@ const MAX_GROUPS_X: u32 = 32768u;
 // The workgroups' work: (entry of `ranges`, first cluster of its object).
 @group(1) @binding(9) var<storage, read> chunks: array<vec2u>;
 
+#ifdef SHADOW_FACES
+// Every shadow face's view-projection (the scene group's binding 10, as
+// `shadows.wgsl` declares it).
+@group(0) @binding(10) var<storage, read> shadow_faces: array<mat4x4f>;
+
+// The view-projection visible object `range_index` is culled by.
+fn range_view_proj(range_index: u32) -> mat4x4f {
+    return shadow_faces[ranges[range_index].w];
+}
+#else
+fn range_view_proj(range_index: u32) -> mat4x4f {
+    return view.view_proj;
+}
+#endif
+
 #ifdef INDEXED_DRAWS
 // `draw_indexed_indirect` arguments.
 struct DrawIndexedArgs {
@@ -104,13 +128,20 @@ struct DrawIndexedArgs {
     first_instance: u32,
 }
 
+#ifdef SHADOW_FACES
+// Per shadow face: the first entry of its opaque casters' draws in `draws`
+// and of its alpha-masked casters'.
+@group(2) @binding(0) var<storage, read> face_draws: array<vec2u>;
+#else
 // x: the first entry of the alpha-masked objects' draws in each list's
 // `params.capacity` entries of `draws` (the opaque ones' come first).
 @group(2) @binding(0) var<uniform> draw_split: vec4u;
+#endif
 @group(2) @binding(1) var<storage, read_write> draws: array<DrawIndexedArgs>;
 // Draws per list and kind: list 0 opaque, list 0 masked, list 1 opaque,
 // list 1 masked (the count buffer of `multi_draw_indexed_indirect_count`).
-@group(2) @binding(2) var<storage, read_write> draw_counts: array<atomic<u32>, 4>;
+// With SHADOW_FACES: every face's draws, 0, then per face opaque, masked.
+@group(2) @binding(2) var<storage, read_write> draw_counts: array<atomic<u32>>;
 
 // Per thread of the chunk: its cluster's list entry + 1, 0 when not appended.
 var<workgroup> appended: array<u32, CULL_WORKGROUP>;
@@ -217,8 +248,15 @@ fn append_draw(list: u32, range_index: u32, i0: u32, i1: u32, entry: u32) {
     // Opaque and alpha-masked objects are drawn by pipelines of their own
     // (`passes::ScenePipeline`), each from its own run of draws.
     let masked = o.alpha_cutoff > 0.0;
+#ifdef SHADOW_FACES
+    let face = ranges[range_index].w;
+    atomicAdd(&draw_counts[0], 1u);
+    let k = atomicAdd(&draw_counts[2u + 2u * face + select(0u, 1u, masked)], 1u);
+    let first = select(face_draws[face].x, face_draws[face].y, masked);
+#else
     let k = atomicAdd(&draw_counts[2u * list + select(0u, 1u, masked)], 1u);
     let first = list * params.capacity + select(0u, draw_split.x, masked);
+#endif
     let count = c1.first + c1.count - c0.first;
     draws[first + k] = DrawIndexedArgs(3u * count, 1u, 3u * c0.first, i32(o.base_vertex), entry);
 }
@@ -234,7 +272,7 @@ fn cull_cluster(range_index: u32, i: u32, late: bool) -> u32 {
         return 0u;
     }
     let o = objects[object];
-    let mvp = view.view_proj * o.model;
+    let mvp = range_view_proj(range_index) * o.model;
     let cluster = oc.x + i;
     let slot = oc.z + i;
     let c = clusters[cluster];
@@ -258,13 +296,15 @@ fn cull_cluster(range_index: u32, i: u32, late: bool) -> u32 {
         }
         return 0u;
     }
-    let was_visible = history[slot] != 0u;
+    let plain = (params.flags & CULL_PLAIN) != 0u;
     if !late {
-        if (params.flags & CULL_OCCLUSION) == 0u || was_visible {
+        // (The history is read only with occlusion: the shadow faces bind none.)
+        if (params.flags & CULL_OCCLUSION) == 0u || (!plain && history[slot] != 0u) {
             return append(LIST_EARLY, range_index, cluster);
         }
         return 0u;
     }
+    let was_visible = !plain && history[slot] != 0u;
     let seen = !occluded(mvp, c);
     history[slot] = select(0u, 1u, seen);
     if !was_visible {
@@ -302,7 +342,8 @@ fn cull_chunk(chunk: u32, local: u32, late: bool) {
         }
     }
 #ifdef INDEXED_DRAWS
-    if entry != 0u && (local == 0u || appended[local - 1u] == 0u) {
+    let plain = (params.flags & CULL_PLAIN) != 0u;
+    if !plain && entry != 0u && (local == 0u || appended[local - 1u] == 0u) {
         var last = local;
         while last + 1u < CULL_WORKGROUP && appended[last + 1u] != 0u {
             last++;
