@@ -6,6 +6,8 @@
 //!
 //! - `coverage`: background, interior, MSAA edge (samples on different surfaces);
 //! - `level`: the atlas level the gather read;
+//! - `interior level`: the same for interior pixels only (edges apart, so
+//!   that a level's error is not its edges');
 //! - `texels per pixel`: that level's texels per pixel (below 1: magnified);
 //! - `island taps`: the filter's taps all in the pixel's chart island, some
 //!   outside (near a chart border: renormalized), none inside (a sliver);
@@ -40,9 +42,13 @@ pub struct Factor {
 const FORWARD: &str = "shaded forward";
 
 /// The factors, in the order of the report.
-pub const FACTORS: [Factor; 6] = [
+pub const FACTORS: [Factor; 7] = [
     Factor { name: "coverage", classes: &["background", "interior", "edge"] },
     Factor { name: "level", classes: &["background", "level 0", "level 1", "level 2", "level 3+", FORWARD] },
+    Factor {
+        name: "interior level",
+        classes: &["background", "edge", "level 0", "level 1", "level 2", "level 3+", FORWARD],
+    },
     Factor { name: "texels per pixel", classes: &["background", "< 0.5", "0.5-1", "1-2", ">= 2", FORWARD] },
     Factor { name: "island taps", classes: &["background", "all in island", "some outside", "none inside", FORWARD] },
     Factor {
@@ -81,7 +87,7 @@ pub fn class_of(factor: usize, c: &PixelClass, gradient: f32) -> u8 {
     if factor == 0 {
         return if c.coverage == Coverage::Edge { 2 } else { 1 };
     }
-    if factor == 5 {
+    if factor == 6 {
         return if gradient < 2.0 {
             1
         } else if gradient < 8.0 {
@@ -90,18 +96,22 @@ pub fn class_of(factor: usize, c: &PixelClass, gradient: f32) -> u8 {
             3
         };
     }
+    if factor == 2 && c.coverage == Coverage::Edge {
+        return 1;
+    }
     if c.source != Some(ShadeSource::Atlas) {
         return FACTORS[factor].classes.len() as u8 - 1;
     }
     match factor {
         1 => 1 + c.level.min(3) as u8,
-        2 => match c.texels_per_pixel {
+        2 => 2 + c.level.min(3) as u8,
+        3 => match c.texels_per_pixel {
             t if t < 0.5 => 1,
             t if t < 1.0 => 2,
             t if t < 2.0 => 3,
             _ => 4,
         },
-        3 => match c.taps {
+        4 => match c.taps {
             IslandTaps::All => 1,
             IslandTaps::Some => 2,
             IslandTaps::None => 3,
@@ -299,16 +309,20 @@ pub fn summarize(rows: &[BreakdownRow]) -> (serde_json::Value, Vec<Section>) {
         let mut factors_json = Vec::new();
         for factor in FACTORS {
             let totals: Vec<ClassSums> = configs.iter().map(|c| config_total(c, factor.name)).collect();
-            let pixels_total = totals.first().map_or(0, |t| t.pixels);
+            // The pixel shares of the classes the conventional pipelines share
+            // with `SUBJECT`; a configuration classified by its own run (other
+            // object-space options) notes its own share where it differs.
+            let shown = configs.iter().position(|c| *c == SUBJECT).unwrap_or(0);
+            let share = |s: &ClassSums, t: &ClassSums| s.pixels as f64 / t.pixels.max(1) as f64;
             let mut classes_json = Vec::new();
             for class in factor.classes {
                 let per: Vec<Option<ClassSums>> = configs.iter().map(|c| find(c, factor.name, class)).collect();
-                let pixels = per.iter().flatten().next().map_or(0, |s| s.pixels);
-                if pixels == 0 {
+                if per.iter().flatten().all(|s| s.pixels == 0) {
                     continue;
                 }
+                let pixel_share = per[shown].as_ref().map_or(0.0, |s| share(s, &totals[shown]));
                 let mut flip_row =
-                    vec![factor.name.to_string(), class.to_string(), percent(pixels as f64, pixels_total as f64)];
+                    vec![factor.name.to_string(), class.to_string(), format!("{:.0} %", 100.0 * pixel_share)];
                 let mut flicker_row = flip_row.clone();
                 let mut configs_json = serde_json::Map::new();
                 for ((config, s), t) in configs.iter().zip(&per).zip(&totals) {
@@ -319,18 +333,24 @@ pub fn summarize(rows: &[BreakdownRow]) -> (serde_json::Value, Vec<Section>) {
                     };
                     let flip_mean = s.flip / s.pixels.max(1) as f64;
                     let flicker_mean = s.flicker / (3 * s.pair_pixels.max(1)) as f64;
-                    flip_row.push(format!("{flip_mean:.4} ({})", percent(s.flip, t.flip)));
-                    flicker_row.push(format!("{flicker_mean:.3} ({})", percent(s.flicker, t.flicker)));
+                    let own = share(s, t);
+                    let note = if (own - pixel_share).abs() >= 0.005 {
+                        format!("; {:.0} % px", 100.0 * own)
+                    } else {
+                        String::new()
+                    };
+                    flip_row.push(format!("{flip_mean:.4} ({}{note})", percent(s.flip, t.flip)));
+                    flicker_row.push(format!("{flicker_mean:.3} ({}{note})", percent(s.flicker, t.flicker)));
                     configs_json.insert(
                         config.to_string(),
                         serde_json::json!({
-                            "flip_mean": flip_mean, "flip_share": s.flip / t.flip.max(f64::MIN_POSITIVE),
+                            "pixel_share": own, "flip_mean": flip_mean, "flip_share": s.flip / t.flip.max(f64::MIN_POSITIVE),
                             "flicker_mean": flicker_mean, "flicker_share": s.flicker / t.flicker.max(f64::MIN_POSITIVE),
                         }),
                     );
                 }
                 let mut class_json = serde_json::json!({
-                    "class": class, "pixel_share": pixels as f64 / pixels_total.max(1) as f64, "configs": configs_json,
+                    "class": class, "pixel_share": pixel_share, "configs": configs_json,
                 });
                 if extra {
                     let at = |c: &str| configs.iter().position(|x| *x == c).expect("listed");
@@ -364,7 +384,8 @@ pub fn summarize(rows: &[BreakdownRow]) -> (serde_json::Value, Vec<Section>) {
             heading: format!("Error by pixel class: {what}"),
             text: format!(
                 "Each factor splits every measured frame's pixels into classes (its rows; `pixels`: the class's \
-                 share of the pixels). Per configuration, the class's mean FLIP against the reference (first \
+                 share of the pixels, in `{SUBJECT}`'s classes; a configuration classified by its own run notes its \
+                 own share, `% px`, where it differs). Per configuration, the class's mean FLIP against the reference (first \
                  table) and mean flicker per channel in 8-bit steps (second), and in brackets the share of the \
                  configuration's total the class carries. The classes are what object space's gather read for \
                  the pixel (the conventional pipelines: the `{SUBJECT}` run's classes, so both are judged over \
@@ -421,13 +442,13 @@ mod tests {
             class(Coverage::Interior, ShadeSource::Forward, 0, 0.0, IslandTaps::All, 0),
             class(Coverage::Edge, ShadeSource::NotBacked, 1, 0.9, IslandTaps::All, 0),
         ];
-        let expected: [[u8; 6]; 6] = [
-            [0, 0, 0, 0, 0, 0],
-            [1, 1, 1, 1, 1, 1],
-            [2, 4, 3, 2, 2, 2],
-            [1, 3, 4, 3, 3, 3],
-            [1, 5, 5, 4, 4, 1],
-            [2, 5, 5, 4, 4, 2],
+        let expected: [[u8; 7]; 6] = [
+            [0, 0, 0, 0, 0, 0, 0],
+            [1, 1, 2, 1, 1, 1, 1],
+            [2, 4, 1, 3, 2, 2, 2],
+            [1, 3, 4, 4, 3, 3, 3],
+            [1, 5, 6, 5, 4, 4, 1],
+            [2, 5, 1, 5, 4, 4, 2],
         ];
         let gradients = [0.0, 0.5, 3.0, 9.0, 1.0, 5.0];
         for ((k, g), want) in kinds.iter().zip(gradients).zip(expected) {
