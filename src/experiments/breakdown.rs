@@ -9,6 +9,9 @@
 //! - `interior level`: the same for interior pixels only (edges apart, so
 //!   that a level's error is not its edges');
 //! - `texels per pixel`: that level's texels per pixel (below 1: magnified);
+//! - `anisotropy`: texels per pixel along the footprint's longer axis over
+//!   those along its shorter (at a grazing angle a texel, sized for the
+//!   longer axis, spans several pixels along the shorter);
 //! - `island taps`: the filter's taps all in the pixel's chart island, some
 //!   outside (near a chart border: renormalized), none inside (a sliver);
 //! - `shade age`: the pixel's tile shaded this frame or reused;
@@ -42,7 +45,7 @@ pub struct Factor {
 const FORWARD: &str = "shaded forward";
 
 /// The factors, in the order of the report.
-pub const FACTORS: [Factor; 7] = [
+pub const FACTORS: [Factor; 8] = [
     Factor { name: "coverage", classes: &["background", "interior", "edge"] },
     Factor { name: "level", classes: &["background", "level 0", "level 1", "level 2", "level 3+", FORWARD] },
     Factor {
@@ -50,6 +53,7 @@ pub const FACTORS: [Factor; 7] = [
         classes: &["background", "edge", "level 0", "level 1", "level 2", "level 3+", FORWARD],
     },
     Factor { name: "texels per pixel", classes: &["background", "< 0.5", "0.5-1", "1-2", ">= 2", FORWARD] },
+    Factor { name: "anisotropy", classes: &["background", "< 2", "2-4", ">= 4", FORWARD] },
     Factor { name: "island taps", classes: &["background", "all in island", "some outside", "none inside", FORWARD] },
     Factor {
         name: "shade age",
@@ -87,7 +91,7 @@ pub fn class_of(factor: usize, c: &PixelClass, gradient: f32) -> u8 {
     if factor == 0 {
         return if c.coverage == Coverage::Edge { 2 } else { 1 };
     }
-    if factor == 6 {
+    if factor == 7 {
         return if gradient < 2.0 {
             1
         } else if gradient < 8.0 {
@@ -111,7 +115,12 @@ pub fn class_of(factor: usize, c: &PixelClass, gradient: f32) -> u8 {
             t if t < 2.0 => 3,
             _ => 4,
         },
-        4 => match c.taps {
+        4 => match c.texels_per_pixel / c.texels_per_pixel_minor.max(f32::MIN_POSITIVE) {
+            a if a < 2.0 => 1,
+            a if a < 4.0 => 2,
+            _ => 3,
+        },
+        5 => match c.taps {
             IslandTaps::All => 1,
             IslandTaps::Some => 2,
             IslandTaps::None => 3,
@@ -326,7 +335,7 @@ pub fn summarize(rows: &[BreakdownRow]) -> (serde_json::Value, Vec<Section>) {
                 let mut flicker_row = flip_row.clone();
                 let mut configs_json = serde_json::Map::new();
                 for ((config, s), t) in configs.iter().zip(&per).zip(&totals) {
-                    let Some(s) = s else {
+                    let Some(s) = s.as_ref().filter(|s| s.pixels > 0) else {
                         flip_row.push("-".into());
                         flicker_row.push("-".into());
                         continue;
@@ -356,7 +365,7 @@ pub fn summarize(rows: &[BreakdownRow]) -> (serde_json::Value, Vec<Section>) {
                     let at = |c: &str| configs.iter().position(|x| *x == c).expect("listed");
                     let (s, b) = (per[at(SUBJECT)], per[at(BASELINE)]);
                     let (ts, tb) = (&totals[at(SUBJECT)], &totals[at(BASELINE)]);
-                    if let (Some(s), Some(b)) = (s, b) {
+                    if let (Some(s), Some(b)) = (s.filter(|s| s.pixels > 0), b) {
                         let flip_extra = (s.flip - b.flip) / s.pixels.max(1) as f64;
                         let flicker_extra = (s.flicker - b.flicker) / (3 * s.pair_pixels.max(1)) as f64;
                         flip_row.push(format!("{flip_extra:+.4} ({})", percent(s.flip - b.flip, ts.flip - tb.flip)));
@@ -367,6 +376,9 @@ pub fn summarize(rows: &[BreakdownRow]) -> (serde_json::Value, Vec<Section>) {
                         class_json["extra_flip_share"] = serde_json::json!((s.flip - b.flip) / (ts.flip - tb.flip));
                         class_json["extra_flicker_share"] =
                             serde_json::json!((s.flicker - b.flicker) / (ts.flicker - tb.flicker));
+                    } else {
+                        flip_row.push("-".into());
+                        flicker_row.push("-".into());
                     }
                 }
                 flip_table.rows.push(flip_row);
@@ -418,7 +430,16 @@ mod tests {
         taps: IslandTaps,
         age: u32,
     ) -> PixelClass {
-        PixelClass { coverage, source: Some(source), level, texels_per_pixel: texels, taps, age, blended: false }
+        PixelClass {
+            coverage,
+            source: Some(source),
+            level,
+            texels_per_pixel: texels,
+            texels_per_pixel_minor: texels / (1.0 + level as f32),
+            taps,
+            age,
+            blended: false,
+        }
     }
 
     /// Every pixel kind falls in exactly one class of each factor (a class
@@ -430,6 +451,7 @@ mod tests {
             source: None,
             level: 0,
             texels_per_pixel: 0.0,
+            texels_per_pixel_minor: 0.0,
             taps: IslandTaps::All,
             age: 0,
             blended: false,
@@ -442,13 +464,14 @@ mod tests {
             class(Coverage::Interior, ShadeSource::Forward, 0, 0.0, IslandTaps::All, 0),
             class(Coverage::Edge, ShadeSource::NotBacked, 1, 0.9, IslandTaps::All, 0),
         ];
-        let expected: [[u8; 7]; 6] = [
-            [0, 0, 0, 0, 0, 0, 0],
-            [1, 1, 2, 1, 1, 1, 1],
-            [2, 4, 1, 3, 2, 2, 2],
-            [1, 3, 4, 4, 3, 3, 3],
-            [1, 5, 6, 5, 4, 4, 1],
-            [2, 5, 1, 5, 4, 4, 2],
+        // Anisotropy 1 + level: 1, 6, 3.
+        let expected: [[u8; 8]; 6] = [
+            [0, 0, 0, 0, 0, 0, 0, 0],
+            [1, 1, 2, 1, 1, 1, 1, 1],
+            [2, 4, 1, 3, 3, 2, 2, 2],
+            [1, 3, 4, 4, 2, 3, 3, 3],
+            [1, 5, 6, 5, 4, 4, 4, 1],
+            [2, 5, 1, 5, 4, 4, 4, 2],
         ];
         let gradients = [0.0, 0.5, 3.0, 9.0, 1.0, 5.0];
         for ((k, g), want) in kinds.iter().zip(gradients).zip(expected) {

@@ -71,6 +71,8 @@ fn pixel_classes_cover_every_pixel_and_their_error_adds_up() {
                 assert!(c.level < levels, "pixel {p}: {c:?}");
                 let t = c.texels_per_pixel;
                 assert!(t.is_finite() && t > 0.0, "pixel {p}: {c:?}");
+                let minor = c.texels_per_pixel_minor;
+                assert!(minor > 0.0 && minor <= t, "pixel {p}: {c:?}");
                 if c.level > 0 && c.level + 1 < levels {
                     assert!((0.70..=1.42).contains(&t), "pixel {p}: {c:?}");
                 }

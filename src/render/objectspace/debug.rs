@@ -85,6 +85,10 @@ pub struct PixelClass {
     /// Texels of that level per pixel along the footprint's longer axis
     /// (below 1: a texel is larger than the pixel, magnified).
     pub texels_per_pixel: f32,
+    /// The same along the footprint's shorter axis (anisotropic footprints,
+    /// seen at a grazing angle, have fewer: there a texel is longer than a
+    /// pixel).
+    pub texels_per_pixel_minor: f32,
     /// Atlas pixels only.
     pub taps: IslandTaps,
     /// Frames since the tile under the pixel was shaded (0: this frame), at most 255. Atlas pixels only.
@@ -95,7 +99,7 @@ pub struct PixelClass {
 
 impl PixelClass {
     /// Decodes the `classify` pass's words (`gather.wgsl`, `CLASS_*`).
-    pub fn from_words([x, y]: [u32; 2]) -> Self {
+    pub fn from_words([x, y, z, _]: [u32; 4]) -> Self {
         let coverage = match x & 3 {
             0 => Coverage::Background,
             1 => Coverage::Interior,
@@ -117,6 +121,7 @@ impl PixelClass {
             source,
             level: x >> 4 & 15,
             texels_per_pixel: f32::from_bits(y),
+            texels_per_pixel_minor: f32::from_bits(z),
             taps,
             age: x >> 10 & 255,
             blended: x >> 18 & 1 == 1,
@@ -262,7 +267,7 @@ impl ObjectSpace {
         ctx.queue.submit([encoder.finish()]);
         let words = Self::words(ctx, &pass.classes)?;
         ctx.check_errors()?;
-        Ok(words.chunks_exact(2).map(|w| PixelClass::from_words([w[0], w[1]])).collect())
+        Ok(words.chunks_exact(4).map(|w| PixelClass::from_words([w[0], w[1], w[2], w[3]])).collect())
     }
 
     /// The main view's visibility buffer (for tests: its ids per sample

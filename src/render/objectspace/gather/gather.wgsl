@@ -47,9 +47,9 @@
 #endif
 #ifdef PIXEL_CLASSES
 // Per pixel, written by `classify` (`debug::PixelClass`): what its gather
-// reads, packed as the `CLASS_*` fields below; y: texels per pixel at that
-// level (f32 bits).
-@group(2) @binding(3) var<storage, read_write> pixel_classes: array<vec2u>;
+// reads, packed as the `CLASS_*` fields below; y and z: texels per pixel at
+// that level along the footprint's longer and shorter axis (f32 bits).
+@group(2) @binding(3) var<storage, read_write> pixel_classes: array<vec4u>;
 #endif
 
 // Debug colours go through the tone mapper: pre-invert Reinhard so that they
@@ -433,27 +433,29 @@ fn island_taps(own: OwnSurface, level_index: u32, uv: vec2f) -> u32 {
 }
 
 // What the gather of surface point `p` reads: (source | level | taps | age
-// | blended packed as `pixel_classes`' x, less coverage; texels per pixel).
-fn surface_class(p: PixelSample) -> vec2u {
+// | blended packed as `pixel_classes`' x, less coverage; texels per pixel
+// along the longer and the shorter axis).
+fn surface_class(p: PixelSample) -> vec4u {
     let e = atlas_entries[p.object];
     if e.size == 0u {
-        return vec2u(SOURCE_FORWARD << 2u, 0u);
+        return vec4u(SOURCE_FORWARD << 2u, 0u, 0u, 0u);
     }
     let f = chart_footprint(p);
     let levels = select_levels(e, p, f);
     let level_index = select(levels.lo, levels.hi, levels.t >= 0.5);
     let l = entry_level(p.object, level_index);
     let texels = max(length(f.du_dx), length(f.du_dy)) * f32(l.size);
+    let minor = min(length(f.du_dx), length(f.du_dy)) * f32(l.size);
     let blended = select(0u, 1u, levels.t > 0.0 && levels.t < 1.0);
     let taps = island_taps(OwnSurface(p.object, p.triangle), level_index, f.uv);
     let t = vec2u(bilinear(l, f.uv).texel);
     let page = physical_page(virtual_page(l, t));
     if taps == NOT_BACKED || page == NOT_BACKED {
-        return vec2u(SOURCE_NOT_BACKED << 2u | level_index << 4u, bitcast<u32>(texels));
+        return vec4u(SOURCE_NOT_BACKED << 2u | level_index << 4u, bitcast<u32>(texels), bitcast<u32>(minor), 0u);
     }
     let age = min(params.stamp - tile_shaded[physical_tile(page, t)], 255u);
-    return vec2u(SOURCE_ATLAS << 2u | level_index << 4u | taps << 8u | age << 10u | blended << 18u,
-        bitcast<u32>(texels));
+    return vec4u(SOURCE_ATLAS << 2u | level_index << 4u | taps << 8u | age << 10u | blended << 18u,
+        bitcast<u32>(texels), bitcast<u32>(minor), 0u);
 }
 
 // Debug read-back (`ObjectSpace::read_pixel_classes`), run after a frame
@@ -486,7 +488,7 @@ fn classify(@builtin(global_invocation_id) id: vec3u) {
     }
 #endif
     if surface.x == 0u {
-        pixel_classes[i] = vec2u(CLASS_BACKGROUND, 0u);
+        pixel_classes[i] = vec4u(CLASS_BACKGROUND, 0u, 0u, 0u);
         return;
     }
 #ifdef MSAA
@@ -495,6 +497,6 @@ fn classify(@builtin(global_invocation_id) id: vec3u) {
 #else
     let c = surface_class(sample_pixel(id.xy, surface));
 #endif
-    pixel_classes[i] = vec2u(coverage | c.x, c.y);
+    pixel_classes[i] = vec4u(coverage | c.x, c.yzw);
 }
 #endif

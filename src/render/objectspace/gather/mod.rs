@@ -68,7 +68,7 @@ impl GatherPass {
     }
 
     /// The `classify` debug pass over view 0's pixels, writing into a
-    /// buffer of `vec2u` per pixel.
+    /// buffer of `vec4u` per pixel.
     pub fn classify_pass(
         &self,
         device: &wgpu::Device,
@@ -98,7 +98,7 @@ impl GatherPass {
         let pipeline = compute_pipeline_with(device, shaders, SHADER, &[PIXEL_CLASSES], "classify", &groups)?;
         let classes = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("pixel classes"),
-            size: pixels * 8,
+            size: pixels * 16,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
@@ -127,7 +127,7 @@ impl GatherPass {
 pub struct ClassifyPass {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
-    /// Per pixel of view 0: `vec2u` ([`super::debug::PixelClass`]).
+    /// Per pixel of view 0: `vec4u` ([`super::debug::PixelClass`]).
     pub classes: wgpu::Buffer,
     /// View 0's HDR target (bound, not written).
     output: wgpu::TextureView,
