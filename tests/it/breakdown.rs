@@ -10,7 +10,7 @@ use shadespace::metrics::breakdown::total;
 use shadespace::metrics::temporal::path_quality_by;
 use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::objectspace::debug::{Coverage, IslandTaps, ShadeSource};
-use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
 use shadespace::scene::{self, LightSpec, lights, path};
 
 const SCENE: &str = "atrium";
@@ -18,9 +18,10 @@ const SIZE: (u32, u32) = (96, 64);
 const SAMPLES: u32 = 4;
 
 /// The atrium at 96x64 with 4 samples, object space shading at 30 Hz of 60
-/// (reuse 2, spread: half the tiles are a frame old) against forward as
-/// the "reference", path frames 24-26 (the first one warms up). Measured on
-/// lavapipe: about 4 s on a loaded machine.
+/// (reuse 2, spread: half the tiles are a frame old) with compute
+/// visibility (a layer per sample, as the GPU machine runs the quality
+/// experiment) against forward as the "reference", path frames 24-26 (the
+/// first one warms up). Measured on lavapipe: about 4 s on a loaded machine.
 #[test]
 fn pixel_classes_cover_every_pixel_and_their_error_adds_up() {
     let ctx = common::gpu();
@@ -31,7 +32,13 @@ fn pixel_classes_cover_every_pixel_and_their_error_adds_up() {
     let lights = lights::build_lights(&spec, &scene.bounds(), &cameras.camera_at(0), aspect, 7).unwrap();
     let options = |pipeline| RenderOptions { width: SIZE.0, height: SIZE.1, pipeline, samples: SAMPLES };
     let (charted, texture_sizes) = common::charted(&scene);
-    let config = ObjectSpaceConfig { texture_sizes, reuse: 2, spread_reshading: true, ..Default::default() };
+    let config = ObjectSpaceConfig {
+        texture_sizes,
+        reuse: 2,
+        spread_reshading: true,
+        visibility: VisibilityMethod::Compute,
+        ..Default::default()
+    };
     let mut os = Renderer::new(&ctx, &charted, &options(PipelineConfig::ObjectSpace(config))).unwrap();
     let mut forward = Renderer::new(&ctx, &scene, &options(PipelineConfig::Forward(ForwardConfig::default()))).unwrap();
     let (mut images, mut references, mut classes) = (Vec::new(), Vec::new(), Vec::new());
