@@ -170,6 +170,19 @@ pub struct TimingArgs {
     /// default 1,4,8; quick: 1,4). Pipelines without MSAA are measured at 1 only.
     #[arg(long, value_delimiter = ',', value_parser = parse::msaa)]
     pub msaa: Vec<u32>,
+    /// `quality`: only these configurations, comma-separated labels as the
+    /// report names them (e.g. deferred-compute,objectspace,objectspace-hz30).
+    #[arg(long, value_delimiter = ',')]
+    pub configs: Vec<String>,
+    /// `quality`: only these texture settings, comma-separated (file, detailed).
+    #[arg(long, value_delimiter = ',')]
+    pub textures: Vec<String>,
+    /// `quality`: split each cell's error and flicker by pixel class (MSAA
+    /// edge, object space's level, texels per pixel, chart-border taps,
+    /// shade age, the reference's gradient) into breakdown.csv and the
+    /// report; object space's classes are read back after each measured frame.
+    #[arg(long)]
+    pub breakdown: bool,
 }
 
 /// Runs the experiment and prints its headline and report path.
@@ -208,7 +221,20 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
     if !a.timing.msaa.is_empty() && name != ExperimentName::Quality {
         return input(Err(anyhow::anyhow!("--msaa: only the quality experiment has an MSAA axis")));
     }
+    if name != ExperimentName::Quality {
+        let quality_only = [
+            ("--configs", !a.timing.configs.is_empty()),
+            ("--textures", !a.timing.textures.is_empty()),
+            ("--breakdown", a.timing.breakdown),
+        ];
+        if let Some((flag, _)) = quality_only.iter().find(|(_, given)| *given) {
+            return input(Err(anyhow::anyhow!("{flag}: only the quality experiment takes it")));
+        }
+    }
     let timing = name.timing_grid(a.quick).map(|g| timing_grid(g, &a.timing));
+    if let (ExperimentName::Quality, Some(grid)) = (name, &timing) {
+        input(check_quality_choice(grid, a.quick))?;
+    }
     let options = ExperimentOptions {
         name,
         scene: a.scene.clone(),
@@ -257,6 +283,19 @@ fn merge_shards(a: &ExperimentArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `--configs` and `--textures` name what the quality grid has.
+fn check_quality_choice(grid: &TimingGrid, quick: bool) -> anyhow::Result<()> {
+    let labels: Vec<String> = quality::configs(grid, quick).iter().map(|c| c.label()).collect();
+    if let Some(bad) = grid.configs.iter().find(|c| !labels.contains(c)) {
+        anyhow::bail!("--configs: '{bad}' is not a configuration of this grid ({})", labels.join(", "));
+    }
+    let textures = quality::texture_settings(quick);
+    if let Some(bad) = grid.textures.iter().find(|t| !textures.contains(&t.as_str())) {
+        anyhow::bail!("--textures: '{bad}' is not a texture setting of this grid ({})", textures.join(", "));
+    }
+    Ok(())
+}
+
 /// A timing study's grid with the command line's changes.
 fn timing_grid(mut grid: TimingGrid, a: &TimingArgs) -> TimingGrid {
     if let Some((w, h)) = a.size {
@@ -279,6 +318,9 @@ fn timing_grid(mut grid: TimingGrid, a: &TimingArgs) -> TimingGrid {
         msaa.dedup();
         grid.msaa = msaa;
     }
+    grid.configs = a.configs.clone();
+    grid.textures = a.textures.clone();
+    grid.breakdown = a.breakdown;
     if !a.counts.is_empty() {
         let mut counts = a.counts.clone();
         counts.sort_unstable();

@@ -11,6 +11,7 @@
 //! pipelines over light sets with `bench`'s run loop ([`timing::Bench`]);
 //! `quality` also judges their images against supersampled references.
 
+pub mod breakdown;
 pub mod census;
 pub mod layers;
 pub mod lights;

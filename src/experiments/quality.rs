@@ -18,6 +18,7 @@ use std::collections::BTreeMap;
 use image::RgbaImage;
 use serde::{Deserialize, Serialize};
 
+use super::breakdown::{self, BreakdownRow, PathSums};
 use super::census::StudyScene;
 use super::plot::{LinePlot, Series};
 use super::report::{Section, Table, f3};
@@ -25,9 +26,10 @@ use super::scenarios::Scenario;
 use super::timing::{Shading, Sweep, TimingGrid};
 use super::{ExperimentError, ExperimentOptions, Findings, Outcome, Output, differences};
 use crate::gpu::GpuContext;
-use crate::metrics::temporal::path_quality;
+use crate::metrics::temporal::{path_quality, path_quality_by};
 use crate::reference::{ReferenceCache, ReferenceSettings, ReferenceView, References};
 use crate::render::objectspace::GatherFilter;
+use crate::render::objectspace::debug::PixelClass;
 use crate::render::{Exposure, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
 use crate::scene::gloss::{self, Gloss};
 use crate::scene::lights::build_lights;
@@ -162,13 +164,29 @@ pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
     all
 }
 
-/// The axes of a run: quick measures the textured scene only.
+/// The configurations a run measures: [`configs`], only those named in
+/// the grid's `configs` where it names any.
+pub fn chosen_configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
+    let all = configs(grid, quick);
+    all.into_iter().filter(|c| grid.configs.is_empty() || grid.configs.contains(&c.label())).collect()
+}
+
+/// The texture settings of a grid (quick: the textured scene only), before `grid.textures` chooses.
+pub fn texture_settings(quick: bool) -> Vec<&'static str> {
+    if quick { vec!["detailed"] } else { vec!["file", "detailed"] }
+}
+
+/// The axes of a run: quick measures the textured scene only; the grid's
+/// `configs` and `textures` keep only those they name.
 pub fn axes(grid: &TimingGrid, quick: bool) -> Axes {
+    let textures = texture_settings(quick)
+        .into_iter()
+        .filter(|t| grid.textures.is_empty() || grid.textures.iter().any(|g| g == t));
     Axes {
-        textures: if quick { vec!["detailed"] } else { vec!["file", "detailed"] },
+        textures: textures.collect(),
         gloss: vec![Gloss::Default, Gloss::High],
         msaa: grid.msaa.clone(),
-        configs: configs(grid, quick).iter().map(Config::label).collect(),
+        configs: chosen_configs(grid, quick).iter().map(Config::label).collect(),
     }
 }
 
@@ -192,7 +210,7 @@ pub fn cells(grid: &TimingGrid, quick: bool) -> Vec<Cell> {
             for sweep in &grid.sweeps {
                 for &lights in &sweep.counts {
                     for &msaa in &a.msaa {
-                        for config in configs(grid, quick) {
+                        for config in chosen_configs(grid, quick) {
                             out.push(Cell { textures, gloss, scenario: sweep.scenario, lights, msaa, config });
                         }
                     }
@@ -247,6 +265,17 @@ impl Variant {
     }
 }
 
+/// What [`measure`] hands back: a row per cell and, with the grid's
+/// `breakdown`, each cell's rows of the error breakdown.
+pub struct Measured {
+    pub rows: Vec<Row>,
+    pub breakdown: Vec<BreakdownRow>,
+}
+
+/// Cells of one textures, gloss, light set and sample count share their
+/// references and, in the breakdown, the plain object-space run's pixel classes.
+type CellKey = (&'static str, &'static str, String, u32);
+
 /// Measures `cells` (a whole grid or a shard of it) and returns their rows.
 pub fn measure(
     ctx: &GpuContext,
@@ -255,7 +284,7 @@ pub fn measure(
     grid: &TimingGrid,
     cells: &[(usize, Cell)],
     progress: &indicatif::ProgressBar,
-) -> Result<Vec<Row>, ExperimentError> {
+) -> Result<Measured, ExperimentError> {
     let aspect = grid.width as f32 / grid.height as f32;
     let cameras = cameras_for_scene(&options.scene, &scene.render, aspect)?;
     let region = cameras.light_region(&scene.render.bounds());
@@ -268,10 +297,20 @@ pub fn measure(
     let first = grid.first_frame;
     let measured: Vec<u32> = (first + grid.warmup..first + grid.warmup + grid.frames).collect();
     let mut rows = Vec::new();
+    let mut breakdown_rows = Vec::new();
     // Cells sharing a scene variant and light set share its references.
     let mut variants: BTreeMap<(&str, &str), Variant> = BTreeMap::new();
     let mut reference_images: BTreeMap<(&str, &str, String), Vec<RgbaImage>> = BTreeMap::new();
-    for (index, cell) in cells {
+    // The breakdown: the plain object-space run's classes per measured frame,
+    // which the conventional pipelines of its key are split by. Its cells go
+    // first, so that a shard holding one runs it once.
+    let plain = Config::plain(Shading::OBJECT_SPACE);
+    let mut classes: BTreeMap<CellKey, Vec<Vec<PixelClass>>> = BTreeMap::new();
+    let mut order: Vec<&(usize, Cell)> = cells.iter().collect();
+    if grid.breakdown {
+        order.sort_by_key(|(_, c)| c.config != plain);
+    }
+    for (index, cell) in order {
         let variant = variants
             .entry((cell.textures, cell.gloss.name()))
             .or_insert_with(|| Variant::new(scene, cell.textures, cell.gloss));
@@ -298,23 +337,28 @@ pub fn measure(
         }
         let label = cell.config.label();
         progress.set_message(format!("{label} {} {} {spec}", cell.textures, cell.gloss.name()));
-        let shaded = if cell.config.shading.is_conventional() { &variant.render } else { &variant.charted };
-        // Gloss and detail change materials, not geometry: the study scene's texture sizes hold.
-        let render_options = RenderOptions {
+        // As `--visibility auto` picks it.
+        let visibility = VisibilityMethod::preferred_for(features, cell.msaa);
+        let render_options = |config: &Config| RenderOptions {
             width: grid.width,
             height: grid.height,
-            // As `--visibility auto` picks it.
-            pipeline: cell
-                .config
-                .render_config(&scene.density_sizes, VisibilityMethod::preferred_for(features, cell.msaa)),
+            // Gloss and detail change materials, not geometry: the study scene's texture sizes hold.
+            pipeline: config.render_config(&scene.density_sizes, visibility),
             samples: cell.msaa,
         };
-        let mut renderer = Renderer::new(ctx, shaded, &render_options)?;
+        let conventional = cell.config.shading.is_conventional();
+        let shaded = if conventional { &variant.render } else { &variant.charted };
+        let mut renderer = Renderer::new(ctx, shaded, &render_options(&cell.config))?;
         let mut images = Vec::new();
+        let mut own_classes = Vec::new();
         for i in 0..grid.warmup + grid.frames {
             renderer.render(ctx, &path.camera_at(first + i), &lights, u64::from(i))?;
             if i >= grid.warmup {
                 images.push(renderer.read_image(ctx)?);
+                // Read after the frame's image, outside it: the frame's timing is untouched.
+                if grid.breakdown && !conventional {
+                    own_classes.push(renderer.read_pixel_classes(ctx)?.expect("object space classifies its pixels"));
+                }
             }
             progress.inc(1);
         }
@@ -325,7 +369,54 @@ pub fn measure(
             .map(|t| t.total_ms)
             .collect();
         times.sort_by(f64::total_cmp);
-        let q = path_quality(&images, &reference_images[&key]);
+        drop(renderer);
+        let class_key = (cell.textures, cell.gloss.name(), spec.to_string(), cell.msaa);
+        let references = &reference_images[&key];
+        let q =
+            if grid.breakdown {
+                if conventional && !classes.contains_key(&class_key) {
+                    progress.set_message(format!("pixel classes {} {} {spec}", cell.textures, cell.gloss.name()));
+                    let mut os = Renderer::new(ctx, &variant.charted, &render_options(&plain))?;
+                    let mut found = Vec::new();
+                    for i in 0..grid.warmup + grid.frames {
+                        os.render(ctx, &path.camera_at(first + i), &lights, u64::from(i))?;
+                        if i >= grid.warmup {
+                            found.push(os.read_pixel_classes(ctx)?.expect("object space classifies its pixels"));
+                        }
+                    }
+                    classes.insert(class_key.clone(), found);
+                }
+                if cell.config == plain {
+                    classes.insert(class_key.clone(), std::mem::take(&mut own_classes));
+                }
+                let frames_classes: &[Vec<PixelClass>] =
+                    if conventional || cell.config == plain { &classes[&class_key] } else { &own_classes };
+                let classes_from = if conventional { plain.label() } else { "own".to_string() };
+                let (q, per_frame) = path_quality_by(&images, references, |t, flip| {
+                    let labels = breakdown::labels(&frames_classes[t], &references[t]);
+                    let mut sums = PathSums::new();
+                    sums.add_frame(&labels, (&images, references), t, flip).map(|()| sums)
+                });
+                let mut sums = PathSums::new();
+                for frame in per_frame {
+                    sums.merge(&frame.map_err(|e| ExperimentError::Output {
+                        path: "pixel classes".into(),
+                        message: e.to_string(),
+                    })?);
+                }
+                breakdown_rows.extend(sums.rows(&breakdown::CellKey {
+                    cell: *index,
+                    textures: cell.textures,
+                    gloss: cell.gloss.name(),
+                    lights_spec: &spec.to_string(),
+                    msaa: cell.msaa,
+                    config: &label,
+                    classes_from: &classes_from,
+                }));
+                q
+            } else {
+                path_quality(&images, references)
+            };
         rows.push(Row {
             cell: *index,
             textures: cell.textures.to_string(),
@@ -343,7 +434,10 @@ pub fn measure(
             flicker_sum: q.flicker.sum,
         });
     }
-    Ok(rows)
+    // In the grid's order, whatever order the cells ran in.
+    rows.sort_by_key(|r| r.cell);
+    breakdown_rows.sort_by_key(|r| r.cell);
+    Ok(Measured { rows, breakdown: breakdown_rows })
 }
 
 fn reference_error(e: crate::reference::ReferenceError) -> ExperimentError {
@@ -505,6 +599,9 @@ pub struct Setup {
     pub cells: usize,
     pub quick: bool,
     pub visibility: String,
+    /// The error breakdown by pixel class was measured (`breakdown.csv`).
+    #[serde(default)]
+    pub breakdown: bool,
 }
 
 impl Setup {
@@ -527,6 +624,7 @@ impl Setup {
             cells: cells(grid, quick).len(),
             quick,
             visibility: visibility.name().to_string(),
+            breakdown: grid.breakdown,
         }
     }
 }
@@ -576,7 +674,7 @@ pub(super) fn study(
     // before any cell is measured.
     let features = ctx.device.features();
     for &samples in &grid.msaa {
-        for config in configs(grid, options.quick) {
+        for config in chosen_configs(grid, options.quick) {
             let pipeline = config.render_config(&[], VisibilityMethod::preferred_for(features, samples));
             crate::render::check_samples_for(ctx, samples, &pipeline)?;
         }
@@ -587,10 +685,13 @@ pub(super) fn study(
         .filter(|(i, _)| options.shard.is_none_or(|s| s.holds(*i)))
         .collect();
     progress.set_length(cells.len() as u64 * u64::from(grid.warmup + grid.frames));
-    let rows = measure(ctx, options, scene, grid, &cells, progress)?;
-    output.write_rows(&rows)?;
+    let measured = measure(ctx, options, scene, grid, &cells, progress)?;
+    output.write_rows(&measured.rows)?;
     let setup = Setup::new(grid, options.quick, scene, VisibilityMethod::preferred(ctx.device.features()));
-    let findings = summarize(&setup, &rows, output)?;
+    let mut findings = summarize(&setup, &measured.rows, output)?;
+    if setup.breakdown {
+        add_breakdown(&mut findings, &measured.breakdown, output)?;
+    }
     let mut outcome = outcome(&setup, findings);
     if let serde_json::Value::Object(summary) = &mut outcome.summary {
         summary.insert("grid".into(), serde_json::json!(grid));
@@ -599,6 +700,17 @@ pub(super) fn study(
         }
     }
     Ok(outcome)
+}
+
+/// Writes the breakdown's rows into `breakdown.csv` and adds its tables and
+/// results (`breakdown`) to `findings`.
+fn add_breakdown(findings: &mut Findings, rows: &[BreakdownRow], output: Output) -> Result<(), ExperimentError> {
+    let path = output.dir.join("breakdown.csv");
+    super::report::write_csv(&path, rows).map_err(|e| ExperimentError::output(&path, e))?;
+    let (results, sections) = breakdown::summarize(rows);
+    findings.results["breakdown"] = results;
+    findings.sections.extend(sections);
+    Ok(())
 }
 
 /// The summary keys, setup and differences of a run (or a merge).
@@ -624,6 +736,12 @@ fn outcome(setup: &Setup, findings: Findings) -> Outcome {
         setup.configs.join(", "),
         setup.visibility,
     );
+    let mut text = text;
+    if setup.breakdown {
+        text += "\nWith the error breakdown by pixel class (`--breakdown`: `breakdown.csv` and the \
+                 \"Error by pixel class\" sections); object space's classes are read back after each measured \
+                 frame, outside it.\n";
+    }
     let items = vec![
         "MSAA: forward, forward-multipass and clustered resolve hardware MSAA at the standard sample positions; \
          deferred and deferred-compute light a multisampled G-buffer, each pixel once or, on edges, sample by \
@@ -678,6 +796,7 @@ pub fn merge(
         .map_err(|e| merge_error(&first_dir.join("summary.json"), format!("not a quality run: {e}")))?;
     let mut seen = Vec::new();
     let mut rows: Vec<Row> = Vec::new();
+    let mut breakdown_rows: Vec<BreakdownRow> = Vec::new();
     for dir in dirs {
         let summary = read_summary(dir)?;
         let path = dir.join("summary.json");
@@ -694,6 +813,13 @@ pub fn merge(
         let mut reader = csv::Reader::from_path(&csv_path).map_err(|e| merge_error(&csv_path, e))?;
         for row in reader.deserialize() {
             rows.push(row.map_err(|e| merge_error(&csv_path, e))?);
+        }
+        if setup.breakdown {
+            let csv_path = dir.join("breakdown.csv");
+            let mut reader = csv::Reader::from_path(&csv_path).map_err(|e| merge_error(&csv_path, e))?;
+            for row in reader.deserialize() {
+                breakdown_rows.push(row.map_err(|e| merge_error(&csv_path, e))?);
+            }
         }
     }
     let count = seen[0].count;
@@ -716,7 +842,12 @@ pub fn merge(
     std::fs::create_dir_all(out).map_err(|e| merge_error(out, format!("cannot create the folder: {e}")))?;
     let output = Output { dir: out };
     output.write_rows(&rows)?;
-    let findings = summarize(&setup, &rows, output)?;
+    let mut findings = summarize(&setup, &rows, output)?;
+    if setup.breakdown {
+        // Each cell's rows come from one shard, in order: a stable sort keeps them so.
+        breakdown_rows.sort_by_key(|r| r.cell);
+        add_breakdown(&mut findings, &breakdown_rows, output)?;
+    }
     let outcome = outcome(&setup, findings);
     let mut provenance: super::report::Provenance = serde_json::from_value(first["provenance"].clone())
         .map_err(|e| merge_error(&first_dir.join("summary.json"), e))?;
@@ -832,6 +963,7 @@ mod tests {
             cells: all.len(),
             quick: true,
             visibility: "compute".into(),
+            breakdown: true,
         };
         // Distinct values per cell, one without a GPU time, so a row merged
         // into the wrong cell or summarized out of order changes the output.
@@ -855,12 +987,39 @@ mod tests {
                 flicker_sum: 0.1 * i as f64 * f64::from(quick.frames - 1),
             })
             .collect();
+        // Breakdown rows: distinct sums per cell and class.
+        let breakdown: Vec<BreakdownRow> = rows
+            .iter()
+            .flat_map(|r| {
+                let mut sums = PathSums::new();
+                for (f, factor) in sums.factors.iter_mut().enumerate() {
+                    for (k, s) in factor.iter_mut().enumerate() {
+                        s.pixels = (r.cell * 31 + f * 7 + k) as u64 % 17;
+                        s.flip = s.pixels as f64 * 0.01 * (1 + r.cell % 3) as f64;
+                        s.pair_pixels = s.pixels / 2;
+                        s.flicker = s.pair_pixels as f64 * 0.3;
+                    }
+                }
+                let from = if r.pipeline == "objectspace" { "own" } else { "objectspace" };
+                sums.rows(&breakdown::CellKey {
+                    cell: r.cell,
+                    textures: &r.textures,
+                    gloss: &r.gloss,
+                    lights_spec: &r.lights_spec,
+                    msaa: r.msaa,
+                    config: &r.config,
+                    classes_from: from,
+                })
+            })
+            .collect();
         let root = tempfile::tempdir().unwrap();
         let whole = root.path().join("whole");
         std::fs::create_dir_all(&whole).unwrap();
         let output = Output { dir: &whole };
         output.write_rows(&rows).unwrap();
-        let findings = summarize(&setup, &rows, output).unwrap();
+        let mut findings = summarize(&setup, &rows, output).unwrap();
+        add_breakdown(&mut findings, &breakdown, output).unwrap();
+        assert!(whole.join("breakdown.csv").exists());
 
         let provenance = serde_json::json!({
             "adapter": "test", "backend": "Vulkan", "driver": "test", "driver_info": "",
@@ -873,6 +1032,8 @@ mod tests {
             std::fs::create_dir_all(&dir).unwrap();
             let part: Vec<Row> = rows.iter().filter(|r| shard.holds(r.cell)).cloned().collect();
             Output { dir: &dir }.write_rows(&part).unwrap();
+            let part: Vec<BreakdownRow> = breakdown.iter().filter(|r| shard.holds(r.cell)).cloned().collect();
+            super::super::report::write_csv(&dir.join("breakdown.csv"), &part).unwrap();
             let summary = serde_json::json!({
                 "quality": setup, "grid": quick, "scene_spec": "synthetic", "shard": shard, "provenance": provenance,
             });

@@ -137,6 +137,18 @@ pub struct TimingGrid {
     /// MSAA samples per pixel, an axis of the quality experiment's grid
     /// (the other timing studies render one sample per pixel).
     pub msaa: Vec<u32>,
+    /// The quality experiment: only these configurations (labels, e.g.
+    /// `objectspace`; empty: all of its grid's).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub configs: Vec<String>,
+    /// The quality experiment: only these texture settings (`file`,
+    /// `detailed`; empty: all of its grid's).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub textures: Vec<String>,
+    /// The quality experiment: split each cell's error and flicker by pixel
+    /// class (`experiments::breakdown`).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub breakdown: bool,
 }
 
 impl TimingGrid {
@@ -148,7 +160,21 @@ impl TimingGrid {
     pub fn new(quick: bool, shadings: Vec<Shading>, sweeps: Vec<Sweep>) -> Self {
         let ((width, height), warmup, frames, cap_ms) =
             if quick { ((160, 90), 1, 2, 10_000.0) } else { ((1920, 1080), 5, 20, 200.0) };
-        Self { width, height, warmup, frames, first_frame: 0, cap_ms, seed: 1, shadings, sweeps, msaa: vec![1] }
+        Self {
+            width,
+            height,
+            warmup,
+            frames,
+            first_frame: 0,
+            cap_ms,
+            seed: 1,
+            shadings,
+            sweeps,
+            msaa: vec![1],
+            configs: Vec::new(),
+            textures: Vec::new(),
+            breakdown: false,
+        }
     }
 
     /// Points per configuration.

@@ -1,6 +1,7 @@
 //! Image error between two renders: FLIP (NVIDIA's perceptual metric, through
 //! `nv-flip`), PSNR and SSIM. Used by golden-image tests and pipeline comparisons.
 
+pub mod breakdown;
 pub mod ssim;
 pub mod temporal;
 
@@ -25,6 +26,17 @@ pub struct ImageError {
 ///
 /// Panics if the sizes differ (callers compare renders of one size).
 pub fn compare(reference: &RgbaImage, test: &RgbaImage) -> (ImageError, RgbImage) {
+    let (error, values) = compare_values(reference, test);
+    let (w, h) = reference.dimensions();
+    let error_map = nv_flip::FlipImageFloat::with_data(w, h, &values);
+    let visual = error_map.apply_color_lut(&nv_flip::magma_lut());
+    let map = RgbImage::from_raw(w, h, visual.to_vec()).expect("FLIP map has w*h*3 bytes");
+    (error, map)
+}
+
+/// [`compare`]'s errors and the FLIP value of each pixel, row-major (their
+/// mean is `flip_mean`).
+pub fn compare_values(reference: &RgbaImage, test: &RgbaImage) -> (ImageError, Vec<f32>) {
     assert_eq!(reference.dimensions(), test.dimensions(), "compared images must have the same size");
     let (w, h) = reference.dimensions();
     let rgb = |img: &RgbaImage| img.pixels().flat_map(|p| [p[0], p[1], p[2]]).collect::<Vec<u8>>();
@@ -35,8 +47,6 @@ pub fn compare(reference: &RgbaImage, test: &RgbaImage) -> (ImageError, RgbImage
         nv_flip::DEFAULT_PIXELS_PER_DEGREE,
     );
     let flip_mean = nv_flip::FlipPool::from_image(&error_map).mean();
-    let visual = error_map.apply_color_lut(&nv_flip::magma_lut());
-    let map = RgbImage::from_raw(w, h, visual.to_vec()).expect("FLIP map has w*h*3 bytes");
     let mut sq = 0.0f64;
     let mut max_abs = 0u8;
     for (x, y) in a.iter().zip(&b) {
@@ -46,7 +56,8 @@ pub fn compare(reference: &RgbaImage, test: &RgbaImage) -> (ImageError, RgbImage
     }
     let mse = sq / a.len().max(1) as f64;
     let psnr_db = if mse == 0.0 { f64::INFINITY } else { 10.0 * (255.0f64 * 255.0 / mse).log10() };
-    (ImageError { flip_mean, psnr_db, max_abs, ssim: ssim::ssim(reference, test) }, map)
+    let error = ImageError { flip_mean, psnr_db, max_abs, ssim: ssim::ssim(reference, test) };
+    (error, error_map.to_vec())
 }
 
 #[cfg(test)]

@@ -14,7 +14,7 @@ use image::RgbaImage;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{ImageError, compare};
+use super::{ImageError, compare_values};
 
 /// The flicker of one path.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -71,16 +71,35 @@ pub struct PathQuality {
 
 /// Errors and flicker of `pipeline`'s frames against `reference`'s.
 pub fn path_quality(pipeline: &[RgbaImage], reference: &[RgbaImage]) -> PathQuality {
+    path_quality_by(pipeline, reference, |_, _| ()).0
+}
+
+/// [`path_quality`], and `per_frame(t, FLIP map)` of each frame `t` (its
+/// FLIP value per pixel, row-major), computed beside the frame's errors.
+pub fn path_quality_by<T: Send>(
+    pipeline: &[RgbaImage],
+    reference: &[RgbaImage],
+    per_frame: impl Fn(usize, &[f32]) -> T + Sync,
+) -> (PathQuality, Vec<T>) {
     assert_eq!(pipeline.len(), reference.len(), "one reference frame per pipeline frame");
     // FLIP takes about a second a frame at 1920x1080 on one core: frames in parallel.
-    let frames: Vec<ImageError> = reference.par_iter().zip(pipeline).map(|(r, p)| compare(r, p).0).collect();
+    let (frames, extra): (Vec<ImageError>, Vec<T>) = reference
+        .par_iter()
+        .zip(pipeline)
+        .enumerate()
+        .map(|(t, (r, p))| {
+            let (error, map) = compare_values(r, p);
+            (error, per_frame(t, &map))
+        })
+        .unzip();
     let n = frames.len().max(1) as f64;
-    PathQuality {
+    let quality = PathQuality {
         flip_mean: frames.iter().map(|e| f64::from(e.flip_mean)).sum::<f64>() / n,
         psnr_db: frames.iter().map(|e| e.psnr_db).sum::<f64>() / n,
         flicker: flicker(pipeline, reference),
         frames,
-    }
+    };
+    (quality, extra)
 }
 
 #[cfg(test)]

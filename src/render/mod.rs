@@ -684,6 +684,19 @@ impl Renderer {
         Ok(f32::from_le_bytes(bytes[..4].try_into().expect("the exposure buffer holds a vec4")))
     }
 
+    /// Object space only (`None` for the other pipelines): per pixel of the
+    /// last frame, what its gather read ([`objectspace::ObjectSpace::read_pixel_classes`];
+    /// a debug pass outside the frame, blocking).
+    pub fn read_pixel_classes(
+        &mut self,
+        ctx: &GpuContext,
+    ) -> Result<Option<Vec<objectspace::debug::PixelClass>>, RenderError> {
+        let Some(os) = (self.pipeline.as_mut() as &mut dyn Any).downcast_mut::<objectspace::ObjectSpace>() else {
+            return Ok(None);
+        };
+        os.read_pixel_classes(ctx, &mut self.shaders, &self.scene).map(Some)
+    }
+
     /// Reads the last tone-mapped frame back (blocks).
     pub fn read_image(&self, ctx: &GpuContext) -> Result<image::RgbaImage, RenderError> {
         let bytes = readback::read_texture_rgba8(ctx, &self.targets.ldr)?;

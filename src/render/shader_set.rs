@@ -81,6 +81,13 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         objectspace::mark::SHADER.with_defs(&[crate::shaders::MSAA, crate::shaders::VISIBILITY_LAYERS]),
         objectspace::gather::SHADER.with_defs(&[crate::shaders::MSAA, crate::shaders::VISIBILITY_LAYERS]),
         objectspace::gather::SHADER.with_defs(&[objectspace::mark::PIXEL_RECORD]),
+        objectspace::gather::SHADER.with_defs(&[objectspace::gather::PIXEL_CLASSES]),
+        objectspace::gather::SHADER.with_defs(&[objectspace::gather::PIXEL_CLASSES, crate::shaders::MSAA]),
+        objectspace::gather::SHADER.with_defs(&[
+            objectspace::gather::PIXEL_CLASSES,
+            crate::shaders::MSAA,
+            crate::shaders::VISIBILITY_LAYERS,
+        ]),
         deferred::GLOBALS_SHADER.with_defs(&[crate::shaders::MSAA]),
         deferred::volumes::VOLUMES_SHADER.with_defs(&[crate::shaders::MSAA]),
     ]);

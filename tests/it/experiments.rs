@@ -444,6 +444,15 @@ fn bad_experiment_input_names_the_flag_or_file() {
     let (code, err) = run_cli(&["experiment", "quality", "--quick", "--frames", "1", "--out", out]);
     assert_eq!(code, 2);
     assert!(err.contains("--frames 1"), "{err}");
+    let (code, err) = run_cli(&["experiment", "quality", "--quick", "--configs", "objectspace,deferred", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--configs") && err.contains("'deferred'") && err.contains("objectspace-hz30"), "{err}");
+    let (code, err) = run_cli(&["experiment", "quality", "--quick", "--textures", "file", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--textures") && err.contains("'file'") && err.contains("detailed"), "{err}");
+    let (code, err) = run_cli(&["experiment", "speedup", "--quick", "--breakdown", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--breakdown") && err.contains("only the quality experiment"), "{err}");
     let (code, err) = run_cli(&["experiment", "lights", "--quick", "--shard", "1/2", "--out", out]);
     assert_eq!(code, 2);
     assert!(err.contains("--shard") && err.contains("lights"), "{err}");

@@ -8,6 +8,7 @@ mod common;
 mod agreement;
 mod blending;
 mod bloom;
+mod breakdown;
 mod cameras;
 mod city;
 mod cli;

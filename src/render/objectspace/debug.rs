@@ -6,7 +6,10 @@ use super::atlas::BLOCK_PAGES;
 use super::resources::{ATLAS_FORMAT, TRIANGLE_MAP_FORMAT};
 use crate::color::reinhard_srgb8;
 use crate::gpu::{GpuContext, GpuError, readback};
+use crate::render::RenderError;
 use crate::render::passes::visibility::VisibilityBuffer;
+use crate::render::scene_gpu::SceneGpu;
+use crate::shaders::ShaderLibrary;
 
 /// Per virtual page backed: its triangle map's and its shades' texel bytes
 /// ([`ObjectSpace::read_backed_pages`]).
@@ -35,6 +38,95 @@ pub struct MarkState {
     pub counters: [u32; super::TileCounter::SLOTS],
     /// Per physical page: the virtual page it backs, if any.
     pub page_owner: Vec<Option<u32>>,
+}
+
+/// Whether a pixel's samples see one surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coverage {
+    /// Every sample sees the background.
+    Background,
+    /// Every sample sees one chart surface (the gather reads the pixel once).
+    Interior,
+    /// Samples see different surfaces (under MSAA: the gather reads each sample).
+    Edge,
+}
+
+/// Where a pixel's shade comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadeSource {
+    /// Filtered from the atlas.
+    Atlas,
+    /// Its object is not in the atlas: shaded per pixel in the gather.
+    Forward,
+    /// A tap's page had no physical page (the atlas was full): shaded per pixel.
+    NotBacked,
+}
+
+/// Which of the taps of the gather's filter lie in the pixel's chart island.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IslandTaps {
+    All,
+    /// Some: the filter renormalizes over the others (near a chart border).
+    Some,
+    /// None: the filter keeps all of them (a sliver thinner than a texel).
+    None,
+}
+
+/// What the gather read for one pixel in the last frame
+/// ([`ObjectSpace::read_pixel_classes`]; for an edge pixel, for its first
+/// sample on a surface).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelClass {
+    pub coverage: Coverage,
+    /// `None` for background pixels.
+    pub source: Option<ShadeSource>,
+    /// The level read (of the two blended, the one of the larger weight).
+    pub level: u32,
+    /// Texels of that level per pixel along the footprint's longer axis
+    /// (below 1: a texel is larger than the pixel, magnified).
+    pub texels_per_pixel: f32,
+    /// The same along the footprint's shorter axis (anisotropic footprints,
+    /// seen at a grazing angle, have fewer: there a texel is longer than a
+    /// pixel).
+    pub texels_per_pixel_minor: f32,
+    /// Atlas pixels only.
+    pub taps: IslandTaps,
+    /// Frames since the tile under the pixel was shaded (0: this frame), at most 255. Atlas pixels only.
+    pub age: u32,
+    /// Blended between two levels (`--level-blend`).
+    pub blended: bool,
+}
+
+impl PixelClass {
+    /// Decodes the `classify` pass's words (`gather.wgsl`, `CLASS_*`).
+    pub fn from_words([x, y, z, _]: [u32; 4]) -> Self {
+        let coverage = match x & 3 {
+            0 => Coverage::Background,
+            1 => Coverage::Interior,
+            _ => Coverage::Edge,
+        };
+        let source = match (coverage, x >> 2 & 3) {
+            (Coverage::Background, _) => None,
+            (_, 0) => Some(ShadeSource::Atlas),
+            (_, 1) => Some(ShadeSource::Forward),
+            _ => Some(ShadeSource::NotBacked),
+        };
+        let taps = match x >> 8 & 3 {
+            0 => IslandTaps::All,
+            1 => IslandTaps::Some,
+            _ => IslandTaps::None,
+        };
+        Self {
+            coverage,
+            source,
+            level: x >> 4 & 15,
+            texels_per_pixel: f32::from_bits(y),
+            texels_per_pixel_minor: f32::from_bits(z),
+            taps,
+            age: x >> 10 & 255,
+            blended: x >> 18 & 1 == 1,
+        }
+    }
 }
 
 /// The two-level page table after a frame, read back from the GPU.
@@ -149,6 +241,33 @@ impl ObjectSpace {
             level_blend: o.level_blend,
             gather_filter: o.gather_filter,
         }
+    }
+
+    /// Per pixel of the main view, row-major: what the last frame's gather
+    /// read ([`PixelClass`]), from a debug pass run now over the state the
+    /// frame left (its pipeline is built on the first call). Call it after
+    /// a frame and before the next; it blocks on the GPU.
+    pub fn read_pixel_classes(
+        &mut self,
+        ctx: &GpuContext,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+    ) -> Result<Vec<PixelClass>, RenderError> {
+        let size = (self.res.visibility.texture.width(), self.res.visibility.texture.height());
+        if self.classify.is_none() {
+            let pixels = u64::from(size.0) * u64::from(size.1);
+            let pass = self.gather.classify_pass(&ctx.device, shaders, scene, &self.res, &self.grid.grid, pixels)?;
+            self.classify = Some(pass);
+        }
+        let pass = self.classify.as_ref().expect("built above");
+        let mut encoder =
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("classify") });
+        let groups = (&self.res, scene.bind_group(), &self.grid.grid);
+        super::gather::classify(&mut encoder, &ctx.device, pass, groups, size);
+        ctx.queue.submit([encoder.finish()]);
+        let words = Self::words(ctx, &pass.classes)?;
+        ctx.check_errors()?;
+        Ok(words.chunks_exact(4).map(|w| PixelClass::from_words([w[0], w[1], w[2], w[3]])).collect())
     }
 
     /// The main view's visibility buffer (for tests: its ids per sample

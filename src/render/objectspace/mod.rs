@@ -709,6 +709,8 @@ pub struct ObjectSpace {
     trimap: TrimapPass,
     shade: ShadePass,
     gather: GatherPass,
+    /// The debug pass behind [`Self::read_pixel_classes`], built on its first call.
+    classify: Option<gather::ClassifyPass>,
     /// With `--view atlas-pages`: the pass drawing `atlas_pages` over the frame.
     atlas_view: Option<AtlasViewPass>,
     atlas_pages: AtlasPages,
@@ -917,6 +919,7 @@ impl ObjectSpace {
             trimap: TrimapPass::new(ctx, shaders, scene_cpu, scene, &res, &layout, &config)?,
             shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
             gather,
+            classify: None,
             atlas_view: (config.view == DebugView::AtlasPages)
                 .then(|| AtlasViewPass::new(device, shaders, scene, &res, targets))
                 .transpose()?,

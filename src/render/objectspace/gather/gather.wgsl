@@ -45,6 +45,12 @@
 // Per pixel: what marking found (`mark.wgsl`): chart UV, level weight, levels.
 @group(2) @binding(3) var<storage, read> pixel_records: array<vec4u>;
 #endif
+#ifdef PIXEL_CLASSES
+// Per pixel, written by `classify` (`debug::PixelClass`): what its gather
+// reads, packed as the `CLASS_*` fields below; y and z: texels per pixel at
+// that level along the footprint's longer and shorter axis (f32 bits).
+@group(2) @binding(3) var<storage, read_write> pixel_classes: array<vec4u>;
+#endif
 
 // Debug colours go through the tone mapper: pre-invert Reinhard so that they
 // come out as written.
@@ -380,3 +386,117 @@ fn gather_surface(p: PixelSample) -> vec4f {
     }
     return out;
 }
+
+#ifdef PIXEL_CLASSES
+// `pixel_classes[i].x`: coverage (bits 0-1), source (2-3), level (4-7),
+// island taps (8-9), tile age in frames, at most 255 (10-17), blended
+// between two levels (18). Mirrors `debug::PixelClass::from_words`.
+const CLASS_BACKGROUND: u32 = 0u;
+const CLASS_INTERIOR: u32 = 1u;
+const CLASS_EDGE: u32 = 2u;
+const SOURCE_ATLAS: u32 = 0u;
+const SOURCE_FORWARD: u32 = 1u;
+const SOURCE_NOT_BACKED: u32 = 2u;
+const TAPS_ALL: u32 = 0u;
+const TAPS_SOME: u32 = 1u;
+const TAPS_NONE: u32 = 2u;
+
+// The island taps of the filter `filter_level` runs at `uv` in level
+// `level_index`: TAPS_ALL in the pixel's island, TAPS_SOME (it renormalizes
+// over the rest) or TAPS_NONE (it keeps all: a sliver); NOT_BACKED where a
+// tap's page has no physical page. One page lookup per tap: slower than
+// the gather's, the same texels.
+fn island_taps(own: OwnSurface, level_index: u32, uv: vec2f) -> u32 {
+    let l = entry_level(own.object, level_index);
+    let last = vec2i(i32(l.size) - 1);
+    var first = vec2i(bilinear(l, uv).texel);
+    var count = 2;
+    if params.gather_filter != FILTER_BILINEAR {
+        first = vec2i(floor(uv * f32(l.size) - 0.5)) - 1;
+        count = 4;
+    }
+    var kept = 0;
+    for (var j = 0; j < count; j++) {
+        for (var i = 0; i < count; i++) {
+            let texel = vec2u(clamp(first + vec2i(i, j), vec2i(0), last));
+            let page = physical_page(virtual_page(l, texel));
+            if page == NOT_BACKED {
+                return NOT_BACKED;
+            }
+            kept += i32(in_island(own, atlas_texel(page, texel)));
+        }
+    }
+    if kept == count * count {
+        return TAPS_ALL;
+    }
+    return select(TAPS_SOME, TAPS_NONE, kept == 0);
+}
+
+// What the gather of surface point `p` reads: (source | level | taps | age
+// | blended packed as `pixel_classes`' x, less coverage; texels per pixel
+// along the longer and the shorter axis).
+fn surface_class(p: PixelSample) -> vec4u {
+    let e = atlas_entries[p.object];
+    if e.size == 0u {
+        return vec4u(SOURCE_FORWARD << 2u, 0u, 0u, 0u);
+    }
+    let f = chart_footprint(p);
+    let levels = select_levels(e, p, f);
+    let level_index = select(levels.lo, levels.hi, levels.t >= 0.5);
+    let l = entry_level(p.object, level_index);
+    let texels = max(length(f.du_dx), length(f.du_dy)) * f32(l.size);
+    let minor = min(length(f.du_dx), length(f.du_dy)) * f32(l.size);
+    let blended = select(0u, 1u, levels.t > 0.0 && levels.t < 1.0);
+    let taps = island_taps(OwnSurface(p.object, p.triangle), level_index, f.uv);
+    let t = vec2u(bilinear(l, f.uv).texel);
+    let page = physical_page(virtual_page(l, t));
+    if taps == NOT_BACKED || page == NOT_BACKED {
+        return vec4u(SOURCE_NOT_BACKED << 2u | level_index << 4u, bitcast<u32>(texels), bitcast<u32>(minor), 0u);
+    }
+    let age = min(params.stamp - tile_shaded[physical_tile(page, t)], 255u);
+    return vec4u(SOURCE_ATLAS << 2u | level_index << 4u | taps << 8u | age << 10u | blended << 18u,
+        bitcast<u32>(texels), bitcast<u32>(minor), 0u);
+}
+
+// Debug read-back (`ObjectSpace::read_pixel_classes`), run after a frame
+// and outside it: per pixel, whether its samples see one surface, and what
+// the gather read for it (for an edge pixel, for its first sample on a
+// surface): the source of its shade, level, texels per pixel, taps outside
+// the chart island, and the age of its tile's shade.
+@compute @workgroup_size(8, 8)
+fn classify(@builtin(global_invocation_id) id: vec3u) {
+    let size = textureDimensions(visibility);
+    if id.x >= size.x || id.y >= size.y {
+        return;
+    }
+    let i = id.y * size.x + id.x;
+    let ids = visibility_ids(id.xy, 0u);
+    var surface = ids;
+    var coverage = select(CLASS_INTERIOR, CLASS_BACKGROUND, ids.x == 0u);
+#ifdef MSAA
+    let n = visibility_samples();
+    var first = select(0u, n, ids.x == 0u);
+    for (var s = 1u; s < n; s++) {
+        let sample_ids = visibility_ids(id.xy, s);
+        if !same_chart_surface(sample_ids, ids) {
+            coverage = CLASS_EDGE;
+        }
+        if first == n && sample_ids.x != 0u {
+            first = s;
+            surface = sample_ids;
+        }
+    }
+#endif
+    if surface.x == 0u {
+        pixel_classes[i] = vec4u(CLASS_BACKGROUND, 0u, 0u, 0u);
+        return;
+    }
+#ifdef MSAA
+    let at = select(vec2f(0.5), standard_sample_position(n, first), coverage == CLASS_EDGE);
+    let c = surface_class(sample_pixel_at(id.xy, at, surface));
+#else
+    let c = surface_class(sample_pixel(id.xy, surface));
+#endif
+    pixel_classes[i] = vec4u(coverage | c.x, c.yzw);
+}
+#endif
