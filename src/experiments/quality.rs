@@ -147,8 +147,9 @@ pub struct Axes {
 
 /// The configurations of a grid: its shadings, then object space at 30 Hz
 /// (reuse 2, spread over the frames) and, but in quick mode, with mip bias 1,
-/// with level blend 1 (trilinear gathering), with the B-spline gather, and
-/// with both (the least flicker on lavapipe: BENCHMARKS.md).
+/// with level blend 1 (trilinear gathering), with the B-spline gather, with
+/// both (the least flicker on lavapipe: BENCHMARKS.md), and with mip bias -1
+/// (finer levels) alone and with level blend 1.
 pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
     let mut all: Vec<Config> = grid.shadings.iter().map(|&s| Config::plain(s)).collect();
     if grid.shadings.iter().any(|s| !s.is_conventional()) {
@@ -159,6 +160,12 @@ pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
             let bspline = Config { filter: GatherFilter::Bspline, ..Config::plain(Shading::OBJECT_SPACE) };
             all.push(bspline);
             all.push(Config { level_blend: 1.0, ..bspline });
+            // Finer levels (4x the texels): what it costs to bring object
+            // space's flicker down to forward's (issue 24), alone and with
+            // level blending.
+            let finer = Config { mip_bias: -1.0, ..Config::plain(Shading::OBJECT_SPACE) };
+            all.push(finer);
+            all.push(Config { level_blend: 1.0, ..finer });
         }
     }
     all
@@ -910,7 +917,9 @@ mod tests {
                 "objectspace-bias1",
                 "objectspace-blend1",
                 "objectspace-bspline",
-                "objectspace-blend1-bspline"
+                "objectspace-blend1-bspline",
+                "objectspace-bias-1",
+                "objectspace-bias-1-blend1"
             ]
         );
         let all = cells(&full, false);
@@ -919,7 +928,7 @@ mod tests {
             labels.len() * 3 * 2 * 2,
             "full: two textures, two gloss settings, one light set, MSAA 1, 4, 8"
         );
-        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 8 * 4 * 3);
+        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 10 * 4 * 3);
         assert_eq!(all.iter().filter(|c| c.msaa == 8).count(), labels.len() * 4);
         let quick = grid(true);
         let labels: Vec<String> = configs(&quick, true).iter().map(Config::label).collect();
