@@ -180,7 +180,8 @@ pub struct TimingArgs {
     /// `quality`: split each cell's error and flicker by pixel class (MSAA
     /// edge, object space's level, texels per pixel, chart-border taps,
     /// shade age, the reference's gradient) into breakdown.csv and the
-    /// report; object space's classes are read back after each measured frame.
+    /// report; object space's classes come from a second, untimed run of
+    /// each cell's frames, so the timed frames read nothing back.
     #[arg(long)]
     pub breakdown: bool,
 }

@@ -33,7 +33,7 @@ use crate::render::objectspace::debug::PixelClass;
 use crate::render::{Exposure, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
 use crate::scene::gloss::{self, Gloss};
 use crate::scene::lights::build_lights;
-use crate::scene::path::cameras_for_scene;
+use crate::scene::path::{CameraPath, cameras_for_scene};
 use crate::scene::{Light, Scene};
 
 /// Samples per axis of the reference (16 per pixel: 4x4 differs from 8x8
@@ -357,15 +357,10 @@ pub fn measure(
         let shaded = if conventional { &variant.render } else { &variant.charted };
         let mut renderer = Renderer::new(ctx, shaded, &render_options(&cell.config))?;
         let mut images = Vec::new();
-        let mut own_classes = Vec::new();
         for i in 0..grid.warmup + grid.frames {
             renderer.render(ctx, &path.camera_at(first + i), &lights, u64::from(i))?;
             if i >= grid.warmup {
                 images.push(renderer.read_image(ctx)?);
-                // Read after the frame's image, outside it: the frame's timing is untouched.
-                if grid.breakdown && !conventional {
-                    own_classes.push(renderer.read_pixel_classes(ctx)?.expect("object space classifies its pixels"));
-                }
             }
             progress.inc(1);
         }
@@ -377,53 +372,55 @@ pub fn measure(
             .collect();
         times.sort_by(f64::total_cmp);
         drop(renderer);
+        // Object space's pixel classes come from a second run of the same
+        // frames, untimed: read back between timed frames, the classify pass
+        // and its waits moved some cells' medians by up to 2.5x on the H200.
+        let mut own_classes = Vec::new();
+        if grid.breakdown && !conventional {
+            progress.set_message(format!("pixel classes {label} {} {} {spec}", cell.textures, cell.gloss.name()));
+            own_classes = pixel_classes(ctx, shaded, &render_options(&cell.config), path, first, grid, &lights)?;
+        }
         let class_key = (cell.textures, cell.gloss.name(), spec.to_string(), cell.msaa);
         let references = &reference_images[&key];
-        let q =
-            if grid.breakdown {
-                if conventional && !classes.contains_key(&class_key) {
-                    progress.set_message(format!("pixel classes {} {} {spec}", cell.textures, cell.gloss.name()));
-                    let mut os = Renderer::new(ctx, &variant.charted, &render_options(&plain))?;
-                    let mut found = Vec::new();
-                    for i in 0..grid.warmup + grid.frames {
-                        os.render(ctx, &path.camera_at(first + i), &lights, u64::from(i))?;
-                        if i >= grid.warmup {
-                            found.push(os.read_pixel_classes(ctx)?.expect("object space classifies its pixels"));
-                        }
-                    }
-                    classes.insert(class_key.clone(), found);
-                }
-                if cell.config == plain {
-                    classes.insert(class_key.clone(), std::mem::take(&mut own_classes));
-                }
-                let frames_classes: &[Vec<PixelClass>] =
-                    if conventional || cell.config == plain { &classes[&class_key] } else { &own_classes };
-                let classes_from = if conventional { plain.label() } else { "own".to_string() };
-                let (q, per_frame) = path_quality_by(&images, references, |t, flip| {
-                    let labels = breakdown::labels(&frames_classes[t], &references[t]);
-                    let mut sums = PathSums::new();
-                    sums.add_frame(&labels, (&images, references), t, flip).map(|()| sums)
-                });
+        let q = if grid.breakdown {
+            if conventional && !classes.contains_key(&class_key) {
+                progress.set_message(format!("pixel classes {} {} {spec}", cell.textures, cell.gloss.name()));
+                let found = pixel_classes(ctx, &variant.charted, &render_options(&plain), path, first, grid, &lights)?;
+                classes.insert(class_key.clone(), found);
+            }
+            if cell.config == plain {
+                classes.insert(class_key.clone(), std::mem::take(&mut own_classes));
+            }
+            let frames_classes: &[Vec<PixelClass>] =
+                if conventional || cell.config == plain { &classes[&class_key] } else { &own_classes };
+            let classes_from = if conventional { plain.label() } else { "own".to_string() };
+            let (q, per_frame) = path_quality_by(&images, references, |t, flip| {
+                let labels = breakdown::labels(&frames_classes[t], &references[t]);
                 let mut sums = PathSums::new();
-                for frame in per_frame {
-                    sums.merge(&frame.map_err(|e| ExperimentError::Output {
+                sums.add_frame(&labels, (&images, references), t, flip).map(|()| sums)
+            });
+            let mut sums = PathSums::new();
+            for frame in per_frame {
+                sums.merge(
+                    &frame.map_err(|e| ExperimentError::Output {
                         path: "pixel classes".into(),
                         message: e.to_string(),
-                    })?);
-                }
-                breakdown_rows.extend(sums.rows(&breakdown::CellKey {
-                    cell: *index,
-                    textures: cell.textures,
-                    gloss: cell.gloss.name(),
-                    lights_spec: &spec.to_string(),
-                    msaa: cell.msaa,
-                    config: &label,
-                    classes_from: &classes_from,
-                }));
-                q
-            } else {
-                path_quality(&images, references)
-            };
+                    })?,
+                );
+            }
+            breakdown_rows.extend(sums.rows(&breakdown::CellKey {
+                cell: *index,
+                textures: cell.textures,
+                gloss: cell.gloss.name(),
+                lights_spec: &spec.to_string(),
+                msaa: cell.msaa,
+                config: &label,
+                classes_from: &classes_from,
+            }));
+            q
+        } else {
+            path_quality(&images, references)
+        };
         rows.push(Row {
             cell: *index,
             textures: cell.textures.to_string(),
@@ -445,6 +442,29 @@ pub fn measure(
     rows.sort_by_key(|r| r.cell);
     breakdown_rows.sort_by_key(|r| r.cell);
     Ok(Measured { rows, breakdown: breakdown_rows })
+}
+
+/// Object space's pixel classes at each measured frame of the path (after
+/// the warm-up), from a renderer of `options` drawing the frames again:
+/// untimed, so that the timed run reads nothing back between its frames.
+fn pixel_classes(
+    ctx: &GpuContext,
+    scene: &Scene,
+    options: &RenderOptions,
+    path: &CameraPath,
+    first: u32,
+    grid: &TimingGrid,
+    lights: &[Light],
+) -> Result<Vec<Vec<PixelClass>>, ExperimentError> {
+    let mut renderer = Renderer::new(ctx, scene, options)?;
+    let mut found = Vec::new();
+    for i in 0..grid.warmup + grid.frames {
+        renderer.render(ctx, &path.camera_at(first + i), lights, u64::from(i))?;
+        if i >= grid.warmup {
+            found.push(renderer.read_pixel_classes(ctx)?.expect("object space classifies its pixels"));
+        }
+    }
+    Ok(found)
 }
 
 fn reference_error(e: crate::reference::ReferenceError) -> ExperimentError {
@@ -746,8 +766,8 @@ fn outcome(setup: &Setup, findings: Findings) -> Outcome {
     let mut text = text;
     if setup.breakdown {
         text += "\nWith the error breakdown by pixel class (`--breakdown`: `breakdown.csv` and the \
-                 \"Error by pixel class\" sections); object space's classes are read back after each measured \
-                 frame, outside it.\n";
+                 \"Error by pixel class\" sections); object space's classes come from a second, untimed run of \
+                 each cell's frames.\n";
     }
     let items = vec![
         "MSAA: forward, forward-multipass and clustered resolve hardware MSAA at the standard sample positions; \
