@@ -373,8 +373,9 @@ pub fn measure(
         times.sort_by(f64::total_cmp);
         drop(renderer);
         // Object space's pixel classes come from a second run of the same
-        // frames, untimed: read back between timed frames, the classify pass
-        // and its waits moved some cells' medians by up to 2.5x on the H200.
+        // frames, untimed, so that the timed frames read nothing back (with
+        // the read-backs between them, two cells' medians were 1.7x and 2.5x
+        // their neighbours' on the H200).
         let mut own_classes = Vec::new();
         if grid.breakdown && !conventional {
             progress.set_message(format!("pixel classes {label} {} {} {spec}", cell.textures, cell.gloss.name()));
