@@ -5,8 +5,9 @@
 //! Passes, each timed under its name: `vis: clear` (the 64-bit buffer to
 //! background), `vis: raster` (one thread per visible triangle: near-plane
 //! clipped bounds, homogeneous edge functions with the top-left rule, and one
-//! 64-bit `atomicMax(depth << 32 | payload)` per covered pixel where a load
-//! of the pixel finds nothing nearer ([`SceneGpu::vis_depth_test`]); triangles
+//! 64-bit `atomicMax(depth << 32 | payload)` per covered pixel (with
+//! [`SceneGpu::vis_depth_test`], off by default, only where a load of the
+//! pixel finds nothing nearer: fewer atomics, but slower on the H200); triangles
 //! whose bounds exceed 256 pixels are set up once into a buffer and queued as
 //! 32x32 tiles), `vis: raster big` (one workgroup per queued tile: its 8x8
 //! squares are tested against the triangle's edges, then every pixel of the
