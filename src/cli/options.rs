@@ -312,11 +312,15 @@ pub struct ObjectSpaceArgs {
     /// How tile marking writes the tiles pixels need: `workgroup` (default:
     /// the first pixel of each 8x8 workgroup to need a tile marks it once)
     /// or `per-pixel` (every pixel marks each tile of its footprint: the
-    /// former pass, for comparison). Both mark the same tiles.
+    /// former pass, for comparison) or `subgroup` (as `workgroup`, but a
+    /// subgroup's pixels that need one tile elect one of them to claim it in
+    /// the workgroup's table; needs subgroup operations). All mark the same
+    /// tiles.
     #[arg(long, value_enum, default_value = "workgroup")]
     pub marking: Marking,
     /// Count tile marking's global tile marks and atomics every frame into
-    /// the `--stats`/`bench` counters `mark_tiles` and `mark_atomics` (adds
+    /// the `--stats`/`bench` counters `mark_tiles`, `mark_atomics` and
+    /// `mark_claims` (claims of a tile in the workgroup table; adds
     /// workgroup atomics: for profiling, not for timing).
     #[arg(long)]
     pub count_marks: bool,

@@ -329,9 +329,18 @@ struct MarkingCase<'a> {
 /// the queue sorted, and the counters visible, new, queued, requested.
 type MarkingState = (Vec<u32>, Vec<u32>, Vec<[u32; 2]>, [u32; 4]);
 
-/// The marking state after each of the case's frames, and the frames'
-/// global tile marks and atomics of marking.
-fn marking_run(ctx: &GpuContext, case: &MarkingCase, marking: Marking) -> (Vec<MarkingState>, u64, u64) {
+/// What marking a case's frames left: the marking state and the image after
+/// each frame, and the frames' global tile marks, global atomics and claims
+/// in the workgroup tables, summed.
+struct MarkingRun {
+    states: Vec<MarkingState>,
+    images: Vec<image::RgbaImage>,
+    tiles: u64,
+    atomics: u64,
+    claims: u64,
+}
+
+fn marking_run(ctx: &GpuContext, case: &MarkingCase, marking: Marking) -> MarkingRun {
     let objectspace = ObjectSpaceConfig {
         reuse: 2,
         texture_sizes: case.texture_sizes.clone(),
@@ -346,36 +355,34 @@ fn marking_run(ctx: &GpuContext, case: &MarkingCase, marking: Marking) -> (Vec<M
         samples: 1,
     };
     let mut renderer = Renderer::new(ctx, case.scene, &options).unwrap();
-    let (mut states, mut tiles, mut atomics) = (Vec::new(), 0, 0);
+    let mut run = MarkingRun { states: Vec::new(), images: Vec::new(), tiles: 0, atomics: 0, claims: 0 };
     for (frame, camera) in case.cameras.iter().enumerate() {
         renderer.render(ctx, camera, &case.lights, frame as u64).unwrap();
+        run.images.push(renderer.read_image(ctx).unwrap());
         let gpu = renderer.pipeline::<ObjectSpace>().unwrap().read_mark_state(ctx).unwrap();
         let mut queue = gpu.queue;
         queue.sort_unstable();
         let c = |t: TileCounter| gpu.counters[t as usize];
         let rules =
             [c(TileCounter::Visible), c(TileCounter::New), c(TileCounter::Queued), c(TileCounter::PagesRequested)];
-        states.push((gpu.tile_visible, gpu.tile_shaded, queue, rules));
-        tiles += c(TileCounter::MarkTiles) as u64;
-        atomics += c(TileCounter::MarkAtomics) as u64;
+        run.states.push((gpu.tile_visible, gpu.tile_shaded, queue, rules));
+        run.tiles += c(TileCounter::MarkTiles) as u64;
+        run.atomics += c(TileCounter::MarkAtomics) as u64;
+        run.claims += c(TileCounter::MarkClaims) as u64;
     }
-    (states, tiles, atomics)
+    run
 }
 
-/// Marks with both markings and asserts the same state after every frame,
-/// fewer global tile marks and at most `most_share` of per-pixel marking's
-/// global atomics (printed).
-fn compare_markings(ctx: &GpuContext, case: MarkingCase, most_share: f64) {
-    let name = case.name;
-    let (per_pixel, pixel_tiles, pixel_atomics) = marking_run(ctx, &case, Marking::PerPixel);
-    let (workgroup, group_tiles, group_atomics) = marking_run(ctx, &case, Marking::Workgroup);
+/// Asserts that two markings left the same state after every frame.
+fn assert_same_marking(name: &str, what: &str, a: &[MarkingState], b: &[MarkingState]) {
     // The first tile whose stamps differ, and how many do.
     let differ = |a: &[u32], b: &[u32]| {
         let wrong: Vec<usize> = (0..a.len().max(b.len())).filter(|&t| a.get(t) != b.get(t)).collect();
         wrong.first().map(|&t| format!("{} tiles, first {t}: {:?} against {:?}", wrong.len(), a.get(t), b.get(t)))
     };
-    for (frame, (a, b)) in per_pixel.iter().zip(&workgroup).enumerate() {
-        let at = format!("{name} frame {frame}, per pixel against workgroup");
+    assert_eq!(a.len(), b.len());
+    for (frame, (a, b)) in a.iter().zip(b).enumerate() {
+        let at = format!("{name} frame {frame}, {what}");
         assert!(a.3[0] > 0, "{at}: no tile visible");
         assert_eq!(a.3, b.3, "{at}: the counters visible, new, queued, requested differ");
         assert_eq!(differ(&a.0, &b.0), None, "{at}: tile_visible differs");
@@ -384,6 +391,18 @@ fn compare_markings(ctx: &GpuContext, case: MarkingCase, most_share: f64) {
         assert_eq!(differ(&qa, &qb), None, "{at}: the queued tiles differ");
         assert!(a.2 == b.2, "{at}: a queued tile's object or level differs");
     }
+}
+
+/// Marks with both markings and asserts the same state after every frame,
+/// fewer global tile marks and at most `most_share` of per-pixel marking's
+/// global atomics (printed).
+fn compare_markings(ctx: &GpuContext, case: MarkingCase, most_share: f64) {
+    let name = case.name;
+    let per_pixel = marking_run(ctx, &case, Marking::PerPixel);
+    let workgroup = marking_run(ctx, &case, Marking::Workgroup);
+    assert_same_marking(name, "per pixel against workgroup", &per_pixel.states, &workgroup.states);
+    let (pixel_tiles, pixel_atomics) = (per_pixel.tiles, per_pixel.atomics);
+    let (group_tiles, group_atomics) = (workgroup.tiles, workgroup.atomics);
     let share = group_atomics as f64 / pixel_atomics as f64;
     eprintln!(
         "{name}, {}x{}, {} frames: global tile marks {pixel_tiles} per pixel, {group_tiles} by workgroup \
@@ -427,4 +446,47 @@ fn workgroup_marking_matches_per_pixel_marking_with_fewer_atomics() {
     let (charted, texture_sizes) = common::charted_for(&scene, &cameras[0], width, height);
     let case = MarkingCase { name: "sponza", scene: &charted, texture_sizes, width, height, cameras, lights };
     compare_markings(&ctx, case, 0.4);
+}
+
+/// Marking with a subgroup election before the workgroup table marks what
+/// workgroup marking marks (tile stamps, queue, counters, the image, frame
+/// by frame along the atrium's path with reuse 2), with fewer claims in the
+/// workgroup tables.
+#[test]
+fn subgroup_marking_matches_workgroup_marking_with_fewer_claims() {
+    let ctx = common::gpu();
+    if !ctx.device.features().contains(wgpu::Features::SUBGROUP) {
+        eprintln!("SKIPPED: the adapter has no subgroup operations");
+        return;
+    }
+    let (width, height) = (192, 108);
+    let aspect = width as f32 / height as f32;
+    let spec: LightSpec = "small:4".parse().unwrap();
+    let scene = scene::load("atrium").unwrap();
+    let path = path::cameras_for_scene("atrium", &scene, aspect).unwrap().select(path::CameraChoice::Path).unwrap();
+    let cameras: Vec<Camera> = (0..3).map(|f| path.camera_at(f * 12)).collect();
+    let lights = lights::build_lights(&spec, &scene.bounds(), &cameras[0], aspect, 7).unwrap();
+    let (charted, texture_sizes) = common::charted(&scene);
+    let case = MarkingCase { name: "atrium", scene: &charted, texture_sizes, width, height, cameras, lights };
+    let workgroup = marking_run(&ctx, &case, Marking::Workgroup);
+    let subgroup = marking_run(&ctx, &case, Marking::Subgroup);
+    assert_same_marking("atrium", "workgroup against subgroup", &workgroup.states, &subgroup.states);
+    for (frame, (a, b)) in workgroup.images.iter().zip(&subgroup.images).enumerate() {
+        assert!(a == b, "atrium frame {frame}: the images differ");
+    }
+    eprintln!(
+        "atrium, {width}x{height}, 3 frames: workgroup-table claims {} by workgroup, {} by subgroup ({:.3}); \
+         global tile marks {} and {}, global atomics {} and {}",
+        workgroup.claims,
+        subgroup.claims,
+        subgroup.claims as f64 / workgroup.claims as f64,
+        workgroup.tiles,
+        subgroup.tiles,
+        workgroup.atomics,
+        subgroup.atomics
+    );
+    // Each distinct tile of a workgroup is marked globally once either way
+    // (more often only where a crowded table gives up, for fewer claimants).
+    assert!(subgroup.tiles <= workgroup.tiles, "global marks {} of {}", subgroup.tiles, workgroup.tiles);
+    assert!(subgroup.claims < workgroup.claims, "claims {} of {}", subgroup.claims, workgroup.claims);
 }

@@ -288,10 +288,15 @@ pub enum TileCounter {
     /// whose triangle maps were copied from a page holding the map of the
     /// same mesh, level and page (another instance's, [`trimap`]).
     TrimapShared = 28,
+    /// With [`ObjectSpaceConfig::count_mark_atomics`]: the mark pass's
+    /// claims of a tile in its workgroup's table (one per pixel and tile of
+    /// its footprint, or per distinct tile of a subgroup with
+    /// [`Marking::Subgroup`]).
+    MarkClaims = 29,
 }
 
 impl TileCounter {
-    pub const ALL: [Self; 20] = [
+    pub const ALL: [Self; 21] = [
         Self::Queued,
         Self::Visible,
         Self::New,
@@ -312,6 +317,7 @@ impl TileCounter {
         Self::MarkAtomics,
         Self::TrimapWeighed,
         Self::TrimapShared,
+        Self::MarkClaims,
     ];
     /// First slot of the age buckets (free pages, then unused for 128 or
     /// more frames, 64-127, ..., 1 frame).
@@ -342,6 +348,7 @@ impl TileCounter {
             Self::MarkAtomics => "COUNT_MARK_ATOMICS",
             Self::TrimapWeighed => "COUNT_TRIMAP_WEIGHED",
             Self::TrimapShared => "COUNT_TRIMAP_SHARED",
+            Self::MarkClaims => "COUNT_MARK_CLAIMS",
         }
     }
 }
@@ -403,6 +410,12 @@ pub enum Marking {
     /// workgroup, not per pixel.
     #[default]
     Workgroup,
+    /// As [`Self::Workgroup`], but the invocations of a subgroup that need
+    /// one tile elect one of them to claim it in the workgroup table
+    /// (subgroup operations: the adapter must have `SUBGROUP`), so the
+    /// table's compare-exchanges follow the distinct tiles of each
+    /// subgroup rather than its pixels.
+    Subgroup,
 }
 
 /// How the passes between marking and shading that back requested pages are
@@ -680,6 +693,8 @@ pub enum ObjectSpaceError {
     ViewsNeedComputeVisibility,
     #[error("an atlas of {texels} texels needs {bytes} bytes of tile state, more than the adapter's largest buffer")]
     AtlasTooLarge { texels: u64, bytes: u64 },
+    #[error("--marking subgroup needs subgroup operations (the SUBGROUP feature), which {0} lacks")]
+    MarkingNeedsSubgroups(String),
     #[error("--os-gather record needs one view and one sample per pixel (got {views} views, {samples} samples)")]
     RecordNeedsOneSample { views: u32, samples: u32 },
     #[error("triangle-map lanes must be one of 1, 2, 4, 8 (got {0})")]
@@ -804,6 +819,9 @@ impl ObjectSpace {
         if invocations > max {
             let adapter = ctx.info.name.clone();
             return Err(ObjectSpaceError::TrimapLanesTooMany { lanes, invocations, adapter, max });
+        }
+        if config.marking == Marking::Subgroup && !device.features().contains(wgpu::Features::SUBGROUP) {
+            return Err(ObjectSpaceError::MarkingNeedsSubgroups(ctx.info.name.clone()));
         }
         if !device.features().contains(wgpu::Features::PRIMITIVE_INDEX) {
             return Err(ObjectSpaceError::NoPrimitiveIndex(ctx.info.name.clone()));
@@ -1320,6 +1338,7 @@ impl Pipeline for ObjectSpace {
                 if self.config.count_mark_atomics {
                     counters.push(("mark_tiles", count(TileCounter::MarkTiles)));
                     counters.push(("mark_atomics", count(TileCounter::MarkAtomics)));
+                    counters.push(("mark_claims", count(TileCounter::MarkClaims)));
                 }
                 if !self.extra_views.is_empty() {
                     // Like for like: tiles on pages already backed, shared

@@ -16,12 +16,19 @@
 // deferred-compute shares and the raster path lacks, and the gather reads its
 // output anyway, so fusing would save one read of the visibility buffer and
 // a pass boundary (the whole resolve is 0.026 ms at 1920x1080 on the H100).
+// `MARK_SUBGROUP` (`--marking subgroup`) adds a step before the workgroup
+// table: the invocations of a subgroup that mark one tile at one call site
+// elect one of them to claim it, so the table's compare-exchanges (which
+// serialise when a subgroup's lanes hit one slot, the common case: most
+// neighbouring pixels need the same tile) follow the distinct tiles of each
+// subgroup, not its pixels; the per-pixel counts are summed per subgroup.
 // `COUNT_MARK_ATOMICS` counts the global tile marks and the global atomics
-// they issue (`COUNT_MARK_TILES`, `COUNT_MARK_ATOMICS`).
+// they issue, and the claims reaching the workgroup table
+// (`COUNT_MARK_TILES`, `COUNT_MARK_ATOMICS`, `COUNT_MARK_CLAIMS`).
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_PAGES_USED, COUNT_PAGES_REQUESTED, COUNT_PAGES_FAILED,
     COUNT_PAGES_BACKED, COUNT_VIEW_TILES, COUNT_BACKED_TILES, COUNT_ATLAS_PIXELS, COUNT_UNDER_SHADED_PIXELS}
 #ifdef COUNT_MARK_ATOMICS
-#import shadespace::contract::{COUNT_MARK_TILES, COUNT_MARK_ATOMICS}
+#import shadespace::contract::{COUNT_MARK_TILES, COUNT_MARK_ATOMICS, COUNT_MARK_CLAIMS}
 #endif
 #import shadespace::pixel_surface::{sample_pixel, PixelSample}
 #ifdef MSAA
@@ -92,6 +99,7 @@ fn queue_if_due(slot: u32, tile: u32, object: u32, level_index: u32, valid_since
 #ifdef COUNT_MARK_ATOMICS
 var<workgroup> mark_tiles_counted: atomic<u32>;
 var<workgroup> mark_atomics_counted: atomic<u32>;
+var<workgroup> mark_claims_counted: atomic<u32>;
 #endif
 
 // Counts `n` global atomics of marking (with `COUNT_MARK_ATOMICS`).
@@ -229,9 +237,44 @@ fn first_in_workgroup(tile: u32) -> bool {
 #endif
 }
 
+#ifdef MARK_SUBGROUP
+// Whether this invocation claims global virtual tile `tile` for the
+// invocations of its subgroup that call this together: one per distinct
+// tile among them (the first's tile, then the next's ...). Any split of the
+// subgroup only elects more than one: the workgroup table still dedups.
+fn first_in_subgroup(tile: u32) -> bool {
+    var claims = false;
+    loop {
+        if tile == subgroupBroadcastFirst(tile) {
+            claims = elected();
+            break;
+        }
+    }
+    return claims;
+}
+
+// This invocation's index in its subgroup (`mark` sets it).
+var<private> lane: u32;
+
+// Whether this is the lowest of the invocations running this call together
+// (naga has no `subgroupElect`).
+fn elected() -> bool {
+    return subgroupBroadcastFirst(lane) == lane;
+}
+#endif
+
 // Marks the tile of texel `texel` unless the workgroup already did.
 fn mark_tile_once(object: u32, level_index: u32, l: AtlasLevel, valid_since: u32, texel: vec2i) {
-    if first_in_workgroup(virtual_tile(l, vec2u(texel))) {
+    let tile = virtual_tile(l, vec2u(texel));
+#ifdef MARK_SUBGROUP
+    if !first_in_subgroup(tile) {
+        return;
+    }
+#endif
+#ifdef COUNT_MARK_ATOMICS
+    atomicAdd(&mark_claims_counted, 1u);
+#endif
+    if first_in_workgroup(tile) {
         mark_tile(object, level_index, l, valid_since, texel);
     }
 }
@@ -246,22 +289,43 @@ const PIXEL_UNDER_SHADED: u32 = 2u;
 var<workgroup> atlas_pixels: atomic<u32>;
 var<workgroup> under_shaded_pixels: atomic<u32>;
 
+#ifdef MARK_SUBGROUP
+// naga takes the subgroup builtins only with a one-dimensional workgroup:
+// its 64 invocations cover the 8x8 pixels row by row, as (8, 8) numbers them.
+@compute @workgroup_size(64)
+fn mark(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) local: u32,
+        @builtin(subgroup_invocation_id) subgroup_lane: u32) {
+    lane = subgroup_lane;
+    let pixel = wg.xy * 8u + vec2u(local % 8u, local / 8u);
+#else
 @compute @workgroup_size(8, 8)
 fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) local: u32) {
+    let pixel = id.xy;
+#endif
 #ifndef MARK_PER_PIXEL
     for (var i = local; i < MARK_SLOTS; i += 64u) {
         atomicStore(&marked_tiles[i], EMPTY_SLOT);
     }
     workgroupBarrier();
 #endif
-    let kind = mark_pixel(id.xy);
+    let kind = mark_pixel(pixel);
     // Counted per workgroup first: one global atomic per 64 pixels.
+#ifdef MARK_SUBGROUP
+    // ... and per subgroup before that: one workgroup atomic per subgroup.
+    let atlas = subgroupAdd(u32(kind != PIXEL_NOT_IN_ATLAS));
+    let under = subgroupAdd(u32(kind == PIXEL_UNDER_SHADED));
+    if elected() {
+        atomicAdd(&atlas_pixels, atlas);
+        atomicAdd(&under_shaded_pixels, under);
+    }
+#else
     if kind != PIXEL_NOT_IN_ATLAS {
         atomicAdd(&atlas_pixels, 1u);
     }
     if kind == PIXEL_UNDER_SHADED {
         atomicAdd(&under_shaded_pixels, 1u);
     }
+#endif
     workgroupBarrier();
     if local == 0u {
         atomicAdd(&counters[COUNT_ATLAS_PIXELS], atomicLoad(&atlas_pixels));
@@ -269,6 +333,7 @@ fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_inde
 #ifdef COUNT_MARK_ATOMICS
         atomicAdd(&counters[COUNT_MARK_TILES], atomicLoad(&mark_tiles_counted));
         atomicAdd(&counters[COUNT_MARK_ATOMICS], atomicLoad(&mark_atomics_counted));
+        atomicAdd(&counters[COUNT_MARK_CLAIMS], atomicLoad(&mark_claims_counted));
 #endif
     }
 }

@@ -6,7 +6,8 @@
 //! one invocation turns the queue length into the shade pass's indirect
 //! dispatch. `cpu.rs` is the CPU twin that tests check this pass against.
 //! [`Marking`] picks whether each pixel or each workgroup's first pixel of
-//! a tile marks it globally.
+//! a tile marks it globally, and whether a subgroup elects one claimant per
+//! tile before the workgroup's table.
 
 use super::Marking;
 use super::resources::{BACKED_ARGS, Resources};
@@ -22,15 +23,19 @@ pub const SHADER: ShaderSource = ShaderSource::new("mark.wgsl", include_str!("ma
 pub const MARK_BACKED_WGSL: ShaderSource = ShaderSource::new("mark_backed.wgsl", include_str!("mark_backed.wgsl"));
 /// Defined for [`Marking::PerPixel`].
 pub const PER_PIXEL: &str = "MARK_PER_PIXEL";
+/// Defined for [`Marking::Subgroup`].
+pub const SUBGROUP: &str = "MARK_SUBGROUP";
 /// Defined to count the global tile marks and atomics.
 pub const COUNT_ATOMICS: &str = "COUNT_MARK_ATOMICS";
 /// Defined for [`super::GatherInput::Record`] (in `gather.wgsl` too): marking
 /// writes each pixel's chart UV and levels for the gather.
 pub const PIXEL_RECORD: &str = "PIXEL_RECORD";
 /// The variants besides [`SHADER`], for the test that validates every shader.
-pub const VARIANTS: [ShaderSource; 4] = [
+pub const VARIANTS: [ShaderSource; 6] = [
     SHADER.with_defs(&[PER_PIXEL]),
     SHADER.with_defs(&[COUNT_ATOMICS]),
+    SHADER.with_defs(&[SUBGROUP]),
+    SHADER.with_defs(&[SUBGROUP, COUNT_ATOMICS]),
     SHADER.with_defs(&[PER_PIXEL, COUNT_ATOMICS]),
     SHADER.with_defs(&[PIXEL_RECORD]),
 ];
@@ -60,8 +65,10 @@ impl MarkPass {
         let mark_groups: &[&wgpu::BindGroupLayout] =
             if records.is_some() { &[&scene.layout, &res.layout, &records_layout] } else { &plain };
         let mut defs = Vec::new();
-        if marking == Marking::PerPixel {
-            defs.push(PER_PIXEL);
+        match marking {
+            Marking::PerPixel => defs.push(PER_PIXEL),
+            Marking::Subgroup => defs.push(SUBGROUP),
+            Marking::Workgroup => {}
         }
         if count_atomics {
             defs.push(COUNT_ATOMICS);
