@@ -62,10 +62,15 @@ fn error(image: &[Vec3], truth: &[Vec3], rows: std::ops::Range<u32>) -> f64 {
     sum / n as f64
 }
 
-/// The floor low and far: the camera 0.8 m above it looking along it, so
-/// its far half is seen at 5 to 15 degrees (footprints 4 to 12 times longer
-/// than wide). Measured on lavapipe (mean absolute error of linear HDR per
-/// channel against the 8x8 truth): see the assertion's message.
+/// The floor low and far: the camera 0.8 m above it looking along it, the
+/// floor's far edge on the image's middle row. Rows 48-71 see it at 6 to 22
+/// degrees (footprints 2.7 to 10 times longer than wide), rows 72-95 at 22
+/// to 36. Measured on lavapipe, mean absolute error of linear HDR per
+/// channel against the 8x8 truth: rows 48-71 0.01038 with aniso 1, 0.00363
+/// with aniso 8 (0.35x); rows 72-95 0.00655 and 0.00175; shaded texels 5,440
+/// and 27,520 (5.1x). The bound, 0.5x on the far rows, leaves a margin. A
+/// gather that filters every tap at the pixel's chart point (the finer
+/// level, one point) measured 0.01160 far: worse than aniso 1.
 #[test]
 fn aniso_8_brings_the_grazing_floor_closer_to_the_supersampled_truth() {
     let ctx = common::gpu();
@@ -101,7 +106,7 @@ fn aniso_8_brings_the_grazing_floor_closer_to_the_supersampled_truth() {
         (hdr, named["shaded_texels"])
     };
     let ((iso, iso_texels), (aniso, aniso_texels)) = (objectspace(1), objectspace(8));
-    // The horizon is at the image's middle row: the far floor is just below it.
+    // The floor's far edge is on the image's middle row.
     let (far, near) = (HEIGHT / 2..HEIGHT * 3 / 4, HEIGHT * 3 / 4..HEIGHT);
     let (far_iso, far_aniso) = (error(&iso, &truth, far.clone()), error(&aniso, &truth, far));
     let (near_iso, near_aniso) = (error(&iso, &truth, near.clone()), error(&aniso, &truth, near));
@@ -110,9 +115,9 @@ fn aniso_8_brings_the_grazing_floor_closer_to_the_supersampled_truth() {
          {near_iso:.5}, {near_aniso:.5}; shaded texels {iso_texels} and {aniso_texels}"
     );
     eprintln!("{message}");
-    assert!(far_aniso <= 0.8 * far_iso, "aniso 8 should cut the far floor's error by 20 % or more: {message}");
-    // Where the floor is seen steeply the footprints are nearly round: no worse.
-    assert!(near_aniso <= near_iso * 1.02, "{message}");
+    assert!(far_aniso <= 0.5 * far_iso, "aniso 8 should halve the far floor's error or better: {message}");
+    // Nearer, the footprints are less long (1.7 to 2.7): better still.
+    assert!(near_aniso < near_iso, "{message}");
     // Finer levels along the shorter axis cost texels.
     assert!(aniso_texels > iso_texels, "{message}");
 }

@@ -713,6 +713,46 @@ mod tests {
     }
 
     #[test]
+    fn aniso_follows_the_shorter_axis_with_taps_along_the_longer() {
+        // 256 texels: 8 texels per pixel across, 1 down.
+        let entries = entries();
+        let f = ChartFootprint {
+            uv: Vec2::splat(0.5),
+            du_dx: Vec2::new(8.0 / 256.0, 0.0),
+            du_dy: Vec2::new(0.0, 1.0 / 256.0),
+        };
+        let at = |aniso| {
+            let lod = level_of_detail(&entries[0], &MarkParams { aniso, ..params(0.0, 0.0) }, &f, 0.0);
+            let taps = aniso_choices(256, aniso, &f);
+            assert_eq!(taps.len(), 1, "aniso {aniso}: {taps:?}");
+            (lod, taps[0])
+        };
+        // Isotropic: the longer axis's level, one tap at the point.
+        let (lod, taps) = at(1);
+        assert!((lod - 3.0).abs() < 1e-5 && taps.points() == [f.uv], "{lod} {taps:?}");
+        // 8 taps a texel apart along x, at the shorter axis's level 0.
+        let (lod, taps) = at(8);
+        assert!(lod.abs() < 1e-5 && taps.count == 8 && taps.axis == f.du_dx, "{lod} {taps:?}");
+        let xs: Vec<f32> = taps.points().iter().map(|p| (p.x - 0.5) * 256.0).collect();
+        assert_eq!(xs, [-3.5, -2.5, -1.5, -0.5, 0.5, 1.5, 2.5, 3.5]);
+        // Limited to 4 taps: the level rises until 4 cover the longer axis.
+        let (lod, taps) = at(4);
+        assert!((lod - 1.0).abs() < 1e-5 && taps.count == 4, "{lod} {taps:?}");
+        // A ratio on a `ceil` boundary counts both tap counts; axes of equal
+        // length, both axes.
+        let f2 = ChartFootprint { du_dx: Vec2::new(2.0 / 256.0, 0.0), du_dy: Vec2::new(0.0, 1.0 / 256.0), ..f };
+        let counts: Vec<u32> = aniso_choices(256, 8, &f2).iter().map(|t| t.count).collect();
+        assert_eq!(counts, [2, 3]);
+        let round = ChartFootprint { du_dx: Vec2::new(2.0 / 256.0, 0.0), du_dy: Vec2::new(0.0, 2.0 / 256.0), ..f };
+        let choices = aniso_choices(256, 8, &round);
+        assert_eq!(choices.len(), 3, "{choices:?}");
+        assert!(choices.iter().any(|t| t.count == 2 && t.axis == round.du_dy), "{choices:?}");
+        // Magnified (under a texel a pixel along both axes): one tap.
+        let small = ChartFootprint { du_dx: Vec2::new(0.5 / 256.0, 0.0), du_dy: Vec2::new(0.0, 0.1 / 256.0), ..f };
+        assert_eq!(aniso_choices(256, 16, &small).iter().map(|t| t.count).collect::<Vec<_>>(), [1]);
+    }
+
+    #[test]
     fn variable_rate_fades_out_where_normals_diverge() {
         assert_eq!(variable_rate_bias(0.0, [Vec3::Z; 3]), 0.0);
         // cos 45 degrees: 1 - 0.707 = 0.29, times 8 is above 1: no bias.
