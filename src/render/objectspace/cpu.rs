@@ -196,6 +196,11 @@ pub fn lod_tolerance(params: &MarkParams) -> f32 {
     if params.aniso > 1 { 10.0 * LOD_TOLERANCE } else { LOD_TOLERANCE }
 }
 
+/// The relative error of an anisotropic footprint's axis (`AnisoTaps::axis`)
+/// on the GPU, for the position of its taps ([`AnisoTaps::slack`]): the
+/// same as [`ANISO_TOLERANCE`]'s lengths.
+pub const AXIS_TOLERANCE: f32 = 1e-3;
+
 /// Mirrors `AnisoTaps`: the chart points the gather filters and averages
 /// for a pixel (`--os-aniso`), `count` of them spread along `axis`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -217,6 +222,22 @@ impl AnisoTaps {
     /// Every tap's chart point, in the gather's order.
     pub fn points(&self) -> Vec<Vec2> {
         (0..self.count).map(|i| self.tap(i)).collect()
+    }
+
+    /// How far (in chart UV) the GPU's tap `i` may be from [`Self::tap`]'s
+    /// beyond the chart point's own error ([`TEXEL_TOLERANCE`]): the axis's
+    /// error ([`AXIS_TOLERANCE`] of it, a difference of close chart UVs)
+    /// times the tap's offset along it. A pixel at a silhouette may have an
+    /// axis of most of the chart (its neighbour's barycentrics extrapolated
+    /// far off the triangle): on lavapipe a far tap of one of the atrium at
+    /// `--os-aniso 8` (axis 0.76 of the chart) floored the other way with
+    /// no slack. One other there (pixel (77, 19) of path frame 12 at 128x72)
+    /// is off by more than 3e-3 of its axis, which this twin does not cover.
+    pub fn slack(&self, i: u32) -> f32 {
+        if self.count == 1 {
+            return 0.0;
+        }
+        self.axis.length() * ((i as f32 + 0.5) / self.count as f32 - 0.5).abs() * AXIS_TOLERANCE
     }
 }
 
@@ -443,11 +464,11 @@ pub fn pixel_tiles(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Option<P
     levels.dedup();
     for level in levels {
         let l = &e.levels[level as usize];
-        let tolerance = l.size as f32 * TEXEL_TOLERANCE;
         let mut level_must: Option<BTreeSet<u32>> = None;
         for taps in &aniso {
             let mut taps_must = BTreeSet::new();
-            for uv in taps.points() {
+            for (i, uv) in taps.points().into_iter().enumerate() {
+                let tolerance = l.size as f32 * (TEXEL_TOLERANCE + taps.slack(i as u32));
                 // `t` as in `bilinear`, floored both ways when near an integer.
                 let t = uv * l.size as f32 - 0.5;
                 let mut outcomes: Vec<Vec<u32>> = Vec::new();

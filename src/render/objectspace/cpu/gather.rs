@@ -323,18 +323,22 @@ pub fn gather_pixel<'a>(
     let own = islands[p.triangle];
     // Every outcome of one level's filter at chart point `uv` (its bilinear
     // coordinate floored both ways when near an integer).
-    let filters = |level_index: u32, uv: Vec2| -> Vec<GatherTaps> {
+    // `slack`: the tap's position error beyond the chart point's (`AnisoTaps::slack`).
+    let filters = |level_index: u32, uv: Vec2, slack: f32| -> Vec<GatherTaps> {
         let texels = level(p.object, level_index);
         let size = e.levels[level_index as usize].size;
         assert_eq!(texels.size, size, "object {} level {level_index}: texels of another size", p.object);
         let t = uv * size as f32 - 0.5;
-        let tolerance = size as f32 * TEXEL_TOLERANCE;
+        let tolerance = size as f32 * (TEXEL_TOLERANCE + slack);
         let mut out = Vec::new();
         for x in floor_candidates(t.x, tolerance) {
             for y in floor_candidates(t.y, tolerance) {
                 let base = IVec2::new(x, y);
                 let (taps, weights) = level_taps(inputs.params.gather_filter, size, base, t - base.as_vec2());
-                out.push(filter_taps(texels, own, islands, level_index, &taps, &weights));
+                let mut g = filter_taps(texels, own, islands, level_index, &taps, &weights);
+                // The weights move with the tap's wider error too.
+                g.weight_tolerance *= 1.0 + slack / TEXEL_TOLERANCE;
+                out.push(g);
             }
         }
         out
@@ -343,8 +347,8 @@ pub fn gather_pixel<'a>(
     // tap's outcomes combined with the others'.
     let level_outcomes = |level_index: u32, taps: &AnisoTaps| -> Vec<Vec<GatherTaps>> {
         let mut combos: Vec<Vec<GatherTaps>> = vec![Vec::new()];
-        for uv in taps.points() {
-            let tap = filters(level_index, uv);
+        for (i, uv) in taps.points().into_iter().enumerate() {
+            let tap = filters(level_index, uv, taps.slack(i as u32));
             combos = combos
                 .iter()
                 .flat_map(|c| tap.iter().map(move |g| [c.as_slice(), std::slice::from_ref(g)].concat()))
