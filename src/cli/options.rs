@@ -372,6 +372,16 @@ pub struct ObjectSpaceArgs {
     /// the 4x4: sharper); the cubics mark one texel more each side.
     #[arg(long, value_enum, default_value = "bilinear")]
     pub os_filter: GatherFilter,
+    /// Anisotropic gathering: the most filter taps (1, 2, 4, 8 or 16) a
+    /// pixel reads along its footprint's longer axis. The mip level then
+    /// follows the shorter axis, limited so that the longer needs at most
+    /// this many taps, as hardware anisotropic filtering does: grazing and
+    /// distant surfaces are shaded and read less blurred along their
+    /// shorter axis, at the cost of more tiles shaded and more taps read.
+    /// Default 1: the level follows the longer axis, one tap. Not with
+    /// `--os-gather record`.
+    #[arg(long, default_value_t = 1, value_parser = parse::aniso)]
+    pub os_aniso: u32,
     /// Points each shaded texel averages: 1 (its centre, default) or 4
     /// (2x2 over the texel: shading pre-filtered over the texel's footprint,
     /// against specular aliasing; 4x the shading work, the same tiles).

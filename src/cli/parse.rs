@@ -175,6 +175,14 @@ pub fn level_blend(s: &str) -> Result<f32, String> {
     finite_in(s, 0.0..=1.0, "a band from 0 to 1 levels")
 }
 
+/// `--os-aniso`: 1, 2, 4, 8 or 16 taps.
+pub fn aniso(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(n) if shadespace::render::objectspace::ANISO_RATIOS.contains(&n) => Ok(n),
+        _ => Err(format!("'{s}' is not one of 1, 2, 4, 8, 16 taps")),
+    }
+}
+
 /// `--os-texel-samples`: 1 or 4.
 pub fn texel_samples(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {

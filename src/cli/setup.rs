@@ -62,6 +62,12 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
             "--os-gather record needs one view and one sample per pixel: not with {with}"
         )));
     }
+    if os.os_gather == GatherInput::Record && os.os_aniso > 1 {
+        return input(Err(anyhow::anyhow!(
+            "--os-gather record reads one tap a pixel: not with --os-aniso {}",
+            os.os_aniso
+        )));
+    }
     let mut scene = input(scene::load(&a.scene))?;
     scene.cull_back_faces = a.cull_back_faces;
     if a.textures == TextureChoice::Detailed {
@@ -190,6 +196,7 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             trimap_share: a.objectspace.os_trimap_share,
             gather_input: a.objectspace.os_gather,
             gather_filter: a.objectspace.os_filter,
+            aniso: a.objectspace.os_aniso,
             texel_samples: a.objectspace.os_texel_samples,
             ..Default::default()
         }),

@@ -173,6 +173,7 @@ const OUR_MARKING: MarkParams = MarkParams {
     variable_rate: 0.0,
     level_blend: 0.0,
     gather_filter: GatherFilter::Bilinear,
+    aniso: 1,
 };
 
 /// The atlas tiles our marking gives a pixel of an object (entry `e`) with

@@ -86,16 +86,18 @@ pub struct Config {
     pub level_blend: f32,
     /// Object space: `--os-filter`.
     pub filter: GatherFilter,
+    /// Object space: `--os-aniso` (1: isotropic).
+    pub aniso: u32,
 }
 
 impl Config {
     fn plain(shading: Shading) -> Self {
-        Self { shading, spread: false, mip_bias: 0.0, level_blend: 0.0, filter: GatherFilter::Bilinear }
+        Self { shading, spread: false, mip_bias: 0.0, level_blend: 0.0, filter: GatherFilter::Bilinear, aniso: 1 }
     }
 
     /// `objectspace-hz30` (shading at 30 Hz of 60, spread), `objectspace-bias1`,
     /// `objectspace-blend1` (level blend 1: trilinear), `objectspace-bspline`
-    /// (the B-spline gather), ...
+    /// (the B-spline gather), `objectspace-aniso8` (`--os-aniso 8`), ...
     pub fn label(&self) -> String {
         match self.shading {
             Shading::ObjectSpace { reuse, variable_rate } if self.spread => {
@@ -115,6 +117,7 @@ impl Config {
                 GatherFilter::Bspline => "-bspline",
                 GatherFilter::Mitchell => "-mitchell",
             }
+            + &if self.aniso > 1 { format!("-aniso{}", self.aniso) } else { String::new() }
     }
 
     /// The pipeline's name (a curve of the cost-error plot).
@@ -129,6 +132,7 @@ impl Config {
             os.mip_bias = self.mip_bias;
             os.level_blend = self.level_blend;
             os.gather_filter = self.filter;
+            os.aniso = self.aniso;
         }
         config
     }
@@ -148,8 +152,10 @@ pub struct Axes {
 /// The configurations of a grid: its shadings, then object space at 30 Hz
 /// (reuse 2, spread over the frames) and, but in quick mode, with mip bias 1,
 /// with level blend 1 (trilinear gathering), with the B-spline gather, with
-/// both (the least flicker on lavapipe: BENCHMARKS.md), and with mip bias -1
-/// (finer levels) alone and with level blend 1.
+/// both (the least flicker on lavapipe: BENCHMARKS.md), with mip bias -1
+/// (finer levels) alone and with level blend 1, and with anisotropic
+/// gathering (`--os-aniso` 4 and 8, and 8 with level blend 1). A quick run
+/// may name the others with `--configs` ([`chosen_configs`]).
 pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
     let mut all: Vec<Config> = grid.shadings.iter().map(|&s| Config::plain(s)).collect();
     if grid.shadings.iter().any(|s| !s.is_conventional()) {
@@ -166,15 +172,24 @@ pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
             let finer = Config { mip_bias: -1.0, ..Config::plain(Shading::OBJECT_SPACE) };
             all.push(finer);
             all.push(Config { level_blend: 1.0, ..finer });
+            // Anisotropic gathering: the level follows the footprint's
+            // shorter axis, against the blur and crawl of grazing surfaces
+            // (pixels of level 3 and coarser carry a third of object space's
+            // extra error, BENCHMARKS.md).
+            for aniso in [4, 8] {
+                all.push(Config { aniso, ..Config::plain(Shading::OBJECT_SPACE) });
+            }
+            all.push(Config { level_blend: 1.0, aniso: 8, ..Config::plain(Shading::OBJECT_SPACE) });
         }
     }
     all
 }
 
 /// The configurations a run measures: [`configs`], only those named in
-/// the grid's `configs` where it names any.
+/// the grid's `configs` where it names any (then from every configuration
+/// of its shadings, quick or not).
 pub fn chosen_configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
-    let all = configs(grid, quick);
+    let all = configs(grid, quick && grid.configs.is_empty());
     all.into_iter().filter(|c| grid.configs.is_empty() || grid.configs.contains(&c.label())).collect()
 }
 
@@ -940,7 +955,10 @@ mod tests {
                 "objectspace-bspline",
                 "objectspace-blend1-bspline",
                 "objectspace-bias-1",
-                "objectspace-bias-1-blend1"
+                "objectspace-bias-1-blend1",
+                "objectspace-aniso4",
+                "objectspace-aniso8",
+                "objectspace-blend1-aniso8"
             ]
         );
         let all = cells(&full, false);
@@ -949,7 +967,7 @@ mod tests {
             labels.len() * 3 * 2 * 2,
             "full: two textures, two gloss settings, one light set, MSAA 1, 4, 8"
         );
-        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 10 * 4 * 3);
+        assert_eq!(all.iter().filter(|c| c.config.pipeline() == "objectspace").count(), 13 * 4 * 3);
         assert_eq!(all.iter().filter(|c| c.msaa == 8).count(), labels.len() * 4);
         let quick = grid(true);
         let labels: Vec<String> = configs(&quick, true).iter().map(Config::label).collect();
@@ -957,6 +975,10 @@ mod tests {
         let cells = cells(&quick, true);
         assert_eq!(cells.len(), 4 * 2 * 2, "quick: detailed textures, two gloss settings, one light set, MSAA 1, 4");
         assert!(cells.iter().all(|c| c.textures == "detailed"));
+        // A quick run may name the full grid's object-space cells.
+        let named = TimingGrid { configs: vec!["objectspace-aniso8".into()], ..grid(true) };
+        let labels: Vec<String> = chosen_configs(&named, true).iter().map(Config::label).collect();
+        assert_eq!(labels, ["objectspace-aniso8"]);
     }
 
     /// Every file of `dir` by name, for comparing two runs' outputs.

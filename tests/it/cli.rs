@@ -99,6 +99,10 @@ fn bad_options_say_what_is_wrong() {
     let (code, err) = run(&["render", "--pipeline", "objectspace", "--os-gather", "record", "--msaa", "4"]);
     assert_eq!(code, 2);
     assert!(err.contains("--os-gather record") && err.contains("--msaa 4"), "{err}");
+    // The records hold one chart point a pixel: no anisotropic taps.
+    let (code, err) = run(&["render", "--pipeline", "objectspace", "--os-gather", "record", "--os-aniso", "4"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--os-gather record") && err.contains("--os-aniso 4"), "{err}");
     let (code, err) = run(&["bench", "--forward-only", "nothing-called-this"]);
     assert_eq!(code, 2);
     assert!(err.contains("nothing-called-this"), "{err}");
@@ -108,7 +112,7 @@ fn bad_options_say_what_is_wrong() {
 /// texture sizes are refused with the flag and the accepted range.
 #[test]
 fn numeric_flags_must_be_finite_and_in_range() {
-    let cases: [(&[&str], &str); 11] = [
+    let cases: [(&[&str], &str); 13] = [
         (&["--mip-bias", "nan"], "-16 to 16"),
         (&["--mip-bias", "inf"], "-16 to 16"),
         (&["--exposure", "inf"], "positive finite"),
@@ -120,6 +124,8 @@ fn numeric_flags_must_be_finite_and_in_range() {
         (&["--level-blend", "nan"], "from 0 to 1"),
         (&["--cull-plain-above", "1.5"], "from 0 to 1"),
         (&["--cull-plain-above", "nan"], "from 0 to 1"),
+        (&["--os-aniso", "3"], "1, 2, 4, 8, 16"),
+        (&["--os-aniso", "0"], "1, 2, 4, 8, 16"),
     ];
     for (flags, expected) in cases {
         let mut args = vec!["render", "--pipeline", "objectspace"];

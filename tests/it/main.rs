@@ -6,6 +6,7 @@
 mod common;
 
 mod agreement;
+mod aniso;
 mod blending;
 mod bloom;
 mod breakdown;

@@ -32,6 +32,8 @@ struct Run<'a> {
     gather_filter: GatherFilter,
     /// How the visibility buffer the twin reads is filled.
     visibility: VisibilityMethod,
+    /// `ObjectSpaceConfig::aniso` (marking marks every tap's footprint).
+    aniso: u32,
     /// One camera per frame.
     cameras: Vec<Camera>,
     lights: Vec<Light>,
@@ -73,6 +75,7 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
         level_blend: run.level_blend,
         gather_filter: run.gather_filter,
         visibility: run.visibility,
+        aniso: run.aniso,
         texture_sizes: run.texture_sizes.clone(),
         ..Default::default()
     };
@@ -227,6 +230,7 @@ fn static_floor_reuses_shades_until_they_age_and_the_camera_moves_or_the_lights_
             level_blend: 0.0,
             gather_filter: GatherFilter::Bilinear,
             visibility: VisibilityMethod::Raster,
+            aniso: 1,
             cameras,
             lights,
             lights_change_at: Some(6),
@@ -244,11 +248,17 @@ fn static_floor_reuses_shades_until_they_age_and_the_camera_moves_or_the_lights_
 fn moving_floor_marks_new_tiles() {
     let ctx = common::gpu();
     let (scene, _, lights) = common::floor_scene();
-    for (reuse, variable_rate) in [(1, 0.0), (2, 1.0)] {
+    let runs = [
+        ("moving floor, reuse 1", 1, 0.0, 1),
+        ("moving floor, reuse 2, variable rate 1", 2, 1.0, 1),
+        // Grazing: up to 8 taps along each pixel's footprint, each marked.
+        ("moving floor, reuse 1, aniso 8", 1, 0.0, 8),
+    ];
+    for (name, reuse, variable_rate, aniso) in runs {
         let reports = check(
             &ctx,
             Run {
-                name: if reuse == 1 { "moving floor, reuse 1" } else { "moving floor, reuse 2, variable rate 1" },
+                name,
                 scene: &scene,
                 texture_sizes: vec![Some(2048)],
                 width: 160,
@@ -258,6 +268,7 @@ fn moving_floor_marks_new_tiles() {
                 level_blend: 0.0,
                 gather_filter: GatherFilter::Bilinear,
                 visibility: VisibilityMethod::Raster,
+                aniso,
                 // Low over the floor and nearing it: finer levels come into view.
                 cameras: floor_cameras(Vec3::new(0.0, 2.5, 5.0), Vec3::new(0.3, -0.2, -0.5), 5),
                 lights: lights.clone(),
@@ -283,16 +294,21 @@ fn atrium_along_its_camera_path() {
     let lights = lights::build_lights(&spec, &bounds, &cameras[0], width as f32 / height as f32, 7).unwrap();
     let (scene, texture_sizes) = common::charted(&scene);
     let (bilinear, bspline) = (GatherFilter::Bilinear, GatherFilter::Bspline);
+    let raster = VisibilityMethod::Raster;
     let runs = [
-        ("atrium, reuse 1", 1, 0.0, 0.0, bilinear, VisibilityMethod::Raster),
-        ("atrium, reuse 3, variable rate 1", 3, 1.0, 0.0, bilinear, VisibilityMethod::Raster),
-        ("atrium, reuse 2, compute visibility", 2, 0.0, 0.0, bilinear, VisibilityMethod::Compute),
+        ("atrium, reuse 1", 1, 0.0, 0.0, bilinear, raster, 1),
+        ("atrium, reuse 3, variable rate 1", 3, 1.0, 0.0, bilinear, raster, 1),
+        ("atrium, reuse 2, compute visibility", 2, 0.0, 0.0, bilinear, VisibilityMethod::Compute, 1),
         // Two levels per pixel between levels: both marked.
-        ("atrium, reuse 2, level blend 1", 2, 0.0, 1.0, bilinear, VisibilityMethod::Raster),
+        ("atrium, reuse 2, level blend 1", 2, 0.0, 1.0, bilinear, raster, 1),
         // The B-spline's 4x4 taps: one texel more each side marked.
-        ("atrium, reuse 2, B-spline filter", 2, 0.0, 0.0, bspline, VisibilityMethod::Raster),
+        ("atrium, reuse 2, B-spline filter", 2, 0.0, 0.0, bspline, raster, 1),
+        // Up to 4 anisotropic taps a pixel, in both levels of a blend: every tap's tiles
+        // (at aniso 8 one silhouette pixel's far tap is off by more than the twin allows:
+        // `cpu::AnisoTaps::slack`).
+        ("atrium, reuse 2, aniso 4, level blend 1", 2, 0.0, 1.0, bilinear, raster, 4),
     ];
-    for (name, reuse, variable_rate, level_blend, gather_filter, visibility) in runs {
+    for (name, reuse, variable_rate, level_blend, gather_filter, visibility, aniso) in runs {
         check(
             &ctx,
             Run {
@@ -306,6 +322,7 @@ fn atrium_along_its_camera_path() {
                 level_blend,
                 gather_filter,
                 visibility,
+                aniso,
                 cameras: cameras.clone(),
                 lights: lights.clone(),
                 lights_change_at: Some(2),

@@ -46,6 +46,8 @@ struct Case<'a> {
     gather_filter: GatherFilter,
     /// `ObjectSpaceConfig::texel_samples`.
     texel_samples: u32,
+    /// `ObjectSpaceConfig::aniso`.
+    aniso: u32,
     /// Check the shade stage too (the scene has no textures).
     shade: bool,
 }
@@ -65,6 +67,8 @@ struct Report {
     levels: BTreeMap<u32, usize>,
     /// Pixels that blend two levels.
     blended_pixels: usize,
+    /// Pixels gathered at more than one anisotropic tap.
+    aniso_pixels: usize,
     /// Largest shade difference, in `Rgba16Float` units in the last place.
     worst_shade: f32,
     /// Largest share of its bound a pixel's colour difference uses.
@@ -73,7 +77,7 @@ struct Report {
 
 fn describe_outcome(o: &GatherOutcome) -> String {
     let levels: Vec<String> = o.taps().map(describe).collect();
-    format!("blend weight {} of [{}]", o.pair.t, levels.join("; "))
+    format!("blend weight {}, {} taps along {:?}, of [{}]", o.pair.t, o.taps.count, o.taps.axis, levels.join("; "))
 }
 
 fn describe(t: &GatherTaps) -> String {
@@ -95,6 +99,7 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
         level_blend: case.level_blend,
         gather_filter: case.gather_filter,
         texel_samples: case.texel_samples,
+        aniso: case.aniso,
         ..Default::default()
     };
     let options = RenderOptions {
@@ -216,6 +221,7 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
                     *report.levels.entry(level).or_default() += 1;
                 }
                 report.blended_pixels += usize::from(outcomes[0].pair.levels().len() == 2);
+                report.aniso_pixels += usize::from(outcomes[0].taps.count > 1);
                 report.filtered_pixels += usize::from(outcomes[0].taps().any(|t| t.kept.iter().any(|k| !k)));
                 let error = outcomes.iter().map(|t| t.bound_used(got)).fold(f32::MAX, f32::min);
                 if outcomes.iter().any(|t| t.matches(got)) {
@@ -250,20 +256,24 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
 /// The floor scene (checker texture: neighbouring texels differ, which a
 /// wrong filter cannot hide) seen from its camera, at two levels, with
 /// trilinear gathering (level blend 1: two levels per pixel but where the
-/// last level clamps), and with the Mitchell cubic.
+/// last level clamps), with the Mitchell cubic, and with anisotropic
+/// gathering (the floor recedes: up to 8 taps a pixel, alone and with
+/// trilinear and the B-spline).
 #[test]
 fn gather_on_the_floor() {
     let ctx = common::gpu();
     let (scene, camera, lights) = common::floor_scene();
     let mut levels = BTreeMap::new();
     let cases = [
-        ("floor", 0.0, 0.0, GatherFilter::Bilinear),
-        ("floor, mip bias -2.5", -2.5, 0.0, GatherFilter::Bilinear),
-        ("floor, mip bias -2.5, trilinear", -2.5, 1.0, GatherFilter::Bilinear),
+        ("floor", 0.0, 0.0, GatherFilter::Bilinear, 1),
+        ("floor, mip bias -2.5", -2.5, 0.0, GatherFilter::Bilinear, 1),
+        ("floor, mip bias -2.5, trilinear", -2.5, 1.0, GatherFilter::Bilinear, 1),
         // Negative lobes on a checker: a wrong weight or tap shows.
-        ("floor, mip bias -2.5, Mitchell", -2.5, 0.0, GatherFilter::Mitchell),
+        ("floor, mip bias -2.5, Mitchell", -2.5, 0.0, GatherFilter::Mitchell, 1),
+        ("floor, aniso 8", 0.0, 0.0, GatherFilter::Bilinear, 8),
+        ("floor, aniso 4, trilinear, B-spline", 0.0, 1.0, GatherFilter::Bspline, 4),
     ];
-    for (name, mip_bias, level_blend, gather_filter) in cases {
+    for (name, mip_bias, level_blend, gather_filter, aniso) in cases {
         let report = check(
             &ctx,
             Case {
@@ -278,10 +288,17 @@ fn gather_on_the_floor() {
                 level_blend,
                 gather_filter,
                 texel_samples: 1,
+                aniso,
                 shade: false,
             },
         );
         assert!(report.pixels > 5000, "{report:?}");
+        // The receding floor's footprints are long: most pixels read several taps.
+        if aniso > 1 {
+            assert!(report.aniso_pixels * 2 > report.pixels, "{name}: {report:?}");
+        } else {
+            assert_eq!(report.aniso_pixels, 0, "{name}: {report:?}");
+        }
         // Trilinear reads two levels wherever the last level does not clamp
         // (with bias -2.5 on lavapipe, all but 432 of 7151 pixels without
         // blending); without blending, never.
@@ -317,6 +334,7 @@ fn shade_and_gather_on_the_untextured_floor() {
             level_blend: 0.0,
             gather_filter: GatherFilter::Bilinear,
             texel_samples: 1,
+            aniso: 1,
             shade: true,
         },
     );
@@ -363,6 +381,7 @@ fn atrium(name: &'static str, gather_filter: GatherFilter, texel_samples: u32) -
             level_blend: 0.5,
             gather_filter,
             texel_samples,
+            aniso: 1,
             shade: true,
         },
     );

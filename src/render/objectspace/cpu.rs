@@ -62,6 +62,8 @@ pub struct MarkParams {
     /// How the gather filters a level: marking marks the tiles of the
     /// texels it reads ([`GatherFilter::margin`] beyond the bilinear pair).
     pub gather_filter: GatherFilter,
+    /// Most gather taps along the footprint's longer axis (`--os-aniso`).
+    pub aniso: u32,
 }
 
 /// Everything the marking pass reads besides the visibility buffer.
@@ -166,12 +168,111 @@ pub fn variable_rate_bias(variable_rate: f32, normals: [Vec3; 3]) -> f32 {
     variable_rate * (1.0 - curvature)
 }
 
-/// The unrounded level of `select_level`:
-/// `log2(max(|dUV/dx|, |dUV/dy|) * size) + biases`.
+/// The unrounded level of `select_level` (`footprint_level` plus the
+/// biases): `log2(max(major / N, minor) * size) + biases`, major and minor
+/// the lengths of the longer and shorter of dUV/dx and dUV/dy, N
+/// [`MarkParams::aniso`].
 pub fn level_of_detail(e: &GpuAtlasEntry, params: &MarkParams, f: &ChartFootprint, variable_rate_bias: f32) -> f32 {
     let size = e.size as f32;
-    let rho = f.du_dx.length().max(f.du_dy.length()) * size;
+    let (a, b) = (f.du_dx.length(), f.du_dy.length());
+    let rho = (a.max(b) / params.aniso as f32).max(a.min(b)) * size;
     rho.max(1e-8).log2() + params.mip_bias + e.mip_bias + variable_rate_bias
+}
+
+/// How far (relative) the ratio of an anisotropic footprint's longer axis
+/// to a tap's span, or its two axes' lengths, may be from a decision
+/// (`ceil` to the tap count; which axis is the longer) and still go either
+/// way on the GPU. The shorter axis is the difference of two close chart
+/// UVs, whose absolute rounding error is a larger share of it than of the
+/// longer axis: 10 times [`LOD_TOLERANCE`]'s relative error. With 1e-4 one
+/// pixel of `tests/it/mark_twin.rs`'s atrium at `--os-aniso 8` (frame 1)
+/// went the other way on lavapipe.
+pub const ANISO_TOLERANCE: f32 = 1e-3;
+
+/// The tolerance on a pixel's unrounded level ([`LOD_TOLERANCE`]): 10 times
+/// wider with `--os-aniso` above 1, where the level follows the shorter
+/// axis (see [`ANISO_TOLERANCE`]).
+pub fn lod_tolerance(params: &MarkParams) -> f32 {
+    if params.aniso > 1 { 10.0 * LOD_TOLERANCE } else { LOD_TOLERANCE }
+}
+
+/// The relative error of an anisotropic footprint's axis (`AnisoTaps::axis`)
+/// on the GPU, for the position of its taps ([`AnisoTaps::slack`]): the
+/// same as [`ANISO_TOLERANCE`]'s lengths.
+pub const AXIS_TOLERANCE: f32 = 1e-3;
+
+/// Mirrors `AnisoTaps`: the chart points the gather filters and averages
+/// for a pixel (`--os-aniso`), `count` of them spread along `axis`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnisoTaps {
+    pub uv: Vec2,
+    pub axis: Vec2,
+    pub count: u32,
+}
+
+impl AnisoTaps {
+    /// Mirrors `aniso_tap`: the chart point of tap `i`.
+    pub fn tap(&self, i: u32) -> Vec2 {
+        if self.count == 1 {
+            return self.uv;
+        }
+        self.uv + self.axis * ((i as f32 + 0.5) / self.count as f32 - 0.5)
+    }
+
+    /// Every tap's chart point, in the gather's order.
+    pub fn points(&self) -> Vec<Vec2> {
+        (0..self.count).map(|i| self.tap(i)).collect()
+    }
+
+    /// How far (in chart UV) the GPU's tap `i` may be from [`Self::tap`]'s
+    /// beyond the chart point's own error ([`TEXEL_TOLERANCE`]): the axis's
+    /// error ([`AXIS_TOLERANCE`] of it, a difference of close chart UVs)
+    /// times the tap's offset along it. A pixel at a silhouette may have an
+    /// axis of most of the chart (its neighbour's barycentrics extrapolated
+    /// far off the triangle): on lavapipe a far tap of one of the atrium at
+    /// `--os-aniso 8` (axis 0.76 of the chart) floored the other way with
+    /// no slack. One other there (pixel (77, 19) of path frame 12 at 128x72)
+    /// is off by more than 3e-3 of its axis, which this twin does not cover.
+    pub fn slack(&self, i: u32) -> f32 {
+        if self.count == 1 {
+            return 0.0;
+        }
+        self.axis.length() * ((i as f32 + 0.5) / self.count as f32 - 0.5).abs() * AXIS_TOLERANCE
+    }
+}
+
+/// Mirrors `aniso_taps` for an object of level-0 side `size` and at most
+/// `aniso` taps: every tap set the GPU may take (a tap count near a `ceil`
+/// boundary both ways, and both axes where their lengths nearly tie, see
+/// [`ANISO_TOLERANCE`]).
+pub fn aniso_choices(size: u32, aniso: u32, f: &ChartFootprint) -> Vec<AnisoTaps> {
+    let single = AnisoTaps { uv: f.uv, axis: Vec2::ZERO, count: 1 };
+    if aniso <= 1 {
+        return vec![single];
+    }
+    let (a, b) = (f.du_dx.length(), f.du_dy.length());
+    let major = a.max(b) * size as f32;
+    let per_tap = (major / aniso as f32).max(a.min(b) * size as f32).max(1.0);
+    let ratio = major / per_tap;
+    let mut counts: Vec<u32> = [ratio * (1.0 - ANISO_TOLERANCE), ratio, ratio * (1.0 + ANISO_TOLERANCE)]
+        .iter()
+        .map(|r| (r.ceil() as u32).clamp(1, aniso))
+        .collect();
+    counts.dedup();
+    let mut axes = vec![if a >= b { f.du_dx } else { f.du_dy }];
+    if (a - b).abs() <= ANISO_TOLERANCE * a.max(b) {
+        axes = vec![f.du_dx, f.du_dy];
+    }
+    let mut out: Vec<AnisoTaps> = Vec::new();
+    for &count in &counts {
+        for &axis in &axes {
+            let t = if count == 1 { single } else { AnisoTaps { uv: f.uv, axis, count } };
+            if !out.contains(&t) {
+                out.push(t);
+            }
+        }
+    }
+    out
 }
 
 /// The rest of `select_level`: WGSL `round` (ties to even), clamped to the
@@ -315,12 +416,12 @@ pub fn f16_ulp(x: f32) -> f32 {
 }
 
 /// The level pairs a pixel of unrounded level `lod` may select on the GPU:
-/// [`select_levels`] at `lod` and [`LOD_TOLERANCE`] either side of it, each
-/// distinct set of levels read once (both sides of a rounding boundary, or
-/// of a blend band's edge).
-pub fn level_choices(lod: f32, level_count: u32, blend: f32) -> Vec<LevelPair> {
+/// [`select_levels`] at `lod` and `tolerance` ([`lod_tolerance`]) either
+/// side of it, each distinct set of levels read once (both sides of a
+/// rounding boundary, or of a blend band's edge).
+pub fn level_choices(lod: f32, level_count: u32, blend: f32, tolerance: f32) -> Vec<LevelPair> {
     let mut out: Vec<LevelPair> = Vec::new();
-    for x in [lod - LOD_TOLERANCE, lod, lod + LOD_TOLERANCE] {
+    for x in [lod - tolerance, lod, lod + tolerance] {
         let pair = select_levels(x, level_count, blend);
         if !out.iter().any(|p| p.levels() == pair.levels()) {
             out.push(pair);
@@ -351,10 +452,11 @@ pub fn pixel_tiles(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Option<P
     let normals = &inputs.scene.meshes[inputs.scene.objects[p.object].mesh].normals;
     let bias = variable_rate_bias(inputs.params.variable_rate, p.tri.map(|v| normals[v]));
     let lod = level_of_detail(e, &inputs.params, &f, bias);
-    let choices = level_choices(lod, e.level_count, inputs.params.level_blend);
+    let choices = level_choices(lod, e.level_count, inputs.params.level_blend, lod_tolerance(&inputs.params));
+    let aniso = aniso_choices(e.size, inputs.params.aniso, &f);
     // Tiles of different levels differ: a tile is marked in every outcome
-    // when every choice reads its level and every floor of the bilinear
-    // coordinate in that level marks it.
+    // when every choice reads its level and, for every tap set, some tap
+    // marks it whichever way its bilinear coordinate in that level floors.
     let mut must = Vec::new();
     let mut may = Vec::new();
     let mut levels: Vec<u32> = choices.iter().flat_map(LevelPair::levels).collect();
@@ -362,21 +464,33 @@ pub fn pixel_tiles(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Option<P
     levels.dedup();
     for level in levels {
         let l = &e.levels[level as usize];
-        // `t` as in `bilinear`, floored both ways when near an integer.
-        let t = f.uv * l.size as f32 - 0.5;
-        let tolerance = l.size as f32 * TEXEL_TOLERANCE;
-        let mut outcomes: Vec<Vec<u32>> = Vec::new();
-        for x in floor_candidates(t.x, tolerance) {
-            for y in floor_candidates(t.y, tolerance) {
-                let (texel, texel_hi) = filter_span(l.size, IVec2::new(x, y), inputs.params.gather_filter.margin());
-                outcomes.push(footprint_tiles(l, inputs.params.tile_size, texel, texel_hi));
+        let mut level_must: Option<BTreeSet<u32>> = None;
+        for taps in &aniso {
+            let mut taps_must = BTreeSet::new();
+            for (i, uv) in taps.points().into_iter().enumerate() {
+                let tolerance = l.size as f32 * (TEXEL_TOLERANCE + taps.slack(i as u32));
+                // `t` as in `bilinear`, floored both ways when near an integer.
+                let t = uv * l.size as f32 - 0.5;
+                let mut outcomes: Vec<Vec<u32>> = Vec::new();
+                for x in floor_candidates(t.x, tolerance) {
+                    for y in floor_candidates(t.y, tolerance) {
+                        let margin = inputs.params.gather_filter.margin();
+                        let (texel, texel_hi) = filter_span(l.size, IVec2::new(x, y), margin);
+                        outcomes.push(footprint_tiles(l, inputs.params.tile_size, texel, texel_hi));
+                    }
+                }
+                let in_tap: Vec<u32> = outcomes.concat();
+                taps_must.extend(in_tap.iter().copied().filter(|t| outcomes.iter().all(|o| o.contains(t))));
+                may.extend(in_tap);
             }
+            level_must = Some(match level_must {
+                None => taps_must,
+                Some(m) => m.intersection(&taps_must).copied().collect(),
+            });
         }
-        let in_level: Vec<u32> = outcomes.concat();
         if choices.iter().all(|c| c.levels().contains(&level)) {
-            must.extend(in_level.iter().copied().filter(|t| outcomes.iter().all(|o| o.contains(t))));
+            must.extend(level_must.unwrap_or_default());
         }
-        may.extend(in_level);
     }
     may.sort_unstable();
     may.dedup();
@@ -551,6 +665,7 @@ mod tests {
             variable_rate,
             level_blend: 0.0,
             gather_filter: GatherFilter::Bilinear,
+            aniso: 1,
         }
     }
 
@@ -616,6 +731,46 @@ mod tests {
         assert_eq!(select_level(9.0, 4), 3);
         // WGSL rounds ties to even.
         assert_eq!((select_level(0.5, 4), select_level(1.5, 4), select_level(2.5, 4)), (0, 2, 2));
+    }
+
+    #[test]
+    fn aniso_follows_the_shorter_axis_with_taps_along_the_longer() {
+        // 256 texels: 8 texels per pixel across, 1 down.
+        let entries = entries();
+        let f = ChartFootprint {
+            uv: Vec2::splat(0.5),
+            du_dx: Vec2::new(8.0 / 256.0, 0.0),
+            du_dy: Vec2::new(0.0, 1.0 / 256.0),
+        };
+        let at = |aniso| {
+            let lod = level_of_detail(&entries[0], &MarkParams { aniso, ..params(0.0, 0.0) }, &f, 0.0);
+            let taps = aniso_choices(256, aniso, &f);
+            assert_eq!(taps.len(), 1, "aniso {aniso}: {taps:?}");
+            (lod, taps[0])
+        };
+        // Isotropic: the longer axis's level, one tap at the point.
+        let (lod, taps) = at(1);
+        assert!((lod - 3.0).abs() < 1e-5 && taps.points() == [f.uv], "{lod} {taps:?}");
+        // 8 taps a texel apart along x, at the shorter axis's level 0.
+        let (lod, taps) = at(8);
+        assert!(lod.abs() < 1e-5 && taps.count == 8 && taps.axis == f.du_dx, "{lod} {taps:?}");
+        let xs: Vec<f32> = taps.points().iter().map(|p| (p.x - 0.5) * 256.0).collect();
+        assert_eq!(xs, [-3.5, -2.5, -1.5, -0.5, 0.5, 1.5, 2.5, 3.5]);
+        // Limited to 4 taps: the level rises until 4 cover the longer axis.
+        let (lod, taps) = at(4);
+        assert!((lod - 1.0).abs() < 1e-5 && taps.count == 4, "{lod} {taps:?}");
+        // A ratio on a `ceil` boundary counts both tap counts; axes of equal
+        // length, both axes.
+        let f2 = ChartFootprint { du_dx: Vec2::new(2.0 / 256.0, 0.0), du_dy: Vec2::new(0.0, 1.0 / 256.0), ..f };
+        let counts: Vec<u32> = aniso_choices(256, 8, &f2).iter().map(|t| t.count).collect();
+        assert_eq!(counts, [2, 3]);
+        let round = ChartFootprint { du_dx: Vec2::new(2.0 / 256.0, 0.0), du_dy: Vec2::new(0.0, 2.0 / 256.0), ..f };
+        let choices = aniso_choices(256, 8, &round);
+        assert_eq!(choices.len(), 3, "{choices:?}");
+        assert!(choices.iter().any(|t| t.count == 2 && t.axis == round.du_dy), "{choices:?}");
+        // Magnified (under a texel a pixel along both axes): one tap.
+        let small = ChartFootprint { du_dx: Vec2::new(0.5 / 256.0, 0.0), du_dy: Vec2::new(0.0, 0.1 / 256.0), ..f };
+        assert_eq!(aniso_choices(256, 16, &small).iter().map(|t| t.count).collect::<Vec<_>>(), [1]);
     }
 
     #[test]
@@ -716,7 +871,7 @@ mod tests {
         assert_eq!(select_levels(7.0, 5, 1.0).levels(), vec![4]);
         assert_eq!(select_levels(-1.0, 5, 1.0).levels(), vec![0]);
         // Near a band's edge the GPU may read one level or both.
-        let choices: Vec<Vec<u32>> = level_choices(2.25, 5, 0.5).iter().map(LevelPair::levels).collect();
+        let choices: Vec<Vec<u32>> = level_choices(2.25, 5, 0.5, LOD_TOLERANCE).iter().map(LevelPair::levels).collect();
         assert_eq!(choices, [vec![2], vec![2, 3]]);
     }
 
@@ -788,6 +943,7 @@ mod tests {
             variable_rate: 0.0,
             level_blend: 0.0,
             gather_filter: GatherFilter::Bilinear,
+            aniso: 1,
         };
         let visible: BTreeSet<u32> = [0, 1, 2, 3, 21].into();
         let marks = mark_frame(&previous, &visible, &params, &entries);

@@ -240,6 +240,7 @@ impl ObjectSpace {
             variable_rate: o.variable_rate,
             level_blend: o.level_blend,
             gather_filter: o.gather_filter,
+            aniso: o.aniso,
         }
     }
 

@@ -561,6 +561,13 @@ pub struct ObjectSpaceConfig {
     pub level_blend: f32,
     /// How the gather filters each level's texels (marking marks what it reads).
     pub gather_filter: GatherFilter,
+    /// Anisotropic gathering: the most filter taps a pixel reads along its
+    /// footprint's longer axis, one of [`ANISO_RATIOS`]. The level follows
+    /// the shorter axis, limited so that the longer needs at most this many
+    /// taps (`lod = log2(max(major / N, minor))`), and the gather averages
+    /// its taps spread along the longer axis; marking marks every tap's
+    /// tiles. 1: isotropic (the level follows the longer axis, one tap).
+    pub aniso: u32,
     /// Points each shaded texel averages, spread over it on a square grid:
     /// 1 (its centre) or 4 (pre-filtered shading: the shade over the
     /// texel's footprint, so a highlight narrower than a texel is not
@@ -625,6 +632,9 @@ pub struct ObjectSpaceConfig {
     pub gather_input: GatherInput,
 }
 
+/// The ratios [`ObjectSpaceConfig::aniso`] takes (`--os-aniso`).
+pub const ANISO_RATIOS: [u32; 5] = [1, 2, 4, 8, 16];
+
 /// [`ObjectSpaceConfig::slot_timeout`]'s default: a second at 60 Hz, so that
 /// an object glanced away from keeps its shades.
 pub const DEFAULT_SLOT_TIMEOUT: u32 = 60;
@@ -639,6 +649,7 @@ impl Default for ObjectSpaceConfig {
             variable_rate: 0.0,
             level_blend: 0.0,
             gather_filter: GatherFilter::Bilinear,
+            aniso: 1,
             texel_samples: 1,
             view: DebugView::Shade,
             texture_sizes: Vec::new(),
@@ -685,6 +696,10 @@ pub enum ObjectSpaceError {
     BadLevelBlend(f32),
     #[error("samples per shaded texel must be 1 or 4 (got {0})")]
     BadTexelSamples(u32),
+    #[error("the anisotropy must be one of 1, 2, 4, 8, 16 (got {0})")]
+    BadAniso(u32),
+    #[error("--os-gather record reads one tap a pixel: not with --os-aniso {0}")]
+    RecordNeedsIsotropic(u32),
     #[error("the object-space pipeline needs the PRIMITIVE_INDEX feature, which {0} lacks")]
     NoPrimitiveIndex(String),
     #[error("{0} texture sizes given for {1} objects")]
@@ -806,6 +821,13 @@ impl ObjectSpace {
         }
         if ![1, 4].contains(&config.texel_samples) {
             return Err(ObjectSpaceError::BadTexelSamples(config.texel_samples));
+        }
+        if !ANISO_RATIOS.contains(&config.aniso) {
+            return Err(ObjectSpaceError::BadAniso(config.aniso));
+        }
+        // The records hold one chart point a pixel, not the footprint's axis.
+        if config.gather_input == GatherInput::Record && config.aniso > 1 {
+            return Err(ObjectSpaceError::RecordNeedsIsotropic(config.aniso));
         }
         let lanes = trimap_lanes(&config, &ctx.info);
         if !TRIMAP_LANES.contains(&lanes) {

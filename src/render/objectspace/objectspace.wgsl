@@ -66,6 +66,9 @@ struct Params {
     gather_filter: u32,
     // Points per side of a texel that shading averages (1: its centre alone).
     texel_sample_side: u32,
+    // Most gather taps along the footprint's longer axis (`--os-aniso`; 1:
+    // isotropic, the level follows the longer axis).
+    aniso: u32,
 }
 
 const FILTER_BILINEAR: u32 = 0u;
@@ -343,12 +346,57 @@ fn variable_rate_bias(p: PixelSample) -> f32 {
 }
 
 // The mip level a pixel shades at and gathers from:
-// round(log2(max(|dUV/dx|, |dUV/dy|) * size) + biases), clamped to the levels.
-// Level-0 texels per pixel along the footprint's longer axis, as a level:
-// log2 of it (negative where level 0 is magnified).
+// round(log2(max(major / N, minor) * size) + biases), clamped to the levels,
+// where major and minor are the lengths of the longer and shorter of
+// dUV/dx, dUV/dy and N is `params.aniso` (1: the longer axis alone).
+// Level-0 texels per gather tap, as a level: log2 of it (negative where
+// level 0 is magnified). With N = 1, log2(max(|dUV/dx|, |dUV/dy|) * size)
+// bit for bit (x / 1 is x).
 fn footprint_level(e: AtlasEntry, f: ChartFootprint) -> f32 {
-    let rho = max(length(f.du_dx), length(f.du_dy)) * f32(e.size);
+    let a = length(f.du_dx);
+    let b = length(f.du_dy);
+    let rho = max(max(a, b) / f32(params.aniso), min(a, b)) * f32(e.size);
     return log2(max(rho, 1e-8));
+}
+
+// Where the gather reads a pixel's shade (`--os-aniso`): `count` chart
+// points spread evenly along the footprint's longer axis `axis` (one
+// pixel's dUV along it), centred on `uv`, each filtered at the pixel's
+// levels and averaged with equal weights. Marking marks every tap's
+// footprint from the same arithmetic.
+struct AnisoTaps {
+    uv: vec2f,
+    axis: vec2f,
+    count: u32,
+}
+
+// The taps of footprint `f` of an object of level-0 side `size`: as many
+// as the longer axis spans texels of the level the pixel reads (level 0
+// at least), up to N; one, at `uv`, with N = 1.
+fn aniso_taps(size: u32, f: ChartFootprint) -> AnisoTaps {
+    var out: AnisoTaps;
+    out.uv = f.uv;
+    out.count = 1u;
+    out.axis = vec2f(0.0);
+    if params.aniso <= 1u {
+        return out;
+    }
+    let a = length(f.du_dx);
+    let b = length(f.du_dy);
+    let major = max(a, b) * f32(size);
+    let per_tap = max(max(major / f32(params.aniso), min(a, b) * f32(size)), 1.0);
+    out.count = clamp(u32(ceil(major / per_tap)), 1u, params.aniso);
+    out.axis = select(f.du_dy, f.du_dx, a >= b);
+    return out;
+}
+
+// Chart point of tap `i` of `t`: at (i + 0.5) / count - 0.5 of the axis
+// from the centre (the centre itself for one tap).
+fn aniso_tap(t: AnisoTaps, i: u32) -> vec2f {
+    if t.count == 1u {
+        return t.uv;
+    }
+    return t.uv + t.axis * ((f32(i) + 0.5) / f32(t.count) - 0.5);
 }
 
 fn select_level(e: AtlasEntry, p: PixelSample, f: ChartFootprint) -> u32 {

@@ -52,6 +52,8 @@ gpu_struct! {
         /// Points per side of a texel that shading averages
         /// ([`ObjectSpaceConfig::texel_samples`]: 1 or 2).
         pub texel_sample_side: u32,
+        /// [`ObjectSpaceConfig::aniso`].
+        pub aniso: u32,
     }
 }
 
@@ -514,6 +516,7 @@ impl Resources {
             level_blend: config.level_blend,
             gather_filter: config.gather_filter.code(),
             texel_sample_side: config.texel_sample_side(),
+            aniso: config.aniso,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(&self.counters, 0, None);

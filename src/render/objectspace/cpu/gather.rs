@@ -3,23 +3,26 @@
 //! filter's taps in each (bilinear, or the cubic B-spline's 4x4 with
 //! `--os-filter bspline`), their weights, the taps kept (those in the pixel's
 //! chart island) and the colour filtered from the shades the GPU holds
-//! ([`LevelTexels`]), in `f32` and in the WGSL's order.
+//! ([`LevelTexels`]), in `f32` and in the WGSL's order; with `--os-aniso`,
+//! the same at each anisotropic tap ([`AnisoTaps`]), averaged.
 //!
 //! As for marking, the GPU may round a near-boundary decision the other way;
-//! [`gather_pixel`] returns every outcome (level within [`LOD_TOLERANCE`] of a
-//! rounding boundary or a blend band's edge, bilinear coordinate within
-//! [`TEXEL_TOLERANCE`] of an integer), each with how far its colour may be
-//! from the GPU's.
+//! [`gather_pixel`] returns every outcome (level within [`LOD_TOLERANCE`], 10
+//! times more with `--os-aniso`, of a rounding boundary or a blend band's
+//! edge, bilinear coordinate within [`TEXEL_TOLERANCE`] of an integer, tap
+//! count and axis within [`ANISO_TOLERANCE`] of a decision), each with how
+//! far its colour may be from the GPU's.
 //!
 //! [`LOD_TOLERANCE`]: super::LOD_TOLERANCE
+//! [`ANISO_TOLERANCE`]: super::ANISO_TOLERANCE
 
 use glam::{IVec2, UVec2, Vec2, Vec3};
 
 use crate::render::objectspace::GatherFilter;
 
 use super::{
-    LOD_TOLERANCE, LevelPair, LevelTexels, MarkInputs, TEXEL_TOLERANCE, bilinear_taps, chart_footprint,
-    floor_candidates, level_choices, level_of_detail, sample_pixel, variable_rate_bias,
+    AnisoTaps, LevelPair, LevelTexels, MarkInputs, TEXEL_TOLERANCE, aniso_choices, bilinear_taps, chart_footprint,
+    floor_candidates, level_choices, level_of_detail, lod_tolerance, sample_pixel, variable_rate_bias,
 };
 
 /// Bound on a gathered colour channel besides the weights' error, in
@@ -76,20 +79,40 @@ impl GatherTaps {
 }
 
 /// One way the GPU may gather a pixel from its levels: the finer level's
-/// filter where `pair.t < 1`, the coarser's where `pair.t > 0`, blended
-/// `(1 - t) fine + t coarse`.
+/// filter where `pair.t < 1`, the coarser's where `pair.t > 0`, each at the
+/// pixel's anisotropic taps (`filter_taps` in `gather.wgsl`: one with
+/// `--os-aniso 1`) and averaged, blended `(1 - t) fine + t coarse`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GatherOutcome {
     pub pair: LevelPair,
-    pub fine: Option<GatherTaps>,
-    pub coarse: Option<GatherTaps>,
+    /// The taps read (`taps.count` points; a single one with `--os-aniso 1`).
+    pub taps: AnisoTaps,
+    /// The finer level's filter at each tap, in order; empty where it is not read.
+    pub fine: Vec<GatherTaps>,
+    /// The coarser level's filter at each tap; empty where it is not read.
+    pub coarse: Vec<GatherTaps>,
     /// How far `t` may be from the GPU's: the level's rounding
-    /// ([`LOD_TOLERANCE`]) over the blend band's width, inside the band.
+    /// ([`super::lod_tolerance`]) over the blend band's width, inside the band.
     pub blend_tolerance: f32,
 }
 
+/// The mean colour of a level's filters at the taps (`filter_taps`);
+/// `Some(None)` when a tap has no physical page, `None` when the level is
+/// not read.
+fn taps_color(taps: &[GatherTaps]) -> Option<Option<Vec3>> {
+    if taps.is_empty() {
+        return None;
+    }
+    Some(taps.iter().map(|g| g.color).sum::<Option<Vec3>>().map(|c| c / taps.len() as f32))
+}
+
+/// The mean weight tolerance of a level's filters at the taps (0 where not read).
+fn taps_tolerance(taps: &[GatherTaps]) -> f32 {
+    if taps.is_empty() { 0.0 } else { taps.iter().map(|g| g.weight_tolerance).sum::<f32>() / taps.len() as f32 }
+}
+
 impl GatherOutcome {
-    /// The levels' filters that this outcome reads.
+    /// The levels' filters that this outcome reads, every tap's.
     pub fn taps(&self) -> impl Iterator<Item = &GatherTaps> {
         self.fine.iter().chain(&self.coarse)
     }
@@ -97,8 +120,8 @@ impl GatherOutcome {
     /// The blended colour; `None` when a level's tap has no physical page.
     pub fn color(&self) -> Option<Vec3> {
         let t = self.pair.t;
-        let fine = self.fine.as_ref().map_or(Some(Vec3::ZERO), |g| g.color.map(|c| c * (1.0 - t)))?;
-        let coarse = self.coarse.as_ref().map_or(Some(Vec3::ZERO), |g| g.color.map(|c| c * t))?;
+        let fine = taps_color(&self.fine).map_or(Some(Vec3::ZERO), |c| c.map(|c| c * (1.0 - t)))?;
+        let coarse = taps_color(&self.coarse).map_or(Some(Vec3::ZERO), |c| c.map(|c| c * t))?;
         Some(fine + coarse)
     }
 
@@ -120,10 +143,9 @@ impl GatherOutcome {
     pub fn bound_used(&self, gpu: Vec3) -> f32 {
         let Some(c) = self.color().filter(|_| !self.fragile()) else { return f32::INFINITY };
         let t = self.pair.t;
-        let weights = self.fine.as_ref().map_or(0.0, |g| g.weight_tolerance * (1.0 - t))
-            + self.coarse.as_ref().map_or(0.0, |g| g.weight_tolerance * t);
-        let spread = match (&self.fine, &self.coarse) {
-            (Some(f), Some(g)) => (f.color.expect("checked") - g.color.expect("checked")).abs(),
+        let weights = taps_tolerance(&self.fine) * (1.0 - t) + taps_tolerance(&self.coarse) * t;
+        let spread = match (taps_color(&self.fine), taps_color(&self.coarse)) {
+            (Some(f), Some(g)) => (f.expect("checked") - g.expect("checked")).abs(),
             _ => Vec3::ZERO,
         };
         (0..3)
@@ -157,10 +179,12 @@ pub fn pixel_levels(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Vec<(us
     if e.size == 0 {
         return Vec::new();
     }
-    let mut levels: Vec<u32> = level_choices(pixel_lod(inputs, ids, pixel), e.level_count, inputs.params.level_blend)
-        .iter()
-        .flat_map(LevelPair::levels)
-        .collect();
+    let tolerance = lod_tolerance(&inputs.params);
+    let mut levels: Vec<u32> =
+        level_choices(pixel_lod(inputs, ids, pixel), e.level_count, inputs.params.level_blend, tolerance)
+            .iter()
+            .flat_map(LevelPair::levels)
+            .collect();
     levels.sort_unstable();
     levels.dedup();
     levels.into_iter().map(|l| (p.object, l)).collect()
@@ -297,35 +321,59 @@ pub fn gather_pixel<'a>(
     let f = chart_footprint(inputs.scene, &p);
     let islands = &islands[p.object];
     let own = islands[p.triangle];
-    // Every outcome of one level's filter (its bilinear coordinate floored
-    // both ways when near an integer).
-    let filters = |level_index: u32| -> Vec<GatherTaps> {
+    // Every outcome of one level's filter at chart point `uv` (its bilinear
+    // coordinate floored both ways when near an integer).
+    // `slack`: the tap's position error beyond the chart point's (`AnisoTaps::slack`).
+    let filters = |level_index: u32, uv: Vec2, slack: f32| -> Vec<GatherTaps> {
         let texels = level(p.object, level_index);
         let size = e.levels[level_index as usize].size;
         assert_eq!(texels.size, size, "object {} level {level_index}: texels of another size", p.object);
-        let t = f.uv * size as f32 - 0.5;
-        let tolerance = size as f32 * TEXEL_TOLERANCE;
+        let t = uv * size as f32 - 0.5;
+        let tolerance = size as f32 * (TEXEL_TOLERANCE + slack);
         let mut out = Vec::new();
         for x in floor_candidates(t.x, tolerance) {
             for y in floor_candidates(t.y, tolerance) {
                 let base = IVec2::new(x, y);
                 let (taps, weights) = level_taps(inputs.params.gather_filter, size, base, t - base.as_vec2());
-                out.push(filter_taps(texels, own, islands, level_index, &taps, &weights));
+                let mut g = filter_taps(texels, own, islands, level_index, &taps, &weights);
+                // The weights move with the tap's wider error too.
+                g.weight_tolerance *= 1.0 + slack / TEXEL_TOLERANCE;
+                out.push(g);
             }
         }
         out
     };
+    // Every outcome of one level's filters at every tap of `taps`: each
+    // tap's outcomes combined with the others'.
+    let level_outcomes = |level_index: u32, taps: &AnisoTaps| -> Vec<Vec<GatherTaps>> {
+        let mut combos: Vec<Vec<GatherTaps>> = vec![Vec::new()];
+        for (i, uv) in taps.points().into_iter().enumerate() {
+            let tap = filters(level_index, uv, taps.slack(i as u32));
+            combos = combos
+                .iter()
+                .flat_map(|c| tap.iter().map(move |g| [c.as_slice(), std::slice::from_ref(g)].concat()))
+                .collect();
+        }
+        combos
+    };
     let blend = inputs.params.level_blend;
     let mut outcomes = Vec::new();
-    for pair in level_choices(pixel_lod(inputs, ids, pixel), e.level_count, blend) {
-        let fine: Vec<Option<GatherTaps>> =
-            if pair.t < 1.0 { filters(pair.lo).into_iter().map(Some).collect() } else { vec![None] };
-        let coarse: Vec<Option<GatherTaps>> =
-            if pair.t > 0.0 { filters(pair.hi).into_iter().map(Some).collect() } else { vec![None] };
-        let blend_tolerance = if pair.t > 0.0 && pair.t < 1.0 { LOD_TOLERANCE / blend } else { 0.0 };
-        for fine in &fine {
-            for coarse in &coarse {
-                outcomes.push(GatherOutcome { pair, fine: fine.clone(), coarse: coarse.clone(), blend_tolerance });
+    for taps in aniso_choices(e.size, inputs.params.aniso, &f) {
+        let tolerance = lod_tolerance(&inputs.params);
+        for pair in level_choices(pixel_lod(inputs, ids, pixel), e.level_count, blend, tolerance) {
+            let fine = if pair.t < 1.0 { level_outcomes(pair.lo, &taps) } else { vec![Vec::new()] };
+            let coarse = if pair.t > 0.0 { level_outcomes(pair.hi, &taps) } else { vec![Vec::new()] };
+            let blend_tolerance = if pair.t > 0.0 && pair.t < 1.0 { tolerance / blend } else { 0.0 };
+            for fine in &fine {
+                for coarse in &coarse {
+                    outcomes.push(GatherOutcome {
+                        pair,
+                        taps,
+                        fine: fine.clone(),
+                        coarse: coarse.clone(),
+                        blend_tolerance,
+                    });
+                }
             }
         }
     }

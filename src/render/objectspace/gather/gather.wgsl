@@ -2,7 +2,8 @@
 // the same mip levels as tile marking did (one, or two blended) and filters
 // the object's shades bilinearly in each (by hand, with taps clamped inside
 // the level's square, so no tap reads a neighbour in the atlas, and only taps
-// in the pixel's chart island). Objects outside the atlas (forward-only) are
+// in the pixel's chart island), at its chart point or, with `--os-aniso`, at
+// up to N points along its footprint's longer axis, averaged. Objects outside the atlas (forward-only) are
 // shaded here per pixel, with the world grid's lights. Debug views replace
 // the shade.
 // Under MSAA a pixel whose samples see different chart surfaces
@@ -30,7 +31,7 @@
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_levels,
     bilinear, AtlasTexel, atlas_texel, triangle_charts, physical_page, virtual_page, physical_tile,
-    NOT_BACKED, BlendedVertex, blended_vertex, FILTER_BILINEAR, FILTER_MITCHELL}
+    NOT_BACKED, BlendedVertex, blended_vertex, FILTER_BILINEAR, FILTER_MITCHELL, AnisoTaps, aniso_taps, aniso_tap}
 #import shadespace::alpha_mask::opacity
 #import shadespace::objectspace::LevelPair
 #ifdef PIXEL_RECORD
@@ -295,8 +296,9 @@ fn gather_recorded(pixel: vec2u, ids: vec2u, size: vec2u) -> vec4f {
         return gather_surface(sample_pixel(pixel, ids));
     }
     let r = pixel_records[pixel.y * size.x + pixel.x];
+    // One tap: `--os-aniso` above 1 is refused with records.
     let c = gather_levels(OwnSurface(object, ids.y), LevelPair(r.w & 0xffffu, r.w >> 16u, bitcast<f32>(r.z)),
-        bitcast<vec2f>(r.xy));
+        AnisoTaps(bitcast<vec2f>(r.xy), vec2f(0.0), 1u));
     if c.w < 0.0 {
         return shade_forward(sample_pixel(pixel, ids));
     }
@@ -304,19 +306,38 @@ fn gather_recorded(pixel: vec2u, ids: vec2u, size: vec2u) -> vec4f {
 }
 #endif
 
-// The shade of chart point `uv` from the levels around its footprint,
+// The mean of level `level_index`'s filter at the anisotropic taps `taps`
+// (box weights: the pixel's footprint along its longer axis is a box, as
+// the supersampled reference's resolve; a single tap is `filter_level`
+// alone). Alpha -1 when a tap's page has no physical page.
+fn filter_taps(own: OwnSurface, level_index: u32, taps: AnisoTaps) -> vec4f {
+    if taps.count == 1u {
+        return filter_level(own, level_index, aniso_tap(taps, 0u));
+    }
+    var c = vec3f(0.0);
+    for (var i = 0u; i < taps.count; i++) {
+        let s = filter_level(own, level_index, aniso_tap(taps, i));
+        if s.w < 0.0 {
+            return s;
+        }
+        c += s.rgb;
+    }
+    return vec4f(c / f32(taps.count), 1.0);
+}
+
+// The shade of the pixel's taps from the levels around its footprint,
 // blended by the coarser one's weight (one level where the weight is 0 or
 // 1); alpha -1 when a tap's page has no physical page (the atlas was full).
-fn gather_levels(own: OwnSurface, levels: LevelPair, uv: vec2f) -> vec4f {
+fn gather_levels(own: OwnSurface, levels: LevelPair, taps: AnisoTaps) -> vec4f {
     var c = vec3f(0.0);
     var backed = true;
     if levels.t < 1.0 {
-        let fine = filter_level(own, levels.lo, uv);
+        let fine = filter_taps(own, levels.lo, taps);
         backed = fine.w >= 0.0;
         c = fine.rgb * (1.0 - levels.t);
     }
     if levels.t > 0.0 {
-        let coarse = filter_level(own, levels.hi, uv);
+        let coarse = filter_taps(own, levels.hi, taps);
         backed = backed && coarse.w >= 0.0;
         c += coarse.rgb * levels.t;
     }
@@ -377,7 +398,7 @@ fn gather_surface(p: PixelSample) -> vec4f {
             }
         }
         default: {
-            out = gather_levels(OwnSurface(p.object, p.triangle), levels, f.uv);
+            out = gather_levels(OwnSurface(p.object, p.triangle), levels, aniso_taps(e.size, f));
             if out.w < 0.0 {
                 // The atlas was full this frame: shade the pixel forward.
                 return shade_forward(p);

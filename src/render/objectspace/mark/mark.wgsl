@@ -39,7 +39,8 @@
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
     chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
-    page_request_bit, tile_request_bit, page_tile_origin, forget_request, BlendedVertex, blended_vertex, filter_margin}
+    page_request_bit, tile_request_bit, page_tile_origin, forget_request, BlendedVertex, blended_vertex, filter_margin,
+    aniso_taps, aniso_tap}
 #import shadespace::objectspace::visibility_ids
 #ifdef MSAA
 #import shadespace::objectspace::{same_chart_surface, visibility_samples}
@@ -282,8 +283,9 @@ fn mark_tile_once(object: u32, level_index: u32, l: AtlasLevel, valid_since: u32
 // What a pixel is, for the under-shading counters.
 const PIXEL_NOT_IN_ATLAS: u32 = 0u;
 const PIXEL_SHADED: u32 = 1u;
-// Its level holds fewer than one texel per pixel (along the footprint's
-// longer axis): level > log2(texels per pixel at level 0).
+// Its level holds fewer than one texel per gather tap (along the
+// footprint's longer axis, or with `--os-aniso` the larger of its
+// shorter axis and the longer over N): level > `footprint_level`.
 const PIXEL_UNDER_SHADED: u32 = 2u;
 
 var<workgroup> atlas_pixels: atomic<u32>;
@@ -414,11 +416,16 @@ fn mark_surface(p: PixelSample) -> u32 {
     // The finer of the levels it reads decides whether it is under-shaded.
     let finest = select(levels.lo, levels.hi, levels.t >= 1.0);
     let kind = select(PIXEL_SHADED, PIXEL_UNDER_SHADED, f32(finest) > footprint_level(e, f));
-    if levels.t < 1.0 {
-        mark_footprint(p.object, levels.lo, e.valid_since, f.uv);
-    }
-    if levels.t > 0.0 {
-        mark_footprint(p.object, levels.hi, e.valid_since, f.uv);
+    // Every tap the gather reads (`--os-aniso`: up to N along the longer axis).
+    let taps = aniso_taps(e.size, f);
+    for (var i = 0u; i < taps.count; i++) {
+        let uv = aniso_tap(taps, i);
+        if levels.t < 1.0 {
+            mark_footprint(p.object, levels.lo, e.valid_since, uv);
+        }
+        if levels.t > 0.0 {
+            mark_footprint(p.object, levels.hi, e.valid_since, uv);
+        }
     }
     return kind;
 }
