@@ -23,8 +23,8 @@
 //!   A texture that is missing or cannot be decoded is a warning.
 //! - Faces: OBJ has no facing rule, so materials are single-sided
 //!   ([`Material::double_sided`] false: back faces culled in every pipeline,
-//!   about half of Sponza's rasterized pixels, none of them seen along its
-//!   path or fixed cameras) except cut-outs (a `map_d`), which are usually
+//!   about half of Sponza's rasterized pixels, of which a few crack pixels
+//!   show along its path, docs/culling.md) except cut-outs (a `map_d`), which are usually
 //!   single quads seen from both sides. `--back-faces draw` draws them all.
 //! - Objects without a texture get a generated UV checker tinted by their
 //!   index in the whole scene (`checker_texture`).

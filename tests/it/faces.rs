@@ -2,9 +2,10 @@
 //! `doubleSided`): a glTF of two quads, the left one single-sided and the
 //! right one double-sided, seen from behind. In every pipeline (object space
 //! and deferred-compute with both visibility methods, the raster pipelines
-//! drawing plain and culled clusters) the single-sided quad vanishes and the
-//! double-sided one is drawn as with both faces of everything: the image is
-//! the one of the scene without the single-sided quad.
+//! drawing plain and culled clusters) the single-sided quad vanishes, showing
+//! the quad behind it, and the double-sided one is drawn as with both faces
+//! of everything: the image is the one of the scene without the
+//! single-sided quad's triangles.
 
 use crate::common::{self, gltf::MeshData};
 
@@ -34,13 +35,27 @@ fn quad(x0: f32, x1: f32) -> MeshData {
     }
 }
 
-/// The two quads as a glTF file whose first material is single-sided (no
-/// `doubleSided`: the default, false) and whose second is `doubleSided`,
-/// loaded.
+/// A strip from `x0` to `x1`: its left half faces +z ([`quad`]), its right
+/// half -z, so that seen from z < 0 only the right half is a front face.
+/// One cluster with both facings, so that its normal cone culls nothing and
+/// the raster passes' cull modes decide.
+fn quad_and_back(x0: f32, x1: f32) -> MeshData {
+    let xm = 0.5 * (x0 + x1);
+    let mut m = quad(x0, xm);
+    m.positions.extend(quad(xm, x1).positions);
+    m.normals.extend([Vec3::NEG_Z; 4]);
+    m.indices.extend([4, 6, 5, 4, 7, 6]);
+    m
+}
+
+/// The quads as a glTF file whose first material is single-sided (no
+/// `doubleSided`: the default, false; [`quad_and_back`]) and whose second is
+/// `doubleSided` ([`quad`]), loaded.
 fn two_quads() -> Scene {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("faces");
     std::fs::create_dir_all(&dir).unwrap();
-    let path = common::gltf::write_gltf(&dir, "two-quads", &[quad(-2.0, -0.2), quad(0.2, 2.0)], &Default::default());
+    let meshes = [quad_and_back(-2.0, -0.2), quad(0.2, 2.0)];
+    let path = common::gltf::write_gltf(&dir, "two-quads", &meshes, &Default::default());
     let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
     let single = doc["materials"][0].clone();
     let mut double = single.clone();
@@ -125,24 +140,26 @@ fn single_sided_quads_vanish_from_behind_in_every_pipeline() {
     let (rule, sizes) = common::charted(&loaded);
     let mut both = rule.clone();
     both.set_back_faces(BackFaces::Draw);
-    // The double-sided quad alone: what the rule must draw.
+    // What the rule must draw: the double-sided quad, and of the
+    // single-sided strip only its half that faces the camera.
     let mut alone = rule.clone();
-    alone.objects.retain(|o| o.material == 1);
-    let alone_sizes: Vec<Option<u32>> =
-        (0..rule.objects.len()).filter(|&i| rule.objects[i].material == 1).map(|i| sizes[i]).collect();
+    let single = alone.objects[0].mesh;
+    alone.meshes[single].indices.drain(..6);
     let out = common::out_dir();
-    for (k, (run, alone_run)) in pipelines(&sizes).into_iter().zip(pipelines(&alone_sizes)).enumerate() {
+    for (k, (run, alone_run)) in pipelines(&sizes).into_iter().zip(pipelines(&sizes)).enumerate() {
         let label = format!("faces-{k}-{}-{:?}-{:?}", run.0.name(), run.1, run.2);
         let with_rule = render(&ctx, &rule, run.clone());
         let expected = render(&ctx, &alone, alone_run);
         let with_both = render(&ctx, &both, run);
         let (err, map) = shadespace::metrics::compare(&expected, &with_rule);
         let (drawn, _) = shadespace::metrics::compare(&expected, &with_both);
-        eprintln!("{label}: rule against the double-sided quad alone {err:?}; both faces against it {drawn:?}");
-        if err.flip_mean > 1e-4 {
+        eprintln!("{label}: rule against the scene without the back quad {err:?}; both faces against it {drawn:?}");
+        // Object space shades the quad behind from an atlas laid out with the
+        // back quad in it: one 8-bit step apart in places.
+        if err.flip_mean > 1e-3 {
             with_rule.save(out.join(format!("{label}.png"))).unwrap();
             map.save(out.join(format!("{label}-flip.png"))).unwrap();
-            panic!("{label}: the rule's image is not the double-sided quad's alone: {err:?}");
+            panic!("{label}: the rule's image is not the one without the single-sided back quad: {err:?}");
         }
         assert!(
             drawn.flip_mean > 0.01,
@@ -174,5 +191,7 @@ fn ids_are_identical_between_compute_and_raster_visibility_with_the_rule() {
     let differ = raster.iter().zip(&compute).filter(|(r, c)| r != c).count();
     assert_eq!(differ, 0, "{differ} pixels' ids differ between raster and compute visibility");
     assert!(raster.iter().any(|id| id[0] == 2), "the double-sided quad is not drawn");
-    assert!(raster.iter().all(|id| id[0] != 1), "the single-sided quad's back is drawn");
+    // Triangles 0 and 1 of the single-sided mesh face away: never seen.
+    assert!(raster.iter().any(|id| id[0] == 1), "the single-sided mesh's quad behind is not drawn");
+    assert!(raster.iter().all(|id| id[0] != 1 || id[1] >= 2), "the single-sided quad's back is drawn");
 }

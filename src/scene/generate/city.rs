@@ -309,8 +309,9 @@ impl Kit {
             flat("bollard", Vec3::new(0.3, 0.3, 0.32)),
         );
         // Single-sided: the city is seen from outside its closed shells (the
-        // slabs' undersides and the buildings' insides never show), and
-        // culling the back faces changes no pixel along its paths (docs/city.md).
+        // slabs' undersides and the buildings' insides never show); culling
+        // the back faces changes at most 10 crack pixels of 57,600 along its
+        // paths at 320x180 (docs/culling.md).
         let look = |texture: Option<usize>, specular: f32, shininess: f32, roughness: f32| Material {
             base_color_texture: texture,
             specular,
