@@ -37,8 +37,7 @@ impl DepthMode {
     }
 }
 
-/// A scene raster pass's pipelines, one per kind of object the scene has
-/// ([`Kinds`]). Opaque objects and, when the scene has alpha-masked ones, the
+/// A scene raster pass's pipelines, one per kind of object the scene has. Opaque objects and, when the scene has alpha-masked ones, the
 /// pass shader's [`ALPHA_MASK`] variant for those, which discards their
 /// cut-away fragments: apart, so that opaque objects are drawn by a fragment
 /// stage that never discards and keep their early depth test. A pass testing
