@@ -32,6 +32,26 @@ pub enum TextureChoice {
     Detailed,
 }
 
+/// `--back-faces`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BackFacesChoice {
+    Material,
+    Cull,
+    Draw,
+}
+
+impl BackFacesChoice {
+    /// The scene's rule for this choice (`--cull-back-faces` is `cull`).
+    pub fn faces(self, cull_back_faces: bool) -> shadespace::scene::BackFaces {
+        use shadespace::scene::BackFaces;
+        match (self, cull_back_faces) {
+            (_, true) | (Self::Cull, _) => BackFaces::Cull,
+            (Self::Material, false) => BackFaces::Material,
+            (Self::Draw, false) => BackFaces::Draw,
+        }
+    }
+}
+
 /// What `render`, `bench` and `view` draw and how: the scene, pipeline,
 /// size, camera, lights, shading, and the groups below.
 #[derive(Args, Clone)]
@@ -119,10 +139,16 @@ pub struct SceneArgs {
     /// shading blurs.
     #[arg(long, value_enum, default_value = "file")]
     pub textures: TextureChoice,
-    /// Cull back faces in every pipeline (the compute rasterizer too), for
-    /// scenes whose meshes are closed or seen from the front only: about
-    /// half the rasterization work on Sponza. Default: both faces drawn.
-    #[arg(long)]
+    /// Which back faces every pipeline draws (the compute rasterizer, cluster
+    /// cone culling and object space's marking too; shadow maps always draw
+    /// both faces): `material` (default: each material's rule, glTF's
+    /// `doubleSided`; OBJ materials are single-sided except cut-outs, the
+    /// procedural scenes double-sided except the city's buildings), `cull`
+    /// (every back face culled) or `draw` (every back face drawn).
+    #[arg(long, value_enum, default_value = "material")]
+    pub back_faces: BackFacesChoice,
+    /// The same as `--back-faces cull`.
+    #[arg(long, conflicts_with = "back_faces")]
     pub cull_back_faces: bool,
     /// Forward, deferred, deferred-compute: skip the depth pre-pass (shade or
     /// write the G-buffer for every rasterized fragment).
@@ -155,8 +181,9 @@ pub struct SceneArgs {
     /// Compute visibility: how the meshes' clusters (up to 64 triangles) are
     /// culled on the GPU before rasterizing (objects outside the view are
     /// skipped on the CPU in every mode): `none` (every triangle of every
-    /// object in view), `frustum` (clusters outside the view, and with
-    /// --cull-back-faces those facing away) or `occlusion` (also two-pass
+    /// object in view), `frustum` (clusters outside the view, and by their
+    /// normal cones those of single-sided materials facing away) or
+    /// `occlusion` (also two-pass
     /// occlusion against a depth pyramid of the clusters visible last
     /// frame). Default: `occlusion` for scenes of 64 objects or more (the
     /// city), `none` for fewer (Sponza, a model), the faster on each. The

@@ -69,7 +69,7 @@ pub fn setup(a: &SceneArgs) -> Result<Setup, Failure> {
         )));
     }
     let mut scene = input(scene::load(&a.scene))?;
-    scene.cull_back_faces = a.cull_back_faces;
+    scene.set_back_faces(a.back_faces.faces(a.cull_back_faces));
     if a.textures == TextureChoice::Detailed {
         scene::detail::add_detailed_textures(&mut scene);
     }

@@ -226,7 +226,7 @@ pub fn scene_hash(scene: &Scene) -> u64 {
         h.write_u32(t.height);
         h.write_pod(&t.rgba8);
     }
-    h.write(format!("{:?}|{:?}|{}", scene.materials, scene.objects, scene.cull_back_faces).as_bytes());
+    h.write(format!("{:?}|{:?}", scene.materials, scene.objects).as_bytes());
     match &scene.environment {
         None => h.write(b"no environment"),
         Some(Environment::Sky(sky)) => h.write(format!("{sky:?}").as_bytes()),

@@ -64,6 +64,13 @@ gpu_struct! {
         /// binding 13); no layers for a plain material.
         pub layer_first: u32,
         pub layer_count: u32,
+        /// 1 where the material is single-sided (not
+        /// [`crate::scene::Material::double_sided`]): the compute
+        /// rasterizer and the cluster cone test cull its back faces.
+        pub cull_back: u32,
+        pub pad_a: u32,
+        pub pad_b: u32,
+        pub pad_c: u32,
     }
 }
 

@@ -79,8 +79,10 @@ pub struct SceneGpu {
     /// Per triangle of the index buffer: its chart island in its mesh's
     /// chart UVs ([`triangle_islands`](crate::charts::islands::triangle_islands); object space filters within it).
     pub triangle_charts: wgpu::Buffer,
-    /// The scene's [`Scene::cull_back_faces`].
-    pub cull_back_faces: bool,
+    /// Per object: whether its material is single-sided (not
+    /// [`crate::scene::Material::double_sided`]): every pipeline culls its
+    /// back faces.
+    pub single_sided: Vec<bool>,
     /// Every mesh's clusters ([`clusters::build`](super::clusters::build)), mesh after mesh.
     pub clusters: wgpu::Buffer,
     /// The clusters' triangles (indices of their mesh's triangles), cluster
@@ -227,6 +229,8 @@ impl SceneGpu {
                     alpha_cutoff: m.alpha_cutoff.unwrap_or(0.0),
                     layer_first: layer_ranges[o.material].0,
                     layer_count: layer_ranges[o.material].1,
+                    cull_back: u32::from(!m.double_sided),
+                    ..Default::default()
                 }
             })
             .collect();
@@ -326,7 +330,7 @@ impl SceneGpu {
             object_bounds,
             object_data,
             triangle_count: scene.triangle_count() as u64,
-            cull_back_faces: scene.cull_back_faces,
+            single_sided: (0..scene.objects.len()).map(|i| scene.single_sided(i)).collect(),
             clusters: clusters_buf,
             cluster_triangles,
             cluster_indices,
@@ -395,6 +399,16 @@ impl SceneGpu {
     /// Whether some object is alpha-masked.
     pub fn has_alpha_masks(&self) -> bool {
         self.masked.contains(&true)
+    }
+
+    /// Whether some object is single-sided (its back faces culled).
+    pub fn has_single_sided(&self) -> bool {
+        self.single_sided.contains(&true)
+    }
+
+    /// Whether some object is double-sided (both faces drawn).
+    pub fn has_double_sided(&self) -> bool {
+        self.single_sided.contains(&false)
     }
 
     /// Whether some object is alpha-blended.

@@ -100,6 +100,10 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         let draw: &'static [&'static str] = &["CLUSTER_DRAW"];
         all.extend([forward::SHADER, clustered::SHADER, passes::gbuffer::SHADER].map(|s| s.with_defs(draw)));
         all.extend([passes::depth_prepass::SHADER, passes::visibility::SHADER].map(|s| s.with_defs(draw)));
+        // Scenes with both cull modes: each variant skips the other's objects.
+        let indexed_single: &'static [&'static str] = &["CLUSTER_DRAW", INDEXED_DRAWS, SINGLE_SIDED_DRAW];
+        let list_double: &'static [&'static str] = &["CLUSTER_DRAW", DOUBLE_SIDED_DRAW];
+        all.extend([forward::SHADER.with_defs(indexed_single), forward::SHADER.with_defs(list_double)]);
         // The culling's indexed draws, for the camera and for the shadow faces.
         use passes::shadows::cull::SHADOW_FACES;
         let cull = passes::visibility::compute::CULL;

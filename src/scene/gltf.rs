@@ -706,6 +706,11 @@ impl Builder<'_> {
             );
             m.emissive = Vec3::ZERO;
         }
+        // glTF 2.0, `material.doubleSided`: "When this value is false,
+        // back-face culling is enabled. When this value is true, back-face
+        // culling is disabled and double-sided lighting is enabled." It
+        // defaults to false, so is the default material.
+        m.double_sided = material.double_sided();
         m.blend = material.alpha_mode() == AlphaMode::Blend;
         m.alpha_cutoff = match material.alpha_mode() {
             AlphaMode::Opaque | AlphaMode::Blend => None,

@@ -233,6 +233,15 @@ pub struct Material {
     /// Layers over the material's own surface, bottom first
     /// ([`crate::materials`]); none for a plain material.
     pub layers: Vec<crate::materials::Layer>,
+    /// Both faces are drawn. When false the surface is seen from its front
+    /// only (counter-clockwise on screen): every pipeline culls its back
+    /// faces, the compute rasterizer and cluster cone culling included, and
+    /// object space never shades them; shadow maps draw both faces of every
+    /// caster. glTF gives it per material (`doubleSided`, default false),
+    /// OBJ is single-sided except for cut-out and blended materials
+    /// ([`obj`]); `Default` (the procedural scenes) is true, and the city
+    /// sets false where that changes no image ([`generate::city`]).
+    pub double_sided: bool,
 }
 
 impl Default for Material {
@@ -254,6 +263,7 @@ impl Default for Material {
             alpha_cutoff: None,
             blend: false,
             layers: Vec::new(),
+            double_sided: true,
         }
     }
 }
@@ -292,6 +302,18 @@ impl Material {
         let alpha = (roughness * roughness).max(1e-3);
         ((2.0 / (alpha * alpha) - 2.0) * 0.25).clamp(1.0, 512.0)
     }
+}
+
+/// Which back faces are drawn (`--back-faces`, [`Scene::set_back_faces`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BackFaces {
+    /// Each material's rule ([`Material::double_sided`]), as loaded.
+    #[default]
+    Material,
+    /// Every back face is culled (every material single-sided).
+    Cull,
+    /// Every back face is drawn (every material double-sided).
+    Draw,
 }
 
 /// How a material's alpha is used (glTF's `alphaMode`).
@@ -382,11 +404,6 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Cameras that came with the scene file (glTF cameras).
     pub cameras: Vec<Camera>,
-    /// Surfaces are seen from their front only (closed or one-sided meshes,
-    /// counter-clockwise in front): every pipeline culls back faces, the
-    /// compute rasterizer included (shadow maps keep both). Default false:
-    /// both faces are drawn.
-    pub cull_back_faces: bool,
     /// The environment that lights of kind [`LightKind::Environment`] add
     /// (`--env`; default none).
     pub environment: Option<environment::Environment>,
@@ -419,6 +436,25 @@ impl Scene {
     /// Whether some object's material is alpha-masked.
     pub fn has_alpha_masks(&self) -> bool {
         self.objects.iter().any(|o| self.materials[o.material].alpha_cutoff.is_some())
+    }
+
+    /// Overrides every material's [`Material::double_sided`] as `faces` says
+    /// (`--back-faces`); [`BackFaces::Material`] leaves them as loaded.
+    pub fn set_back_faces(&mut self, faces: BackFaces) {
+        let double_sided = match faces {
+            BackFaces::Material => return,
+            BackFaces::Cull => false,
+            BackFaces::Draw => true,
+        };
+        for m in &mut self.materials {
+            m.double_sided = double_sided;
+        }
+    }
+
+    /// Whether object `object`'s back faces are culled (its material is not
+    /// [`Material::double_sided`]).
+    pub fn single_sided(&self, object: usize) -> bool {
+        !self.materials[self.objects[object].material].double_sided
     }
 
     /// Whether some object's material is alpha-blended.

@@ -21,6 +21,11 @@
 //!   `alpha_cutoff` 0.5 (OBJ has no alpha mode: a `map_d` is taken as a
 //!   cutout, as real-time renderers take Crytek Sponza's foliage and chains).
 //!   A texture that is missing or cannot be decoded is a warning.
+//! - Faces: OBJ has no facing rule, so materials are single-sided
+//!   ([`Material::double_sided`] false: back faces culled in every pipeline,
+//!   about half of Sponza's rasterized pixels, of which a few crack pixels
+//!   show along its path, docs/culling.md) except cut-outs (a `map_d`), which are usually
+//!   single quads seen from both sides. `--back-faces draw` draws them all.
 //! - Objects without a texture get a generated UV checker tinted by their
 //!   index in the whole scene (`checker_texture`).
 //! - UVs follow the glTF/wgpu convention (origin top-left): OBJ `vt` (origin
@@ -264,6 +269,9 @@ impl Loader {
         if material.base_color_texture.is_none() {
             material.base_color_texture = Some(checker_texture(scene, &mut self.checkers, object_index, object_name));
         }
+        // OBJ has no facing rule: closed meshes and walls seen from inside
+        // are single-sided, cut-outs (foliage, chains: single quads) are not.
+        material.double_sided = material.alpha_cutoff.is_some();
         material
     }
 
@@ -864,6 +872,8 @@ f 1 2 3
         assert_eq!((tex.width, &tex.rgba8[..8]), (2, &[255, 255, 255, 0, 255, 255, 255, 255][..]), "white, alpha");
         assert_eq!(lost.alpha_cutoff, None, "a missing map_d leaves the material opaque");
         assert!(scene.has_alpha_masks());
+        // Cut-outs are double-sided, the rest single-sided.
+        assert_eq!([leaf, chain, lost].map(|m| m.double_sided), [true, true, false]);
     }
 
     /// `map_Ke` (kept by `tobj` among unknown parameters) becomes the

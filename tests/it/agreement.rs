@@ -13,6 +13,7 @@ use shadespace::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, PipelineConfig,
     RenderOptions, Renderer, VisibilityMethod,
 };
+use shadespace::scene::BackFaces;
 
 const WIDTH: u32 = 320;
 const HEIGHT: u32 = 180;
@@ -147,7 +148,7 @@ fn conventional_pipelines_agree_with_forward_shadowed_voxels() {
     check("voxels", SHADOWED_LIGHTS, false, Bound { flip: 0.0043, psnr: 54.9 });
 }
 
-/// With back faces culled (`Scene::cull_back_faces`), every pipeline culls
+/// With back faces culled (`BackFaces::Cull`), every pipeline culls
 /// the same faces as forward (the compute rasterizer by the sign of the
 /// homogeneous determinant, the raster pipelines by their cull mode), and on
 /// the closed meshes of the atrium culling changes almost nothing visible
@@ -160,7 +161,7 @@ fn conventional_pipelines_agree_with_forward_with_back_faces_culled() {
     let ctx = common::gpu();
     let both = forward_once(&ctx, "atrium", LIGHTS, false);
     let mut culled = common::path_frame("atrium", LIGHTS, WIDTH, HEIGHT);
-    culled.scene.cull_back_faces = true;
+    culled.scene.set_back_faces(BackFaces::Cull);
     let forward = render(&ctx, &culled, false, PipelineConfig::Forward(ForwardConfig::default()));
     let (err, _) = metrics::compare(&both, &forward);
     eprintln!("atrium, forward, culled against both faces: {err:?}");

@@ -12,7 +12,7 @@ use glam::Vec3;
 use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::{Culling, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
-use shadespace::scene::{self, Camera, Scene, Texture, path};
+use shadespace::scene::{self, BackFaces, Camera, Scene, Texture, path};
 
 const SPONZA: &str = "../shared/scenes/sponza-thesis";
 /// Least share of covered pixels whose ids must agree.
@@ -311,15 +311,15 @@ fn counts_add_up_on_a_floor_filling_the_view() {
 fn ids_agree_with_raster_with_back_faces_culled() {
     let ctx = common::gpu();
     let mut voxels = scene::load("voxels").unwrap();
-    voxels.cull_back_faces = true;
+    voxels.set_back_faces(BackFaces::Cull);
     compare(&ctx, "voxels culled, frame 40", &voxels, &path_camera("voxels", &voxels, 40), (256, 144));
     if Path::new(SPONZA).is_dir() {
         let mut sponza = scene::load(SPONZA).unwrap();
-        sponza.cull_back_faces = true;
+        sponza.set_back_faces(BackFaces::Cull);
         compare(&ctx, "sponza culled, frame 100", &sponza, &path_camera(SPONZA, &sponza, 100), (320, 180));
     }
     let (mut floor, camera, _) = common::floor_scene();
-    floor.cull_back_faces = true;
+    floor.set_back_faces(BackFaces::Cull);
     let above = Camera { position: Vec3::new(0.2, 2.0, 0.1), forward: Vec3::NEG_Y, up: Vec3::Z, ..camera };
     let below = Camera { position: Vec3::new(0.2, -2.0, 0.1), forward: Vec3::Y, up: Vec3::Z, ..camera };
     let (covered, _) = compare(&ctx, "floor culled, from above", &floor, &above, (160, 120));

@@ -24,6 +24,7 @@ mod environment;
 mod examples;
 mod experiments;
 mod exposure;
+mod faces;
 mod forward;
 mod forward_multipass;
 mod fuzz_regressions;

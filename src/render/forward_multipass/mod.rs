@@ -27,8 +27,8 @@ use super::passes::background::{Background, Coverage, background};
 use super::passes::blended::{OVER, back_to_front, blended_pipeline, over_frame_attachment};
 use super::passes::depth_prepass::{DepthPrepass, depth_prepass};
 use super::passes::{
-    Binding, DepthMode, SceneRaster, bind_group, bind_group_layout_for, depth_attachment, depth_attachment_read_only,
-    hdr_attachment_then, scene_raster_pipeline_from,
+    Binding, DepthMode, SceneRaster, SidedPipelines, bind_group, bind_group_layout_for, depth_attachment,
+    depth_attachment_read_only, hdr_attachment_then, scene_raster_pipeline_from,
 };
 use super::report::{Counters, PipelineReport};
 use super::scene_gpu::{GrowableBuffer, SceneGpu};
@@ -63,7 +63,7 @@ gpu_struct! {
 pub struct ForwardMultipass {
     config: ForwardMultipassConfig,
     prepass: DepthPrepass,
-    shade: wgpu::RenderPipeline,
+    shade: SidedPipelines,
     pairs_layout: wgpu::BindGroupLayout,
     pairs_buffer: GrowableBuffer,
     pairs_group: wgpu::BindGroup,
@@ -201,7 +201,7 @@ impl Pipeline for ForwardMultipass {
 /// `blended_after` leaves for the blended pass to resolve).
 fn light_passes(
     frame: &mut Frame,
-    pipeline: &wgpu::RenderPipeline,
+    pipelines: &SidedPipelines,
     pairs_group: &wgpu::BindGroup,
     pairs: &[LightPair],
     blended_after: bool,
@@ -211,12 +211,12 @@ fn light_passes(
     let view_proj = frame.view.view_proj;
     let color = [hdr_attachment_then(targets, blended_after)];
     let mut rp = frame.render_pass("light passes", &color, Some(depth_attachment(targets, false)));
-    rp.set_pipeline(pipeline);
     rp.set_bind_group(0, scene.bind_group(), &[]);
     rp.set_bind_group(1, pairs_group, &[]);
     rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
     let mut current = None;
     let mut rect = None;
+    let mut sided = None;
     for (i, pair) in pairs.iter().enumerate() {
         if current != Some(pair.light) {
             current = Some(pair.light);
@@ -232,6 +232,14 @@ fn light_passes(
         }
         if rect.is_none() {
             continue; // the light's volume is off screen
+        }
+        // Single- and double-sided objects by pipelines of their cull modes.
+        let single = scene.single_sided[pair.object as usize];
+        if sided != Some(single) {
+            sided = Some(single);
+            if let Some(p) = &pipelines[usize::from(single)] {
+                rp.set_pipeline(p);
+            }
         }
         let d = scene.draws[pair.object as usize];
         let i = i as u32;

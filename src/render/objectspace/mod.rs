@@ -1250,7 +1250,9 @@ impl Pipeline for ObjectSpace {
     /// what shading every visible tile costs, the study's measure) and
     /// `shaded_texels_per_pixel` (after reuse); paging: `pages_in_use`
     /// (backing visible tiles this frame), `pages_backed` (newly),
-    /// `pages_failed` (found no page: the atlas was full), `page_texels`
+    /// `pages_failed` (found no page: the atlas was full, at its budget,
+    /// before the budget's bias, which follows the counts a few frames late,
+    /// rose; those pixels are shaded forward, not under-shaded), `page_texels`
     /// (texels of the pages in use), `table_chunks` (page-table chunks in
     /// use), `slotted_objects` and `slot_pages` (objects holding a
     /// page-directory slot, the virtual pages in their slots: [`slots`]),

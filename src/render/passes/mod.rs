@@ -37,24 +37,56 @@ impl DepthMode {
     }
 }
 
-/// A scene raster pass's pipelines: one for the opaque objects and, when the
-/// scene has alpha-masked ones, the pass shader's [`ALPHA_MASK`] variant for
-/// those, which discards their cut-away fragments. Two pipelines, so that
-/// opaque objects are drawn by a fragment stage that never discards and keep
-/// their early depth test. A pass testing `Equal` after a depth pre-pass
-/// needs the variant too: where a masked triangle is cut away, another
-/// triangle of its object may have left the same depth (coplanar ones), and
-/// the `Equal` test alone would let the cut one through.
+/// A scene raster pass's pipelines, one per kind of object the scene has. Opaque objects and, when the scene has alpha-masked ones, the
+/// pass shader's [`ALPHA_MASK`] variant for those, which discards their
+/// cut-away fragments: apart, so that opaque objects are drawn by a fragment
+/// stage that never discards and keep their early depth test. A pass testing
+/// `Equal` after a depth pre-pass needs the variant too: where a masked
+/// triangle is cut away, another triangle of its object may have left the
+/// same depth (coplanar ones), and the `Equal` test alone would let the cut
+/// one through. Single-sided objects ([`SceneGpu::single_sided`]) and
+/// double-sided ones apart too, by pipelines that cull back faces and that do
+/// not (wgpu has no per-draw cull mode).
 pub struct ScenePipeline {
-    opaque: wgpu::RenderPipeline,
-    masked: Option<wgpu::RenderPipeline>,
-    /// How the two were built, for their cluster-draw variants (boxed, as
+    plain: Kinds,
+    /// How they were built, for their cluster-draw variants (boxed, as
     /// is what follows: rarely used, and pass structs are held inline).
     recipe: Box<RasterRecipe>,
-    /// The [`cluster_draws::CLUSTER_DRAW`] variants of `opaque` and
-    /// `masked` ([`Self::add_cluster_draws`]).
-    clustered: Option<Box<(wgpu::RenderPipeline, Option<wgpu::RenderPipeline>)>>,
+    /// The [`cluster_draws::CLUSTER_DRAW`] variants of `plain`
+    /// ([`Self::add_cluster_draws`]).
+    clustered: Option<Box<Kinds>>,
 }
+
+/// A pass's pipelines by kind of object, `[masked][single-sided]`: those of
+/// the kinds the scene has ([`object_kind`]).
+type Kinds = [[Option<wgpu::RenderPipeline>; 2]; 2];
+
+/// Object `i`'s entry of [`Kinds`]: (alpha-masked, single-sided).
+fn object_kind(scene: &SceneGpu, i: usize) -> (usize, usize) {
+    (usize::from(scene.masked[i]), usize::from(scene.single_sided[i]))
+}
+
+/// The cull modes `scene`'s objects need: double-sided (false) and
+/// single-sided (true), those it has.
+fn sides(scene: &SceneGpu) -> Vec<bool> {
+    [(false, scene.has_double_sided()), (true, scene.has_single_sided())]
+        .into_iter()
+        .filter(|p| p.1)
+        .map(|p| p.0)
+        .collect()
+}
+
+/// The pipelines of `kinds` with whether each is the alpha-masked and the
+/// single-sided objects'.
+fn kinds_iter(kinds: &Kinds) -> impl Iterator<Item = (&wgpu::RenderPipeline, bool, bool)> {
+    kinds.iter().enumerate().flat_map(|(m, by_side)| {
+        by_side.iter().enumerate().filter_map(move |(s, p)| p.as_ref().map(|p| (p, m == 1, s == 1)))
+    })
+}
+
+/// A scene raster pass's pipelines by cull mode, `[single-sided]`
+/// ([`ScenePipeline::for_every_object`]).
+pub type SidedPipelines = [Option<wgpu::RenderPipeline>; 2];
 
 /// A [`SceneRaster`] with owned parts.
 struct RasterRecipe {
@@ -68,13 +100,14 @@ struct RasterRecipe {
 }
 
 impl ScenePipeline {
-    /// One pipeline for every object, for a pass with a draw loop of its own
-    /// that tests `Equal` after a depth pre-pass: in scenes with masks the
-    /// [`ALPHA_MASK`] variant (it cuts only the masked objects, and with no
-    /// depth writes a fragment stage that may discard keeps its early depth
-    /// test), else the plain one.
-    pub fn for_every_object(self) -> wgpu::RenderPipeline {
-        self.masked.unwrap_or(self.opaque)
+    /// The pipelines of every object by cull mode, for a pass with a draw
+    /// loop of its own that tests `Equal` after a depth pre-pass: in scenes
+    /// with masks the [`ALPHA_MASK`] variants (they cut only the masked
+    /// objects, and with no depth writes a fragment stage that may discard
+    /// keeps its early depth test), else the plain ones.
+    pub fn for_every_object(self) -> SidedPipelines {
+        let [opaque, masked] = self.plain;
+        if masked.iter().any(Option::is_some) { masked } else { opaque }
     }
 
     /// Whether it has its cluster-draw variants ([`Self::add_cluster_draws`]).
@@ -83,9 +116,10 @@ impl ScenePipeline {
     }
 
     /// The cluster-draw variants (none before [`Self::add_cluster_draws`]),
-    /// each with whether it is the alpha-masked objects'.
+    /// each with whether it is the alpha-masked objects' (each draws every
+    /// list: it skips the other kinds' objects).
     pub fn clustered_pipelines(&self) -> impl Iterator<Item = (&wgpu::RenderPipeline, bool)> {
-        self.clustered.iter().flat_map(|c| std::iter::once((&c.0, false)).chain(c.1.iter().map(|m| (m, true))))
+        self.clustered.iter().flat_map(|c| kinds_iter(c).map(|(p, masked, _)| (p, masked)))
     }
 
     /// Builds the variants that draw cluster lists
@@ -123,20 +157,29 @@ impl ScenePipeline {
         } else {
             &[cluster_draws::CLUSTER_DRAW]
         };
-        let opaque = raster_pipeline_with(device, shaders, scene, &raster, draw)?;
-        let masked = if self.masked.is_some() {
-            let fragment = raster.fragment.or(Some(("fs_alpha_mask", &[])));
-            Some(raster_pipeline_with(
-                device,
-                shaders,
-                scene,
-                &SceneRaster { fragment, ..raster },
-                &[&[ALPHA_MASK], draw].concat(),
-            )?)
-        } else {
-            None
-        };
-        self.clustered = Some(Box::new((opaque, masked)));
+        // Where the scene has both cull modes, every list is drawn once with
+        // each, and each skips the other's objects (`cluster_draws.wgsl`).
+        let mixed = scene.has_single_sided() && scene.has_double_sided();
+        let mut clustered: Kinds = Default::default();
+        for (m, by_side) in self.plain.iter().enumerate() {
+            for (single, _) in by_side.iter().enumerate().filter(|(_, p)| p.is_some()) {
+                let fragment = if m == 1 { raster.fragment.or(Some(("fs_alpha_mask", &[]))) } else { raster.fragment };
+                let mut defs: Vec<&str> = draw.to_vec();
+                if m == 1 {
+                    defs.push(ALPHA_MASK);
+                }
+                if mixed {
+                    defs.push(if single == 1 {
+                        cluster_draws::SINGLE_SIDED_DRAW
+                    } else {
+                        cluster_draws::DOUBLE_SIDED_DRAW
+                    });
+                }
+                let raster = SceneRaster { fragment, ..raster };
+                clustered[m][single] = Some(raster_pipeline_with(device, shaders, scene, &raster, &defs, single == 1)?);
+            }
+        }
+        self.clustered = Some(Box::new(clustered));
         Ok(())
     }
 }
@@ -160,8 +203,8 @@ pub fn alpha_masked_shaders() -> Vec<ShaderSource> {
 }
 
 /// A raster pipeline over the scene bind group (group 0): vertices pulled
-/// from storage (no vertex buffers), no face culling (unless the scene culls
-/// back faces), a reversed-Z depth test, and a fragment stage writing its
+/// from storage (no vertex buffers), back faces culled for single-sided
+/// objects only ([`ScenePipeline`]), a reversed-Z depth test, and a fragment stage writing its
 /// colour targets (several: a G-buffer; none: depth only), with bind groups
 /// after the scene's, blending, and multisampling.
 #[derive(Clone, Copy)]
@@ -180,21 +223,25 @@ pub struct SceneRaster<'a> {
     pub samples: u32,
 }
 
-/// The raster pipelines `raster` describes ([`SceneRaster`]).
+/// The raster pipelines `raster` describes ([`SceneRaster`]), one per kind
+/// of object `scene` has ([`ScenePipeline`]).
 pub fn scene_raster_pipeline_from(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,
     scene: &SceneGpu,
     raster: &SceneRaster,
 ) -> Result<ScenePipeline, ShaderError> {
-    let opaque = raster_pipeline(device, shaders, scene, raster, false)?;
-    let masked = if scene.has_alpha_masks() {
-        // A depth-only pass discards in a fragment stage of its own.
-        let fragment = raster.fragment.or(Some(("fs_alpha_mask", &[])));
-        Some(raster_pipeline(device, shaders, scene, &SceneRaster { fragment, ..*raster }, true)?)
-    } else {
-        None
-    };
+    let mut plain: Kinds = Default::default();
+    for single in sides(scene) {
+        plain[0][usize::from(single)] = Some(raster_pipeline_with(device, shaders, scene, raster, &[], single)?);
+        if scene.has_alpha_masks() {
+            // A depth-only pass discards in a fragment stage of its own.
+            let fragment = raster.fragment.or(Some(("fs_alpha_mask", &[])));
+            let masked = SceneRaster { fragment, ..*raster };
+            plain[1][usize::from(single)] =
+                Some(raster_pipeline_with(device, shaders, scene, &masked, &[ALPHA_MASK], single)?);
+        }
+    }
     let recipe = Box::new(RasterRecipe {
         shader: raster.shader,
         vertex_entry: raster.vertex_entry.to_string(),
@@ -204,11 +251,12 @@ pub fn scene_raster_pipeline_from(
         blend: raster.blend,
         samples: raster.samples,
     });
-    Ok(ScenePipeline { opaque, masked, recipe, clustered: None })
+    Ok(ScenePipeline { plain, recipe, clustered: None })
 }
 
-/// One pipeline of [`scene_raster_pipeline_from`]: the shader's
-/// [`ALPHA_MASK`] variant when `alpha_mask`.
+/// One pipeline of [`scene_raster_pipeline_from`] drawing both faces: the
+/// shader's [`ALPHA_MASK`] variant when `alpha_mask` (the blended passes,
+/// which draw every face of their surfaces).
 pub(crate) fn raster_pipeline(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,
@@ -216,23 +264,25 @@ pub(crate) fn raster_pipeline(
     raster: &SceneRaster,
     alpha_mask: bool,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
-    raster_pipeline_with(device, shaders, scene, raster, if alpha_mask { &[ALPHA_MASK] } else { &[] })
+    raster_pipeline_with(device, shaders, scene, raster, if alpha_mask { &[ALPHA_MASK] } else { &[] }, false)
 }
 
-/// [`raster_pipeline`] with `defs` defined.
+/// [`raster_pipeline`] with `defs` defined, culling back faces when `cull_back`.
 fn raster_pipeline_with(
     device: &wgpu::Device,
     shaders: &mut ShaderLibrary,
     scene: &SceneGpu,
     raster: &SceneRaster,
     defs: &[&str],
+    cull_back: bool,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
     let shader = raster.shader;
     let state = (
         (raster.vertex_entry, raster.fragment, raster.depth, raster.groups.len()),
-        (raster.blend, raster.samples, scene.cull_back_faces),
+        (raster.blend, raster.samples, cull_back),
     );
-    shaders.pipeline(shader, defs, state, |shaders| build_raster_pipeline(device, shaders, scene, raster, defs))
+    shaders
+        .pipeline(shader, defs, state, |shaders| build_raster_pipeline(device, shaders, scene, raster, defs, cull_back))
 }
 
 /// [`raster_pipeline`] as it is built when not built before.
@@ -242,6 +292,7 @@ fn build_raster_pipeline(
     scene: &SceneGpu,
     raster: &SceneRaster,
     defs: &[&str],
+    cull_back: bool,
 ) -> Result<wgpu::RenderPipeline, ShaderError> {
     let shader = raster.shader;
     let module = shaders.module_with(device, shader, defs)?;
@@ -277,10 +328,7 @@ fn build_raster_pipeline(
             compilation_options: Default::default(),
             targets: targets.as_slice(),
         }),
-        primitive: wgpu::PrimitiveState {
-            cull_mode: scene.cull_back_faces.then_some(wgpu::Face::Back),
-            ..Default::default()
-        },
+        primitive: wgpu::PrimitiveState { cull_mode: cull_back.then_some(wgpu::Face::Back), ..Default::default() },
         depth_stencil: Some(wgpu::DepthStencilState {
             format: targets::DEPTH_FORMAT,
             depth_write_enabled: Some(depth_write),
@@ -320,17 +368,15 @@ pub fn draw_scene(
 
 /// Draws every visible object with `pipeline`: one instanced draw per object,
 /// the instance index being the object (the shaders read its table entry);
-/// the opaque objects first, then the alpha-masked ones with the masked
-/// variant where the pipeline has one.
+/// each kind of object ([`ScenePipeline`]) with its pipeline.
 pub fn draw_objects(pass: &mut wgpu::RenderPass, scene: &SceneGpu, visible: &[bool], pipeline: &ScenePipeline) {
     pass.set_bind_group(0, scene.bind_group(), &[]);
     pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-    let masked = pipeline.masked.as_ref();
-    pass.set_pipeline(&pipeline.opaque);
-    draw_visible(pass, scene, |i| visible[i] && (masked.is_none() || !scene.masked[i]));
-    if let Some(masked) = masked {
-        pass.set_pipeline(masked);
-        draw_visible(pass, scene, |i| visible[i] && scene.masked[i]);
+    for (p, masked, single) in kinds_iter(&pipeline.plain) {
+        pass.set_pipeline(p);
+        draw_visible(pass, scene, |i| {
+            visible[i] && object_kind(scene, i) == (usize::from(masked), usize::from(single))
+        });
     }
 }
 
@@ -358,13 +404,15 @@ fn visible_runs(scene: &SceneGpu, draw: impl Fn(usize) -> bool) -> Vec<(DrawRang
 }
 
 /// The draws [`draw_objects`] issues for the `visible` objects with a
-/// pipeline of `scene` (opaque and, in scenes with masks, alpha-masked
-/// objects apart): what a pass drawing the plain way issues, beside what
-/// the cluster draws issue.
+/// pipeline of `scene` (each kind of object apart): what a pass drawing the
+/// plain way issues, beside what the cluster draws issue.
 pub fn plain_draws(scene: &SceneGpu, visible: &[bool]) -> u32 {
-    let runs =
-        |masked: Option<bool>| visible_runs(scene, |i| visible[i] && masked.is_none_or(|m| scene.masked[i] == m));
-    let n = if scene.has_alpha_masks() { runs(Some(false)).len() + runs(Some(true)).len() } else { runs(None).len() };
+    let mut n = 0;
+    for masked in 0..2 {
+        for single in 0..2 {
+            n += visible_runs(scene, |i| visible[i] && object_kind(scene, i) == (masked, single)).len();
+        }
+    }
     n as u32
 }
 

@@ -49,6 +49,11 @@ struct Object {
     // (`shadespace::layers`); 0 layers for a plain material.
     layer_first: u32,
     layer_count: u32,
+    // 1 where the material is single-sided: its back faces are culled.
+    cull_back: u32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
 }
 
 struct View {

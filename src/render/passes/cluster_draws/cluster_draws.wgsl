@@ -11,6 +11,7 @@
 #define_import_path shadespace::cluster_draws
 #ifdef CLUSTER_DRAW
 #import shadespace::scene_bindings::{objects, indices}
+#import shadespace::scene::Object
 #endif
 
 struct SceneVertex {
@@ -50,12 +51,34 @@ const TRIANGLES: u32 = 64u;
 // The clusters' triangles (indices of their mesh's triangles).
 @group(2) @binding(4) var<storage, read> cluster_triangles: array<u32>;
 
+// Whether `o` is drawn by another pipeline's cull mode: in scenes with both
+// single- and double-sided objects, every list is drawn with a pipeline of
+// each (`passes::ScenePipeline`), defined SINGLE_SIDED_DRAW or
+// DOUBLE_SIDED_DRAW, and each skips the other's objects.
+fn other_sides(o: Object) -> bool {
+#ifdef SINGLE_SIDED_DRAW
+    return o.cull_back == 0u;
+#else
+#ifdef DOUBLE_SIDED_DRAW
+    return o.cull_back != 0u;
+#else
+    return false;
+#endif
+#endif
+}
+
 #ifdef INDEXED_DRAWS
 fn scene_vertex(vertex_index: u32, instance_index: u32) -> SceneVertex {
     // The draw's index range is a run of the object's clusters (the first
     // at `instance_index`); its base vertex the object's.
     let entry = cluster_lists[instance_index];
-    return SceneVertex(vertex_index, ranges[entry.x].x, clusters[entry.y].first);
+    let object = ranges[entry.x].x;
+    // Another pipeline's object: every corner on its mesh's first vertex
+    // (zero area, no fragment).
+    if other_sides(objects[object]) {
+        return SceneVertex(objects[object].base_vertex, object, clusters[entry.y].first);
+    }
+    return SceneVertex(vertex_index, object, clusters[entry.y].first);
 }
 
 // The mesh's triangle of a fragment: `triangle` from `scene_vertex`,
@@ -70,8 +93,9 @@ fn scene_vertex(vertex_index: u32, instance_index: u32) -> SceneVertex {
     let c = clusters[entry.y];
     let o = objects[object];
     let t = vertex_index / 3u;
-    // The passes draw opaque and alpha-masked objects with pipelines of
-    // their own (`passes::ScenePipeline`); the list holds both.
+    // The passes draw opaque and alpha-masked objects (and single- and
+    // double-sided ones) with pipelines of their own
+    // (`passes::ScenePipeline`); the list holds all.
 #ifdef ALPHA_MASK
     let drawn = o.alpha_cutoff > 0.0;
 #else
@@ -79,7 +103,7 @@ fn scene_vertex(vertex_index: u32, instance_index: u32) -> SceneVertex {
 #endif
     // Past the cluster's triangles, or another pipeline's object: the first
     // corner of its first triangle, three times (zero area, no fragment).
-    let kept = drawn && t < c.count;
+    let kept = drawn && !other_sides(o) && t < c.count;
     let local = select(0u, t, kept);
     let corner = select(0u, vertex_index % 3u, kept);
     let triangle = cluster_triangles[c.first + local];

@@ -74,6 +74,12 @@ pub const CLUSTER_DRAW: &str = "CLUSTER_DRAW";
 /// that draws clusters with indexed draws, and in `cull.wgsl`'s variant
 /// that writes them.
 pub const INDEXED_DRAWS: &str = "INDEXED_DRAWS";
+/// Defined, besides [`CLUSTER_DRAW`], in the variant that draws the
+/// single-sided objects of lists that hold double-sided ones too (it skips
+/// those: `cluster_draws.wgsl`'s `other_sides`).
+pub const SINGLE_SIDED_DRAW: &str = "SINGLE_SIDED_DRAW";
+/// [`SINGLE_SIDED_DRAW`]'s twin for the double-sided objects.
+pub const DOUBLE_SIDED_DRAW: &str = "DOUBLE_SIDED_DRAW";
 /// The features the indexed cluster draws need: a draw's first instance
 /// carries its cluster, and the draws are counted on the GPU.
 pub const INDEXED_FEATURES: wgpu::Features =
@@ -409,7 +415,7 @@ impl ClusterCull {
             frame.queue.write_buffer(&self.chunks, 0, bytemuck::cast_slice(&chunks));
         }
         let (levels, level_offsets) = self.pyramid.level_offsets();
-        let flags = if frame.scene.cull_back_faces { CULL_CONE } else { 0 }
+        let flags = if frame.scene.has_single_sided() { CULL_CONE } else { 0 }
             | if culling == Culling::Occlusion { CULL_OCCLUSION } else { 0 }
             | if plain { CULL_PLAIN } else { 0 };
         let params = GpuCullParams {

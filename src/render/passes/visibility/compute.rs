@@ -63,8 +63,9 @@ use crate::render::targets::Targets;
 use crate::shaders::{ALPHA_MASK, ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
 
 pub const RASTER: ShaderSource = ShaderSource::new("raster.wgsl", include_str!("raster.wgsl"));
-/// `raster.wgsl` culling back faces ([`crate::scene::Scene::cull_back_faces`]),
-/// counting its work ([`RasterCount`]), or both.
+/// `raster.wgsl` culling the back faces of single-sided objects
+/// ([`crate::scene::Material::double_sided`]), counting its work
+/// ([`RasterCount`]), or both.
 pub const RASTER_CULLING: ShaderSource = RASTER.with_defs(&["CULL_BACK"]);
 pub const RASTER_COUNTING: ShaderSource = RASTER.with_defs(&["COUNT"]);
 pub const RASTER_CULLING_COUNTING: ShaderSource = RASTER.with_defs(&["CULL_BACK", "COUNT"]);
@@ -526,7 +527,7 @@ impl ComputeVisibility {
             &[wgpu::BindingResource::TextureView(&out.view), depth_ids.as_entire_binding()],
         );
         let raster_layouts = [&scene.layout, &raster_layout];
-        let raster_shader = match (scene.cull_back_faces, counting.is_some()) {
+        let raster_shader = match (scene.has_single_sided(), counting.is_some()) {
             (false, false) => RASTER,
             (false, true) => RASTER_COUNTING,
             (true, false) => RASTER_CULLING,
@@ -830,7 +831,7 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
             frame.queue.write_buffer(&pass.cull.chunks, 0, bytemuck::cast_slice(&chunks));
         }
         let (levels, level_offsets) = pass.cull.pyramid.level_offsets();
-        let flags = if frame.scene.cull_back_faces { CULL_CONE } else { 0 }
+        let flags = if frame.scene.has_single_sided() { CULL_CONE } else { 0 }
             | if culling == Culling::Occlusion { CULL_OCCLUSION } else { 0 };
         let params = GpuCullParams {
             range_count,

@@ -282,7 +282,8 @@ fn cull_cluster(range_index: u32, i: u32, late: bool) -> u32 {
     }
     let outside = outside_frustum(mvp, c);
     var away = false;
-    if !outside && (params.flags & CULL_CONE) != 0u {
+    // Only single-sided objects' clusters may face away.
+    if !outside && (params.flags & CULL_CONE) != 0u && o.cull_back != 0u {
         // The model's inverse is the transpose of the normal matrix.
         let eye = (transpose(o.normal_model) * vec4f(view.camera_position.xyz, 1.0)).xyz;
         let linear = mat3x3f(o.model[0].xyz, o.model[1].xyz, o.model[2].xyz);

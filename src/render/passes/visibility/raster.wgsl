@@ -408,9 +408,10 @@ fn setup_triangle(object: u32, triangle: u32, payload: u32) -> Setup {
         return s;
     }
 #ifdef CULL_BACK
-    // Clockwise: a back face, culled as the raster pipelines cull it (the
-    // sign of the homogeneous determinant, as the hardware decides it).
-    if det < 0.0 {
+    // Clockwise: a back face, culled where the object's material is
+    // single-sided as the raster pipelines cull it (the sign of the
+    // homogeneous determinant, as the hardware decides it).
+    if det < 0.0 && objects[object].cull_back != 0u {
         return s;
     }
 #endif
@@ -421,7 +422,7 @@ fn setup_triangle(object: u32, triangle: u32, payload: u32) -> Setup {
         s.owns = masked;
         return s;
     }
-    // Both facings are drawn, as the raster path draws with no face culling.
+    // The facings left are drawn, as the raster path draws them.
     let inward = sign(det);
     s.edge_a = n[0] * inward;
     s.edge_b = n[1] * inward;
