@@ -50,11 +50,11 @@ fn material_texels_level(o: Object, uv: vec2f, lod: f32) -> MaterialTexels {
     return t;
 }
 
-// As `material_texels_level`, with UV0's screen derivatives `ddx`, `ddy`
-// (for fragments: `dpdx(uv)` and `dpdy(uv)` taken in uniform control flow,
-// so that these samples, like implicit ones, filter the pixel's footprint).
-// The view's texture_lod_bias scales them by 2^bias: the same level shift
-// as `textureSampleBias`.
+// As `material_texels_level`, with UV0's screen derivatives `pixel_ddx`,
+// `pixel_ddy` (for fragments: `dpdx(uv)` and `dpdy(uv)` taken in uniform
+// control flow, so that these samples, like implicit ones, filter the
+// pixel's footprint). The view's texture_lod_bias scales them by 2^bias:
+// the same level shift as `textureSampleBias`.
 fn material_texels_grad(o: Object, uv: vec2f, pixel_ddx: vec2f, pixel_ddy: vec2f) -> MaterialTexels {
     var t = no_material_texels();
 #ifdef MATERIAL_TEXTURES
