@@ -793,9 +793,10 @@ fn outcome(setup: &Setup, findings: Findings) -> Outcome {
          with the samples. Deferred-compute's and object space's visibility, at every sample count, is the one \
          the setup names (the compute rasterizer, where the adapter has it, writes each sample)."
             .to_string(),
-        "Reference textures: the reference's sub-pixel frames sample textures at the level of a whole pixel's \
-         footprint, as one sample per pixel does; it resolves geometry, shading and specular aliasing, not \
-         texture filtering."
+        "Reference textures: each of the reference's N x N sub-pixel frames samples textures log2(N) levels \
+         finer than a pixel's footprint (the footprint of its sample in a frame N times larger), so it resolves \
+         texture detail as well as geometry, shading and specular aliasing; each sample's filter is the \
+         hardware's trilinear one (no anisotropy)."
             .to_string(),
         "Flicker and error are of the tone-mapped 8-bit images; on a CPU driver the GPU times do not measure \
          every pass (README, lavapipe timestamps)."

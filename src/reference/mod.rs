@@ -1,20 +1,32 @@
 //! Supersampled reference images: the ground truth pipelines are judged
 //! against. The forward pipeline renders the frame N x N times, each time
 //! with the projection shifted by a sub-pixel offset of a regular grid
-//! (`(i + 0.5) / N - 0.5` pixels on each axis), and the HDR frames are
-//! averaged in linear light (a box filter over the pixel) before tone
-//! mapping with the exposure the pipelines use.
+//! (`(i + 0.5) / N - 0.5` pixels on each axis) and its material textures
+//! sampled log2(N) levels finer (`Renderer::texture_lod_bias` = -log2(N)),
+//! and the HDR frames are averaged in linear light (a box filter over the
+//! pixel) before tone mapping with the exposure the pipelines use.
+//!
+//! So each sample sees what the pixel centre of a frame N times larger sees:
+//! the same point (the grid's points are the large frame's pixel centres),
+//! and its textures filtered over that smaller pixel's footprint (the large
+//! frame's UV derivatives are 1/N of these, log2(N) levels finer). The
+//! result is that large frame box-filtered down N x N, which converges to
+//! the pixel integral of geometry, shading, specular aliasing and texture
+//! detail alike.
 //!
 //! Why jittered frames and not one frame at N times the size: the samples
-//! are the same N x N stratified points per pixel, but every frame is at the
-//! pipelines' own size, so no target outgrows the adapter (16384 / 8 is
-//! 2048 pixels a side: an 8x8 reference at 3840x2160 would need tiles) and
-//! everything sized from the screen (light grids, clusters, texture levels)
-//! is what the pipelines see. The one difference from a true pixel integral:
-//! textures are sampled at the mip level of a whole pixel's footprint, so
-//! texture detail is the level-filtered one, as at one sample per pixel
-//! (a frame N times larger would pick levels log2(N) finer); what the
-//! reference resolves is geometry, shading and specular aliasing.
+//! are the same, but every frame is at the pipelines' own size, so no target
+//! outgrows the adapter (16384 / 8 is 2048 pixels a side: an 8x8 reference
+//! at 3840x2160 would need tiles) and what is sized from the screen (light
+//! grids, clusters) is what the pipelines see. What remains different from a
+//! true integral: each sample's texture value is the hardware's trilinear
+//! filter of its footprint (a square box between two mip levels, not the
+//! footprint's own shape: at grazing angles it blurs along the short axis as
+//! the long one wants; no anisotropic filter), and implicit derivatives are
+//! taken over 2x2 quads of the pipelines' pixels, N times the large frame's
+//! quads (equal where UV is affine over them, close under perspective).
+//! Shadow maps and the environment are sampled as in any frame: their
+//! resolution does not follow the screen's.
 //!
 //! References are cached on disk ([`ReferenceCache`]) by a hash of all their
 //! inputs, so experiments render each one once.
@@ -33,7 +45,9 @@ use crate::scene::environment::Environment;
 use crate::scene::{Camera, Light, Scene};
 
 /// Bumped when the reference's method changes, so old cache files are not reused.
-const METHOD_VERSION: u32 = 1;
+/// 2: material textures sampled at the samples' own footprints (a level bias
+/// of -log2(N)); 1 sampled them at the whole pixel's.
+const METHOD_VERSION: u32 = 2;
 const MAGIC: &[u8; 8] = b"SSREF\0\0\x01";
 
 /// Why a reference could not be made.
@@ -177,6 +191,9 @@ impl<'a> References<'a> {
             }
         };
         renderer.exposure = Exposure::Fixed(exposure);
+        // Each sample's textures at its own footprint, a pixel of the frame
+        // N times larger: log2(N) levels finer than this frame's pixel.
+        renderer.texture_lod_bias = lod_bias(n);
         let pixels = (s.width * s.height) as usize;
         let mut sum = vec![0.0f64; pixels * 3];
         for j in 0..n {
@@ -195,6 +212,7 @@ impl<'a> References<'a> {
             }
         }
         renderer.jitter = Vec2::ZERO;
+        renderer.texture_lod_bias = 0.0;
         let scale = 1.0 / f64::from(n * n);
         let hdr = sum.iter().map(|v| (v * scale) as f32).collect();
         Ok(Reference { width: s.width, height: s.height, samples: n, exposure, hdr })
@@ -205,6 +223,12 @@ impl<'a> References<'a> {
 /// centres of an n x n grid over the pixel.
 pub fn offset(i: u32, n: u32) -> f32 {
     (i as f32 + 0.5) / n as f32 - 0.5
+}
+
+/// The texture level bias of a reference with `n` samples per axis:
+/// `-log2(n)`, the level shift from a pixel's footprint to an `n`-th of it.
+pub fn lod_bias(n: u32) -> f32 {
+    -(n as f32).log2()
 }
 
 /// A stable hash of everything in a scene that reaches the image: geometry,
@@ -349,6 +373,11 @@ mod tests {
         assert_eq!(four, [-0.375, -0.125, 0.125, 0.375]);
         // Symmetric about the centre: the resolved pixel is not shifted.
         assert_eq!((0..8).map(|i| offset(i, 8)).sum::<f32>(), 0.0);
+    }
+
+    #[test]
+    fn the_lod_bias_is_minus_log2_of_the_samples_per_axis() {
+        assert_eq!([1, 2, 4, 8].map(lod_bias), [0.0, -1.0, -2.0, -3.0]);
     }
 
     #[test]

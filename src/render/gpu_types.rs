@@ -91,7 +91,9 @@ gpu_struct! {
         pub global_light_count: u32,
         /// A [`ShadingModel`] (the lighting model every pass evaluates).
         pub shading: u32,
-        pub pad_b: u32,
+        /// Added to the mip level of every material texture sample taken
+        /// from a footprint (0: none); see `Renderer::texture_lod_bias`.
+        pub texture_lod_bias: f32,
     }
 }
 

@@ -343,6 +343,11 @@ pub struct Renderer {
     /// default none): supersampled references (`crate::reference`) average
     /// frames rendered at a grid of such offsets.
     pub jitter: glam::Vec2,
+    /// Added to the mip level of every material texture sample taken from a
+    /// footprint, in every pipeline (default 0: the footprint's own level).
+    /// References set `-log2(N)` so that N x N jittered samples filter
+    /// textures as a frame N times larger would.
+    pub texture_lod_bias: f32,
     shadows: ShadowMaps,
     /// The library the pipelines were built with (cluster culling builds
     /// its variants from it when first needed).
@@ -445,6 +450,7 @@ impl Renderer {
             cluster_draws: ClusterDraws::default(),
             cull_plain_above: clusters::CULL_PLAIN_ABOVE,
             jitter: glam::Vec2::ZERO,
+            texture_lod_bias: 0.0,
             shadows,
             shaders,
             cluster_culling_built: false,
@@ -515,6 +521,7 @@ impl Renderer {
         view.light_count = lights.len() as u32;
         view.global_light_count = global_lights;
         view.shading = self.shading as u32;
+        view.texture_lod_bias = self.texture_lod_bias;
         let frustum = Frustum::from_view_projection(view.view_proj);
         let lists = if self.pipeline.uses_object_light_lists() {
             culling::lights_per_object(&lights, &self.scene.object_bounds, Some(&frustum))

@@ -5,13 +5,14 @@
 // objects their early depth test.
 #define_import_path shadespace::alpha_mask
 #import shadespace::scene::alpha_cut
-#import shadespace::scene_bindings::{objects, albedo, albedo_sampler}
+#import shadespace::scene_bindings::{view, objects, albedo, albedo_sampler}
 
 // Whether the fragment of `object` at `uv0` is cut away (implicit
-// derivatives: call it in uniform control flow).
+// derivatives, biased by the view's texture_lod_bias as every material
+// sample is: call it in uniform control flow).
 fn masked_out(object: u32, uv0: vec2f) -> bool {
     let o = objects[object];
-    return alpha_cut(o, textureSample(albedo, albedo_sampler, uv0, o.albedo_layer).a);
+    return alpha_cut(o, textureSampleBias(albedo, albedo_sampler, uv0, o.albedo_layer, view.texture_lod_bias).a);
 }
 
 // The opacity of `object` at `uv0` (base colour factor alpha times texture
@@ -19,5 +20,5 @@ fn masked_out(object: u32, uv0: vec2f) -> bool {
 // (implicit derivatives: call it in uniform control flow).
 fn opacity(object: u32, uv0: vec2f) -> f32 {
     let o = objects[object];
-    return clamp(o.base_color.a * textureSample(albedo, albedo_sampler, uv0, o.albedo_layer).a, 0.0, 1.0);
+    return clamp(o.base_color.a * textureSampleBias(albedo, albedo_sampler, uv0, o.albedo_layer, view.texture_lod_bias).a, 0.0, 1.0);
 }

@@ -57,7 +57,8 @@ struct Surface {
     // Ambient occlusion, 1 for none: scales ambient and environment light only.
     occlusion: f32,
     // Layered materials only (`shadespace::layers`; zero otherwise): UV0 and
-    // the albedo mip there (for texture masks), and the material's layers.
+    // the albedo mip there (`albedo_lod`'s, the view's texture_lod_bias
+    // included; for texture masks), and the material's layers.
     uv: vec2f,
     uv_lod: f32,
     layer_first: u32,

@@ -4,7 +4,7 @@
 #define_import_path shadespace::raster_surface
 #import shadespace::lighting::Surface
 #import shadespace::scene::{Object, vertex_uv0}
-#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, linear_maps, object_clip_position}
+#import shadespace::scene_bindings::{view, objects, vertices, albedo, albedo_sampler, linear_maps, object_clip_position}
 #import shadespace::surface::{MaterialTexels, object_surface, material_texels_grad, albedo_lod}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
 
@@ -35,16 +35,16 @@ fn object_vertex(object: u32, vi: u32, tag: u32) -> VertexOut {
     return out;
 }
 
-// The object's albedo texel at the fragment (implicit derivatives: call it
-// in uniform control flow).
+// The object's albedo texel at the fragment (implicit derivatives, biased by
+// the view's texture_lod_bias: call it in uniform control flow).
 fn sample_albedo(o: Object, in: VertexOut) -> vec3f {
-    return textureSample(albedo, albedo_sampler, in.uv, o.albedo_layer).rgb;
+    return textureSampleBias(albedo, albedo_sampler, in.uv, o.albedo_layer, view.texture_lod_bias).rgb;
 }
 
 // The object's normal-map texel at the fragment (uniform control flow, as
 // `sample_albedo`; meaningless for objects without a map).
 fn sample_normal_map(o: Object, in: VertexOut) -> vec3f {
-    return textureSample(linear_maps, albedo_sampler, in.uv, sample_layer(o.normal_layer)).rgb;
+    return textureSampleBias(linear_maps, albedo_sampler, in.uv, sample_layer(o.normal_layer), view.texture_lod_bias).rgb;
 }
 
 // The object's emissive, metallic-roughness and occlusion texels at the

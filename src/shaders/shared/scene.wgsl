@@ -68,7 +68,11 @@ struct View {
     global_light_count: u32,
     // SHADING_PHONG or SHADING_PBR.
     shading: u32,
-    pad_b: u32,
+    // Added to the mip level of every material texture sample taken from a
+    // footprint (hardware or computed derivatives); 0 by default. The
+    // supersampled reference sets -log2(N) so each of its N x N samples per
+    // pixel filters the footprint it would have in a frame N times larger.
+    texture_lod_bias: f32,
 }
 
 // Whether the surface of `o` is cut away where its base colour texel's alpha

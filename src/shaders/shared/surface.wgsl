@@ -50,12 +50,16 @@ fn material_texels_level(o: Object, uv: vec2f, lod: f32) -> MaterialTexels {
     return t;
 }
 
-// As `material_texels_level`, with UV0's screen derivatives `ddx`, `ddy`
-// (for fragments: `dpdx(uv)` and `dpdy(uv)` taken in uniform control flow,
-// so that these samples, like implicit ones, filter the pixel's footprint).
-fn material_texels_grad(o: Object, uv: vec2f, ddx: vec2f, ddy: vec2f) -> MaterialTexels {
+// As `material_texels_level`, with UV0's screen derivatives `pixel_ddx`,
+// `pixel_ddy` (for fragments: `dpdx(uv)` and `dpdy(uv)` taken in uniform
+// control flow, so that these samples, like implicit ones, filter the
+// pixel's footprint). The view's texture_lod_bias scales them by 2^bias:
+// the same level shift as `textureSampleBias`.
+fn material_texels_grad(o: Object, uv: vec2f, pixel_ddx: vec2f, pixel_ddy: vec2f) -> MaterialTexels {
     var t = no_material_texels();
 #ifdef MATERIAL_TEXTURES
+    let ddx = pixel_ddx * exp2(view.texture_lod_bias);
+    let ddy = pixel_ddy * exp2(view.texture_lod_bias);
     if o.emissive_layer != NO_TEXTURE {
         t.emissive = textureSampleGrad(albedo, albedo_sampler, uv, o.emissive_layer, ddx, ddy).rgb;
     }
@@ -200,9 +204,12 @@ fn emission_and_globals_one(s: Surface, to_eye: vec3f) -> vec3f {
     return s.emission + light_globals(s, to_eye);
 }
 
-// Albedo mip for a footprint whose UV0 derivatives are `d0` and `d1`.
+// Albedo mip for a footprint whose UV0 derivatives are `d0` and `d1`, with
+// the view's texture_lod_bias added before the clamp, as the hardware adds
+// `textureSampleBias`'s (every computed material level, layer masks' too,
+// comes from here).
 fn albedo_lod(d0: vec2f, d1: vec2f) -> f32 {
     let size = vec2f(textureDimensions(albedo));
     let rho = max(length(d0 * size), length(d1 * size));
-    return max(log2(max(rho, 1e-8)), 0.0);
+    return max(log2(max(rho, 1e-8)) + view.texture_lod_bias, 0.0);
 }

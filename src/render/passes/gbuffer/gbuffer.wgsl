@@ -8,7 +8,7 @@
 // `object_clip_position`, so after a depth pre-pass the `Equal` test passes.
 #import shadespace::octahedral::oct_encode
 #import shadespace::scene::vertex_uv0
-#import shadespace::scene_bindings::{objects, vertices, albedo, albedo_sampler, linear_maps, object_clip_position}
+#import shadespace::scene_bindings::{view, objects, vertices, albedo, albedo_sampler, linear_maps, object_clip_position}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
 #import shadespace::cluster_draws::scene_vertex
 #import shadespace::surface::{material_texels_grad, albedo_lod}
@@ -70,9 +70,11 @@ fn fs_main(in: VertexOut) -> GbufferOut {
 #endif
     let o = objects[in.object];
     var out: GbufferOut;
-    let normal_texel = textureSample(linear_maps, albedo_sampler, in.uv0, sample_layer(o.normal_layer)).rgb;
+    // Implicit derivatives biased by the view's texture_lod_bias, as forward's.
+    let bias = view.texture_lod_bias;
+    let normal_texel = textureSampleBias(linear_maps, albedo_sampler, in.uv0, sample_layer(o.normal_layer), bias).rgb;
     out.normal = oct_encode(mapped_normal(in.normal, in.tangent, normal_texel, o.normal_layer));
-    out.albedo_color = vec4f(textureSample(albedo, albedo_sampler, in.uv0, o.albedo_layer).rgb * o.base_color.rgb, 1.0);
+    out.albedo_color = vec4f(textureSampleBias(albedo, albedo_sampler, in.uv0, o.albedo_layer, bias).rgb * o.base_color.rgb, 1.0);
     out.object = in.object;
 #ifdef MATERIAL_TEXTURES
     let material = material_texels_grad(o, in.uv0, dpdx(in.uv0), dpdy(in.uv0));

@@ -488,8 +488,11 @@ fn cut_away(payload: u32, p: vec2i) -> bool {
     let quad = vec2f(p & vec2i(-2));
     let uv = uv_at(n0, n1, n2, t0, t1, t2, vec2f(p));
     let corner = uv_at(n0, n1, n2, t0, t1, t2, quad);
-    let ddx = uv_at(n0, n1, n2, t0, t1, t2, quad + vec2f(1.0, 0.0)) - corner;
-    let ddy = uv_at(n0, n1, n2, t0, t1, t2, quad + vec2f(0.0, 1.0)) - corner;
+    // Scaled by 2^bias: the view's texture_lod_bias, as the raster path's
+    // `textureSampleBias` applies it.
+    let scale = exp2(view.texture_lod_bias);
+    let ddx = (uv_at(n0, n1, n2, t0, t1, t2, quad + vec2f(1.0, 0.0)) - corner) * scale;
+    let ddy = (uv_at(n0, n1, n2, t0, t1, t2, quad + vec2f(0.0, 1.0)) - corner) * scale;
     return alpha_cut(o, textureSampleGrad(albedo, albedo_sampler, uv, o.albedo_layer, ddx, ddy).a);
 }
 #endif
