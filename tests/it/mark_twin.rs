@@ -441,11 +441,8 @@ fn workgroup_marking_matches_per_pixel_marking_with_fewer_atomics() {
     let ctx = common::gpu();
     let (width, height) = (192, 108);
     let aspect = width as f32 / height as f32;
-    let spec: LightSpec = "small:4".parse().unwrap();
     let scene = scene::load("atrium").unwrap();
-    let path = path::cameras_for_scene("atrium", &scene, aspect).unwrap().select(path::CameraChoice::Path).unwrap();
-    let cameras: Vec<Camera> = (0..3).map(|f| path.camera_at(f * 12)).collect();
-    let lights = lights::build_lights(&spec, &scene.bounds(), &cameras[0], aspect, 7).unwrap();
+    let (cameras, lights) = common::path_views("atrium", &scene, aspect, 3, "small:4");
     let (charted, texture_sizes) = common::charted(&scene);
     let case = MarkingCase { name: "atrium", scene: &charted, texture_sizes, width, height, cameras, lights };
     // Measured on lavapipe: 0.217 of the atomics (0.124 of the tile marks), Sponza 0.241 (0.141).
@@ -457,9 +454,7 @@ fn workgroup_marking_matches_per_pixel_marking_with_fewer_atomics() {
         return;
     }
     let scene = scene::load(SPONZA).unwrap();
-    let path = path::cameras_for_scene(SPONZA, &scene, aspect).unwrap().select(path::CameraChoice::Path).unwrap();
-    let cameras: Vec<Camera> = (0..3).map(|f| path.camera_at(f * 12)).collect();
-    let lights = lights::build_lights(&spec, &scene.bounds(), &cameras[0], aspect, 7).unwrap();
+    let (cameras, lights) = common::path_views(SPONZA, &scene, aspect, 3, "small:4");
     let (charted, texture_sizes) = common::charted_for(&scene, &cameras[0], width, height);
     let case = MarkingCase { name: "sponza", scene: &charted, texture_sizes, width, height, cameras, lights };
     compare_markings(&ctx, case, 0.4);
@@ -478,11 +473,8 @@ fn subgroup_marking_matches_workgroup_marking_with_fewer_claims() {
     }
     let (width, height) = (192, 108);
     let aspect = width as f32 / height as f32;
-    let spec: LightSpec = "small:4".parse().unwrap();
     let scene = scene::load("atrium").unwrap();
-    let path = path::cameras_for_scene("atrium", &scene, aspect).unwrap().select(path::CameraChoice::Path).unwrap();
-    let cameras: Vec<Camera> = (0..3).map(|f| path.camera_at(f * 12)).collect();
-    let lights = lights::build_lights(&spec, &scene.bounds(), &cameras[0], aspect, 7).unwrap();
+    let (cameras, lights) = common::path_views("atrium", &scene, aspect, 3, "small:4");
     let (charted, texture_sizes) = common::charted(&scene);
     let case = MarkingCase { name: "atrium", scene: &charted, texture_sizes, width, height, cameras, lights };
     let workgroup = marking_run(&ctx, &case, Marking::Workgroup);

@@ -13,7 +13,7 @@ use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::debug::BackedPages;
 use shadespace::render::objectspace::{GatherInput, ObjectSpace, PagingChain, TileCounter};
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
-use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
+use shadespace::scene::{self, Camera, Light, Scene};
 
 /// The passes the fused chain does not record.
 const SPLIT_ONLY: [&str; 3] = ["backed args", "mark backed", "queue"];
@@ -137,11 +137,8 @@ fn compare(ctx: &GpuContext, case: &Case, variants: &[Variant]) {
 fn fused_paging_and_triangle_map_lanes_change_nothing() {
     let ctx = common::gpu();
     let aspect = WIDTH as f32 / HEIGHT as f32;
-    let spec: LightSpec = "small:4".parse().unwrap();
     let scene = scene::load("atrium").unwrap();
-    let path = path::cameras_for_scene("atrium", &scene, aspect).unwrap().select(path::CameraChoice::Path).unwrap();
-    let cameras: Vec<Camera> = (0..3).map(|f| path.camera_at(f * 12)).collect();
-    let lights = lights::build_lights(&spec, &scene.bounds(), &cameras[0], aspect, 7).unwrap();
+    let (cameras, lights) = common::path_views("atrium", &scene, aspect, 3, "small:4");
     let (charted, texture_sizes) = common::charted(&scene);
     // Each shader variant once: the fused chain's marking in the one-lane
     // and in the several-lane triangle-map pass.
@@ -158,9 +155,7 @@ fn fused_paging_and_triangle_map_lanes_change_nothing() {
         return;
     }
     let scene = scene::load(SPONZA).unwrap();
-    let path = path::cameras_for_scene(SPONZA, &scene, aspect).unwrap().select(path::CameraChoice::Path).unwrap();
-    let cameras: Vec<Camera> = (0..2).map(|f| path.camera_at(f * 12)).collect();
-    let lights = lights::build_lights(&spec, &scene.bounds(), &cameras[0], aspect, 7).unwrap();
+    let (cameras, lights) = common::path_views(SPONZA, &scene, aspect, 2, "small:4");
     let (charted, texture_sizes) = common::charted_for(&scene, &cameras[0], WIDTH, HEIGHT);
     // Sponza's charts and pages, with the fused chain and 8 lanes together.
     compare(&ctx, &Case { name: "sponza", scene: &charted, texture_sizes, cameras, lights }, &variants[2..]);

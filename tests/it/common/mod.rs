@@ -158,6 +158,18 @@ pub fn path_frame_seeded(name: &str, spec: &str, width: u32, height: u32, seed: 
     PathFrame { scene, camera, lights }
 }
 
+/// `count` cameras along `name`'s path, 12 frames apart from frame 0, and
+/// the lights `spec` places for the first at `aspect` (seed 7): the views
+/// the marking and paging tests step through.
+pub fn path_views(name: &str, scene: &Scene, aspect: f32, count: u32, spec: &str) -> (Vec<Camera>, Vec<Light>) {
+    use shadespace::scene::{LightSpec, lights, path};
+    let path = path::cameras_for_scene(name, scene, aspect).unwrap().select(path::CameraChoice::Path).unwrap();
+    let cameras: Vec<Camera> = (0..count).map(|f| path.camera_at(f * 12)).collect();
+    let spec: LightSpec = spec.parse().unwrap();
+    let lights = lights::build_lights(&spec, &scene.bounds(), &cameras[0], aspect, 7).unwrap();
+    (cameras, lights)
+}
+
 /// An image that several tests compare against (a forward reference of a
 /// path frame, say), rendered once per test process by whichever test asks
 /// first and shared with the others: the suite is one binary, so a frame
