@@ -79,18 +79,3 @@ fn main() -> ExitCode {
         }
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use clap::CommandFactory;
-
-    use super::Cli;
-
-    /// Every build has `view` (a build without the viewer explains how to
-    /// get it), and the command line's definition passes clap's own checks.
-    #[test]
-    fn every_build_has_the_view_command() {
-        Cli::command().debug_assert();
-        assert!(Cli::command().find_subcommand("view").is_some());
-    }
-}

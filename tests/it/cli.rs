@@ -154,8 +154,14 @@ fn bloom_strength_must_be_from_0_to_1() {
 fn help_explains_every_command() {
     let out = Command::new(env!("CARGO_BIN_EXE_shadespace")).arg("--help").output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    for cmd in ["render", "bench", "info", "charts", "compare"] {
+    // `view` is in every build: one without the viewer explains how to get it.
+    for cmd in ["render", "bench", "info", "charts", "compare", "experiment", "view"] {
         assert!(text.contains(cmd), "--help lacks {cmd}");
+        // A debug binary runs clap's checks of a command's definition when
+        // it is built, so each subcommand's help also validates it.
+        let sub = Command::new(env!("CARGO_BIN_EXE_shadespace")).args([cmd, "--help"]).output().unwrap();
+        assert!(sub.status.success(), "{cmd} --help failed: {}", String::from_utf8_lossy(&sub.stderr));
+        assert!(!sub.stdout.is_empty(), "{cmd} --help printed nothing");
     }
     let out = Command::new(env!("CARGO_BIN_EXE_shadespace")).args(["render", "--help"]).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
