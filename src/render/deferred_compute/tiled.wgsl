@@ -141,17 +141,24 @@ fn shade_texel(texel: GbufferTexel, count: u32, globals: bool) -> vec3f {
 // A pixel's `shade_texel`: once at its centre (`centre`, read once for all
 // the lights) where its samples see one surface, else the mean over its
 // samples, each shaded at its own position (background samples black, as
-// forward's cleared samples are).
+// forward's cleared samples are). One call of `shade_texel` for both: a
+// driver inlines every call with the lighting model in it, and a call per
+// case doubled the shader (a CPU driver took seconds longer to compile it).
 fn shade_msaa(pixel: vec2u, samples: PixelSamples, centre: GbufferTexel, count: u32, globals: bool) -> vec3f {
-    if !samples.edge {
-        return shade_texel(centre, count, globals);
-    }
-    let n = gbuffer_samples();
+    let n = select(1u, gbuffer_samples(), samples.edge);
     var sum = vec3f(0.0);
     for (var s = 0u; s < n; s++) {
-        let d = gbuffer_depth_sample(pixel, s);
-        if d > 0.0 {
-            sum += shade_texel(gbuffer_sample_texel(pixel, s, d), count, globals);
+        var texel = centre;
+        var covered = true;
+        if samples.edge {
+            let d = gbuffer_depth_sample(pixel, s);
+            covered = d > 0.0;
+            if covered {
+                texel = gbuffer_sample_texel(pixel, s, d);
+            }
+        }
+        if covered {
+            sum += shade_texel(texel, count, globals);
         }
     }
     return sum / f32(n);

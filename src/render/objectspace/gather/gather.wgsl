@@ -22,16 +22,16 @@
 // place of the object, indices, vertices and footprint.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
-#import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
+#import shadespace::pixel_surface::{sample_pixel, sample_pixel_at, pixel_surface, PixelSample}
 #ifdef MSAA
-#import shadespace::pixel_surface::{sample_pixel_at, standard_sample_position}
+#import shadespace::pixel_surface::standard_sample_position
 #import shadespace::objectspace::{same_chart_surface, visibility_samples}
 #endif
 #import shadespace::objectspace::visibility_ids
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_shaded, visibility, chart_footprint, select_levels,
     bilinear, AtlasTexel, atlas_texel, triangle_charts, physical_page, virtual_page, physical_tile,
-    NOT_BACKED, BlendedVertex, blended_vertex, FILTER_BILINEAR, FILTER_MITCHELL, AnisoTaps, aniso_taps, aniso_tap}
+    NOT_BACKED, BlendedVertex, blended_vertex, FILTER_BILINEAR, FILTER_MITCHELL, AnisoTaps, aniso_taps, aniso_tap, AtlasEntry}
 #import shadespace::alpha_mask::opacity
 #import shadespace::objectspace::LevelPair
 #ifdef PIXEL_RECORD
@@ -257,33 +257,44 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     let ids = visibility_ids(id.xy, 0u);
+    // One surface point per pixel, or under MSAA one per sample where the
+    // samples see different chart surfaces, through one call of
+    // `gather_surface`: a driver inlines each call with the lighting model
+    // and the filters in it, and a second call doubled the shader (a CPU
+    // driver took several times as long to compile it).
+    var edge = false;
+    var count = 1u;
 #ifdef MSAA
     let n = visibility_samples();
-    var edge = false;
     for (var s = 1u; s < n; s++) {
         edge = edge || !same_chart_surface(visibility_ids(id.xy, s), ids);
     }
     if edge {
-        var sum = vec3f(0.0);
-        for (var s = 0u; s < n; s++) {
-            let sample_ids = visibility_ids(id.xy, s);
-            if sample_ids.x != 0u {
-                sum += gather_surface(sample_pixel_at(id.xy, standard_sample_position(n, s), sample_ids)).rgb;
-            }
-        }
-        textureStore(hdr, id.xy, vec4f(sum / f32(n), 1.0));
-        return;
+        count = n;
     }
 #endif
-    if ids.x == 0u {
-        textureStore(hdr, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
-        return;
-    }
 #ifdef PIXEL_RECORD
-    textureStore(hdr, id.xy, gather_recorded(id.xy, ids, size));
-#else
-    textureStore(hdr, id.xy, gather_surface(sample_pixel(id.xy, ids)));
+    if !edge && ids.x != 0u {
+        textureStore(hdr, id.xy, gather_recorded(id.xy, ids, size));
+        return;
+    }
 #endif
+    var sum = vec3f(0.0);
+    for (var s = 0u; s < count; s++) {
+        var sample_ids = ids;
+        var at = vec2f(0.5);
+#ifdef MSAA
+        if edge {
+            sample_ids = visibility_ids(id.xy, s);
+            at = standard_sample_position(n, s);
+        }
+#endif
+        // Background samples are black.
+        if sample_ids.x != 0u {
+            sum += gather_surface(sample_pixel_at(id.xy, at, sample_ids)).rgb;
+        }
+    }
+    textureStore(hdr, id.xy, vec4f(sum / f32(count), 1.0));
 }
 
 #ifdef PIXEL_RECORD
@@ -311,9 +322,8 @@ fn gather_recorded(pixel: vec2u, ids: vec2u, size: vec2u) -> vec4f {
 // the supersampled reference's resolve; a single tap is `filter_level`
 // alone). Alpha -1 when a tap's page has no physical page.
 fn filter_taps(own: OwnSurface, level_index: u32, taps: AnisoTaps) -> vec4f {
-    if taps.count == 1u {
-        return filter_level(own, level_index, aniso_tap(taps, 0u));
-    }
+    // One call of `filter_level` (inlined with both filters): a single tap
+    // is the loop's one turn, and divided by 1 is its shade exactly.
     var c = vec3f(0.0);
     for (var i = 0u; i < taps.count; i++) {
         let s = filter_level(own, level_index, aniso_tap(taps, i));
@@ -331,15 +341,15 @@ fn filter_taps(own: OwnSurface, level_index: u32, taps: AnisoTaps) -> vec4f {
 fn gather_levels(own: OwnSurface, levels: LevelPair, taps: AnisoTaps) -> vec4f {
     var c = vec3f(0.0);
     var backed = true;
-    if levels.t < 1.0 {
-        let fine = filter_taps(own, levels.lo, taps);
-        backed = fine.w >= 0.0;
-        c = fine.rgb * (1.0 - levels.t);
-    }
-    if levels.t > 0.0 {
-        let coarse = filter_taps(own, levels.hi, taps);
-        backed = backed && coarse.w >= 0.0;
-        c += coarse.rgb * levels.t;
+    // The fine level, then the coarse one, through one call of
+    // `filter_taps` (a call per level doubled the shader, as `gather` says).
+    for (var k = 0u; k < 2u; k++) {
+        let weight = select(1.0 - levels.t, levels.t, k == 1u);
+        if (k == 0u && levels.t < 1.0) || (k == 1u && levels.t > 0.0) {
+            let level = filter_taps(own, select(levels.lo, levels.hi, k == 1u), taps);
+            backed = backed && level.w >= 0.0;
+            c += level.rgb * weight;
+        }
     }
     return vec4f(c, select(-1.0, 1.0, backed));
 }
@@ -361,25 +371,34 @@ fn fs_gather_blended(in: BlendedVertex) -> @location(0) vec4f {
 }
 
 // The shade of one surface point: its object's shades filtered (or a debug
-// view's colour), or shaded here when the object or its page is not in the atlas.
+// view's colour), or shaded here when the object or its page is not in the
+// atlas (one call of `shade_forward` for both, as `gather` says why).
 fn gather_surface(p: PixelSample) -> vec4f {
     let e = atlas_entries[p.object];
-    if e.size == 0u {
-        return shade_forward(p);
+    if e.size != 0u {
+        let c = gather_atlas(p, e);
+        if c.w >= 0.0 {
+            return c;
+        }
     }
+    return shade_forward(p);
+}
+
+// `gather_surface` of an object in the atlas; alpha -1 when a tap's page has
+// no physical page (the atlas was full this frame).
+fn gather_atlas(p: PixelSample, e: AtlasEntry) -> vec4f {
     let f = chart_footprint(p);
     let levels = select_levels(e, p, f);
     // The debug views show the level of the larger weight.
     let level_index = select(levels.lo, levels.hi, levels.t >= 0.5);
     let l = entry_level(p.object, level_index);
     let b = bilinear(l, f.uv);
-    var out: vec4f;
     switch params.view_mode {
         case VIEW_CHART_UV: {
-            out = display(vec3f(fract(f.uv), 0.0));
+            return display(vec3f(fract(f.uv), 0.0));
         }
         case VIEW_MIP_LEVEL: {
-            out = display(level_color(level_index));
+            return display(level_color(level_index));
         }
         case VIEW_TILE_MASK, VIEW_CACHE_AGE: {
             let t = vec2u(b.texel);
@@ -388,24 +407,18 @@ fn gather_surface(p: PixelSample) -> vec4f {
             let tile = t / params.tile_size;
             if page == NOT_BACKED {
                 // Magenta: no physical page (the atlas was full).
-                out = display(vec3f(0.9, 0.1, 0.9));
+                return display(vec3f(0.9, 0.1, 0.9));
             } else if params.view_mode == VIEW_TILE_MASK {
                 // Red: shaded this frame; green: reused. Darker checker per tile.
                 let checker = f32((tile.x + tile.y) & 1u) * 0.25;
-                out = display(select(vec3f(0.1, 0.8, 0.2), vec3f(0.9, 0.15, 0.1), age == 0u) * (1.0 - checker));
-            } else {
-                out = display(vec3f(f32(age) / f32(max(params.reuse, 1u))));
+                return display(select(vec3f(0.1, 0.8, 0.2), vec3f(0.9, 0.15, 0.1), age == 0u) * (1.0 - checker));
             }
+            return display(vec3f(f32(age) / f32(max(params.reuse, 1u))));
         }
         default: {
-            out = gather_levels(OwnSurface(p.object, p.triangle), levels, aniso_taps(e.size, f));
-            if out.w < 0.0 {
-                // The atlas was full this frame: shade the pixel forward.
-                return shade_forward(p);
-            }
+            return gather_levels(OwnSurface(p.object, p.triangle), levels, aniso_taps(e.size, f));
         }
     }
-    return out;
 }
 
 #ifdef PIXEL_CLASSES

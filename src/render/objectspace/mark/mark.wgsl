@@ -30,9 +30,9 @@
 #ifdef COUNT_MARK_ATOMICS
 #import shadespace::contract::{COUNT_MARK_TILES, COUNT_MARK_ATOMICS, COUNT_MARK_CLAIMS}
 #endif
-#import shadespace::pixel_surface::{sample_pixel, PixelSample}
+#import shadespace::pixel_surface::{sample_pixel, sample_pixel_at, PixelSample}
 #ifdef MSAA
-#import shadespace::pixel_surface::{sample_pixel_at, standard_sample_position}
+#import shadespace::pixel_surface::standard_sample_position
 #endif
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace_mark_backed::mark_backed_page
@@ -351,18 +351,20 @@ fn mark_footprint(object: u32, level_index: u32, valid_since: u32, uv: vec2f) {
     let last = i32(l.size) - 1;
     let first_texel = clamp(b.texel - m, vec2i(0), vec2i(last));
     let last_texel = clamp(b.texel_hi + m, vec2i(0), vec2i(last));
-    mark_tile_once(object, level_index, l, valid_since, first_texel);
-    // The other taps only add a tile when they cross a tile edge.
+    // The first texel's tile, then each other corner's where the taps
+    // cross a tile edge, through one call of `mark_tile_once`: a driver
+    // inlines every call, and four made the shader four times as large (a
+    // CPU driver took seconds to compile it).
     let lo = vec2u(first_texel) / params.tile_size;
     let hi = vec2u(last_texel) / params.tile_size;
-    if hi.x != lo.x {
-        mark_tile_once(object, level_index, l, valid_since, vec2i(last_texel.x, first_texel.y));
-    }
-    if hi.y != lo.y {
-        mark_tile_once(object, level_index, l, valid_since, vec2i(first_texel.x, last_texel.y));
-    }
-    if hi.x != lo.x && hi.y != lo.y {
-        mark_tile_once(object, level_index, l, valid_since, last_texel);
+    for (var corner = 0u; corner < 4u; corner++) {
+        let right = (corner & 1u) != 0u;
+        let down = (corner & 2u) != 0u;
+        if (right && hi.x == lo.x) || (down && hi.y == lo.y) {
+            continue;
+        }
+        let texel = vec2i(select(first_texel.x, last_texel.x, right), select(first_texel.y, last_texel.y, down));
+        mark_tile_once(object, level_index, l, valid_since, texel);
     }
 }
 
@@ -373,32 +375,41 @@ fn mark_pixel(pixel: vec2u) -> u32 {
         return PIXEL_NOT_IN_ATLAS;
     }
     let ids = visibility_ids(pixel, 0u);
-#ifdef MSAA
-    // A pixel whose samples see different chart surfaces marks each
-    // sample's footprint at its own position, where the gather reads it.
-    let n = visibility_samples();
+    // A pixel whose samples see different chart surfaces (under MSAA) marks
+    // each sample's footprint at its own position, where the gather reads
+    // it; the others mark once. One call of `mark_surface` either way, as
+    // `mark_footprint` says why.
     var edge = false;
+    var count = 1u;
+#ifdef MSAA
+    let n = visibility_samples();
     for (var s = 1u; s < n; s++) {
         edge = edge || !same_chart_surface(visibility_ids(pixel, s), ids);
     }
     if edge {
-        var kind = PIXEL_NOT_IN_ATLAS;
-        for (var s = 0u; s < n; s++) {
-            let sample_ids = visibility_ids(pixel, s);
-            if sample_ids.x != 0u {
-                kind = max(kind, mark_surface(sample_pixel_at(pixel, standard_sample_position(n, s), sample_ids)));
-            }
-        }
-        return kind;
+        count = n;
     }
 #endif
-    if ids.x == 0u {
-        return PIXEL_NOT_IN_ATLAS;
-    }
 #ifdef PIXEL_RECORD
-    record_index = pixel.y * size.x + pixel.x;
+    if !edge {
+        record_index = pixel.y * size.x + pixel.x;
+    }
 #endif
-    return mark_surface(sample_pixel(pixel, ids));
+    var kind = PIXEL_NOT_IN_ATLAS;
+    for (var s = 0u; s < count; s++) {
+        var sample_ids = ids;
+        var at = vec2f(0.5);
+#ifdef MSAA
+        if edge {
+            sample_ids = visibility_ids(pixel, s);
+            at = standard_sample_position(n, s);
+        }
+#endif
+        if sample_ids.x != 0u {
+            kind = max(kind, mark_surface(sample_pixel_at(pixel, at, sample_ids)));
+        }
+    }
+    return kind;
 }
 
 // Marks the tiles of one surface point's footprint; returns what kind of
@@ -420,11 +431,11 @@ fn mark_surface(p: PixelSample) -> u32 {
     let taps = aniso_taps(e.size, f);
     for (var i = 0u; i < taps.count; i++) {
         let uv = aniso_tap(taps, i);
-        if levels.t < 1.0 {
-            mark_footprint(p.object, levels.lo, e.valid_since, uv);
-        }
-        if levels.t > 0.0 {
-            mark_footprint(p.object, levels.hi, e.valid_since, uv);
+        // The fine level, then the coarse one, through one call.
+        for (var k = 0u; k < 2u; k++) {
+            if (k == 0u && levels.t < 1.0) || (k == 1u && levels.t > 0.0) {
+                mark_footprint(p.object, select(levels.lo, levels.hi, k == 1u), e.valid_since, uv);
+            }
         }
     }
     return kind;
