@@ -11,7 +11,10 @@
 // requested block that has none, and `bind_pages` writes the pages into
 // their chunks and lists them as backed. Requests beyond the candidates (or
 // the free chunks) fail this frame (their pixels are shaded forward in the
-// gather) and the budget raises the mip bias.
+// gather) and the budget raises the mip bias. `paging_args` first writes
+// the dispatches of the ranking, the offsets and `release_chunks` from the
+// requests (and `allocate`'s, which follow them): a frame that requested no
+// page dispatches no workgroup of any of them.
 #import shadespace::contract::{COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
     COUNT_FREE_CHUNKS, COUNT_CHUNKS_TAKEN, COUNT_TABLE_CHUNKS, AGE_BUCKET_BASE, AGE_BUCKETS}
 #import shadespace::objectspace::{params, atlas_entries, counters, page_table, page_used, page_owner, request_list,
@@ -38,7 +41,8 @@ fn list(page: u32) {
     }
 }
 
-// Ranking for a resize (`resize.wgsl` moves pages onto the candidates).
+// Ranking (for paging, dispatched through `paging_args`: none in a frame
+// that requested no page; for a resize, whose moves need candidates, always).
 @compute @workgroup_size(64)
 fn age_pages(@builtin(global_invocation_id) id: vec3u) {
     age(id.x);
@@ -49,36 +53,13 @@ fn list_candidates(@builtin(global_invocation_id) id: vec3u) {
     list(id.x);
 }
 
-// Ranking for paging: nothing to rank in a frame that requested no page
-// (the allocation then dispatches no workgroup).
-@compute @workgroup_size(64)
-fn age_pages_if_requested(@builtin(global_invocation_id) id: vec3u) {
-    if requests() > 0u {
-        age(id.x);
-    }
-}
-
-@compute @workgroup_size(64)
-fn list_candidates_if_requested(@builtin(global_invocation_id) id: vec3u) {
-    if requests() > 0u {
-        list(id.x);
-    }
-}
-
 // This frame's listed requests.
 fn requests() -> u32 {
     return min(atomicLoad(&counters[COUNT_PAGES_REQUESTED]), params.request_capacity);
 }
 
-@compute @workgroup_size(1)
-fn page_offsets() {
-    var offset = 0u;
-    for (var b = 0u; b < AGE_BUCKETS; b++) {
-        let n = atomicLoad(&counters[AGE_BUCKET_BASE + b]);
-        atomicStore(&counters[AGE_BUCKET_BASE + b], offset);
-        offset += n;
-    }
-    atomicStore(&counters[COUNT_CANDIDATES], offset);
+// The dispatches of the passes after the ranking, `offset` candidates found.
+fn write_paging_dispatches(offset: u32) {
     write_dispatch(ALLOCATE_ARGS, (requests() + 63u) / 64u);
 #ifdef FUSED_PAGING
     // The fused chain records no pass after paging to count what it did:
@@ -93,6 +74,53 @@ fn page_offsets() {
 #endif
 }
 
+@compute @workgroup_size(1)
+fn page_offsets() {
+    var offset = 0u;
+    for (var b = 0u; b < AGE_BUCKETS; b++) {
+        let n = atomicLoad(&counters[AGE_BUCKET_BASE + b]);
+        atomicStore(&counters[AGE_BUCKET_BASE + b], offset);
+        offset += n;
+    }
+    atomicStore(&counters[COUNT_CANDIDATES], offset);
+    write_paging_dispatches(offset);
+}
+
+// The indirect arguments of the passes whose work follows the atlas's pages
+// or the table's chunks rather than the requests (`paging::back_pages`
+// dispatches them from this buffer): three dispatches, then a flag the CPU
+// sets when slots were given back or the atlas resized (pages unbound with
+// no request, whose chunks this frame's `release_chunks` frees).
+const RANK_ARGS: u32 = 0u;
+const OFFSETS_ARGS: u32 = 4u;
+const RELEASE_ARGS: u32 = 8u;
+const RELEASE_FLAG: u32 = 12u;
+
+@group(3) @binding(0) var<storage, read_write> paging_dispatch: array<u32, 16>;
+
+fn write_paging_args(at: u32, groups: u32) {
+    paging_dispatch[at] = groups;
+    paging_dispatch[at + 1u] = 1u;
+    paging_dispatch[at + 2u] = 1u;
+}
+
+// One invocation, after marking. With no request, no ranking and no
+// offsets (the dispatches after them are written as the offsets write them
+// with no candidate; the counters stay cleared), and no chunk to free
+// unless the flag is set.
+@compute @workgroup_size(1)
+fn paging_args() {
+    let requested = requests() > 0u;
+    // In x alone, as when they were dispatched directly.
+    write_paging_args(RANK_ARGS, select(0u, (params.physical_pages + 63u) / 64u, requested));
+    write_paging_args(OFFSETS_ARGS, select(0u, 1u, requested));
+    let release = requested || paging_dispatch[RELEASE_FLAG] != 0u;
+    write_paging_args(RELEASE_ARGS, select(0u, (params.table_chunks + 63u) / 64u, release));
+    paging_dispatch[RELEASE_FLAG] = 0u;
+    if !requested {
+        write_paging_dispatches(0u);
+    }
+}
 
 // Request `i` of this frame's list, when there is one.
 fn request_index(wg: vec3u, groups: vec3u, lid: u32) -> u32 {
