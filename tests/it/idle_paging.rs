@@ -37,14 +37,17 @@ fn frame(
 }
 
 /// A frame that requested pages dispatches every paging pass: the ranking
-/// over every physical page, the offsets, the chunk release, and the
-/// allocation over the requests.
+/// over every physical page, the offsets, the allocation over the requests,
+/// and the chunk release over the chunks below the mark (every chunk in use
+/// lies below it).
 fn assert_pages_dispatched(c: &Counters, d: &PagingDispatches, what: &str) {
     let requested = c["pages_requested"] as u32;
     let pages = c["atlas_pages"] as u32;
     assert_eq!(d.rank, pages.div_ceil(64), "{what}: ranking {d:?}");
     assert_eq!(d.offsets, 1, "{what}: offsets {d:?}");
-    assert!(d.release > 0, "{what}: chunk release {d:?}");
+    assert!(d.release <= d.chunk_mark.div_ceil(64), "{what}: chunk release past the mark {d:?}");
+    let chunks = c["table_chunks"] as u32;
+    assert!(chunks > 0 && chunks <= d.chunk_mark, "{what}: {chunks} chunks in use, {d:?}");
     assert_eq!(d.allocate, requested.div_ceil(64), "{what}: allocation {d:?}");
     assert_eq!(d.backed, c["pages_backed"] as u32, "{what}: backed pages' passes {d:?}");
 }
@@ -65,6 +68,8 @@ fn paging_dispatches_nothing_while_no_page_is_requested() {
     eprintln!("dispatches {:?}", frames.iter().map(|(_, d)| d).collect::<Vec<_>>());
     assert!(requested[0] > 0.0, "the first frame requests its pages");
     assert_pages_dispatched(&frames[0].0, &frames[0].1, "frame 0");
+    // No chunk was taken before: none to free, whatever the table's size.
+    assert_eq!(frames[0].1.release, 0, "frame 0 looked for chunks to free");
     // After the first frames (the atlas shrinks to the floor's pages, which
     // may evict some to be requested again) nothing is requested.
     assert!(requested[STATIC as usize - 3..].iter().all(|&r| r == 0.0), "a static view requests pages");
@@ -91,6 +96,7 @@ fn paging_dispatches_nothing_while_no_page_is_requested() {
             requesting += 1;
             assert!(c["pages_backed"] > 0.0, "moving frame {k}: requested pages, backed none");
             assert_pages_dispatched(&c, &d, &format!("moving frame {k}"));
+            assert!(d.release > 0, "moving frame {k}: the chunks in use were not looked at");
         }
     }
     assert_eq!(requesting, 3, "a camera moving towards the floor requested no page in some frame");

@@ -4,7 +4,7 @@
 use super::ObjectSpace;
 use super::atlas::BLOCK_PAGES;
 use super::resources::{
-    ALLOCATE_ARGS, ATLAS_FORMAT, BACKED_ARGS, OFFSETS_ARGS, RANK_ARGS, RELEASE_ARGS, TRIANGLE_MAP_FORMAT,
+    ALLOCATE_ARGS, ATLAS_FORMAT, BACKED_ARGS, CHUNK_MARK, OFFSETS_ARGS, RANK_ARGS, RELEASE_ARGS, TRIANGLE_MAP_FORMAT,
 };
 use crate::color::reinhard_srgb8;
 use crate::gpu::{GpuContext, GpuError, readback};
@@ -50,8 +50,11 @@ pub struct PagingDispatches {
     pub rank: u32,
     /// `page_offsets`.
     pub offsets: u32,
-    /// `release_chunks`.
+    /// `release_chunks` (over the chunks below the chunk mark as it was).
     pub release: u32,
+    /// The chunk mark after the frame: no page-table chunk at or past it
+    /// was ever taken.
+    pub chunk_mark: u32,
     /// `allocate`, `claim_blocks` and `bind_pages` (each).
     pub allocate: u32,
     /// The passes over the pages backed this frame (triangle maps, and
@@ -313,6 +316,7 @@ impl ObjectSpace {
             rank: groups(&own, RANK_ARGS),
             offsets: groups(&own, OFFSETS_ARGS),
             release: groups(&own, RELEASE_ARGS),
+            chunk_mark: own[CHUNK_MARK as usize / 4],
             allocate: groups(&shared, ALLOCATE_ARGS),
             backed: groups(&shared, BACKED_ARGS),
         })

@@ -97,7 +97,8 @@ pub struct Resources {
     pub dispatch_group: wgpu::BindGroup,
     /// The paging passes' own indirect arguments (`paging_args` in
     /// `paging.wgsl`), written on the GPU from the frame's page requests:
-    /// ranking, offsets, chunk release ([`RANK_ARGS`] ...), then a flag.
+    /// ranking, offsets, chunk release ([`RANK_ARGS`] ...), then a flag and
+    /// the chunk mark (the page table's chunks ever taken lie below it).
     pub paging_dispatch: wgpu::Buffer,
     /// `paging_dispatch` as storage (group 3 of `paging_args`).
     pub paging_dispatch_group: wgpu::BindGroup,
@@ -234,6 +235,8 @@ pub const RELEASE_ARGS: u64 = 32;
 /// ... and the word that has the next paging free empty chunks whatever its
 /// requests ([`super::paging::release_chunks_next`]).
 pub const RELEASE_FLAG: u64 = 48;
+/// ... and the chunk mark: the page table's chunks ever taken lie below it.
+pub const CHUNK_MARK: u64 = 52;
 
 impl Resources {
     pub fn new(

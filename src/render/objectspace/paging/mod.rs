@@ -71,7 +71,7 @@ impl PagingPass {
             paging_args: compute_pipeline_with(device, shaders, SHADER, offsets_defs, "paging_args", &with_args)?,
             allocate: compute_pipeline(device, shaders, SHADER, "allocate", &plain)?,
             release_chunks: compute_pipeline(device, shaders, SHADER, "release_chunks", &plain)?,
-            claim_blocks: compute_pipeline(device, shaders, SHADER, "claim_blocks", &plain)?,
+            claim_blocks: compute_pipeline(device, shaders, SHADER, "claim_blocks", &with_args)?,
             bind_pages: compute_pipeline(device, shaders, SHADER, "bind_pages", &plain)?,
             backed_args: compute_pipeline(device, shaders, SHADER, "backed_args", &with_dispatch)?,
         })
@@ -112,6 +112,10 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     cp.set_pipeline(&pass.release_chunks);
     cp.dispatch_workgroups_indirect(&res.paging_dispatch, RELEASE_ARGS);
     cp.set_pipeline(&pass.claim_blocks);
+    // Its chunk mark in group 3; group 2 (which it does not read) holds the
+    // same buffer, not `dispatch`, which this dispatch reads as INDIRECT.
+    cp.set_bind_group(2, &res.paging_dispatch_group, &[]);
+    cp.set_bind_group(3, &res.paging_dispatch_group, &[]);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     cp.set_pipeline(&pass.bind_pages);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);

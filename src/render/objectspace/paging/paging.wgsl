@@ -90,18 +90,31 @@ fn page_offsets() {
 // or the table's chunks rather than the requests (`paging::back_pages`
 // dispatches them from this buffer): three dispatches, then a flag the CPU
 // sets when slots were given back or the atlas resized (pages unbound with
-// no request, whose chunks this frame's `release_chunks` frees).
+// no request, whose chunks this frame's `release_chunks` frees), then the
+// chunk mark: no chunk at or past it was ever taken, so `release_chunks`
+// looks at the chunks below it alone (they hold every block's chunk), and
+// `claim_blocks` takes chunks past it once the free ones below are gone.
 const RANK_ARGS: u32 = 0u;
 const OFFSETS_ARGS: u32 = 4u;
 const RELEASE_ARGS: u32 = 8u;
 const RELEASE_FLAG: u32 = 12u;
+const CHUNK_MARK: u32 = 13u;
 
-@group(3) @binding(0) var<storage, read_write> paging_dispatch: array<u32, 16>;
+@group(3) @binding(0) var<storage, read_write> paging_dispatch: array<atomic<u32>, 16>;
 
 fn write_paging_args(at: u32, groups: u32) {
-    paging_dispatch[at] = groups;
-    paging_dispatch[at + 1u] = 1u;
-    paging_dispatch[at + 2u] = 1u;
+    atomicStore(&paging_dispatch[at], groups);
+    atomicStore(&paging_dispatch[at + 1u], 1u);
+    atomicStore(&paging_dispatch[at + 2u], 1u);
+}
+
+// Raises the mark to whole workgroups of `release_chunks` (the chunks its
+// workgroups reach are exactly those below the mark, so none past it is
+// listed free while `claim_blocks` may take it past the mark); returns it.
+fn round_chunk_mark() -> u32 {
+    let mark = min((atomicLoad(&paging_dispatch[CHUNK_MARK]) + 63u) / 64u * 64u, params.table_chunks);
+    atomicStore(&paging_dispatch[CHUNK_MARK], mark);
+    return mark;
 }
 
 // One invocation, after marking. With no request, no ranking and no
@@ -114,9 +127,9 @@ fn paging_args() {
     // In x alone, as when they were dispatched directly.
     write_paging_args(RANK_ARGS, select(0u, (params.physical_pages + 63u) / 64u, requested));
     write_paging_args(OFFSETS_ARGS, select(0u, 1u, requested));
-    let release = requested || paging_dispatch[RELEASE_FLAG] != 0u;
-    write_paging_args(RELEASE_ARGS, select(0u, (params.table_chunks + 63u) / 64u, release));
-    paging_dispatch[RELEASE_FLAG] = 0u;
+    let release = requested || atomicLoad(&paging_dispatch[RELEASE_FLAG]) != 0u;
+    write_paging_args(RELEASE_ARGS, select(0u, (round_chunk_mark() + 63u) / 64u, release));
+    atomicStore(&paging_dispatch[RELEASE_FLAG], 0u);
     if !requested {
         write_paging_dispatches(0u);
     }
@@ -201,7 +214,8 @@ fn release_chunks(@builtin(global_invocation_id) id: vec3u, @builtin(local_invoc
 const CLAIMING: u32 = 0xffffffffu;
 
 // Per allocated request: the first request of a block with no chunk takes
-// a free one (the others of the block find it taken).
+// a free one, listed or past the mark (the others of the block find it
+// taken).
 @compute @workgroup_size(64)
 fn claim_blocks(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
                 @builtin(local_invocation_index) lid: u32) {
@@ -218,8 +232,13 @@ fn claim_blocks(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) group
         let r = atomicCompareExchangeWeak(&page_directory[block], 0u, CLAIMING);
         if r.exchanged {
             let n = atomicAdd(&counters[COUNT_CHUNKS_TAKEN], 1u);
+            var c = params.table_chunks;
             if n < atomicLoad(&counters[COUNT_FREE_CHUNKS]) {
-                let c = free_chunks[n];
+                c = free_chunks[n];
+            } else if atomicLoad(&paging_dispatch[CHUNK_MARK]) < params.table_chunks {
+                c = atomicAdd(&paging_dispatch[CHUNK_MARK], 1u);
+            }
+            if c < params.table_chunks {
                 table_chunks[c].block = block + 1u;
                 atomicStore(&page_directory[block], c + 1u);
                 atomicAdd(&counters[COUNT_TABLE_CHUNKS], 1u);
