@@ -20,7 +20,6 @@ use crate::common;
 use std::collections::BTreeMap;
 
 use glam::{UVec2, Vec3};
-use shadespace::charts::islands::triangle_islands;
 use shadespace::gpu::{GpuContext, readback};
 use shadespace::render::gpu_types::GpuLight;
 use shadespace::render::objectspace::cpu::gather::{self, GatherOutcome, GatherTaps, PixelGather};
@@ -120,15 +119,7 @@ fn check(ctx: &GpuContext, case: Case) -> Report {
     let entries = os.layout.gpu_entries();
     let params = os.mark_params(&gpu);
     let inputs = MarkInputs { scene: case.scene, view: &view, entries: &entries, params };
-    let islands: Vec<Vec<u32>> = case
-        .scene
-        .objects
-        .iter()
-        .map(|o| {
-            let mesh = &case.scene.meshes[o.mesh];
-            triangle_islands(&mesh.indices, cpu::chart_uvs(mesh))
-        })
-        .collect();
+    let islands = common::chart_islands(case.scene);
 
     // The levels the pixels gather from and the queued tiles lie in, read at once.
     let pixel = |i: usize| UVec2::new(i as u32 % case.width, i as u32 / case.width);
