@@ -23,7 +23,7 @@ use glam::{UVec2, Vec3};
 use shadespace::gpu::{GpuContext, readback};
 use shadespace::render::gpu_types::GpuLight;
 use shadespace::render::objectspace::cpu::gather::{self, GatherOutcome, GatherTaps, PixelGather};
-use shadespace::render::objectspace::cpu::{self, LevelTexels, MarkInputs, shade};
+use shadespace::render::objectspace::cpu::{LevelTexels, MarkInputs, shade};
 use shadespace::render::objectspace::{GatherFilter, ObjectSpace};
 use shadespace::render::scene_gpu::{gpu_view, order_lights};
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
