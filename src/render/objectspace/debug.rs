@@ -50,7 +50,10 @@ pub enum Coverage {
     Background,
     /// Every sample sees one chart surface (the gather reads the pixel once).
     Interior,
-    /// Samples see different surfaces (under MSAA: the gather reads each sample).
+    /// Samples see different surfaces (under MSAA: the gather reads each
+    /// group of samples on one surface; with
+    /// [`super::MsaaGather::Sample`], any pixel of more than one sample
+    /// gathered, each sample its own group).
     Edge,
 }
 
