@@ -7,8 +7,8 @@ use std::str::FromStr;
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 use shadespace::render::objectspace::{
-    DEFAULT_PAGE_SIZE, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, MAX_TRIMAP_GRID, Marking, PagingChain,
-    TrimapSearch,
+    DEFAULT_PAGE_SIZE, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, MAX_TRIMAP_GRID, Marking, MsaaGather,
+    PagingChain, TrimapSearch,
 };
 use shadespace::render::{ClusterDraws, Culling, Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
@@ -409,6 +409,13 @@ pub struct ObjectSpaceArgs {
     /// `--os-gather record`.
     #[arg(long, default_value_t = 1, value_parser = parse::aniso)]
     pub os_aniso: u32,
+    /// Under `--msaa`: `pixel` (default) gathers once per group of a
+    /// pixel's samples that see one chart surface (object and chart
+    /// island), at the group's centroid, so the gather's cost follows the
+    /// surfaces in a pixel, not its samples; `sample` gathers every sample
+    /// at its own position (the per-sample reference; slower).
+    #[arg(long, value_enum, default_value = "pixel")]
+    pub os_msaa_gather: MsaaGather,
     /// Points each shaded texel averages: 1 (its centre, default) or 4
     /// (2x2 over the texel: shading pre-filtered over the texel's footprint,
     /// against specular aliasing; 4x the shading work, the same tiles).

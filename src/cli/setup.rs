@@ -197,6 +197,7 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             gather_input: a.objectspace.os_gather,
             gather_filter: a.objectspace.os_filter,
             aniso: a.objectspace.os_aniso,
+            msaa_gather: a.objectspace.os_msaa_gather,
             texel_samples: a.objectspace.os_texel_samples,
             ..Default::default()
         }),

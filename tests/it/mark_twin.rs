@@ -12,9 +12,10 @@ use glam::Vec3;
 use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::atlas::GpuAtlasEntry;
 use shadespace::render::objectspace::cpu::{self, MarkInputs, TileState};
-use shadespace::render::objectspace::{GatherFilter, Marking, ObjectSpace, TileCounter};
+use shadespace::render::objectspace::{GatherFilter, Marking, MsaaGather, ObjectSpace, TileCounter};
+use shadespace::render::passes::visibility::compute;
 use shadespace::render::scene_gpu::gpu_view;
-use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
+use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod, check_samples};
 use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
 
 /// A sequence of frames to render and check.
@@ -34,6 +35,9 @@ struct Run<'a> {
     visibility: VisibilityMethod,
     /// `ObjectSpaceConfig::aniso` (marking marks every tap's footprint).
     aniso: u32,
+    /// Samples per pixel, and which of them mark one point (`ObjectSpaceConfig::msaa_gather`).
+    samples: u32,
+    msaa_gather: MsaaGather,
     /// One camera per frame.
     cameras: Vec<Camera>,
     lights: Vec<Light>,
@@ -76,6 +80,7 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
         gather_filter: run.gather_filter,
         visibility: run.visibility,
         aniso: run.aniso,
+        msaa_gather: run.msaa_gather,
         texture_sizes: run.texture_sizes.clone(),
         ..Default::default()
     };
@@ -83,8 +88,9 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
         width: run.width,
         height: run.height,
         pipeline: PipelineConfig::ObjectSpace(objectspace),
-        samples: 1,
+        samples: run.samples,
     };
+    let islands = common::chart_islands(run.scene);
     let mut renderer = Renderer::new(ctx, run.scene, &options).unwrap();
     let mut lights = run.lights.clone();
     let mut before = TileState::new(renderer.pipeline::<ObjectSpace>().unwrap().layout.tile_count as usize);
@@ -124,7 +130,12 @@ fn check(ctx: &GpuContext, run: Run) -> Vec<FrameReport> {
         }
         let params = os.mark_params(&gpu);
         let inputs = MarkInputs { scene: run.scene, view: &view, entries: &entries, params };
-        let twin = cpu::visible_tiles(&inputs, &gpu.visibility, run.width);
+        assert_eq!(gpu.samples, run.samples, "{at}: samples of the visibility buffer");
+        let twin = if run.samples == 1 {
+            cpu::visible_tiles(&inputs, &gpu.visibility, run.width)
+        } else {
+            cpu::visible_tiles_samples(&inputs, &islands, (&gpu.visibility, run.samples), run.width, run.msaa_gather)
+        };
         let name = |tiles: Vec<u32>| describe(&entries, params.tile_size, &tiles);
 
         let visible: BTreeSet<u32> =
@@ -231,6 +242,8 @@ fn static_floor_reuses_shades_until_they_age_and_the_camera_moves_or_the_lights_
             gather_filter: GatherFilter::Bilinear,
             visibility: VisibilityMethod::Raster,
             aniso: 1,
+            samples: 1,
+            msaa_gather: MsaaGather::Pixel,
             cameras,
             lights,
             lights_change_at: Some(6),
@@ -269,6 +282,8 @@ fn moving_floor_marks_new_tiles() {
                 gather_filter: GatherFilter::Bilinear,
                 visibility: VisibilityMethod::Raster,
                 aniso,
+                samples: 1,
+                msaa_gather: MsaaGather::Pixel,
                 // Low over the floor and nearing it: finer levels come into view.
                 cameras: floor_cameras(Vec3::new(0.0, 2.5, 5.0), Vec3::new(0.3, -0.2, -0.5), 5),
                 lights: lights.clone(),
@@ -323,9 +338,55 @@ fn atrium_along_its_camera_path() {
                 gather_filter,
                 visibility,
                 aniso,
+                samples: 1,
+                msaa_gather: MsaaGather::Pixel,
                 cameras: cameras.clone(),
                 lights: lights.clone(),
                 lights_change_at: Some(2),
+            },
+        );
+    }
+}
+
+/// Under 4x MSAA each group of a pixel's samples on one chart surface
+/// marks its footprint at its centroid (`sample_group`), and with
+/// `--os-msaa-gather sample` each sample at its position: the twin finds
+/// the same tiles from the visibility buffer's samples, along the atrium's
+/// path with compute visibility (the MSAA variants `msaa.rs` builds).
+#[test]
+fn atrium_at_four_samples_marks_each_sample_groups_point() {
+    let ctx = common::gpu();
+    if check_samples(&ctx, 4).is_err() || !ctx.features.contains(compute::FEATURES) {
+        eprintln!("skipped: {} has no 4 samples per pixel or no 64-bit atomics", ctx.info.name);
+        return;
+    }
+    let scene = scene::load("atrium").unwrap();
+    let (width, height) = (128, 72);
+    let (cameras, lights) = common::path_views("atrium", &scene, width as f32 / height as f32, 3, "small:4");
+    let (scene, texture_sizes) = common::charted(&scene);
+    for (name, msaa_gather) in [
+        ("atrium, 4 samples, pixel gather", MsaaGather::Pixel),
+        ("atrium, 4 samples, sample gather", MsaaGather::Sample),
+    ] {
+        check(
+            &ctx,
+            Run {
+                name,
+                scene: &scene,
+                texture_sizes: texture_sizes.clone(),
+                width,
+                height,
+                reuse: 2,
+                variable_rate: 0.0,
+                level_blend: 0.0,
+                gather_filter: GatherFilter::Bilinear,
+                visibility: VisibilityMethod::Compute,
+                aniso: 1,
+                samples: 4,
+                msaa_gather,
+                cameras: cameras.clone(),
+                lights: lights.clone(),
+                lights_change_at: None,
             },
         );
     }

@@ -23,8 +23,8 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use glam::{IVec2, Mat4, UVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
-use super::GatherFilter;
 use super::atlas::{GpuAtlasEntry, GpuAtlasLevel};
+use super::{GatherFilter, MsaaGather};
 use crate::render::gpu_types::GpuView;
 use crate::scene::{Mesh, Scene};
 
@@ -88,8 +88,109 @@ pub fn chart_uvs(mesh: &Mesh) -> &[Vec2] {
 /// Mirrors `pixel_ndc`: the NDC point of a pixel's centre. `viewport` is
 /// (width, height, 1/width, 1/height).
 pub fn pixel_ndc(pixel: Vec2, viewport: Vec4) -> Vec2 {
-    let uv = (pixel + 0.5) * viewport.zw();
+    point_ndc(pixel + 0.5, viewport)
+}
+
+/// Mirrors `point_ndc`: the NDC point of screen point `xy` (in pixels).
+pub fn point_ndc(xy: Vec2, viewport: Vec4) -> Vec2 {
+    let uv = xy * viewport.zw();
     Vec2::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0)
+}
+
+/// Mirrors `standard_sample_position`: Vulkan's standard position of
+/// sample `s` of `count` (0..1 from the pixel's top-left corner).
+pub fn standard_sample_position(count: u32, s: u32) -> Vec2 {
+    const SAMPLES_2: [[f32; 2]; 2] = [[0.75, 0.75], [0.25, 0.25]];
+    const SAMPLES_4: [[f32; 2]; 4] = [[0.375, 0.125], [0.875, 0.375], [0.125, 0.625], [0.625, 0.875]];
+    const SAMPLES_8: [[f32; 2]; 8] = [
+        [0.5625, 0.3125],
+        [0.4375, 0.6875],
+        [0.8125, 0.5625],
+        [0.3125, 0.1875],
+        [0.1875, 0.8125],
+        [0.0625, 0.4375],
+        [0.6875, 0.9375],
+        [0.9375, 0.0625],
+    ];
+    let table: &[[f32; 2]] = match count {
+        2 => &SAMPLES_2,
+        4 => &SAMPLES_4,
+        8 => &SAMPLES_8,
+        _ => return Vec2::splat(0.5),
+    };
+    Vec2::from(table[s as usize])
+}
+
+/// Mirrors `same_chart_surface`: both background, or one object's
+/// triangles in one chart island (`islands[object][triangle]`).
+pub fn same_chart_surface(islands: &[Vec<u32>], a: [u32; 2], b: [u32; 2]) -> bool {
+    if a[0] != b[0] {
+        return false;
+    }
+    if a[0] == 0 || a[1] == b[1] {
+        return true;
+    }
+    let object = &islands[a[0] as usize - 1];
+    object[a[1] as usize] == object[b[1] as usize]
+}
+
+/// How far barycentrics `b` extrapolate their triangle: the sum of their
+/// magnitudes (1 inside it). Their normalising sum then cancels by that
+/// factor, and each is that much larger, so the chart point's rounding
+/// error grows with its square, and [`TEXEL_TOLERANCE`] is widened by it.
+/// Under MSAA a group's point may lie outside the triangle it is rebuilt
+/// on (its first sample's; other triangles of the island cover it): on
+/// lavapipe a pixel of the atrium at 4 samples (`tests/it/mark_twin.rs`,
+/// barycentrics (1.29, -1.54, 1.26), a sum of 4.08, on a finely split
+/// column seen edge-on) had its bilinear coordinate 4.3e-5 of the side
+/// from the twin's.
+pub fn extrapolation(b: Vec3) -> f32 {
+    b.abs().element_sum().max(1.0)
+}
+
+/// Mirrors `SampleGroup`: samples of a pixel marked and gathered as one point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleGroup {
+    /// Its first sample's ids (`[0] == 0`: background).
+    pub ids: [u32; 2],
+    /// The point (0..1 in the pixel): its samples' centroid, or the
+    /// pixel's centre where they are all of its samples.
+    pub at: Vec2,
+    /// Its samples.
+    pub count: u32,
+}
+
+/// Mirrors the loop of `sample_group` that marking and the gather run over
+/// a pixel whose samples' ids are `samples` (its sample count of them): its
+/// groups, in their order.
+pub fn sample_groups(islands: &[Vec<u32>], samples: &[[u32; 2]], mode: MsaaGather) -> Vec<SampleGroup> {
+    let n = samples.len() as u32;
+    let mut left: u32 = (1 << n) - 1;
+    let mut out = Vec::new();
+    while left != 0 {
+        let first = left.trailing_zeros();
+        let ids = samples[first as usize];
+        let mut mask = 1u32 << first;
+        if mode == MsaaGather::Pixel {
+            for s in first + 1..n {
+                if left & (1 << s) != 0 && same_chart_surface(islands, samples[s as usize], ids) {
+                    mask |= 1 << s;
+                }
+            }
+        }
+        let count = mask.count_ones();
+        let mut at = Vec2::splat(0.5);
+        if count < n {
+            // Summed in sample order, as the WGSL does.
+            let sum = (first..n)
+                .filter(|s| mask & (1 << s) != 0)
+                .fold(Vec2::ZERO, |sum, s| sum + standard_sample_position(n, s));
+            at = sum / count as f32;
+        }
+        out.push(SampleGroup { ids, at, count });
+        left &= !mask;
+    }
+    out
 }
 
 /// Mirrors `barycentrics`: homogeneous, perspective-correct barycentrics of
@@ -116,6 +217,12 @@ pub struct PixelSample {
 /// Mirrors `sample_pixel`: rebuilds pixel `pixel` whose visibility ids are
 /// `(object + 1, triangle)`, object non-zero. Panics on ids outside the scene.
 pub fn sample_pixel(scene: &Scene, view: &GpuView, pixel: UVec2, ids: [u32; 2]) -> PixelSample {
+    sample_pixel_at(scene, view, pixel, Vec2::splat(0.5), ids)
+}
+
+/// Mirrors `sample_pixel_at`: [`sample_pixel`] at point `at` of the pixel
+/// (0..1 from its top-left corner), derivatives one pixel apart.
+pub fn sample_pixel_at(scene: &Scene, view: &GpuView, pixel: UVec2, at: Vec2, ids: [u32; 2]) -> PixelSample {
     let object = ids[0] as usize - 1;
     let triangle = ids[1] as usize;
     let o = &scene.objects[object];
@@ -123,7 +230,7 @@ pub fn sample_pixel(scene: &Scene, view: &GpuView, pixel: UVec2, ids: [u32; 2]) 
     let tri = [0, 1, 2].map(|k| mesh.indices[3 * triangle + k] as usize);
     let mvp: Mat4 = view.view_proj * o.transform;
     let [c0, c1, c2] = tri.map(|v| (mvp * mesh.positions[v].extend(1.0)).xyw());
-    let q = pixel_ndc(pixel.as_vec2(), view.viewport);
+    let q = point_ndc(pixel.as_vec2() + at, view.viewport);
     let step = 2.0 * view.viewport.zw();
     PixelSample {
         object,
@@ -443,7 +550,13 @@ pub struct PixelTiles {
 /// decisions (see [`LOD_TOLERANCE`], [`TEXEL_TOLERANCE`]). `None` for
 /// objects outside the atlas (shaded forward).
 pub fn pixel_tiles(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Option<PixelTiles> {
-    let p = sample_pixel(inputs.scene, inputs.view, pixel, ids);
+    pixel_tiles_at(inputs, pixel, Vec2::splat(0.5), ids)
+}
+
+/// [`pixel_tiles`] for the point `at` of the pixel (a [`SampleGroup`]'s).
+pub fn pixel_tiles_at(inputs: &MarkInputs, pixel: UVec2, at: Vec2, ids: [u32; 2]) -> Option<PixelTiles> {
+    let p = sample_pixel_at(inputs.scene, inputs.view, pixel, at, ids);
+    let reach = extrapolation(p.b).powi(2);
     let e = &inputs.entries[p.object];
     if e.size == 0 {
         return None;
@@ -468,7 +581,7 @@ pub fn pixel_tiles(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Option<P
         for taps in &aniso {
             let mut taps_must = BTreeSet::new();
             for (i, uv) in taps.points().into_iter().enumerate() {
-                let tolerance = l.size as f32 * (TEXEL_TOLERANCE + taps.slack(i as u32));
+                let tolerance = l.size as f32 * (TEXEL_TOLERANCE * reach + taps.slack(i as u32));
                 // `t` as in `bilinear`, floored both ways when near an integer.
                 let t = uv * l.size as f32 - 0.5;
                 let mut outcomes: Vec<Vec<u32>> = Vec::new();
@@ -521,6 +634,31 @@ pub fn visible_tiles(inputs: &MarkInputs, visibility: &[[u32; 2]], width: u32) -
             out.ambiguous_pixels += usize::from(p.must != p.may);
             out.must.extend(p.must);
             out.may.extend(p.may);
+        }
+    }
+    out
+}
+
+/// [`visible_tiles`] under MSAA: `visibility` holds each pixel's `samples`
+/// ids side by side (`VisibilityBuffer::read_samples`), and each pixel
+/// marks the points of its [`sample_groups`] (`mode`,
+/// `ObjectSpaceConfig::msaa_gather`); `islands` as [`same_chart_surface`]'s.
+pub fn visible_tiles_samples(
+    inputs: &MarkInputs,
+    islands: &[Vec<u32>],
+    (visibility, samples): (&[[u32; 2]], u32),
+    width: u32,
+    mode: MsaaGather,
+) -> VisibleTiles {
+    let mut out = VisibleTiles::default();
+    for (i, pixel_samples) in visibility.chunks_exact(samples as usize).enumerate() {
+        let pixel = UVec2::new(i as u32 % width, i as u32 / width);
+        for g in sample_groups(islands, pixel_samples, mode).into_iter().filter(|g| g.ids[0] != 0) {
+            if let Some(p) = pixel_tiles_at(inputs, pixel, g.at, g.ids) {
+                out.ambiguous_pixels += usize::from(p.must != p.may);
+                out.must.extend(p.must);
+                out.may.extend(p.may);
+            }
         }
     }
     out
@@ -959,6 +1097,39 @@ mod tests {
             } else {
                 assert_eq!((v, s), (previous.visible[t], previous.shaded[t]), "tile {t}");
             }
+        }
+    }
+
+    #[test]
+    fn samples_on_one_chart_surface_are_one_point_at_their_centroid() {
+        // Object 0: triangles 0 and 1 in island 5, triangle 2 in island 6.
+        let islands = vec![vec![5, 5, 6]];
+        let (a, a2, b) = ([1, 0], [1, 1], [1, 2]);
+        let groups = |samples: &[[u32; 2]], mode| sample_groups(&islands, samples, mode);
+        // One island across two triangles: the pixel's centre, exactly.
+        let one = groups(&[a, a2, a, a2], MsaaGather::Pixel);
+        assert_eq!(one, [SampleGroup { ids: a, at: Vec2::splat(0.5), count: 4 }]);
+        // Another island and background: three points, each its samples' centroid.
+        let split = groups(&[a, b, [0, 0], a2], MsaaGather::Pixel);
+        let centroid = (standard_sample_position(4, 0) + standard_sample_position(4, 3)) / 2.0;
+        assert_eq!(
+            split,
+            [
+                SampleGroup { ids: a, at: centroid, count: 2 },
+                SampleGroup { ids: b, at: standard_sample_position(4, 1), count: 1 },
+                SampleGroup { ids: [0, 0], at: standard_sample_position(4, 2), count: 1 },
+            ]
+        );
+        // Per sample: every sample its own point, even on one surface.
+        let each = groups(&[a, a, a, a], MsaaGather::Sample);
+        assert_eq!(
+            each.iter().map(|g| (g.at, g.count)).collect::<Vec<_>>(),
+            (0..4).map(|s| (standard_sample_position(4, s), 1)).collect::<Vec<_>>()
+        );
+        // The standard positions are centred: 2, 4 and 8 samples average to the centre.
+        for n in [2, 4, 8] {
+            let sum = (0..n).fold(Vec2::ZERO, |sum, s| sum + standard_sample_position(n, s));
+            assert_eq!(sum / n as f32, Vec2::splat(0.5), "{n} samples");
         }
     }
 }

@@ -27,8 +27,11 @@ pub struct MarkState {
     pub valid_since: Vec<u32>,
     /// Stamp of the first frame with this frame's view.
     pub view_since: u32,
-    /// Per pixel, row-major: (object + 1, triangle); object 0 = background.
+    /// Per pixel, row-major, its [`Self::samples`] side by side: (object +
+    /// 1, triangle); object 0 = background.
     pub visibility: Vec<[u32; 2]>,
+    /// Samples per pixel of [`Self::visibility`].
+    pub samples: u32,
     /// Per virtual tile: stamp of the last frame it was visible (0 for
     /// tiles on pages with no physical page).
     pub tile_visible: Vec<u32>,
@@ -76,7 +79,10 @@ pub enum Coverage {
     Background,
     /// Every sample sees one chart surface (the gather reads the pixel once).
     Interior,
-    /// Samples see different surfaces (under MSAA: the gather reads each sample).
+    /// Samples see different surfaces (under MSAA: the gather reads each
+    /// group of samples on one surface; with
+    /// [`super::MsaaGather::Sample`], any pixel of more than one sample
+    /// gathered, each sample its own group).
     Edge,
 }
 
@@ -341,12 +347,12 @@ impl ObjectSpace {
             (c[super::TileCounter::Queued as usize] as usize).min(res.max_queue(self.layout.tile_size) as usize);
         let queue =
             Self::words(ctx, &res.physical.work_queue)?.chunks_exact(2).take(queued).map(|c| [c[0], c[1]]).collect();
-        let ids: Vec<u32> = bytemuck::pod_collect_to_vec(&readback::read_texture(ctx, &res.visibility.texture, 8)?);
         Ok(MarkState {
             stamp: self.frames,
             valid_since: res.entry_data.iter().map(|e| e.valid_since).collect(),
             view_since: self.view_since,
-            visibility: ids.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
+            visibility: res.visibility.read_samples(ctx)?,
+            samples: res.visibility.samples(),
             tile_visible,
             tile_shaded,
             queue,

@@ -293,10 +293,17 @@ pub enum TileCounter {
     /// its footprint, or per distinct tile of a subgroup with
     /// [`Marking::Subgroup`]).
     MarkClaims = 29,
+    /// Under MSAA, of [`Self::AtlasPixels`]: those marked (and gathered)
+    /// at more than one point ([`MsaaGather`]: their samples see more than
+    /// one surface, or background beside one; with
+    /// [`MsaaGather::Sample`], every one with more than one sample covered).
+    MsaaEdgePixels = 30,
+    /// Under MSAA: the points marked (and gathered) on surfaces in the atlas.
+    MsaaPoints = 31,
 }
 
 impl TileCounter {
-    pub const ALL: [Self; 21] = [
+    pub const ALL: [Self; 23] = [
         Self::Queued,
         Self::Visible,
         Self::New,
@@ -318,6 +325,8 @@ impl TileCounter {
         Self::TrimapWeighed,
         Self::TrimapShared,
         Self::MarkClaims,
+        Self::MsaaEdgePixels,
+        Self::MsaaPoints,
     ];
     /// First slot of the age buckets (free pages, then unused for 128 or
     /// more frames, 64-127, ..., 1 frame).
@@ -349,6 +358,8 @@ impl TileCounter {
             Self::TrimapWeighed => "COUNT_TRIMAP_WEIGHED",
             Self::TrimapShared => "COUNT_TRIMAP_SHARED",
             Self::MarkClaims => "COUNT_MARK_CLAIMS",
+            Self::MsaaEdgePixels => "COUNT_MSAA_EDGE_PIXELS",
+            Self::MsaaPoints => "COUNT_MSAA_POINTS",
         }
     }
 }
@@ -491,6 +502,30 @@ impl GatherFilter {
     }
 }
 
+/// Under MSAA, which samples of a pixel the gather (and marking) take as
+/// one point (`--os-msaa-gather`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum MsaaGather {
+    /// The samples that see one chart surface (one object, one chart
+    /// island: `same_chart_surface` in `objectspace.wgsl`) are one point,
+    /// at their centroid (the pixel's centre where all of a pixel's
+    /// samples do): the gather's cost follows the surfaces in a pixel, not
+    /// its samples.
+    #[default]
+    Pixel,
+    /// Every sample is gathered at its own position: the cost grows with
+    /// the sample count (the reference the pixel gather approximates).
+    Sample,
+}
+
+impl MsaaGather {
+    /// The mode's code in `Params::msaa_gather` (`objectspace.wgsl`).
+    pub fn code(self) -> u32 {
+        self as u32
+    }
+}
+
 /// The triangle-map pass's invocations per texel (`--os-trimap-lanes`).
 pub const TRIMAP_LANES: [u32; 4] = [1, 2, 4, 8];
 /// [`ObjectSpaceConfig::trimap_lanes`]'s default on a GPU: the
@@ -568,6 +603,8 @@ pub struct ObjectSpaceConfig {
     /// its taps spread along the longer axis; marking marks every tap's
     /// tiles. 1: isotropic (the level follows the longer axis, one tap).
     pub aniso: u32,
+    /// Under MSAA, which samples of a pixel are gathered as one point.
+    pub msaa_gather: MsaaGather,
     /// Points each shaded texel averages, spread over it on a square grid:
     /// 1 (its centre) or 4 (pre-filtered shading: the shade over the
     /// texel's footprint, so a highlight narrower than a texel is not
@@ -650,6 +687,7 @@ impl Default for ObjectSpaceConfig {
             level_blend: 0.0,
             gather_filter: GatherFilter::Bilinear,
             aniso: 1,
+            msaa_gather: MsaaGather::Pixel,
             texel_samples: 1,
             view: DebugView::Shade,
             texture_sizes: Vec::new(),
@@ -1378,6 +1416,15 @@ impl Pipeline for ObjectSpace {
                         count(TileCounter::UnderShadedPixels) / count(TileCounter::AtlasPixels).max(1.0),
                     ),
                 ];
+                if self.res.visibility.samples() > 1 {
+                    // As deferred-compute's edge counts: the atlas pixels
+                    // gathered at more than one point, their share, and
+                    // the points per atlas pixel (1 where no pixel is split).
+                    let (atlas, edges) = (count(TileCounter::AtlasPixels), count(TileCounter::MsaaEdgePixels));
+                    counters.push(("msaa_edge_pixels", edges));
+                    counters.push(("msaa_edge_share", edges / atlas.max(1.0)));
+                    counters.push(("msaa_points_per_pixel", count(TileCounter::MsaaPoints) / atlas.max(1.0)));
+                }
                 if self.config.count_mark_atomics {
                     counters.push(("mark_tiles", count(TileCounter::MarkTiles)));
                     counters.push(("mark_atomics", count(TileCounter::MarkAtomics)));

@@ -6,6 +6,9 @@
 #import shadespace::scene_bindings::{vertices, objects, triangle_vertices, object_clip_position}
 #import shadespace::scene::vertex_uv0
 #import shadespace::pixel_surface::{PixelSample, interpolate2}
+#ifdef MSAA
+#import shadespace::pixel_surface::standard_sample_position
+#endif
 
 struct AtlasLevel {
     size: u32,
@@ -69,7 +72,13 @@ struct Params {
     // Most gather taps along the footprint's longer axis (`--os-aniso`; 1:
     // isotropic, the level follows the longer axis).
     aniso: u32,
+    // Under MSAA, which samples share a gather point (`sample_group`):
+    // MSAA_GATHER_PIXEL or MSAA_GATHER_SAMPLE (`--os-msaa-gather`).
+    msaa_gather: u32,
 }
+
+const MSAA_GATHER_PIXEL: u32 = 0u;
+const MSAA_GATHER_SAMPLE: u32 = 1u;
 
 const FILTER_BILINEAR: u32 = 0u;
 const FILTER_BSPLINE: u32 = 1u;
@@ -479,6 +488,52 @@ fn same_chart_surface(a: vec2u, b: vec2u) -> bool {
     let first = objects[a.x - 1u].first_index / 3u;
     return triangle_charts[first + a.y] == triangle_charts[first + b.y];
 }
+
+#ifdef MSAA
+// Samples of a pixel that marking and the gather treat as one point.
+struct SampleGroup {
+    // The ids of its first sample (its object and the triangle whose plane
+    // the point is rebuilt on); x = 0: background.
+    ids: vec2u,
+    // The point marked and gathered (0..1 in the pixel): the centroid of
+    // the samples' positions, the pixel's centre when they are all its samples.
+    at: vec2f,
+    // Its samples (the weight of its gather in the pixel's resolve).
+    count: u32,
+    // The samples of `left` not in it.
+    left: u32,
+}
+
+// The group of the lowest sample in `left` (a bit per sample of `pixel`,
+// `n` samples): with MSAA_GATHER_PIXEL the samples of `left` that see that
+// sample's chart surface (`same_chart_surface`), with MSAA_GATHER_SAMPLE the
+// sample alone. Marking and the gather both call this, so they mark and read
+// the same points bit for bit.
+fn sample_group(pixel: vec2u, n: u32, left: u32) -> SampleGroup {
+    let first = firstTrailingBit(left);
+    let ids = visibility_ids(pixel, first);
+    var mask = 1u << first;
+    if params.msaa_gather == MSAA_GATHER_PIXEL {
+        for (var s = first + 1u; s < n; s++) {
+            if (left & (1u << s)) != 0u && same_chart_surface(visibility_ids(pixel, s), ids) {
+                mask |= 1u << s;
+            }
+        }
+    }
+    let count = countOneBits(mask);
+    var at = vec2f(0.5);
+    if count < n {
+        var sum = vec2f(0.0);
+        for (var s = first; s < n; s++) {
+            if (mask & (1u << s)) != 0u {
+                sum += standard_sample_position(n, s);
+            }
+        }
+        at = sum / f32(count);
+    }
+    return SampleGroup(ids, at, count, left & ~mask);
+}
+#endif
 
 // A vertex of an alpha-blended object in object space's raster passes over
 // them (`objectspace::blended`), which draw without the index buffer: vertex

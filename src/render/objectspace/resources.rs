@@ -54,6 +54,8 @@ gpu_struct! {
         pub texel_sample_side: u32,
         /// [`ObjectSpaceConfig::aniso`].
         pub aniso: u32,
+        /// [`ObjectSpaceConfig::msaa_gather`] ([`super::MsaaGather::code`]).
+        pub msaa_gather: u32,
     }
 }
 
@@ -540,6 +542,7 @@ impl Resources {
             gather_filter: config.gather_filter.code(),
             texel_sample_side: config.texel_sample_side(),
             aniso: config.aniso,
+            msaa_gather: config.msaa_gather.code(),
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(&self.counters, 0, None);

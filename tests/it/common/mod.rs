@@ -119,6 +119,21 @@ pub fn charted(scene: &Scene) -> (Scene, Vec<Option<u32>>) {
     (c.apply(scene), c.texture_sizes())
 }
 
+/// Per object of `scene`, the chart island of each triangle of its mesh
+/// (what the GPU's `triangle_charts` holds), for the CPU twins.
+pub fn chart_islands(scene: &Scene) -> Vec<Vec<u32>> {
+    use shadespace::charts::islands::triangle_islands;
+    use shadespace::render::objectspace::cpu::chart_uvs;
+    scene
+        .objects
+        .iter()
+        .map(|o| {
+            let mesh = &scene.meshes[o.mesh];
+            triangle_islands(&mesh.indices, chart_uvs(mesh))
+        })
+        .collect()
+}
+
 /// Charts `scene` as the CLI does by default for `camera` at
 /// `width`x`height`: each object's texture sized for the most pixels per
 /// metre the camera shows it at (generated charts packed as the CLI packs

@@ -21,8 +21,9 @@ use glam::{IVec2, UVec2, Vec2, Vec3};
 use crate::render::objectspace::GatherFilter;
 
 use super::{
-    AnisoTaps, LevelPair, LevelTexels, MarkInputs, TEXEL_TOLERANCE, aniso_choices, bilinear_taps, chart_footprint,
-    floor_candidates, level_choices, level_of_detail, lod_tolerance, sample_pixel, variable_rate_bias,
+    AnisoTaps, LevelPair, LevelTexels, MarkInputs, PixelSample, TEXEL_TOLERANCE, aniso_choices, bilinear_taps,
+    chart_footprint, floor_candidates, level_choices, level_of_detail, lod_tolerance, sample_pixel_at,
+    variable_rate_bias,
 };
 
 /// Bound on a gathered colour channel besides the weights' error, in
@@ -141,19 +142,25 @@ impl GatherOutcome {
     /// those with no colour. The levels' weight tolerances count by their
     /// weights, and the two levels' difference by how far `t` may move.
     pub fn bound_used(&self, gpu: Vec3) -> f32 {
-        let Some(c) = self.color().filter(|_| !self.fragile()) else { return f32::INFINITY };
+        let (Some(c), Some(bound)) = (self.color(), self.bound()) else { return f32::INFINITY };
+        (0..3).map(|i| (gpu[i] - c[i]).abs() / bound[i]).fold(0.0, f32::max)
+    }
+
+    /// How far (per channel) the GPU's colour may be from [`Self::color`]:
+    /// [`COLOR_ULPS`], the levels' weight tolerances by their weights, and
+    /// the two levels' difference by how far `t` may move. `None` for
+    /// fragile outcomes and those with no colour.
+    pub fn bound(&self) -> Option<Vec3> {
+        let c = self.color().filter(|_| !self.fragile())?;
         let t = self.pair.t;
         let weights = taps_tolerance(&self.fine) * (1.0 - t) + taps_tolerance(&self.coarse) * t;
         let spread = match (taps_color(&self.fine), taps_color(&self.coarse)) {
             (Some(f), Some(g)) => (f.expect("checked") - g.expect("checked")).abs(),
             _ => Vec3::ZERO,
         };
-        (0..3)
-            .map(|i| {
-                let bound = COLOR_ULPS * super::f16_ulp(c[i]) + weights + spread[i] * self.blend_tolerance;
-                (gpu[i] - c[i]).abs() / bound
-            })
-            .fold(0.0, f32::max)
+        Some(Vec3::from_array(std::array::from_fn(|i| {
+            COLOR_ULPS * super::f16_ulp(c[i]) + weights + spread[i] * self.blend_tolerance
+        })))
     }
 }
 
@@ -171,17 +178,22 @@ pub enum PixelGather {
 /// The levels (object, level) [`gather_pixel`] may read for a pixel
 /// (none for background and forward-shaded objects).
 pub fn pixel_levels(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Vec<(usize, u32)> {
+    pixel_levels_at(inputs, pixel, Vec2::splat(0.5), ids)
+}
+
+/// [`pixel_levels`] for the point `at` of the pixel (a [`super::SampleGroup`]'s).
+pub fn pixel_levels_at(inputs: &MarkInputs, pixel: UVec2, at: Vec2, ids: [u32; 2]) -> Vec<(usize, u32)> {
     if ids[0] == 0 {
         return Vec::new();
     }
-    let p = sample_pixel(inputs.scene, inputs.view, pixel, ids);
+    let p = sample_pixel_at(inputs.scene, inputs.view, pixel, at, ids);
     let e = &inputs.entries[p.object];
     if e.size == 0 {
         return Vec::new();
     }
     let tolerance = lod_tolerance(&inputs.params);
     let mut levels: Vec<u32> =
-        level_choices(pixel_lod(inputs, ids, pixel), e.level_count, inputs.params.level_blend, tolerance)
+        level_choices(pixel_lod(inputs, &p), e.level_count, inputs.params.level_blend, tolerance)
             .iter()
             .flat_map(LevelPair::levels)
             .collect();
@@ -190,10 +202,9 @@ pub fn pixel_levels(inputs: &MarkInputs, pixel: UVec2, ids: [u32; 2]) -> Vec<(us
     levels.into_iter().map(|l| (p.object, l)).collect()
 }
 
-/// The unrounded level of the pixel (as marking computes it).
-fn pixel_lod(inputs: &MarkInputs, ids: [u32; 2], pixel: UVec2) -> f32 {
-    let p = sample_pixel(inputs.scene, inputs.view, pixel, ids);
-    let f = chart_footprint(inputs.scene, &p);
+/// The unrounded level of the point `p` (as marking computes it).
+fn pixel_lod(inputs: &MarkInputs, p: &PixelSample) -> f32 {
+    let f = chart_footprint(inputs.scene, p);
     let normals = &inputs.scene.meshes[inputs.scene.objects[p.object].mesh].normals;
     let bias = variable_rate_bias(inputs.params.variable_rate, p.tri.map(|v| normals[v]));
     level_of_detail(&inputs.entries[p.object], &inputs.params, &f, bias)
@@ -310,10 +321,26 @@ pub fn gather_pixel<'a>(
     ids: [u32; 2],
     level: impl Fn(usize, u32) -> &'a LevelTexels,
 ) -> PixelGather {
+    gather_pixel_at(inputs, islands, pixel, Vec2::splat(0.5), ids, level)
+}
+
+/// [`gather_pixel`] at the point `at` of the pixel (a [`super::SampleGroup`]'s,
+/// under MSAA). A point outside its triangle widens the bilinear
+/// coordinate's tolerance by the square of its [`super::extrapolation`], as
+/// marking's twin does.
+pub fn gather_pixel_at<'a>(
+    inputs: &MarkInputs,
+    islands: &[Vec<u32>],
+    pixel: UVec2,
+    at: Vec2,
+    ids: [u32; 2],
+    level: impl Fn(usize, u32) -> &'a LevelTexels,
+) -> PixelGather {
     if ids[0] == 0 {
         return PixelGather::Background;
     }
-    let p = sample_pixel(inputs.scene, inputs.view, pixel, ids);
+    let p = sample_pixel_at(inputs.scene, inputs.view, pixel, at, ids);
+    let reach = super::extrapolation(p.b).powi(2);
     let e = &inputs.entries[p.object];
     if e.size == 0 {
         return PixelGather::Forward;
@@ -329,7 +356,7 @@ pub fn gather_pixel<'a>(
         let size = e.levels[level_index as usize].size;
         assert_eq!(texels.size, size, "object {} level {level_index}: texels of another size", p.object);
         let t = uv * size as f32 - 0.5;
-        let tolerance = size as f32 * (TEXEL_TOLERANCE + slack);
+        let tolerance = size as f32 * (TEXEL_TOLERANCE * reach + slack);
         let mut out = Vec::new();
         for x in floor_candidates(t.x, tolerance) {
             for y in floor_candidates(t.y, tolerance) {
@@ -337,7 +364,7 @@ pub fn gather_pixel<'a>(
                 let (taps, weights) = level_taps(inputs.params.gather_filter, size, base, t - base.as_vec2());
                 let mut g = filter_taps(texels, own, islands, level_index, &taps, &weights);
                 // The weights move with the tap's wider error too.
-                g.weight_tolerance *= 1.0 + slack / TEXEL_TOLERANCE;
+                g.weight_tolerance *= reach + slack / TEXEL_TOLERANCE;
                 out.push(g);
             }
         }
@@ -360,7 +387,7 @@ pub fn gather_pixel<'a>(
     let mut outcomes = Vec::new();
     for taps in aniso_choices(e.size, inputs.params.aniso, &f) {
         let tolerance = lod_tolerance(&inputs.params);
-        for pair in level_choices(pixel_lod(inputs, ids, pixel), e.level_count, blend, tolerance) {
+        for pair in level_choices(pixel_lod(inputs, &p), e.level_count, blend, tolerance) {
             let fine = if pair.t < 1.0 { level_outcomes(pair.lo, &taps) } else { vec![Vec::new()] };
             let coarse = if pair.t > 0.0 { level_outcomes(pair.hi, &taps) } else { vec![Vec::new()] };
             let blend_tolerance = if pair.t > 0.0 && pair.t < 1.0 { tolerance / blend } else { 0.0 };

@@ -6,10 +6,11 @@
 // up to N points along its footprint's longer axis, averaged. Objects outside the atlas (forward-only) are
 // shaded here per pixel, with the world grid's lights. Debug views replace
 // the shade.
-// Under MSAA a pixel whose samples see different chart surfaces
-// (`same_chart_surface`) gathers each sample at its own position and writes
-// their mean (background samples black): the resolve, in linear HDR; the
-// others gather once.
+// Under MSAA a pixel gathers once per group of its samples that see one
+// chart surface (`sample_group`: once at its centre where all do, the usual
+// case), at the group's centroid, and writes the groups' mean weighted by
+// their samples (background samples black): the resolve, in linear HDR.
+// With `--os-msaa-gather sample` every sample is its own group.
 // Reads per pixel, one level: the visibility buffer; its object and
 // triangle's three indices; the three vertices (positions, chart UVs); the
 // atlas entry and level; the page of each distinct page the four taps lie
@@ -22,10 +23,10 @@
 // place of the object, indices, vertices and footprint.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
-#import shadespace::pixel_surface::{sample_pixel, sample_pixel_at, pixel_surface, PixelSample}
+#import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
 #ifdef MSAA
-#import shadespace::pixel_surface::standard_sample_position
-#import shadespace::objectspace::{same_chart_surface, visibility_samples}
+#import shadespace::pixel_surface::sample_pixel_at
+#import shadespace::objectspace::{sample_group, visibility_samples}
 #endif
 #import shadespace::objectspace::visibility_ids
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
@@ -256,45 +257,35 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
     if id.x >= size.x || id.y >= size.y {
         return;
     }
-    let ids = visibility_ids(id.xy, 0u);
-    // One surface point per pixel, or under MSAA one per sample where the
-    // samples see different chart surfaces, through one call of
-    // `gather_surface`: a driver inlines each call with the lighting model
-    // and the filters in it, and a second call doubled the shader (a CPU
-    // driver took several times as long to compile it).
-    var edge = false;
-    var count = 1u;
 #ifdef MSAA
+    // One call site for every group: a pixel of two surfaces costs its
+    // subgroup two gathers, not one and then one per sample.
     let n = visibility_samples();
-    for (var s = 1u; s < n; s++) {
-        edge = edge || !same_chart_surface(visibility_ids(id.xy, s), ids);
+    var left = (1u << n) - 1u;
+    var sum = vec3f(0.0);
+    loop {
+        let g = sample_group(id.xy, n, left);
+        left = g.left;
+        if g.ids.x != 0u {
+            sum += gather_surface(sample_pixel_at(id.xy, g.at, g.ids)).rgb * f32(g.count);
+        }
+        if left == 0u {
+            break;
+        }
     }
-    if edge {
-        count = n;
-    }
-#endif
-#ifdef PIXEL_RECORD
-    if !edge && ids.x != 0u {
-        textureStore(hdr, id.xy, gather_recorded(id.xy, ids, size));
+    textureStore(hdr, id.xy, vec4f(sum / f32(n), 1.0));
+#else
+    let ids = visibility_ids(id.xy, 0u);
+    if ids.x == 0u {
+        textureStore(hdr, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
         return;
     }
+#ifdef PIXEL_RECORD
+    textureStore(hdr, id.xy, gather_recorded(id.xy, ids, size));
+#else
+    textureStore(hdr, id.xy, gather_surface(sample_pixel(id.xy, ids)));
 #endif
-    var sum = vec3f(0.0);
-    for (var s = 0u; s < count; s++) {
-        var sample_ids = ids;
-        var at = vec2f(0.5);
-#ifdef MSAA
-        if edge {
-            sample_ids = visibility_ids(id.xy, s);
-            at = standard_sample_position(n, s);
-        }
 #endif
-        // Background samples are black.
-        if sample_ids.x != 0u {
-            sum += gather_surface(sample_pixel_at(id.xy, at, sample_ids)).rgb;
-        }
-    }
-    textureStore(hdr, id.xy, vec4f(sum / f32(count), 1.0));
 }
 
 #ifdef PIXEL_RECORD
@@ -494,8 +485,8 @@ fn surface_class(p: PixelSample) -> vec4u {
 
 // Debug read-back (`ObjectSpace::read_pixel_classes`), run after a frame
 // and outside it: per pixel, whether its samples see one surface, and what
-// the gather read for it (for an edge pixel, for its first sample on a
-// surface): the source of its shade, level, texels per pixel, taps outside
+// the gather read for it (for an edge pixel, for its first group of samples
+// on a surface): the source of its shade, level, texels per pixel, taps outside
 // the chart island, and the age of its tile's shade.
 @compute @workgroup_size(8, 8)
 fn classify(@builtin(global_invocation_id) id: vec3u) {
@@ -504,32 +495,28 @@ fn classify(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     let i = id.y * size.x + id.x;
-    let ids = visibility_ids(id.xy, 0u);
-    var surface = ids;
-    var coverage = select(CLASS_INTERIOR, CLASS_BACKGROUND, ids.x == 0u);
 #ifdef MSAA
+    // Its first group on a surface, gathered at the group's point
+    // (`sample_group`); an edge where the samples make more than one group.
     let n = visibility_samples();
-    var first = select(0u, n, ids.x == 0u);
-    for (var s = 1u; s < n; s++) {
-        let sample_ids = visibility_ids(id.xy, s);
-        if !same_chart_surface(sample_ids, ids) {
-            coverage = CLASS_EDGE;
-        }
-        if first == n && sample_ids.x != 0u {
-            first = s;
-            surface = sample_ids;
-        }
+    var g = sample_group(id.xy, n, (1u << n) - 1u);
+    let coverage = select(CLASS_EDGE, CLASS_INTERIOR, g.left == 0u);
+    while g.ids.x == 0u && g.left != 0u {
+        g = sample_group(id.xy, n, g.left);
     }
-#endif
-    if surface.x == 0u {
+    if g.ids.x == 0u {
         pixel_classes[i] = vec4u(CLASS_BACKGROUND, 0u, 0u, 0u);
         return;
     }
-#ifdef MSAA
-    let at = select(vec2f(0.5), standard_sample_position(n, first), coverage == CLASS_EDGE);
-    let c = surface_class(sample_pixel_at(id.xy, at, surface));
+    let c = surface_class(sample_pixel_at(id.xy, g.at, g.ids));
 #else
-    let c = surface_class(sample_pixel(id.xy, surface));
+    let ids = visibility_ids(id.xy, 0u);
+    if ids.x == 0u {
+        pixel_classes[i] = vec4u(CLASS_BACKGROUND, 0u, 0u, 0u);
+        return;
+    }
+    let coverage = CLASS_INTERIOR;
+    let c = surface_class(sample_pixel(id.xy, ids));
 #endif
     pixel_classes[i] = vec4u(coverage | c.x, c.yzw);
 }

@@ -30,9 +30,10 @@
 #ifdef COUNT_MARK_ATOMICS
 #import shadespace::contract::{COUNT_MARK_TILES, COUNT_MARK_ATOMICS, COUNT_MARK_CLAIMS}
 #endif
-#import shadespace::pixel_surface::{sample_pixel, sample_pixel_at, PixelSample}
+#import shadespace::pixel_surface::{sample_pixel, PixelSample}
 #ifdef MSAA
-#import shadespace::pixel_surface::standard_sample_position
+#import shadespace::pixel_surface::sample_pixel_at
+#import shadespace::contract::{COUNT_MSAA_EDGE_PIXELS, COUNT_MSAA_POINTS}
 #endif
 #import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace_mark_backed::mark_backed_page
@@ -43,7 +44,7 @@
     aniso_taps, aniso_tap}
 #import shadespace::objectspace::visibility_ids
 #ifdef MSAA
-#import shadespace::objectspace::{same_chart_surface, visibility_samples}
+#import shadespace::objectspace::{sample_group, visibility_samples}
 #endif
 
 #ifdef PIXEL_RECORD
@@ -290,6 +291,15 @@ const PIXEL_UNDER_SHADED: u32 = 2u;
 
 var<workgroup> atlas_pixels: atomic<u32>;
 var<workgroup> under_shaded_pixels: atomic<u32>;
+#ifdef MSAA
+// Under MSAA, of the atlas pixels: those marked (and gathered) at more than
+// one point, and the points marked on surfaces in the atlas.
+var<workgroup> edge_pixels: atomic<u32>;
+var<workgroup> atlas_points: atomic<u32>;
+// This invocation's pixel's: whether it is such an edge pixel, its points.
+var<private> pixel_edge: bool;
+var<private> pixel_points: u32;
+#endif
 
 #ifdef MARK_SUBGROUP
 // naga takes the subgroup builtins only with a one-dimensional workgroup:
@@ -316,9 +326,17 @@ fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_inde
     // ... and per subgroup before that: one workgroup atomic per subgroup.
     let atlas = subgroupAdd(u32(kind != PIXEL_NOT_IN_ATLAS));
     let under = subgroupAdd(u32(kind == PIXEL_UNDER_SHADED));
+#ifdef MSAA
+    let edges = subgroupAdd(u32(pixel_edge));
+    let points = subgroupAdd(pixel_points);
+#endif
     if elected() {
         atomicAdd(&atlas_pixels, atlas);
         atomicAdd(&under_shaded_pixels, under);
+#ifdef MSAA
+        atomicAdd(&edge_pixels, edges);
+        atomicAdd(&atlas_points, points);
+#endif
     }
 #else
     if kind != PIXEL_NOT_IN_ATLAS {
@@ -327,11 +345,21 @@ fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_inde
     if kind == PIXEL_UNDER_SHADED {
         atomicAdd(&under_shaded_pixels, 1u);
     }
+#ifdef MSAA
+    if pixel_edge {
+        atomicAdd(&edge_pixels, 1u);
+    }
+    atomicAdd(&atlas_points, pixel_points);
+#endif
 #endif
     workgroupBarrier();
     if local == 0u {
         atomicAdd(&counters[COUNT_ATLAS_PIXELS], atomicLoad(&atlas_pixels));
         atomicAdd(&counters[COUNT_UNDER_SHADED_PIXELS], atomicLoad(&under_shaded_pixels));
+#ifdef MSAA
+        atomicAdd(&counters[COUNT_MSAA_EDGE_PIXELS], atomicLoad(&edge_pixels));
+        atomicAdd(&counters[COUNT_MSAA_POINTS], atomicLoad(&atlas_points));
+#endif
 #ifdef COUNT_MARK_ATOMICS
         atomicAdd(&counters[COUNT_MARK_TILES], atomicLoad(&mark_tiles_counted));
         atomicAdd(&counters[COUNT_MARK_ATOMICS], atomicLoad(&mark_atomics_counted));
@@ -374,42 +402,39 @@ fn mark_pixel(pixel: vec2u) -> u32 {
     if pixel.x >= size.x || pixel.y >= size.y {
         return PIXEL_NOT_IN_ATLAS;
     }
-    let ids = visibility_ids(pixel, 0u);
-    // A pixel whose samples see different chart surfaces (under MSAA) marks
-    // each sample's footprint at its own position, where the gather reads
-    // it; the others mark once. One call of `mark_surface` either way, as
-    // `mark_footprint` says why.
-    var edge = false;
-    var count = 1u;
 #ifdef MSAA
+    // Each group of samples on one chart surface (`sample_group`) marks
+    // its footprint at its point, where the gather reads it.
     let n = visibility_samples();
-    for (var s = 1u; s < n; s++) {
-        edge = edge || !same_chart_surface(visibility_ids(pixel, s), ids);
-    }
-    if edge {
-        count = n;
-    }
-#endif
-#ifdef PIXEL_RECORD
-    if !edge {
-        record_index = pixel.y * size.x + pixel.x;
-    }
-#endif
+    var left = (1u << n) - 1u;
     var kind = PIXEL_NOT_IN_ATLAS;
-    for (var s = 0u; s < count; s++) {
-        var sample_ids = ids;
-        var at = vec2f(0.5);
-#ifdef MSAA
-        if edge {
-            sample_ids = visibility_ids(pixel, s);
-            at = standard_sample_position(n, s);
+    var groups = 0u;
+    pixel_points = 0u;
+    loop {
+        let g = sample_group(pixel, n, left);
+        left = g.left;
+        groups += 1u;
+        if g.ids.x != 0u {
+            let k = mark_surface(sample_pixel_at(pixel, g.at, g.ids));
+            kind = max(kind, k);
+            pixel_points += u32(k != PIXEL_NOT_IN_ATLAS);
         }
-#endif
-        if sample_ids.x != 0u {
-            kind = max(kind, mark_surface(sample_pixel_at(pixel, at, sample_ids)));
+        if left == 0u {
+            break;
         }
     }
+    pixel_edge = kind != PIXEL_NOT_IN_ATLAS && groups > 1u;
     return kind;
+#else
+    let ids = visibility_ids(pixel, 0u);
+    if ids.x == 0u {
+        return PIXEL_NOT_IN_ATLAS;
+    }
+#ifdef PIXEL_RECORD
+    record_index = pixel.y * size.x + pixel.x;
+#endif
+    return mark_surface(sample_pixel(pixel, ids));
+#endif
 }
 
 // Marks the tiles of one surface point's footprint; returns what kind of
