@@ -343,9 +343,16 @@ fn shade_and_gather_on_the_untextured_floor() {
     assert!(report.texels > 3000 && report.pixels > 3000 && report.levels.len() >= 3, "{report:?}");
 }
 
-/// The atrium without textures (many objects, chart islands and levels),
-/// gathered with `filter` and shaded with `texel_samples` points a texel.
-fn atrium(name: &'static str, gather_filter: GatherFilter, texel_samples: u32) -> Report {
+/// The atrium without textures (many objects, chart islands and levels) at
+/// frame `frame` of its path, gathered with `filter` and up to `aniso` taps
+/// a pixel, and (with `shade`) shaded with `texel_samples` points a texel.
+fn atrium(
+    name: &'static str,
+    frame: u32,
+    gather_filter: GatherFilter,
+    aniso: u32,
+    (shade, texel_samples): (bool, u32),
+) -> Report {
     let ctx = common::gpu();
     let mut scene = scene::load("atrium").unwrap();
     for m in &mut scene.materials {
@@ -360,7 +367,7 @@ fn atrium(name: &'static str, gather_filter: GatherFilter, texel_samples: u32) -
         .unwrap()
         .select(path::CameraChoice::Path)
         .unwrap()
-        .camera_at(0);
+        .camera_at(frame);
     let spec: LightSpec = "small:8+big:1".parse().unwrap();
     let lights = lights::build_lights(&spec, &scene.bounds(), &camera, width as f32 / height as f32, 7).unwrap();
     assert_eq!(shade::unsupported(&scene, &lights), None);
@@ -381,8 +388,8 @@ fn atrium(name: &'static str, gather_filter: GatherFilter, texel_samples: u32) -
             level_blend: 0.5,
             gather_filter,
             texel_samples,
-            aniso: 1,
-            shade: true,
+            aniso,
+            shade,
         },
     );
     // Several levels, blends, and island filtering at chart borders, were exercised.
@@ -393,12 +400,22 @@ fn atrium(name: &'static str, gather_filter: GatherFilter, texel_samples: u32) -
 
 #[test]
 fn shade_and_gather_in_the_atrium() {
-    atrium("atrium", GatherFilter::Bilinear, 1);
+    atrium("atrium", 0, GatherFilter::Bilinear, 1, (true, 1));
+}
+
+/// Up to 8 anisotropic taps a pixel, at the frame of the atrium's path where
+/// a silhouette pixel's footprint reaches most of its chart (capped at the
+/// coarsest level by `aniso_taps`; the gather only, the atlas as the GPU
+/// shaded it).
+#[test]
+fn anisotropic_gather_in_the_atrium() {
+    let report = atrium("atrium, aniso 8", 12, GatherFilter::Bilinear, 8, (false, 1));
+    assert!(report.aniso_pixels > 100, "{report:?}");
 }
 
 /// The B-spline gather (4x4 taps a level, island-filtered, across page
 /// edges) and pre-filtered shading (2x2 points a texel) against their twins.
 #[test]
 fn bspline_gather_and_four_points_a_texel_in_the_atrium() {
-    atrium("atrium, B-spline, 4 points a texel", GatherFilter::Bspline, 4);
+    atrium("atrium, B-spline, 4 points a texel", 0, GatherFilter::Bspline, 1, (true, 4));
 }

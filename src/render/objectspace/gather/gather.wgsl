@@ -398,7 +398,7 @@ fn gather_surface(p: PixelSample) -> vec4f {
             }
         }
         default: {
-            out = gather_levels(OwnSurface(p.object, p.triangle), levels, aniso_taps(e.size, f));
+            out = gather_levels(OwnSurface(p.object, p.triangle), levels, aniso_taps(e, f));
             if out.w < 0.0 {
                 // The atlas was full this frame: shade the pixel forward.
                 return shade_forward(p);
