@@ -25,8 +25,8 @@
 // (`environment.wgsl`).
 // Trilinear and isotropic, whatever `--aniso`: for samples at an explicit
 // level (`textureSampleLevel`: object space's texels, layer masks), which
-// have no footprint to filter along. (llvmpipe filters such samples
-// anisotropically along the lanes' coordinates when the sampler allows it.)
+// have no footprint to filter along (llvmpipe's compute shaders filter such
+// samples anisotropically all the same when the sampler allows it).
 @group(0) @binding(18) var texel_sampler: sampler;
 
 // The three (global) vertex indices of an object's triangle.
