@@ -74,6 +74,17 @@ pub struct SceneArgs {
     /// exits with status 2.
     #[arg(long, default_value_t = 1, value_parser = parse::msaa)]
     pub msaa: u32,
+    /// Anisotropic texture filtering: the most taps (1, 2, 4, 8 or 16) a
+    /// material texture sample takes along its footprint's longer axis, as
+    /// any engine turns on (default 1: trilinear alone). Every pipeline that
+    /// samples material textures per pixel or per sample (forward,
+    /// multi-pass, clustered, deferred, deferred-compute, either
+    /// --visibility; object space's objects shaded forward) uses it; object
+    /// space's shading does not (its texels are isotropic footprints: see
+    /// --os-aniso). An adapter without anisotropic filtering warns and
+    /// filters trilinearly.
+    #[arg(long, default_value_t = 1, value_parser = parse::texture_aniso)]
+    pub aniso: u16,
     /// `path`: the scene's camera path (from cameras.json beside a shared
     /// scene; an orbit for atrium and voxels; for other scenes the file's
     /// first camera, or else a turntable framing the whole scene; the city's

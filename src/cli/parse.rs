@@ -183,6 +183,14 @@ pub fn aniso(s: &str) -> Result<u32, String> {
     }
 }
 
+/// `--aniso`: 1, 2, 4, 8 or 16 taps of the material textures' sampler.
+pub fn texture_aniso(s: &str) -> Result<u16, String> {
+    match s.parse::<u16>() {
+        Ok(n) if shadespace::render::TEXTURE_ANISOTROPY.contains(&n) => Ok(n),
+        _ => Err(format!("'{s}' is not one of 1, 2, 4, 8, 16 taps")),
+    }
+}
+
 /// `--os-texel-samples`: 1 or 4.
 pub fn texel_samples(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {

@@ -270,6 +270,7 @@ pub fn configure(renderer: &mut Renderer, a: &SceneArgs, s: &Setup) {
     renderer.shadow_refresh = a.shadow_refresh;
     renderer.sun_shadow = a.sun_shadow;
     renderer.shading = a.shading;
+    renderer.texture_anisotropy = a.aniso;
     if let Some(culling) = a.culling {
         renderer.culling = culling;
     }

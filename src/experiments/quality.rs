@@ -86,7 +86,9 @@ pub struct Config {
     pub level_blend: f32,
     /// Object space: `--os-filter`.
     pub filter: GatherFilter,
-    /// Object space: `--os-aniso` (1: isotropic).
+    /// Anisotropic filtering's most taps (1: isotropic): object space's
+    /// gather (`--os-aniso`), or for a conventional pipeline its material
+    /// textures' sampler (`--aniso`, [`Renderer::texture_anisotropy`]).
     pub aniso: u32,
 }
 
@@ -97,7 +99,8 @@ impl Config {
 
     /// `objectspace-hz30` (shading at 30 Hz of 60, spread), `objectspace-bias1`,
     /// `objectspace-blend1` (level blend 1: trilinear), `objectspace-bspline`
-    /// (the B-spline gather), `objectspace-aniso8` (`--os-aniso 8`), ...
+    /// (the B-spline gather), `objectspace-aniso8` (`--os-aniso 8`),
+    /// `deferred-compute-aniso16` (`--aniso 16`), ...
     pub fn label(&self) -> String {
         match self.shading {
             Shading::ObjectSpace { reuse, variable_rate } if self.spread => {
@@ -154,7 +157,8 @@ pub struct Axes {
 /// with level blend 1 (trilinear gathering), with the B-spline gather, with
 /// both (the least flicker on lavapipe: BENCHMARKS.md), with mip bias -1
 /// (finer levels) alone and with level blend 1, and with anisotropic
-/// gathering (`--os-aniso` 4 and 8, and 8 with level blend 1). A quick run
+/// gathering (`--os-aniso` 4 and 8, and 8 with level blend 1); and, but in
+/// quick mode, every conventional pipeline with `--aniso 16`. A quick run
 /// may name the others with `--configs` ([`chosen_configs`]).
 pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
     let mut all: Vec<Config> = grid.shadings.iter().map(|&s| Config::plain(s)).collect();
@@ -182,8 +186,19 @@ pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
             all.push(Config { level_blend: 1.0, aniso: 8, ..Config::plain(Shading::OBJECT_SPACE) });
         }
     }
+    if !quick {
+        // The conventional pipelines with anisotropic texture filtering, as
+        // engines ship them: the fair match for object space's
+        // anisotropic gather.
+        let conventional = grid.shadings.iter().filter(|s| s.is_conventional());
+        all.extend(conventional.map(|&s| Config { aniso: CONVENTIONAL_ANISO, ..Config::plain(s) }));
+    }
     all
 }
+
+/// The sampler anisotropy of the conventional pipelines' `-aniso` cells
+/// (`--aniso 16`, the most hardware offers).
+pub const CONVENTIONAL_ANISO: u32 = 16;
 
 /// The configurations a run measures: [`configs`], only those named in
 /// the grid's `configs` where it names any (then from every configuration
@@ -371,6 +386,9 @@ pub fn measure(
         let conventional = cell.config.shading.is_conventional();
         let shaded = if conventional { &variant.render } else { &variant.charted };
         let mut renderer = Renderer::new(ctx, shaded, &render_options(&cell.config))?;
+        if conventional {
+            renderer.texture_anisotropy = cell.config.aniso as u16;
+        }
         let mut images = Vec::new();
         for i in 0..grid.warmup + grid.frames {
             renderer.render(ctx, &path.camera_at(first + i), &lights, u64::from(i))?;
@@ -959,7 +977,12 @@ mod tests {
                 "objectspace-bias-1-blend1",
                 "objectspace-aniso4",
                 "objectspace-aniso8",
-                "objectspace-blend1-aniso8"
+                "objectspace-blend1-aniso8",
+                "forward-aniso16",
+                "forward-multipass-aniso16",
+                "clustered-aniso16",
+                "deferred-aniso16",
+                "deferred-compute-aniso16"
             ]
         );
         let all = cells(&full, false);
@@ -980,6 +1003,11 @@ mod tests {
         let named = TimingGrid { configs: vec!["objectspace-aniso8".into()], ..grid(true) };
         let labels: Vec<String> = chosen_configs(&named, true).iter().map(Config::label).collect();
         assert_eq!(labels, ["objectspace-aniso8"]);
+        // And the conventional pipelines' anisotropic cells.
+        let named = TimingGrid { configs: vec!["deferred-compute-aniso16".into()], ..grid(true) };
+        let chosen = chosen_configs(&named, true);
+        assert_eq!(chosen.len(), 1);
+        assert_eq!((chosen[0].pipeline(), chosen[0].aniso), ("deferred-compute", CONVENTIONAL_ANISO));
     }
 
     /// Every file of `dir` by name, for comparing two runs' outputs.

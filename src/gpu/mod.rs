@@ -111,6 +111,13 @@ impl GpuContext {
         self.features.contains(feature)
     }
 
+    /// Whether samplers may filter anisotropically (Vulkan's
+    /// `samplerAnisotropy`): without it wgpu creates every sampler
+    /// isotropic, whatever its `anisotropy_clamp`, and reports nothing.
+    pub fn has_anisotropic_filtering(&self) -> bool {
+        self.adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::ANISOTROPIC_FILTERING)
+    }
+
     /// Returns the validation errors raised since the last call, as an error.
     /// Every frame and every test calls this: errors are never swallowed.
     pub fn check_errors(&self) -> Result<(), GpuError> {
@@ -158,6 +165,10 @@ impl GpuContext {
             l.max_compute_workgroup_storage_size >> 10,
             l.max_compute_invocations_per_workgroup,
             l.max_buffer_size >> 20,
+        );
+        s += &format!(
+            "anisotropic filtering (--aniso): {}\n",
+            if self.has_anisotropic_filtering() { "yes" } else { "no" }
         );
         s += &format!("timestamp period: {} ns/tick\n", self.queue.get_timestamp_period());
         s

@@ -22,7 +22,7 @@
 #import shadespace::contract::{LAYER_BASE, LAYER_PAINTED_METAL, LAYER_BARE_METAL, LAYER_DIRT,
     LAYER_SNOW, LAYER_EMISSIVE, MASK_TEXTURE, MASK_NOISE, MASK_SLOPE_HEIGHT, MASK_DECAL}
 #import shadespace::lighting::{Light, Surface, light_radiance, shininess_from_roughness}
-#import shadespace::scene_bindings::{albedo, albedo_sampler, linear_maps}
+#import shadespace::scene_bindings::{albedo, texel_sampler, linear_maps}
 
 // 112 bytes; mirrors `materials::GpuLayer` (field meanings per kind there).
 struct Layer {
@@ -110,16 +110,18 @@ fn fbm(p: vec3f, octaves: u32, seed: u32) -> f32 {
 }
 
 // MASK_TEXTURE: a channel of one of the scene's texture layers at UV0 times
-// `mask_a.x`, at the surface's mip (shifted by the repeat and the array's size).
+// `mask_a.x`, at the surface's mip (shifted by the repeat and the array's
+// size), isotropic in every pipeline (one level, not gradients, is what the
+// G-buffer keeps).
 fn mask_texture(l: Layer, s: Surface) -> f32 {
     let scale = l.mask_a.x;
     let uv = s.uv * scale;
     var v: vec4f;
     if l.mask_mode >= 4u {
         let lod = s.uv_lod + log2(scale * f32(textureDimensions(linear_maps).x) / f32(textureDimensions(albedo).x));
-        v = textureSampleLevel(linear_maps, albedo_sampler, uv, l.mask_index, max(lod, 0.0));
+        v = textureSampleLevel(linear_maps, texel_sampler, uv, l.mask_index, max(lod, 0.0));
     } else {
-        v = textureSampleLevel(albedo, albedo_sampler, uv, l.mask_index, max(s.uv_lod + log2(scale), 0.0));
+        v = textureSampleLevel(albedo, texel_sampler, uv, l.mask_index, max(s.uv_lod + log2(scale), 0.0));
     }
     return v[l.mask_mode & 3u];
 }

@@ -275,6 +275,8 @@ pub enum RenderError {
     BadBloom(f32),
     #[error("bloom needs read-write Rgba16Float storage textures, which {0} does not offer")]
     BloomUnsupported(String),
+    #[error("--aniso {0}: texture anisotropy takes 1, 2, 4, 8 or 16 taps")]
+    BadAnisotropy(u16),
     #[error("--msaa {0}: MSAA takes 1, 2, 4 or 8 samples per pixel")]
     BadSamples(u32),
     #[error(
@@ -292,6 +294,7 @@ impl RenderError {
             Self::BadSize(..)
                 | Self::BadBloom(_)
                 | Self::BloomUnsupported(_)
+                | Self::BadAnisotropy(_)
                 | Self::BadSamples(_)
                 | Self::SamplesUnsupported { .. }
         )
@@ -348,6 +351,16 @@ pub struct Renderer {
     /// References set `-log2(N)` so that N x N jittered samples filter
     /// textures as a frame N times larger would.
     pub texture_lod_bias: f32,
+    /// The most anisotropic taps a material texture sample takes (`--aniso`,
+    /// one of [`TEXTURE_ANISOTROPY`]; default 1: trilinear alone), in every
+    /// pipeline that samples material textures per pixel or per sample with
+    /// a footprint: forward, multi-pass, clustered, deferred, deferred-compute,
+    /// their compute-visibility forms, and object space's objects shaded
+    /// forward. Object space's texels are shaded at an explicit level (an
+    /// isotropic footprint), so its shading does not change
+    /// ([`SceneGpu::set_anisotropy`]). Applied at the next frame; an adapter
+    /// without anisotropic filtering gets a warning and isotropic samples.
+    pub texture_anisotropy: u16,
     shadows: ShadowMaps,
     /// The library the pipelines were built with (cluster culling builds
     /// its variants from it when first needed).
@@ -359,6 +372,9 @@ pub struct Renderer {
     /// Submissions of the frames the GPU may still be working on.
     in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
 }
+
+/// The values [`Renderer::texture_anisotropy`] takes (`--aniso`).
+pub const TEXTURE_ANISOTROPY: [u16; 5] = [1, 2, 4, 8, 16];
 
 /// Most frames queued ahead of the GPU, as a swap chain allows: without a
 /// limit the CPU runs arbitrarily far ahead (bench has no presentation), and
@@ -451,6 +467,7 @@ impl Renderer {
             cull_plain_above: clusters::CULL_PLAIN_ABOVE,
             jitter: glam::Vec2::ZERO,
             texture_lod_bias: 0.0,
+            texture_anisotropy: 1,
             shadows,
             shaders,
             cluster_culling_built: false,
@@ -494,6 +511,20 @@ impl Renderer {
         let start = Instant::now();
         if !(0.0..=1.0).contains(&self.bloom) {
             return Err(RenderError::BadBloom(self.bloom));
+        }
+        if self.texture_anisotropy != self.scene.anisotropy() {
+            if !TEXTURE_ANISOTROPY.contains(&self.texture_anisotropy) {
+                return Err(RenderError::BadAnisotropy(self.texture_anisotropy));
+            }
+            if self.texture_anisotropy > 1 && !ctx.has_anisotropic_filtering() {
+                // wgpu then makes the sampler isotropic without a word.
+                tracing::warn!(
+                    "--aniso {}: {} has no anisotropic filtering (samplerAnisotropy); textures are filtered trilinearly",
+                    self.texture_anisotropy,
+                    ctx.info.name
+                );
+            }
+            self.scene.set_anisotropy(&ctx.device, self.texture_anisotropy);
         }
         let bloom_pass = match &self.bloom_pass {
             _ if self.bloom == 0.0 => None,

@@ -146,13 +146,19 @@ pub struct SceneGpu {
     environment_sampler: wgpu::Sampler,
     lights: GrowableBuffer,
     light_indices: GrowableBuffer,
-    /// The colour textures as one array (binding 5), and the sampler of
-    /// every scene texture (binding 6).
+    /// The colour textures as one array (binding 5).
     pub albedo_view: wgpu::TextureView,
     linear_maps_view: wgpu::TextureView,
     /// The linear maps' array (kept for its size).
     linear_maps: wgpu::Texture,
+    /// Trilinear, isotropic: the scene group's samples at an explicit level
+    /// (binding 18) and the shadow-map passes' alpha tests (a caster's
+    /// coverage from the light does not need a sharper filter).
     pub sampler: wgpu::Sampler,
+    /// The sampler of the material textures in the scene group (binding 6):
+    /// trilinear with up to [`Self::anisotropy`] anisotropic taps.
+    material_sampler: wgpu::Sampler,
+    anisotropy: u16,
     pub layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
 }
@@ -274,15 +280,7 @@ impl SceneGpu {
         };
         let albedo_view = array_view(&albedo);
         let linear_maps_view = array_view(&linear_maps);
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("albedo"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            ..Default::default()
-        });
+        let sampler = material_sampler(device, 1);
         let layout = bind_group_layout(device);
         let shadow_atlas = ShadowAtlas::new(device);
         let environment = EnvironmentMaps::black(device);
@@ -298,7 +296,7 @@ impl SceneGpu {
             &layout,
             [&view, &objects, &vertices_buf, &lights.buffer, &light_indices.buffer, &indices_buf, &layers_buf],
             [&albedo_view, &linear_maps_view],
-            &sampler,
+            [&sampler, &sampler],
             &shadow_atlas,
             (&environment, &environment_sampler),
         );
@@ -365,9 +363,32 @@ impl SceneGpu {
             albedo_view,
             linear_maps_view,
             linear_maps,
+            material_sampler: sampler.clone(),
             sampler,
+            anisotropy: 1,
             layout,
             bind_group,
+        }
+    }
+
+    /// The most anisotropic taps the material sampler takes (1: isotropic).
+    pub fn anisotropy(&self) -> u16 {
+        self.anisotropy
+    }
+
+    /// Gives the material textures' sampler (the scene group's binding 6)
+    /// up to `anisotropy` taps (1, 2, 4, 8 or 16; 1 is trilinear alone) and
+    /// rebuilds the group. Samples taken with gradients (implicit or
+    /// `textureSampleGrad`) filter anisotropically; those at an explicit
+    /// level (object space's texels, layer masks) use the isotropic
+    /// [`Self::sampler`], having no footprint. An adapter without
+    /// `DownlevelFlags::ANISOTROPIC_FILTERING` gets an isotropic sampler from
+    /// wgpu, silently ([`super::Renderer::texture_anisotropy`] warns).
+    pub fn set_anisotropy(&mut self, device: &wgpu::Device, anisotropy: u16) {
+        if anisotropy != self.anisotropy {
+            self.anisotropy = anisotropy;
+            self.material_sampler = material_sampler(device, anisotropy);
+            self.rebuild_bind_group(device);
         }
     }
 
@@ -475,7 +496,7 @@ impl SceneGpu {
                 &self.layers_buffer,
             ],
             [&self.albedo_view, &self.linear_maps_view],
-            &self.sampler,
+            [&self.material_sampler, &self.sampler],
             &self.shadow_atlas,
             (&self.environment, &self.environment_sampler),
         )
@@ -495,11 +516,27 @@ impl SceneGpu {
                 &self.layers_buffer,
             ],
             [&self.albedo_view, &self.linear_maps_view],
-            &self.sampler,
+            [&self.material_sampler, &self.sampler],
             &self.shadow_atlas,
             (&self.environment, &self.environment_sampler),
         );
     }
+}
+
+/// The material textures' sampler: repeating, trilinear, with up to
+/// `anisotropy` anisotropic taps (wgpu asks every filter to be linear for
+/// them, as here).
+fn material_sampler(device: &wgpu::Device, anisotropy: u16) -> wgpu::Sampler {
+    device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some(if anisotropy > 1 { "material textures (anisotropic)" } else { "material textures" }),
+        address_mode_u: wgpu::AddressMode::Repeat,
+        address_mode_v: wgpu::AddressMode::Repeat,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        mipmap_filter: wgpu::MipmapFilterMode::Linear,
+        anisotropy_clamp: anisotropy,
+        ..Default::default()
+    })
 }
 
 /// Every mesh's clusters, mesh after mesh.
@@ -577,12 +614,14 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     // its sampler, indices; 8-11: shadow atlas, comparison sampler, shadow
     // faces, sun cascades; 12: linear maps (normal, metallic-roughness, occlusion);
     // 13: material layers; 14-17: the environment's specular and irradiance
-    // maps, their sampler and the BRDF lookup table.
+    // maps, their sampler and the BRDF lookup table; 18: the isotropic
+    // sampler of explicit-level samples.
     let bindings = [Binding::Uniform, read, read, read, read, albedo, Binding::Sampler, read];
     let shadows = [depth, Binding::ComparisonSampler, read, depth];
     let maps = [albedo, read];
     let env = environment::scene_bindings();
-    bind_group_layout_for(device, "scene", stages, &[bindings.as_slice(), &shadows, &maps, &env].concat())
+    let texel = [Binding::Sampler];
+    bind_group_layout_for(device, "scene", stages, &[bindings.as_slice(), &shadows, &maps, &env, &texel].concat())
 }
 
 /// Buffers in binding order 0, 1, 2, 3, 4, 7, 13; the shadow maps are 8-11;
@@ -592,7 +631,7 @@ fn make_bind_group(
     layout: &wgpu::BindGroupLayout,
     buffers: [&wgpu::Buffer; 7],
     textures: [&wgpu::TextureView; 2],
-    sampler: &wgpu::Sampler,
+    [sampler, texel_sampler]: [&wgpu::Sampler; 2],
     shadows: &ShadowAtlas,
     (env, env_sampler): (&EnvironmentMaps, &wgpu::Sampler),
 ) -> wgpu::BindGroup {
@@ -620,6 +659,7 @@ fn make_bind_group(
             wgpu::BindGroupEntry { binding: 15, resource: wgpu::BindingResource::TextureView(env.irradiance_view()) },
             wgpu::BindGroupEntry { binding: 16, resource: wgpu::BindingResource::Sampler(env_sampler) },
             wgpu::BindGroupEntry { binding: 17, resource: wgpu::BindingResource::TextureView(env.brdf_lut_view()) },
+            wgpu::BindGroupEntry { binding: 18, resource: wgpu::BindingResource::Sampler(texel_sampler) },
         ],
     })
 }

@@ -404,13 +404,16 @@ fn shade_and_gather_on_the_untextured_floor() {
     assert!(report.texels > 3000 && report.pixels > 3000 && report.levels.len() >= 3, "{report:?}");
 }
 
-/// The atrium without textures (many objects, chart islands and levels),
-/// gathered with `filter` and shaded with `texel_samples` points a texel,
-/// at `samples` per pixel gathered as `msaa_gather` says.
+/// The atrium without textures (many objects, chart islands and levels) at
+/// frame `frame` of its path, gathered with `filter` and up to `aniso` taps
+/// a pixel, (with `shade`) shaded with `texel_samples` points a texel, at
+/// `samples` per pixel gathered as `msaa_gather` says.
 fn atrium(
     name: &'static str,
+    frame: u32,
     gather_filter: GatherFilter,
-    texel_samples: u32,
+    aniso: u32,
+    (shade, texel_samples): (bool, u32),
     (samples, msaa_gather): (u32, MsaaGather),
 ) -> Report {
     let ctx = common::gpu();
@@ -427,7 +430,7 @@ fn atrium(
         .unwrap()
         .select(path::CameraChoice::Path)
         .unwrap()
-        .camera_at(0);
+        .camera_at(frame);
     let spec: LightSpec = "small:8+big:1".parse().unwrap();
     let lights = lights::build_lights(&spec, &scene.bounds(), &camera, width as f32 / height as f32, 7).unwrap();
     assert_eq!(shade::unsupported(&scene, &lights), None);
@@ -448,10 +451,10 @@ fn atrium(
             level_blend: 0.5,
             gather_filter,
             texel_samples,
-            aniso: 1,
+            aniso,
             samples,
             msaa_gather,
-            shade: true,
+            shade,
         },
     );
     // Several levels, blends, and island filtering at chart borders, were exercised.
@@ -462,7 +465,7 @@ fn atrium(
 
 #[test]
 fn shade_and_gather_in_the_atrium() {
-    atrium("atrium", GatherFilter::Bilinear, 1, (1, MsaaGather::Pixel));
+    atrium("atrium", 0, GatherFilter::Bilinear, 1, (true, 1), (1, MsaaGather::Pixel));
 }
 
 /// At 4 samples per pixel each group of samples on one chart surface is
@@ -477,7 +480,7 @@ fn gather_at_four_samples_in_the_atrium() {
     for (name, mode) in
         [("atrium, 4 samples", MsaaGather::Pixel), ("atrium, 4 samples, per sample", MsaaGather::Sample)]
     {
-        let report = atrium(name, GatherFilter::Bilinear, 1, (4, mode));
+        let report = atrium(name, 0, GatherFilter::Bilinear, 1, (true, 1), (4, mode));
         assert!(report.edge_pixels > 200, "{name}: {report:?}");
         if mode == MsaaGather::Pixel {
             assert!(report.edge_pixels * 3 < report.pixels, "{name}: {report:?}");
@@ -485,9 +488,19 @@ fn gather_at_four_samples_in_the_atrium() {
     }
 }
 
+/// Up to 8 anisotropic taps a pixel, at the frame of the atrium's path where
+/// a silhouette pixel's footprint reaches most of its chart (capped at the
+/// coarsest level by `aniso_taps`; the gather only, the atlas as the GPU
+/// shaded it).
+#[test]
+fn anisotropic_gather_in_the_atrium() {
+    let report = atrium("atrium, aniso 8", 12, GatherFilter::Bilinear, 8, (false, 1), (1, MsaaGather::Pixel));
+    assert!(report.aniso_pixels > 100, "{report:?}");
+}
+
 /// The B-spline gather (4x4 taps a level, island-filtered, across page
 /// edges) and pre-filtered shading (2x2 points a texel) against their twins.
 #[test]
 fn bspline_gather_and_four_points_a_texel_in_the_atrium() {
-    atrium("atrium, B-spline, 4 points a texel", GatherFilter::Bspline, 4, (1, MsaaGather::Pixel));
+    atrium("atrium, B-spline, 4 points a texel", 0, GatherFilter::Bspline, 1, (true, 4), (1, MsaaGather::Pixel));
 }

@@ -348,18 +348,24 @@ impl AnisoTaps {
     }
 }
 
-/// Mirrors `aniso_taps` for an object of level-0 side `size` and at most
-/// `aniso` taps: every tap set the GPU may take (a tap count near a `ceil`
-/// boundary both ways, and both axes where their lengths nearly tie, see
-/// [`ANISO_TOLERANCE`]).
-pub fn aniso_choices(size: u32, aniso: u32, f: &ChartFootprint) -> Vec<AnisoTaps> {
+/// Mirrors `aniso_taps` for an object of level-0 side `size`, `level_count`
+/// levels and at most `aniso` taps: every tap set the GPU may take (a tap
+/// count near a `ceil` boundary both ways, and both axes where their
+/// lengths nearly tie, see [`ANISO_TOLERANCE`]). Both axes are capped at
+/// what the coarsest level resolves (the longer at `aniso` of its texels,
+/// the shorter at one), so that a footprint extrapolated far off its
+/// triangle (a silhouette) keeps its taps near the pixel's chart point.
+pub fn aniso_choices(size: u32, level_count: u32, aniso: u32, f: &ChartFootprint) -> Vec<AnisoTaps> {
     let single = AnisoTaps { uv: f.uv, axis: Vec2::ZERO, count: 1 };
     if aniso <= 1 {
         return vec![single];
     }
     let (a, b) = (f.du_dx.length(), f.du_dy.length());
-    let major = a.max(b) * size as f32;
-    let per_tap = (major / aniso as f32).max(a.min(b) * size as f32).max(1.0);
+    let coarsest = (1u32 << (level_count - 1)) as f32;
+    let longer = a.max(b) * size as f32;
+    let major = longer.min(aniso as f32 * coarsest);
+    let minor = (a.min(b) * size as f32).min(coarsest);
+    let per_tap = (major / aniso as f32).max(minor).max(1.0);
     let ratio = major / per_tap;
     let mut counts: Vec<u32> = [ratio * (1.0 - ANISO_TOLERANCE), ratio, ratio * (1.0 + ANISO_TOLERANCE)]
         .iter()
@@ -369,6 +375,11 @@ pub fn aniso_choices(size: u32, aniso: u32, f: &ChartFootprint) -> Vec<AnisoTaps
     let mut axes = vec![if a >= b { f.du_dx } else { f.du_dy }];
     if (a - b).abs() <= ANISO_TOLERANCE * a.max(b) {
         axes = vec![f.du_dx, f.du_dy];
+    }
+    if longer > major {
+        for axis in &mut axes {
+            *axis *= major / longer;
+        }
     }
     let mut out: Vec<AnisoTaps> = Vec::new();
     for &count in &counts {
@@ -566,7 +577,7 @@ pub fn pixel_tiles_at(inputs: &MarkInputs, pixel: UVec2, at: Vec2, ids: [u32; 2]
     let bias = variable_rate_bias(inputs.params.variable_rate, p.tri.map(|v| normals[v]));
     let lod = level_of_detail(e, &inputs.params, &f, bias);
     let choices = level_choices(lod, e.level_count, inputs.params.level_blend, lod_tolerance(&inputs.params));
-    let aniso = aniso_choices(e.size, inputs.params.aniso, &f);
+    let aniso = aniso_choices(e.size, e.level_count, inputs.params.aniso, &f);
     // Tiles of different levels differ: a tile is marked in every outcome
     // when every choice reads its level and, for every tap set, some tap
     // marks it whichever way its bilinear coordinate in that level floors.
@@ -882,7 +893,7 @@ mod tests {
         };
         let at = |aniso| {
             let lod = level_of_detail(&entries[0], &MarkParams { aniso, ..params(0.0, 0.0) }, &f, 0.0);
-            let taps = aniso_choices(256, aniso, &f);
+            let taps = aniso_choices(256, 9, aniso, &f);
             assert_eq!(taps.len(), 1, "aniso {aniso}: {taps:?}");
             (lod, taps[0])
         };
@@ -900,15 +911,24 @@ mod tests {
         // A ratio on a `ceil` boundary counts both tap counts; axes of equal
         // length, both axes.
         let f2 = ChartFootprint { du_dx: Vec2::new(2.0 / 256.0, 0.0), du_dy: Vec2::new(0.0, 1.0 / 256.0), ..f };
-        let counts: Vec<u32> = aniso_choices(256, 8, &f2).iter().map(|t| t.count).collect();
+        let counts: Vec<u32> = aniso_choices(256, 9, 8, &f2).iter().map(|t| t.count).collect();
         assert_eq!(counts, [2, 3]);
         let round = ChartFootprint { du_dx: Vec2::new(2.0 / 256.0, 0.0), du_dy: Vec2::new(0.0, 2.0 / 256.0), ..f };
-        let choices = aniso_choices(256, 8, &round);
+        let choices = aniso_choices(256, 9, 8, &round);
         assert_eq!(choices.len(), 3, "{choices:?}");
         assert!(choices.iter().any(|t| t.count == 2 && t.axis == round.du_dy), "{choices:?}");
         // Magnified (under a texel a pixel along both axes): one tap.
         let small = ChartFootprint { du_dx: Vec2::new(0.5 / 256.0, 0.0), du_dy: Vec2::new(0.0, 0.1 / 256.0), ..f };
-        assert_eq!(aniso_choices(256, 16, &small).iter().map(|t| t.count).collect::<Vec<_>>(), [1]);
+        assert_eq!(aniso_choices(256, 9, 16, &small).iter().map(|t| t.count).collect::<Vec<_>>(), [1]);
+        // Wider than the coarsest level resolves (4 levels of 256: its texels
+        // are 8 wide): the longer axis capped at 8 of them (64 texels, from
+        // 200), the shorter at one (8, from 20), so 8 taps 8 texels apart.
+        let wide = ChartFootprint { du_dx: Vec2::new(200.0 / 256.0, 0.0), du_dy: Vec2::new(0.0, 20.0 / 256.0), ..f };
+        let taps = aniso_choices(256, 4, 8, &wide);
+        assert_eq!(taps.len(), 1, "{taps:?}");
+        assert!(taps[0].count == 8 && (taps[0].axis.x * 256.0 - 64.0).abs() < 1e-4, "{taps:?}");
+        // With enough levels the same footprint is not capped.
+        assert_eq!(aniso_choices(256, 9, 8, &wide)[0].axis, wide.du_dx);
     }
 
     #[test]

@@ -379,10 +379,16 @@ struct AnisoTaps {
     count: u32,
 }
 
-// The taps of footprint `f` of an object of level-0 side `size`: as many
-// as the longer axis spans texels of the level the pixel reads (level 0
-// at least), up to N; one, at `uv`, with N = 1.
-fn aniso_taps(size: u32, f: ChartFootprint) -> AnisoTaps {
+// The taps of footprint `f` of object entry `e`: as many as the longer axis
+// spans texels of the level the pixel reads (level 0 at least), up to N;
+// one, at `uv`, with N = 1. Both axes are first capped at what the object's
+// coarsest level resolves, the longer at N of its texels and the shorter at
+// one: a pixel whose footprint is wider than that (its neighbours' rays
+// meet the triangle's plane far off the triangle, at a silhouette or a
+// grazing edge) reads the coarsest level anyway, and its taps would reach
+// far past the surface it sees, at chart points the footprint's rounding
+// moves by texels. Below the cap the taps are as without it, bit for bit.
+fn aniso_taps(e: AtlasEntry, f: ChartFootprint) -> AnisoTaps {
     var out: AnisoTaps;
     out.uv = f.uv;
     out.count = 1u;
@@ -392,10 +398,17 @@ fn aniso_taps(size: u32, f: ChartFootprint) -> AnisoTaps {
     }
     let a = length(f.du_dx);
     let b = length(f.du_dy);
-    let major = max(a, b) * f32(size);
-    let per_tap = max(max(major / f32(params.aniso), min(a, b) * f32(size)), 1.0);
+    // Level-0 texels of one texel of the coarsest level.
+    let coarsest = f32(1u << (e.level_count - 1u));
+    let longer = max(a, b) * f32(e.size);
+    let major = min(longer, f32(params.aniso) * coarsest);
+    let minor = min(min(a, b) * f32(e.size), coarsest);
+    let per_tap = max(max(major / f32(params.aniso), minor), 1.0);
     out.count = clamp(u32(ceil(major / per_tap)), 1u, params.aniso);
     out.axis = select(f.du_dy, f.du_dx, a >= b);
+    if longer > major {
+        out.axis *= major / longer;
+    }
     return out;
 }
 

@@ -6,7 +6,7 @@
 #import shadespace::lighting::Surface
 #import shadespace::scene::vertex_uv0
 #import shadespace::scene_bindings::{view, objects, vertices, triangle_vertices}
-#import shadespace::surface::{surface_point, albedo_lod}
+#import shadespace::surface::surface_point_grad
 
 // What a pixel of the visibility buffer sees, rebuilt from the triangle.
 struct PixelSample {
@@ -98,12 +98,16 @@ fn interpolate2(b: vec3f, a: vec2f, c: vec2f, d: vec2f) -> vec2f {
     return a * b.x + c * b.y + d * b.z;
 }
 
-// The surface a pixel sees, its albedo filtered by its UV0 footprint.
+// The surface a pixel sees, its textures filtered by its UV0 footprint:
+// sampled with the footprint's gradients (not a level picked here), so that
+// the material sampler's anisotropy (`--aniso`) applies as in the raster
+// pipelines.
 fn pixel_surface(p: PixelSample) -> Surface {
     let t0 = vertex_uv0(vertices[p.tri.x]);
     let t1 = vertex_uv0(vertices[p.tri.y]);
     let t2 = vertex_uv0(vertices[p.tri.z]);
     let u = interpolate2(p.b, t0, t1, t2);
-    let lod = albedo_lod(interpolate2(p.b_dx, t0, t1, t2) - u, interpolate2(p.b_dy, t0, t1, t2) - u);
-    return surface_point(objects[p.object], p.tri, p.b, lod);
+    let ddx = interpolate2(p.b_dx, t0, t1, t2) - u;
+    let ddy = interpolate2(p.b_dy, t0, t1, t2) - u;
+    return surface_point_grad(objects[p.object], p.tri, p.b, ddx, ddy);
 }

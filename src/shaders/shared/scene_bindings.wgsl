@@ -10,6 +10,8 @@
 @group(0) @binding(3) var<storage, read> lights: array<Light>;
 @group(0) @binding(4) var<storage, read> light_indices: array<u32>;
 @group(0) @binding(5) var albedo: texture_2d_array<f32>;
+// The material textures' sampler for samples with a footprint (implicit
+// derivatives or `textureSampleGrad`): anisotropic under `--aniso`.
 @group(0) @binding(6) var albedo_sampler: sampler;
 // Mesh-local indices; add the object's base_vertex.
 @group(0) @binding(7) var<storage, read> indices: array<u32>;
@@ -19,6 +21,13 @@
 // normal maps (`normal_map.wgsl`), metallic-roughness maps (blue, green) and
 // occlusion maps (red); one layer when a material packs them into one image.
 @group(0) @binding(12) var linear_maps: texture_2d_array<f32>;
+// Bindings 13-17: material layers (`layers.wgsl`) and the environment
+// (`environment.wgsl`).
+// Trilinear and isotropic, whatever `--aniso`: for samples at an explicit
+// level (`textureSampleLevel`: object space's texels, layer masks), which
+// have no footprint to filter along (llvmpipe's compute shaders filter such
+// samples anisotropically all the same when the sampler allows it).
+@group(0) @binding(18) var texel_sampler: sampler;
 
 // The three (global) vertex indices of an object's triangle.
 fn triangle_vertices(o: Object, triangle: u32) -> vec3u {

@@ -10,7 +10,7 @@
 #import shadespace::layers::{layer_at, layer_mask, layer_surface}
 #endif
 #import shadespace::scene::{Object, vertex_uv0}
-#import shadespace::scene_bindings::{view, vertices, lights, light_indices, albedo, albedo_sampler, linear_maps}
+#import shadespace::scene_bindings::{view, vertices, lights, light_indices, albedo, albedo_sampler, linear_maps, texel_sampler}
 #import shadespace::normal_map::{mapped_normal, sample_layer}
 
 // The texels of an object's emissive, metallic-roughness and occlusion
@@ -38,13 +38,13 @@ fn material_texels_level(o: Object, uv: vec2f, lod: f32) -> MaterialTexels {
     var t = no_material_texels();
 #ifdef MATERIAL_TEXTURES
     if o.emissive_layer != NO_TEXTURE {
-        t.emissive = textureSampleLevel(albedo, albedo_sampler, uv, o.emissive_layer, lod).rgb;
+        t.emissive = textureSampleLevel(albedo, texel_sampler, uv, o.emissive_layer, lod).rgb;
     }
     if o.metal_rough_layer != NO_TEXTURE {
-        t.metal_rough = textureSampleLevel(linear_maps, albedo_sampler, uv, o.metal_rough_layer, lod).bg;
+        t.metal_rough = textureSampleLevel(linear_maps, texel_sampler, uv, o.metal_rough_layer, lod).bg;
     }
     if o.occlusion_layer != NO_TEXTURE {
-        t.occlusion = textureSampleLevel(linear_maps, albedo_sampler, uv, o.occlusion_layer, lod).r;
+        t.occlusion = textureSampleLevel(linear_maps, texel_sampler, uv, o.occlusion_layer, lod).r;
     }
 #endif
     return t;
@@ -108,29 +108,69 @@ fn object_surface(o: Object, t: MaterialTexels) -> Surface {
     return s;
 }
 
-// The surface at barycentrics `b` of the triangle with vertices `tri`
-// (world position and normal; albedo, normal map and material textures
-// sampled at mip `texture_lod`).
-fn surface_point(o: Object, tri: vec3u, b: vec3f, texture_lod: f32) -> Surface {
+// A point at barycentrics `b` of the triangle with vertices `tri`: world
+// position, normal, tangent (xyz world, w the bitangent sign) and UV0 (`uv`).
+struct TrianglePoint {
+    world: vec3f,
+    normal: vec3f,
+    tangent: vec4f,
+    uv: vec2f,
+}
+
+fn triangle_point(o: Object, tri: vec3u, b: vec3f) -> TrianglePoint {
     let v0 = vertices[tri.x];
     let v1 = vertices[tri.y];
     let v2 = vertices[tri.z];
     let local = v0.position * b.x + v1.position * b.y + v2.position * b.z;
     let n = v0.normal * b.x + v1.normal * b.y + v2.normal * b.z;
     let t = v0.tangent * b.x + v1.tangent * b.y + v2.tangent * b.z;
-    let uv0 = vertex_uv0(v0) * b.x + vertex_uv0(v1) * b.y + vertex_uv0(v2) * b.z;
-    let world = (o.model * vec4f(local, 1.0)).xyz;
-    let texel = textureSampleLevel(linear_maps, albedo_sampler, uv0, sample_layer(o.normal_layer), texture_lod).rgb;
-    let world_t = vec4f((o.model * vec4f(t.xyz, 0.0)).xyz, v0.tangent.w);
-    var s = object_surface(o, material_texels_level(o, uv0, texture_lod));
-    s.position = world;
-    s.normal = mapped_normal((o.normal_model * vec4f(n, 0.0)).xyz, world_t, texel, o.normal_layer);
-    s.albedo = textureSampleLevel(albedo, albedo_sampler, uv0, o.albedo_layer, texture_lod).rgb * o.base_color.rgb;
+    var p: TrianglePoint;
+    p.world = (o.model * vec4f(local, 1.0)).xyz;
+    p.normal = (o.normal_model * vec4f(n, 0.0)).xyz;
+    p.tangent = vec4f((o.model * vec4f(t.xyz, 0.0)).xyz, v0.tangent.w);
+    p.uv = vertex_uv0(v0) * b.x + vertex_uv0(v1) * b.y + vertex_uv0(v2) * b.z;
+    return p;
+}
+
+// The surface of object `o` at point `p`, given its normal-map, albedo and
+// material texels and its texture mip `uv_lod` (for layer masks).
+fn point_surface(o: Object, p: TrianglePoint, normal_texel: vec3f, albedo_texel: vec3f, t: MaterialTexels, uv_lod: f32) -> Surface {
+    var s = object_surface(o, t);
+    s.position = p.world;
+    s.normal = mapped_normal(p.normal, p.tangent, normal_texel, o.normal_layer);
+    s.albedo = albedo_texel * o.base_color.rgb;
 #ifdef LAYERS
-    s.uv = uv0;
-    s.uv_lod = texture_lod;
+    s.uv = p.uv;
+    s.uv_lod = uv_lod;
 #endif
     return s;
+}
+
+// The surface at barycentrics `b` of the triangle with vertices `tri`
+// (world position and normal; albedo, normal map and material textures
+// sampled at mip `texture_lod` with the isotropic `texel_sampler`: object
+// space's texels, whatever `--aniso`).
+fn surface_point(o: Object, tri: vec3u, b: vec3f, texture_lod: f32) -> Surface {
+    let p = triangle_point(o, tri, b);
+    let normal_texel = textureSampleLevel(linear_maps, texel_sampler, p.uv, sample_layer(o.normal_layer), texture_lod).rgb;
+    let albedo_texel = textureSampleLevel(albedo, texel_sampler, p.uv, o.albedo_layer, texture_lod).rgb;
+    return point_surface(o, p, normal_texel, albedo_texel, material_texels_level(o, p.uv, texture_lod), texture_lod);
+}
+
+// As `surface_point` for a pixel (or sample) whose UV0 changes by
+// `pixel_ddx`, `pixel_ddy` one pixel right and down: every texture is
+// sampled with those gradients, scaled by the view's texture_lod_bias as
+// `material_texels_grad` does, so the sampler's anisotropy (`--aniso`)
+// filters the footprint as it does a fragment's. Layer masks keep one
+// level (`albedo_lod`), as every pipeline's do.
+fn surface_point_grad(o: Object, tri: vec3u, b: vec3f, pixel_ddx: vec2f, pixel_ddy: vec2f) -> Surface {
+    let p = triangle_point(o, tri, b);
+    let ddx = pixel_ddx * exp2(view.texture_lod_bias);
+    let ddy = pixel_ddy * exp2(view.texture_lod_bias);
+    let normal_texel = textureSampleGrad(linear_maps, albedo_sampler, p.uv, sample_layer(o.normal_layer), ddx, ddy).rgb;
+    let albedo_texel = textureSampleGrad(albedo, albedo_sampler, p.uv, o.albedo_layer, ddx, ddy).rgb;
+    let t = material_texels_grad(o, p.uv, pixel_ddx, pixel_ddy);
+    return point_surface(o, p, normal_texel, albedo_texel, t, albedo_lod(pixel_ddx, pixel_ddy));
 }
 
 // Emission plus every light the object's list holds, seen from the camera;

@@ -385,7 +385,7 @@ pub fn gather_pixel_at<'a>(
     };
     let blend = inputs.params.level_blend;
     let mut outcomes = Vec::new();
-    for taps in aniso_choices(e.size, inputs.params.aniso, &f) {
+    for taps in aniso_choices(e.size, e.level_count, inputs.params.aniso, &f) {
         let tolerance = lod_tolerance(&inputs.params);
         for pair in level_choices(pixel_lod(inputs, &p), e.level_count, blend, tolerance) {
             let fine = if pair.t < 1.0 { level_outcomes(pair.lo, &taps) } else { vec![Vec::new()] };

@@ -407,7 +407,7 @@ fn gather_atlas(p: PixelSample, e: AtlasEntry) -> vec4f {
             return display(vec3f(f32(age) / f32(max(params.reuse, 1u))));
         }
         default: {
-            return gather_levels(OwnSurface(p.object, p.triangle), levels, aniso_taps(e.size, f));
+            return gather_levels(OwnSurface(p.object, p.triangle), levels, aniso_taps(e, f));
         }
     }
 }

@@ -453,7 +453,7 @@ fn mark_surface(p: PixelSample) -> u32 {
     let finest = select(levels.lo, levels.hi, levels.t >= 1.0);
     let kind = select(PIXEL_SHADED, PIXEL_UNDER_SHADED, f32(finest) > footprint_level(e, f));
     // Every tap the gather reads (`--os-aniso`: up to N along the longer axis).
-    let taps = aniso_taps(e.size, f);
+    let taps = aniso_taps(e, f);
     for (var i = 0u; i < taps.count; i++) {
         let uv = aniso_tap(taps, i);
         // The fine level, then the coarse one, through one call.
