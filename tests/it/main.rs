@@ -30,7 +30,6 @@ mod forward_multipass;
 mod fuzz_regressions;
 mod golden;
 mod hwcull;
-mod idle_paging;
 mod layered_materials;
 mod layers;
 mod light_grid;

@@ -3,9 +3,7 @@
 
 use super::ObjectSpace;
 use super::atlas::BLOCK_PAGES;
-use super::resources::{
-    ALLOCATE_ARGS, ATLAS_FORMAT, BACKED_ARGS, CHUNK_MARK, OFFSETS_ARGS, RANK_ARGS, RELEASE_ARGS, TRIANGLE_MAP_FORMAT,
-};
+use super::resources::{ATLAS_FORMAT, TRIANGLE_MAP_FORMAT};
 use crate::color::reinhard_srgb8;
 use crate::gpu::{GpuContext, GpuError, readback};
 use crate::render::RenderError;
@@ -43,33 +41,6 @@ pub struct MarkState {
     pub counters: [u32; super::TileCounter::SLOTS],
     /// Per physical page: the virtual page it backs, if any.
     pub page_owner: Vec<Option<u32>>,
-}
-
-/// Workgroups the last frame's paging chain dispatched indirectly, from its
-/// argument buffers ([`ObjectSpace::read_paging_dispatches`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct PagingDispatches {
-    /// `age_pages` and `list_candidates` (each).
-    pub rank: u32,
-    /// `page_offsets`.
-    pub offsets: u32,
-    /// `release_chunks` (over the chunks below the chunk mark as it was).
-    pub release: u32,
-    /// The chunk mark after the frame: no page-table chunk at or past it
-    /// was ever taken.
-    pub chunk_mark: u32,
-    /// `allocate`, `claim_blocks` and `bind_pages` (each).
-    pub allocate: u32,
-    /// The passes over the pages backed this frame (triangle maps, and
-    /// marking them with the split chain).
-    pub backed: u32,
-}
-
-impl PagingDispatches {
-    /// Every workgroup of them.
-    pub fn total(&self) -> u32 {
-        2 * self.rank + self.offsets + self.release + 3 * self.allocate + self.backed
-    }
 }
 
 /// Whether a pixel's samples see one surface.
@@ -310,22 +281,6 @@ impl ObjectSpace {
     /// through [`VisibilityBuffer::read_samples`]).
     pub fn visibility_buffer(&self) -> &VisibilityBuffer {
         &self.res.visibility
-    }
-
-    /// The workgroups of the paging chain's indirect dispatches in the last
-    /// frame that paged (their argument buffers, read back now).
-    pub fn read_paging_dispatches(&self, ctx: &GpuContext) -> Result<PagingDispatches, GpuError> {
-        let (own, shared) = (Self::words(ctx, &self.res.paging_dispatch)?, Self::words(ctx, &self.res.dispatch)?);
-        // Workgroups of the dispatch whose arguments start at byte `at`.
-        let groups = |words: &[u32], at: u64| words[at as usize / 4..][..3].iter().product();
-        Ok(PagingDispatches {
-            rank: groups(&own, RANK_ARGS),
-            offsets: groups(&own, OFFSETS_ARGS),
-            release: groups(&own, RELEASE_ARGS),
-            chunk_mark: own[CHUNK_MARK as usize / 4],
-            allocate: groups(&shared, ALLOCATE_ARGS),
-            backed: groups(&shared, BACKED_ARGS),
-        })
     }
 
     /// The marking state after the last frame, for tests that check tile

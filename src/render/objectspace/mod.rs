@@ -68,7 +68,7 @@ use atlas_view::{AtlasPages, AtlasPagesError, AtlasViewPass, draw_atlas_pages};
 use gather::{GatherPass, gather};
 use mark::{MarkPass, mark_backed_pages, mark_tiles};
 use paging::resize::{ResizePass, compact_pages, copy_pages};
-use paging::{PagingPass, back_pages, release_chunks_next, release_slots};
+use paging::{PagingPass, back_pages, release_slots};
 use residency::Residency;
 use resources::Resources;
 use shade::{ShadePass, shade_tiles};
@@ -798,12 +798,9 @@ pub struct ObjectSpace {
     /// page and queued no tile: until something changes, every frame would
     /// do the same, so paging, triangle maps and shading are not recorded.
     settled: bool,
-    /// `table_chunks` of the last frame whose paging freed and counted the
-    /// chunks (reported for the frames that skip it).
+    /// `table_chunks` of the last frame that ran paging (reported for the
+    /// frames that skip it).
     table_chunks: f64,
-    /// Pages were unbound outside paging (slots given back, a resize) since
-    /// the last frame that paged: its chunk release runs whatever the requests.
-    release_pending: bool,
     budget: Budget,
     /// The atlas at the whole budget; `res.pool` is what is resident now.
     budget_pool: PagePool,
@@ -834,8 +831,6 @@ struct InFlight {
     stamp: u32,
     /// It skipped paging, triangle maps and shading (settled).
     quiet: bool,
-    /// Its paging freed and counted the chunks even with no page requested.
-    released_chunks: bool,
     /// Objects with a page-directory slot, and the page numbers in slots.
     slots: u32,
     slot_pages: u64,
@@ -1018,7 +1013,6 @@ impl ObjectSpace {
             quiet_since: 0,
             settled: false,
             table_chunks: 0.0,
-            release_pending: false,
             budget: Budget::default(),
             residency: Residency::new(pool.layer_page_count(), pool.layers),
             budget_pool: pool,
@@ -1204,23 +1198,13 @@ impl Pipeline for ObjectSpace {
             self.settled = false;
         }
         let quiet = self.settled;
-        self.release_pending |= resize.is_some() || !self.released.is_empty();
-        if self.release_pending {
-            release_chunks_next(frame.queue, &self.res);
-        }
-        let released_chunks = self.release_pending && !quiet;
-        if !quiet {
-            self.release_pending = false;
-        }
         let (pages, stamp) = (self.res.pool.pages, self.frames);
         let slotted_objects = self.layout.objects.iter().flatten().filter(|o| o.slot.is_some());
         let (slots, slot_pages) =
             (slotted_objects.clone().count() as u32, slotted_objects.map(|o| o.span as u64).sum());
         let unslotted = self.slots.unplaced();
-        self.in_flight.insert(
-            frame.number,
-            InFlight { bias: added, pages, stamp, quiet, released_chunks, slots, slot_pages, unslotted },
-        );
+        self.in_flight
+            .insert(frame.number, InFlight { bias: added, pages, stamp, quiet, slots, slot_pages, unslotted });
         self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, self.view_since, &self.config);
         if !self.released.is_empty() {
             release_slots(frame, &self.paging, &self.res, &std::mem::take(&mut self.released));
@@ -1367,9 +1351,7 @@ impl Pipeline for ObjectSpace {
                 {
                     self.settled = true;
                 }
-                // Paging counts the chunks where it frees them: with a
-                // request, or when asked to.
-                if !quiet && (requested > 0.0 || rendered.is_some_and(|r| r.released_chunks)) {
+                if !quiet {
                     self.table_chunks = count(TileCounter::TableChunks);
                 }
                 // Demand: the pages this frame needed, against the share of
@@ -1392,7 +1374,6 @@ impl Pipeline for ObjectSpace {
                     ("overshading", visible * tile_texels / pixels),
                     ("shaded_texels_per_pixel", shaded * tile_texels / pixels),
                     ("pages_in_use", in_use),
-                    ("pages_requested", requested),
                     ("pages_backed", backed),
                     ("pages_failed", failed),
                     ("page_texels", in_use * page_texels),

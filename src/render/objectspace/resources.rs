@@ -97,13 +97,6 @@ pub struct Resources {
     /// `dispatch` as storage, for the passes that write it (group 2).
     pub dispatch_layout: wgpu::BindGroupLayout,
     pub dispatch_group: wgpu::BindGroup,
-    /// The paging passes' own indirect arguments (`paging_args` in
-    /// `paging.wgsl`), written on the GPU from the frame's page requests:
-    /// ranking, offsets, chunk release ([`RANK_ARGS`] ...), then a flag and
-    /// the chunk mark (the page table's chunks ever taken lie below it).
-    pub paging_dispatch: wgpu::Buffer,
-    /// `paging_dispatch` as storage (group 3 of `paging_args`).
-    pub paging_dispatch_group: wgpu::BindGroup,
     /// The scene's chart islands per triangle (bound for the gather's filter).
     triangle_charts: wgpu::Buffer,
     pub layout: wgpu::BindGroupLayout,
@@ -229,16 +222,6 @@ fn directory_buffers(device: &wgpu::Device, layout: &AtlasLayout) -> (wgpu::Buff
 pub const SHADE_ARGS: u64 = 0;
 pub const ALLOCATE_ARGS: u64 = 16;
 pub const BACKED_ARGS: u64 = 32;
-/// Indirect dispatch offsets in [`Resources::paging_dispatch`] (bytes):
-/// `age_pages` and `list_candidates`, `page_offsets`, `release_chunks`.
-pub const RANK_ARGS: u64 = 0;
-pub const OFFSETS_ARGS: u64 = 16;
-pub const RELEASE_ARGS: u64 = 32;
-/// ... and the word that has the next paging free empty chunks whatever its
-/// requests ([`super::paging::release_chunks_next`]).
-pub const RELEASE_FLAG: u64 = 48;
-/// ... and the chunk mark: the page table's chunks ever taken lie below it.
-pub const CHUNK_MARK: u64 = 52;
 
 impl Resources {
     pub fn new(
@@ -280,10 +263,6 @@ impl Resources {
             bind_group_layout(device, "object-space dispatch", &[Binding::Storage { read_only: false }]);
         let dispatch_group =
             bind_group(device, "object-space dispatch", &dispatch_layout, &[dispatch.as_entire_binding()]);
-        let paging_dispatch =
-            storage("paging dispatch", 64, wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST);
-        let paging_dispatch_group =
-            bind_group(device, "paging dispatch", &dispatch_layout, &[paging_dispatch.as_entire_binding()]);
 
         let rw = Binding::Storage { read_only: false };
         let uint = wgpu::TextureSampleType::Uint;
@@ -347,8 +326,6 @@ impl Resources {
             dispatch,
             dispatch_layout,
             dispatch_group,
-            paging_dispatch,
-            paging_dispatch_group,
             layout,
             virtual_pages: virtual_pages as u32,
             request_tile_base,

@@ -2,10 +2,7 @@
 //! tiles need that have no physical page get one, on the GPU, least
 //! recently used first (free pages, then by age bucket), with no CPU round
 //! trip, and the two-level page table follows (a chunk of table words for
-//! each block of pages with backed pages, freed with its last page). Every
-//! pass of it is dispatched indirectly, with arguments the GPU writes from
-//! the frame's requests: a frame that requested no page records them all
-//! and runs none of their workgroups. The pages backed this frame are then built (`trimap`) and their
+//! each block of pages with backed pages, freed with its last page). The pages backed this frame are then built (`trimap`) and their
 //! requested tiles marked (`mark::mark_backed`). When the atlas is resized,
 //! [`resize`] copies its pages, and before it shrinks moves the pages beyond
 //! its new size below it.
@@ -15,7 +12,7 @@ pub mod resize;
 use wgpu::util::DeviceExt;
 
 use super::PagingChain;
-use super::resources::{ALLOCATE_ARGS, OFFSETS_ARGS, RANK_ARGS, RELEASE_ARGS, RELEASE_FLAG, Resources};
+use super::resources::{ALLOCATE_ARGS, Resources};
 use crate::render::frame::Frame;
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
@@ -34,7 +31,8 @@ pub struct PagingPass {
     age_pages: wgpu::ComputePipeline,
     page_offsets: wgpu::ComputePipeline,
     list_candidates: wgpu::ComputePipeline,
-    paging_args: wgpu::ComputePipeline,
+    age_pages_if_requested: wgpu::ComputePipeline,
+    list_candidates_if_requested: wgpu::ComputePipeline,
     allocate: wgpu::ComputePipeline,
     release_chunks: wgpu::ComputePipeline,
     claim_blocks: wgpu::ComputePipeline,
@@ -56,8 +54,6 @@ impl PagingPass {
     ) -> Result<Self, ShaderError> {
         let plain = [&scene.layout, &res.layout];
         let with_dispatch = [&scene.layout, &res.layout, &res.dispatch_layout];
-        // Group 3: the paging passes' own dispatches (a buffer of one binding, as group 2).
-        let with_args = [&scene.layout, &res.layout, &res.dispatch_layout, &res.dispatch_layout];
         let release_layout = bind_group_layout(device, "released slots", &[Binding::Storage { read_only: true }]);
         let with_ranges = [&scene.layout, &res.layout, &release_layout];
         let offsets_defs: &[&str] = if chain == PagingChain::Fused { &[FUSED] } else { &[] };
@@ -68,10 +64,17 @@ impl PagingPass {
             age_pages: compute_pipeline(device, shaders, SHADER, "age_pages", &plain)?,
             page_offsets: compute_pipeline_with(device, shaders, SHADER, offsets_defs, "page_offsets", &with_dispatch)?,
             list_candidates: compute_pipeline(device, shaders, SHADER, "list_candidates", &plain)?,
-            paging_args: compute_pipeline_with(device, shaders, SHADER, offsets_defs, "paging_args", &with_args)?,
+            age_pages_if_requested: compute_pipeline(device, shaders, SHADER, "age_pages_if_requested", &plain)?,
+            list_candidates_if_requested: compute_pipeline(
+                device,
+                shaders,
+                SHADER,
+                "list_candidates_if_requested",
+                &plain,
+            )?,
             allocate: compute_pipeline(device, shaders, SHADER, "allocate", &plain)?,
             release_chunks: compute_pipeline(device, shaders, SHADER, "release_chunks", &plain)?,
-            claim_blocks: compute_pipeline(device, shaders, SHADER, "claim_blocks", &with_args)?,
+            claim_blocks: compute_pipeline(device, shaders, SHADER, "claim_blocks", &plain)?,
             bind_pages: compute_pipeline(device, shaders, SHADER, "bind_pages", &plain)?,
             backed_args: compute_pipeline(device, shaders, SHADER, "backed_args", &with_dispatch)?,
         })
@@ -81,28 +84,12 @@ impl PagingPass {
 /// Reads: the page requests, page use and owners. Writes: the page
 /// directory and table chunks, page owners and use, the backed-page list,
 /// the counters, the dispatches of allocation and of the backed pages' passes
-/// (with [`PagingChain::Fused`], bounds, and the shade dispatch's too), and
-/// its own ([`Resources::paging_dispatch`]). Every dispatch after the first
-/// (one invocation, `paging_args`) is indirect: with no page requested none
-/// runs a workgroup, but `release_chunks` when [`release_chunks_next`]
-/// asked for it.
+/// (with [`PagingChain::Fused`], bounds, and the shade dispatch's too).
 pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass("paging");
     res.bind(&mut cp, scene);
-    cp.set_bind_group(2, &res.dispatch_group, &[]);
-    cp.set_bind_group(3, &res.paging_dispatch_group, &[]);
-    cp.set_pipeline(&pass.paging_args);
-    cp.dispatch_workgroups(1, 1, 1);
-    // Compute usage scopes are per dispatch: the arguments just written are
-    // read as INDIRECT by the next dispatches of this pass (wgpu puts the
-    // barrier between them), none of which binds them as storage.
-    cp.set_pipeline(&pass.age_pages);
-    cp.dispatch_workgroups_indirect(&res.paging_dispatch, RANK_ARGS);
-    cp.set_pipeline(&pass.page_offsets);
-    cp.dispatch_workgroups_indirect(&res.paging_dispatch, OFFSETS_ARGS);
-    cp.set_pipeline(&pass.list_candidates);
-    cp.dispatch_workgroups_indirect(&res.paging_dispatch, RANK_ARGS);
+    rank_candidates(&mut cp, pass, res, Ranking::IfRequested);
     drop(cp);
     // A pass of its own: it reads the dispatch buffer as INDIRECT.
     let mut cp = frame.compute_pass("allocate");
@@ -110,12 +97,8 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     cp.set_pipeline(&pass.allocate);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     cp.set_pipeline(&pass.release_chunks);
-    cp.dispatch_workgroups_indirect(&res.paging_dispatch, RELEASE_ARGS);
+    cp.dispatch_workgroups(res.chunk_count().div_ceil(64), 1, 1);
     cp.set_pipeline(&pass.claim_blocks);
-    // Its chunk mark in group 3; group 2 (which it does not read) holds the
-    // same buffer, not `dispatch`, which this dispatch reads as INDIRECT.
-    cp.set_bind_group(2, &res.paging_dispatch_group, &[]);
-    cp.set_bind_group(3, &res.paging_dispatch_group, &[]);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     cp.set_pipeline(&pass.bind_pages);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
@@ -149,26 +132,31 @@ pub fn release_slots(frame: &mut Frame, pass: &PagingPass, res: &Resources, rang
     cp.dispatch_workgroups(res.pool.pages.div_ceil(64), 1, 1);
 }
 
-/// Has the next frame that pages free the page-table chunks left with no
-/// page even if it requests none (its `release_chunks` otherwise runs only
-/// with requests, whose evictions are what else empties a chunk): call it
-/// when pages were unbound outside paging (slots given back, a resize).
-pub fn release_chunks_next(queue: &wgpu::Queue, res: &Resources) {
-    queue.write_buffer(&res.paging_dispatch, RELEASE_FLAG, bytemuck::bytes_of(&1u32));
+/// When [`rank_candidates`] ranks the pages.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Ranking {
+    /// Always (a resize's moves need candidates).
+    Always,
+    /// Only when this frame requested a page (paging: a frame that needs no
+    /// new page ranks none, and allocates none).
+    IfRequested,
 }
 
 /// Lists the physical pages below `params.physical_pages` not used this
 /// frame as `candidates`, free first, then least recently used (counts in
 /// the counters' age buckets and `COUNT_CANDIDATES`), on a compute pass with
-/// `res` bound as group 1, whatever the requests (a resize's moves need
-/// candidates). Rebinds group 2.
-pub(super) fn rank_candidates(cp: &mut wgpu::ComputePass, pass: &PagingPass, res: &Resources) {
+/// `res` bound as group 1. Rebinds group 2.
+pub(super) fn rank_candidates(cp: &mut wgpu::ComputePass, pass: &PagingPass, res: &Resources, ranking: Ranking) {
     let pages = res.pool.pages.div_ceil(64);
+    let (age, list) = match ranking {
+        Ranking::Always => (&pass.age_pages, &pass.list_candidates),
+        Ranking::IfRequested => (&pass.age_pages_if_requested, &pass.list_candidates_if_requested),
+    };
     cp.set_bind_group(2, &res.dispatch_group, &[]);
-    cp.set_pipeline(&pass.age_pages);
+    cp.set_pipeline(age);
     cp.dispatch_workgroups(pages, 1, 1);
     cp.set_pipeline(&pass.page_offsets);
     cp.dispatch_workgroups(1, 1, 1);
-    cp.set_pipeline(&pass.list_candidates);
+    cp.set_pipeline(list);
     cp.dispatch_workgroups(pages, 1, 1);
 }

@@ -11,10 +11,7 @@
 // requested block that has none, and `bind_pages` writes the pages into
 // their chunks and lists them as backed. Requests beyond the candidates (or
 // the free chunks) fail this frame (their pixels are shaded forward in the
-// gather) and the budget raises the mip bias. `paging_args` first writes
-// the dispatches of the ranking, the offsets and `release_chunks` from the
-// requests (and `allocate`'s, which follow them): a frame that requested no
-// page dispatches no workgroup of any of them.
+// gather) and the budget raises the mip bias.
 #import shadespace::contract::{COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
     COUNT_FREE_CHUNKS, COUNT_CHUNKS_TAKEN, COUNT_TABLE_CHUNKS, AGE_BUCKET_BASE, AGE_BUCKETS}
 #import shadespace::objectspace::{params, atlas_entries, counters, page_table, page_used, page_owner, request_list,
@@ -41,8 +38,7 @@ fn list(page: u32) {
     }
 }
 
-// Ranking (for paging, dispatched through `paging_args`: none in a frame
-// that requested no page; for a resize, whose moves need candidates, always).
+// Ranking for a resize (`resize.wgsl` moves pages onto the candidates).
 @compute @workgroup_size(64)
 fn age_pages(@builtin(global_invocation_id) id: vec3u) {
     age(id.x);
@@ -53,13 +49,36 @@ fn list_candidates(@builtin(global_invocation_id) id: vec3u) {
     list(id.x);
 }
 
+// Ranking for paging: nothing to rank in a frame that requested no page
+// (the allocation then dispatches no workgroup).
+@compute @workgroup_size(64)
+fn age_pages_if_requested(@builtin(global_invocation_id) id: vec3u) {
+    if requests() > 0u {
+        age(id.x);
+    }
+}
+
+@compute @workgroup_size(64)
+fn list_candidates_if_requested(@builtin(global_invocation_id) id: vec3u) {
+    if requests() > 0u {
+        list(id.x);
+    }
+}
+
 // This frame's listed requests.
 fn requests() -> u32 {
     return min(atomicLoad(&counters[COUNT_PAGES_REQUESTED]), params.request_capacity);
 }
 
-// The dispatches of the passes after the ranking, `offset` candidates found.
-fn write_paging_dispatches(offset: u32) {
+@compute @workgroup_size(1)
+fn page_offsets() {
+    var offset = 0u;
+    for (var b = 0u; b < AGE_BUCKETS; b++) {
+        let n = atomicLoad(&counters[AGE_BUCKET_BASE + b]);
+        atomicStore(&counters[AGE_BUCKET_BASE + b], offset);
+        offset += n;
+    }
+    atomicStore(&counters[COUNT_CANDIDATES], offset);
     write_dispatch(ALLOCATE_ARGS, (requests() + 63u) / 64u);
 #ifdef FUSED_PAGING
     // The fused chain records no pass after paging to count what it did:
@@ -74,66 +93,6 @@ fn write_paging_dispatches(offset: u32) {
 #endif
 }
 
-@compute @workgroup_size(1)
-fn page_offsets() {
-    var offset = 0u;
-    for (var b = 0u; b < AGE_BUCKETS; b++) {
-        let n = atomicLoad(&counters[AGE_BUCKET_BASE + b]);
-        atomicStore(&counters[AGE_BUCKET_BASE + b], offset);
-        offset += n;
-    }
-    atomicStore(&counters[COUNT_CANDIDATES], offset);
-    write_paging_dispatches(offset);
-}
-
-// The indirect arguments of the passes whose work follows the atlas's pages
-// or the table's chunks rather than the requests (`paging::back_pages`
-// dispatches them from this buffer): three dispatches, then a flag the CPU
-// sets when slots were given back or the atlas resized (pages unbound with
-// no request, whose chunks this frame's `release_chunks` frees), then the
-// chunk mark: no chunk at or past it was ever taken, so `release_chunks`
-// looks at the chunks below it alone (they hold every block's chunk), and
-// `claim_blocks` takes chunks past it once the free ones below are gone.
-const RANK_ARGS: u32 = 0u;
-const OFFSETS_ARGS: u32 = 4u;
-const RELEASE_ARGS: u32 = 8u;
-const RELEASE_FLAG: u32 = 12u;
-const CHUNK_MARK: u32 = 13u;
-
-@group(3) @binding(0) var<storage, read_write> paging_dispatch: array<atomic<u32>, 16>;
-
-fn write_paging_args(at: u32, groups: u32) {
-    atomicStore(&paging_dispatch[at], groups);
-    atomicStore(&paging_dispatch[at + 1u], 1u);
-    atomicStore(&paging_dispatch[at + 2u], 1u);
-}
-
-// Raises the mark to whole workgroups of `release_chunks` (the chunks its
-// workgroups reach are exactly those below the mark, so none past it is
-// listed free while `claim_blocks` may take it past the mark); returns it.
-fn round_chunk_mark() -> u32 {
-    let mark = min((atomicLoad(&paging_dispatch[CHUNK_MARK]) + 63u) / 64u * 64u, params.table_chunks);
-    atomicStore(&paging_dispatch[CHUNK_MARK], mark);
-    return mark;
-}
-
-// One invocation, after marking. With no request, no ranking and no
-// offsets (the dispatches after them are written as the offsets write them
-// with no candidate; the counters stay cleared), and no chunk to free
-// unless the flag is set.
-@compute @workgroup_size(1)
-fn paging_args() {
-    let requested = requests() > 0u;
-    // In x alone, as when they were dispatched directly.
-    write_paging_args(RANK_ARGS, select(0u, (params.physical_pages + 63u) / 64u, requested));
-    write_paging_args(OFFSETS_ARGS, select(0u, 1u, requested));
-    let release = requested || atomicLoad(&paging_dispatch[RELEASE_FLAG]) != 0u;
-    write_paging_args(RELEASE_ARGS, select(0u, (round_chunk_mark() + 63u) / 64u, release));
-    atomicStore(&paging_dispatch[RELEASE_FLAG], 0u);
-    if !requested {
-        write_paging_dispatches(0u);
-    }
-}
 
 // Request `i` of this frame's list, when there is one.
 fn request_index(wg: vec3u, groups: vec3u, lid: u32) -> u32 {
@@ -214,8 +173,7 @@ fn release_chunks(@builtin(global_invocation_id) id: vec3u, @builtin(local_invoc
 const CLAIMING: u32 = 0xffffffffu;
 
 // Per allocated request: the first request of a block with no chunk takes
-// a free one, listed or past the mark (the others of the block find it
-// taken).
+// a free one (the others of the block find it taken).
 @compute @workgroup_size(64)
 fn claim_blocks(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
                 @builtin(local_invocation_index) lid: u32) {
@@ -232,13 +190,8 @@ fn claim_blocks(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) group
         let r = atomicCompareExchangeWeak(&page_directory[block], 0u, CLAIMING);
         if r.exchanged {
             let n = atomicAdd(&counters[COUNT_CHUNKS_TAKEN], 1u);
-            var c = params.table_chunks;
             if n < atomicLoad(&counters[COUNT_FREE_CHUNKS]) {
-                c = free_chunks[n];
-            } else if atomicLoad(&paging_dispatch[CHUNK_MARK]) < params.table_chunks {
-                c = atomicAdd(&paging_dispatch[CHUNK_MARK], 1u);
-            }
-            if c < params.table_chunks {
+                let c = free_chunks[n];
                 table_chunks[c].block = block + 1u;
                 atomicStore(&page_directory[block], c + 1u);
                 atomicAdd(&counters[COUNT_TABLE_CHUNKS], 1u);
