@@ -11,7 +11,7 @@ use shadespace::metrics::temporal::path_quality_by;
 use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::objectspace::debug::{Coverage, IslandTaps, ShadeSource};
 use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
-use shadespace::scene::{self, LightSpec, lights, path};
+use shadespace::scene::{LightSpec, lights, path};
 
 const SCENE: &str = "atrium";
 const SIZE: (u32, u32) = (96, 64);
@@ -25,7 +25,7 @@ const SAMPLES: u32 = 4;
 #[test]
 fn pixel_classes_cover_every_pixel_and_their_error_adds_up() {
     let ctx = common::gpu();
-    let scene = scene::load(SCENE).unwrap();
+    let scene = common::load(SCENE);
     let aspect = SIZE.0 as f32 / SIZE.1 as f32;
     let cameras = path::cameras_for_scene(SCENE, &scene, aspect).unwrap().select(path::CameraChoice::Path).unwrap();
     let spec: LightSpec = "small:8".parse().unwrap();

@@ -17,7 +17,7 @@ const LIGHTS: &str = "small:16+big:2";
 /// The tiny city, its camera at frame `frame` of the street path or the
 /// fly-over, and its lights.
 fn view(flyover: bool, frame: u32) -> (Scene, Camera, Vec<Light>) {
-    let scene = scene::load("city:2").unwrap();
+    let scene = common::load("city:2");
     let cameras = path::cameras_for_scene("city:2", &scene, 1.0).unwrap();
     let choice = if flyover { path::CameraChoice::Flyover } else { path::CameraChoice::Path };
     let camera = cameras.select(choice).unwrap().camera_at(frame);

@@ -12,7 +12,7 @@ use glam::Vec3;
 use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::{Culling, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
-use shadespace::scene::{self, BackFaces, Camera, Scene, Texture, path};
+use shadespace::scene::{BackFaces, Camera, Scene, Texture, path};
 
 const SPONZA: &str = "../shared/scenes/sponza-thesis";
 /// Least share of covered pixels whose ids must agree.
@@ -121,7 +121,7 @@ fn path_camera(spec: &str, scene: &Scene, t: u32) -> Camera {
 fn ids_agree_with_raster_on_the_procedural_scenes() {
     let ctx = common::gpu();
     for name in ["atrium", "voxels"] {
-        let scene = scene::load(name).unwrap();
+        let scene = common::load(name);
         let views = [0, 40].map(|frame| (format!("{name} frame {frame}"), path_camera(name, &scene, frame)));
         compare_views(&ctx, &scene, &views, (256, 144));
     }
@@ -137,7 +137,7 @@ fn ids_agree_with_raster_on_the_procedural_scenes() {
 fn ids_agree_with_raster_with_alpha_masks() {
     let ctx = common::gpu();
     for name in ["atrium", "voxels"] {
-        let mut scene = scene::load(name).unwrap();
+        let mut scene = common::load(name);
         let alpha = |x: u32| if (x / 16).is_multiple_of(2) { 255 } else { 0 };
         let rgba8 = (0..64 * 64).flat_map(|i| [200, 200, 200, alpha(i % 64)]).collect();
         scene.textures.push(Texture { name: "stripes".into(), width: 64, height: 64, rgba8 });
@@ -157,7 +157,7 @@ fn ids_agree_with_raster_on_sponza() {
         return;
     }
     let ctx = common::gpu();
-    let scene = scene::load(SPONZA).unwrap();
+    let scene = common::load(SPONZA);
     let views = [0, 100].map(|frame| (format!("sponza frame {frame}"), path_camera(SPONZA, &scene, frame)));
     compare_views(&ctx, &scene, &views, (320, 180));
 }
@@ -181,7 +181,7 @@ fn masked_sponza_ids_differ_only_between_triangles_of_one_object() {
         return;
     }
     let ctx = common::gpu();
-    let mut scene = scene::load(SPONZA).unwrap();
+    let mut scene = common::load(SPONZA);
     // Disks of radius 6 in cells of 16 texels, about 44 % opaque.
     let inside = |x: u32, y: u32| {
         let (cx, cy) = ((x / 16 * 16 + 8) as f32, (y / 16 * 16 + 8) as f32);
@@ -222,7 +222,7 @@ fn masked_sponza_ids_differ_only_between_triangles_of_one_object() {
 #[test]
 fn ids_agree_inside_objects_and_across_the_near_plane() {
     let ctx = common::gpu();
-    let voxels = scene::load("voxels").unwrap();
+    let voxels = common::load("voxels");
     let base = path_camera("voxels", &voxels, 0);
     let mut views = Vec::new();
     for object in [0, voxels.objects.len() / 2] {
@@ -310,11 +310,11 @@ fn counts_add_up_on_a_floor_filling_the_view() {
 #[test]
 fn ids_agree_with_raster_with_back_faces_culled() {
     let ctx = common::gpu();
-    let mut voxels = scene::load("voxels").unwrap();
+    let mut voxels = common::load("voxels");
     voxels.set_back_faces(BackFaces::Cull);
     compare(&ctx, "voxels culled, frame 40", &voxels, &path_camera("voxels", &voxels, 40), (256, 144));
     if Path::new(SPONZA).is_dir() {
-        let mut sponza = scene::load(SPONZA).unwrap();
+        let mut sponza = common::load(SPONZA);
         sponza.set_back_faces(BackFaces::Cull);
         compare(&ctx, "sponza culled, frame 100", &sponza, &path_camera(SPONZA, &sponza, 100), (320, 180));
     }
@@ -380,9 +380,9 @@ fn ids_and_counts(
 #[test]
 fn depth_test_before_the_atomic_keeps_the_ids_with_fewer_atomics() {
     let ctx = common::gpu();
-    let mut views = vec![("city:2 street, frame 4", scene::load("city:2").unwrap(), "city:2", 4, Culling::Frustum)];
+    let mut views = vec![("city:2 street, frame 4", common::load("city:2"), "city:2", 4, Culling::Frustum)];
     if Path::new(SPONZA).is_dir() {
-        views.push(("sponza, frame 100", scene::load(SPONZA).unwrap(), SPONZA, 100, Culling::None));
+        views.push(("sponza, frame 100", common::load(SPONZA), SPONZA, 100, Culling::None));
     } else {
         eprintln!("SKIPPED Sponza: {SPONZA} is absent");
     }

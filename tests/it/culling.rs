@@ -13,7 +13,7 @@ use shadespace::render::objectspace::ObjectSpace;
 use shadespace::render::{
     Counters, Culling, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
 };
-use shadespace::scene::{self, BackFaces, Camera, Scene, path};
+use shadespace::scene::{BackFaces, Camera, Scene, path};
 
 const SPONZA: &str = "../shared/scenes/sponza-thesis";
 
@@ -109,7 +109,7 @@ fn path_cameras(spec: &str, scene: &Scene, choice: path::CameraChoice, frames: &
 #[test]
 fn culling_keeps_the_ids_and_culls_most_clusters_down_the_city_street() {
     let ctx = common::gpu();
-    let mut scene = scene::load("city:2").unwrap();
+    let mut scene = common::load("city:2");
     // Both faces drawn: the frustum and occlusion alone (the cones below).
     scene.set_back_faces(BackFaces::Draw);
     let street = path_cameras("city:2", &scene, path::CameraChoice::Path, &[0, 2, 4, 60]);
@@ -131,7 +131,7 @@ fn culling_keeps_the_ids_and_culls_most_clusters_down_the_city_street() {
 #[test]
 fn cone_culling_keeps_the_ids_of_back_face_culling() {
     let ctx = common::gpu();
-    let mut scene = scene::load("city:2").unwrap();
+    let mut scene = common::load("city:2");
     scene.set_back_faces(BackFaces::Cull);
     let cameras = path_cameras("city:2", &scene, path::CameraChoice::Path, &[0, 20]);
     let views = views(&ctx, &scene, &cameras, (192, 108));
@@ -146,7 +146,7 @@ fn culling_keeps_the_ids_along_sponzas_path() {
         return;
     }
     let ctx = common::gpu();
-    let scene = scene::load(SPONZA).unwrap();
+    let scene = common::load(SPONZA);
     let cameras = path_cameras(SPONZA, &scene, path::CameraChoice::Path, &[0, 10, 120]);
     same_ids("sponza", &views(&ctx, &scene, &cameras, (192, 108)));
 }

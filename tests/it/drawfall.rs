@@ -43,7 +43,7 @@ fn frame(ctx: &GpuContext, r: &mut Renderer, camera: &Camera, lights: &[Light], 
 #[test]
 fn culling_draws_the_plain_way_where_it_keeps_most_clusters() {
     let ctx = common::gpu();
-    let mut scene = scene::load("city:2").unwrap();
+    let mut scene = common::load("city:2");
     // Both faces drawn, so that the fly-over keeps most clusters (its
     // shells' back faces would be culled by their cones).
     scene.set_back_faces(scene::BackFaces::Draw);
@@ -116,7 +116,7 @@ fn shadow_maps_culled_by_cluster_are_the_same() {
         eprintln!("SKIPPED: the adapter lacks {INDEXED_FEATURES:?}: the shadow maps are not culled");
         return;
     }
-    let scene = scene::load("city:2").unwrap();
+    let scene = common::load("city:2");
     let camera = cameras(&scene, path::CameraChoice::Flyover, &[0])[0];
     let centre = scene.bounds().center();
     let point = Light {

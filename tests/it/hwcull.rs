@@ -126,7 +126,7 @@ fn same_frames(name: &str, modes: &[Culling], views: &[View]) {
 #[test]
 fn raster_culling_keeps_the_image_and_culls_most_clusters_down_the_city_street() {
     let ctx = common::gpu();
-    let scene = scene::load("city:2").unwrap();
+    let scene = common::load("city:2");
     let street = path_views("city:2", &scene, &[0, 2, 4, 60]);
     let forward = PipelineConfig::from_name("forward").unwrap();
     let v = views(&ctx, &scene, (forward.clone(), ClusterDraws::Indexed), &street, &Culling::ALL, image(&ctx));
@@ -177,7 +177,7 @@ fn raster_culling_keeps_the_image_along_sponzas_path() {
         return;
     }
     let ctx = common::gpu();
-    let scene = scene::load(SPONZA).unwrap();
+    let scene = common::load(SPONZA);
     let cameras = path_views(SPONZA, &scene, &[0, 120]);
     let modes = [Culling::None, Culling::Occlusion];
     for name in ["forward", "deferred"] {

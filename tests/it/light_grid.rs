@@ -236,7 +236,7 @@ fn check(ctx: &GpuContext, grid: Grid, renderer: &mut Renderer, camera: &Camera,
 }
 
 fn atrium() -> (Scene, Camera) {
-    let scene = shadespace::scene::load("atrium").unwrap();
+    let scene = common::load("atrium");
     let cameras = path::cameras_for_scene("atrium", &scene, WIDTH as f32 / HEIGHT as f32).unwrap();
     let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
     (scene, camera)

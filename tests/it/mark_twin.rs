@@ -16,7 +16,7 @@ use shadespace::render::objectspace::{GatherFilter, Marking, MsaaGather, ObjectS
 use shadespace::render::passes::visibility::compute;
 use shadespace::render::scene_gpu::gpu_view;
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod, check_samples};
-use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
+use shadespace::scene::{Camera, Light, LightSpec, Scene, lights, path};
 
 /// A sequence of frames to render and check.
 struct Run<'a> {
@@ -299,7 +299,7 @@ fn moving_floor_marks_new_tiles() {
 #[test]
 fn atrium_along_its_camera_path() {
     let ctx = common::gpu();
-    let scene = scene::load("atrium").unwrap();
+    let scene = common::load("atrium");
     let bounds = scene.bounds();
     let path =
         path::cameras_for_scene("atrium", &scene, 128.0 / 72.0).unwrap().select(path::CameraChoice::Path).unwrap();
@@ -361,7 +361,7 @@ fn atrium_at_four_samples_marks_each_sample_groups_point() {
         eprintln!("skipped: {} has no 4 samples per pixel or no 64-bit atomics", ctx.info.name);
         return;
     }
-    let scene = scene::load("atrium").unwrap();
+    let scene = common::load("atrium");
     let (width, height) = (128, 72);
     let (cameras, lights) = common::path_views("atrium", &scene, width as f32 / height as f32, 3, "small:4");
     let (scene, texture_sizes) = common::charted(&scene);
@@ -503,7 +503,7 @@ fn workgroup_marking_matches_per_pixel_marking_with_fewer_atomics() {
     let ctx = common::gpu();
     let (width, height) = (192, 108);
     let aspect = width as f32 / height as f32;
-    let scene = scene::load("atrium").unwrap();
+    let scene = common::load("atrium");
     let (cameras, lights) = common::path_views("atrium", &scene, aspect, 3, "small:4");
     let (charted, texture_sizes) = common::charted(&scene);
     let case = MarkingCase { name: "atrium", scene: &charted, texture_sizes, width, height, cameras, lights };
@@ -515,7 +515,7 @@ fn workgroup_marking_matches_per_pixel_marking_with_fewer_atomics() {
         eprintln!("SKIPPED (Sponza part): {SPONZA} is absent");
         return;
     }
-    let scene = scene::load(SPONZA).unwrap();
+    let scene = common::load(SPONZA);
     let (cameras, lights) = common::path_views(SPONZA, &scene, aspect, 3, "small:4");
     let (charted, texture_sizes) = common::charted_for(&scene, &cameras[0], width, height);
     let case = MarkingCase { name: "sponza", scene: &charted, texture_sizes, width, height, cameras, lights };
@@ -535,7 +535,7 @@ fn subgroup_marking_matches_workgroup_marking_with_fewer_claims() {
     }
     let (width, height) = (192, 108);
     let aspect = width as f32 / height as f32;
-    let scene = scene::load("atrium").unwrap();
+    let scene = common::load("atrium");
     let (cameras, lights) = common::path_views("atrium", &scene, aspect, 3, "small:4");
     let (charted, texture_sizes) = common::charted(&scene);
     let case = MarkingCase { name: "atrium", scene: &charted, texture_sizes, width, height, cameras, lights };

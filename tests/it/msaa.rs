@@ -299,7 +299,7 @@ fn compute_samples_hold_the_hardware_ids() {
         eprintln!("SKIPPED Sponza: {SPONZA} is absent");
         return;
     }
-    let sponza = shadespace::scene::load(SPONZA).unwrap();
+    let sponza = common::load(SPONZA);
     let camera = path::cameras_for_scene(SPONZA, &sponza, 16.0 / 9.0)
         .unwrap()
         .select(path::CameraChoice::Path)

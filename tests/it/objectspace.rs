@@ -340,7 +340,7 @@ fn a_stereo_pair_shares_one_atlas() {
 fn the_page_table_follows_pages_evicted_along_a_path() {
     use shadespace::scene::{self, lights, path};
     let ctx = common::gpu();
-    let scene = scene::load("atrium").unwrap();
+    let scene = common::load("atrium");
     let (width, height) = (192, 108);
     let path = path::cameras_for_scene("atrium", &scene, width as f32 / height as f32)
         .unwrap()

@@ -13,7 +13,7 @@ use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::debug::BackedPages;
 use shadespace::render::objectspace::{GatherInput, ObjectSpace, PagingChain, TileCounter};
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
-use shadespace::scene::{self, Camera, Light, Scene};
+use shadespace::scene::{Camera, Light, Scene};
 
 /// The passes the fused chain does not record.
 const SPLIT_ONLY: [&str; 3] = ["backed args", "mark backed", "queue"];
@@ -137,7 +137,7 @@ fn compare(ctx: &GpuContext, case: &Case, variants: &[Variant]) {
 fn fused_paging_and_triangle_map_lanes_change_nothing() {
     let ctx = common::gpu();
     let aspect = WIDTH as f32 / HEIGHT as f32;
-    let scene = scene::load("atrium").unwrap();
+    let scene = common::load("atrium");
     let (cameras, lights) = common::path_views("atrium", &scene, aspect, 3, "small:4");
     let (charted, texture_sizes) = common::charted(&scene);
     // Each shader variant once: the fused chain's marking in the one-lane
@@ -154,7 +154,7 @@ fn fused_paging_and_triangle_map_lanes_change_nothing() {
         eprintln!("SKIPPED (Sponza part): {SPONZA} is absent");
         return;
     }
-    let scene = scene::load(SPONZA).unwrap();
+    let scene = common::load(SPONZA);
     let (cameras, lights) = common::path_views(SPONZA, &scene, aspect, 2, "small:4");
     let (charted, texture_sizes) = common::charted_for(&scene, &cameras[0], WIDTH, HEIGHT);
     // Sponza's charts and pages, with the fused chain and 8 lanes together.

@@ -32,7 +32,7 @@ pub(crate) fn city() -> &'static City {
 
 fn make_city() -> City {
     use shadespace::charts::{self, ChartCache, ChartSettings};
-    let scene = scene::load("city:2").unwrap();
+    let scene = common::load("city:2");
     let cameras = path::cameras_for_scene("city:2", &scene, 1.0).unwrap();
     // Down the cross street (its second leg): 44 of the 248 instances in view.
     let street = cameras.select(path::CameraChoice::Path).unwrap().camera_at(500);

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use shadespace::metrics;
 use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
-use shadespace::scene::{self, LightSpec, lights, path};
+use shadespace::scene::{LightSpec, lights, path};
 
 const SPONZA: &str = "../shared/scenes/sponza-thesis";
 
@@ -17,7 +17,7 @@ fn sponza_forward_and_objectspace_agree() {
         return;
     }
     let ctx = common::gpu();
-    let scene = scene::load(SPONZA).unwrap();
+    let scene = common::load(SPONZA);
     let bounds = scene.bounds();
     let camera = path::cameras_for_scene(SPONZA, &scene, 480.0 / 270.0)
         .unwrap()

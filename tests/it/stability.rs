@@ -61,7 +61,7 @@ fn flicker(
 #[test]
 fn level_blending_and_the_bspline_filter_cut_the_flicker_object_space_adds() {
     let ctx = common::gpu();
-    let mut scene = scene::load(SCENE).unwrap();
+    let mut scene = common::load(SCENE);
     scene::detail::add_detailed_textures(&mut scene);
     let aspect = WIDTH as f32 / HEIGHT as f32;
     let cameras = path::cameras_for_scene(SCENE, &scene, aspect).unwrap().select(path::CameraChoice::Path).unwrap();

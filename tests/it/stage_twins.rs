@@ -27,7 +27,7 @@ use shadespace::render::objectspace::cpu::{self, LevelTexels, MarkInputs, Sample
 use shadespace::render::objectspace::{GatherFilter, MsaaGather, ObjectSpace};
 use shadespace::render::scene_gpu::{gpu_view, order_lights};
 use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
-use shadespace::scene::{self, Camera, Light, LightSpec, Scene, lights, path};
+use shadespace::scene::{Camera, Light, LightSpec, Scene, lights, path};
 
 /// The least share of its bound the GPU's colour `got` uses against some
 /// combination of the groups' outcomes (each group's weight in the
@@ -417,7 +417,7 @@ fn atrium(
     (samples, msaa_gather): (u32, MsaaGather),
 ) -> Report {
     let ctx = common::gpu();
-    let mut scene = scene::load("atrium").unwrap();
+    let mut scene = common::load("atrium");
     for m in &mut scene.materials {
         m.base_color_texture = None;
         m.normal_texture = None;

@@ -3,9 +3,10 @@
 
 pub mod gltf;
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::LazyLock;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{LazyLock, Mutex};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use shadespace::gpu::{GpuContext, GpuOptions};
@@ -157,14 +158,29 @@ pub struct PathFrame {
 }
 
 /// Loads `name` (a procedural scene or a path) as a [`PathFrame`] lit by `spec`.
+/// `scene::load(name)` (a generated scene's name or a path), loaded once per
+/// test process and cloned: the tests draw the same few scenes dozens of
+/// times, and parsing Sponza or generating the atrium or the city each time
+/// cost the suite about half a minute of CPU.
+pub fn load(name: &str) -> Scene {
+    static LOADED: LazyLock<Mutex<HashMap<String, Scene>>> = LazyLock::new(Default::default);
+    if let Some(scene) = LOADED.lock().unwrap_or_else(|e| e.into_inner()).get(name) {
+        return scene.clone();
+    }
+    // Loaded outside the lock: two tests loading one scene at once load it twice.
+    let scene = shadespace::scene::load(name).unwrap_or_else(|e| panic!("cannot load {name}: {e}"));
+    LOADED.lock().unwrap_or_else(|e| e.into_inner()).entry(name.to_string()).or_insert_with(|| scene.clone());
+    scene
+}
+
 pub fn path_frame(name: &str, spec: &str, width: u32, height: u32) -> PathFrame {
     path_frame_seeded(name, spec, width, height, 7)
 }
 
 /// As [`path_frame`], with the lights placed from `seed`.
 pub fn path_frame_seeded(name: &str, spec: &str, width: u32, height: u32, seed: u64) -> PathFrame {
-    use shadespace::scene::{self, LightSpec, lights, path};
-    let scene = scene::load(name).unwrap();
+    use shadespace::scene::{LightSpec, lights, path};
+    let scene = load(name);
     let bounds = scene.bounds();
     let cameras = path::cameras_for_scene(name, &scene, width as f32 / height as f32).unwrap();
     let camera = cameras.select(path::CameraChoice::Path).unwrap().camera_at(0);
