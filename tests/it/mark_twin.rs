@@ -45,6 +45,39 @@ struct Run<'a> {
     lights_change_at: Option<usize>,
 }
 
+impl<'a> Run<'a> {
+    /// A run of `scene` at `size` through `cameras`: one sample per pixel,
+    /// reuse 1, one bilinear tap at one level, raster visibility, lights
+    /// unchanged; runs set what they vary over this.
+    fn new(
+        name: &'static str,
+        scene: &'a Scene,
+        texture_sizes: Vec<Option<u32>>,
+        (width, height): (u32, u32),
+        cameras: Vec<Camera>,
+        lights: Vec<Light>,
+    ) -> Self {
+        Self {
+            name,
+            scene,
+            texture_sizes,
+            width,
+            height,
+            reuse: 1,
+            variable_rate: 0.0,
+            level_blend: 0.0,
+            gather_filter: GatherFilter::Bilinear,
+            visibility: VisibilityMethod::Raster,
+            aniso: 1,
+            samples: 1,
+            msaa_gather: MsaaGather::Pixel,
+            cameras,
+            lights,
+            lights_change_at: None,
+        }
+    }
+}
+
 /// What the GPU marked in one frame (all checked against the twin).
 #[derive(Debug)]
 struct FrameReport {
@@ -231,22 +264,9 @@ fn static_floor_reuses_shades_until_they_age_and_the_camera_moves_or_the_lights_
     let reports = check(
         &ctx,
         Run {
-            name: "static floor, reuse 3",
-            scene: &scene,
-            texture_sizes: vec![Some(2048)],
-            width: 128,
-            height: 96,
             reuse: 3,
-            variable_rate: 0.0,
-            level_blend: 0.0,
-            gather_filter: GatherFilter::Bilinear,
-            visibility: VisibilityMethod::Raster,
-            aniso: 1,
-            samples: 1,
-            msaa_gather: MsaaGather::Pixel,
-            cameras,
-            lights,
             lights_change_at: Some(6),
+            ..Run::new("static floor, reuse 3", &scene, vec![Some(2048)], (128, 96), cameras, lights)
         },
     );
     // The twin agreed frame by frame; make sure each rule was exercised: first
@@ -271,23 +291,19 @@ fn moving_floor_marks_new_tiles() {
         let reports = check(
             &ctx,
             Run {
-                name,
-                scene: &scene,
-                texture_sizes: vec![Some(2048)],
-                width: 160,
-                height: 120,
                 reuse,
                 variable_rate,
-                level_blend: 0.0,
-                gather_filter: GatherFilter::Bilinear,
-                visibility: VisibilityMethod::Raster,
                 aniso,
-                samples: 1,
-                msaa_gather: MsaaGather::Pixel,
-                // Low over the floor and nearing it: finer levels come into view.
-                cameras: floor_cameras(Vec3::new(0.0, 2.5, 5.0), Vec3::new(0.3, -0.2, -0.5), 5),
-                lights: lights.clone(),
                 lights_change_at: Some(3),
+                // Low over the floor and nearing it: finer levels come into view.
+                ..Run::new(
+                    name,
+                    &scene,
+                    vec![Some(2048)],
+                    (160, 120),
+                    floor_cameras(Vec3::new(0.0, 2.5, 5.0), Vec3::new(0.3, -0.2, -0.5), 5),
+                    lights.clone(),
+                )
             },
         );
         // Tiles come into view, but most stay.
@@ -328,22 +344,14 @@ fn atrium_along_its_camera_path() {
         check(
             &ctx,
             Run {
-                name,
-                scene: &scene,
-                texture_sizes: texture_sizes.clone(),
-                width,
-                height,
                 reuse,
                 variable_rate,
                 level_blend,
                 gather_filter,
                 visibility,
                 aniso,
-                samples: 1,
-                msaa_gather: MsaaGather::Pixel,
-                cameras: cameras.clone(),
-                lights: lights.clone(),
                 lights_change_at: Some(2),
+                ..Run::new(name, &scene, texture_sizes.clone(), (width, height), cameras.clone(), lights.clone())
             },
         );
     }
@@ -372,22 +380,11 @@ fn atrium_at_four_samples_marks_each_sample_groups_point() {
         check(
             &ctx,
             Run {
-                name,
-                scene: &scene,
-                texture_sizes: texture_sizes.clone(),
-                width,
-                height,
                 reuse: 2,
-                variable_rate: 0.0,
-                level_blend: 0.0,
-                gather_filter: GatherFilter::Bilinear,
                 visibility: VisibilityMethod::Compute,
-                aniso: 1,
                 samples: 4,
                 msaa_gather,
-                cameras: cameras.clone(),
-                lights: lights.clone(),
-                lights_change_at: None,
+                ..Run::new(name, &scene, texture_sizes.clone(), (width, height), cameras.clone(), lights.clone())
             },
         );
     }
