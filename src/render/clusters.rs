@@ -398,6 +398,67 @@ mod tests {
         assert!(culled > 0, "no cluster culled");
     }
 
+    /// Clusters of mixed facing: a crumpled sheet of triangles with normals
+    /// scattered over every direction (so each cluster's cone is as wide as
+    /// its normal class allows), back-to-back twins (a leaf seen from both
+    /// sides) and slivers. From eyes all around and inside it, no culled
+    /// cluster holds a triangle that faces the eye, and a cluster holding a
+    /// sliver has no cone.
+    #[test]
+    fn cone_test_never_culls_a_front_face_of_a_mixed_cluster() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(27);
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for t in 0..2000u32 {
+            let centre =
+                Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            let mut corner = || centre + 0.1 * Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.05);
+            let [a, b, c] = if t % 50 == 0 {
+                // A sliver: its third corner on the first edge.
+                let (a, b) = (corner(), corner());
+                [a, b, a.lerp(b, 0.5)]
+            } else {
+                [corner(), corner(), corner()]
+            };
+            let first = positions.len() as u32;
+            positions.extend([a, b, c]);
+            indices.extend([first, first + 1, first + 2]);
+            if t % 7 == 0 {
+                // Its back-to-back twin, at the same place.
+                indices.extend([first, first + 2, first + 1]);
+            }
+        }
+        let mc = build(&positions, &indices);
+        let mut culled = 0;
+        for e in 0..64 {
+            let eye = if e == 0 {
+                Vec3::ZERO
+            } else {
+                Vec3::new(rng.random_range(-4.0..4.0), rng.random_range(-4.0..4.0), rng.random_range(-4.0..4.0))
+            };
+            for c in &mc.clusters {
+                let tris = &mc.triangles[c.first as usize..(c.first + c.count) as usize];
+                let corners = |t: u32| [0, 1, 2].map(|k| positions[indices[3 * t as usize + k] as usize]);
+                if tris.iter().any(|&t| {
+                    let [a, b, cc] = corners(t);
+                    (b - a).cross(cc - a).length() <= 1e-6 * (b - a).length_squared().max((cc - a).length_squared())
+                }) {
+                    assert_eq!(c.cone_cutoff, NO_CONE, "a cluster with a sliver has a cone");
+                }
+                if !c.backfacing(eye) {
+                    continue;
+                }
+                culled += 1;
+                for &t in tris {
+                    let [a, b, cc] = corners(t);
+                    assert!(triangle_backfacing(a, b, cc, eye), "mixed cluster culled with a front face toward {eye}");
+                }
+            }
+        }
+        assert!(culled > 0, "no cluster culled: the test would not see a wrong cull");
+    }
+
     /// The CPU twin of the frustum test keeps every cluster a vertex of
     /// which is inside the view volume and culls those behind the camera.
     #[test]
