@@ -16,15 +16,20 @@ const HEIGHT: u32 = 180;
 const LIGHTS: &str = "small:24+big:2";
 
 /// Per pixel: the (object + 1, chart) it sees, 0 for background.
-fn pixel_charts(scene: &Scene, ids: &[[u32; 2]]) -> Vec<(u32, u32)> {
-    let charts: Vec<Vec<u32>> = scene
+/// Each object's triangles' chart islands (found once per scene: every
+/// mip bias's pixels are looked up in them).
+fn object_islands(scene: &Scene) -> Vec<Vec<u32>> {
+    scene
         .objects
         .iter()
         .map(|o| {
             let mesh = &scene.meshes[o.mesh];
             triangle_islands(&mesh.indices, mesh.uv1.as_ref().expect("charted mesh"))
         })
-        .collect();
+        .collect()
+}
+
+fn pixel_charts(charts: &[Vec<u32>], ids: &[[u32; 2]]) -> Vec<(u32, u32)> {
     ids.iter()
         .map(
             |&[object, triangle]| {
@@ -65,11 +70,12 @@ fn seams(name: &str, mip_biases: &[f32]) -> Vec<(f64, f64, usize)> {
     };
     // The scene, its charts and forward's image once; object space at each bias.
     let (forward, _) = render(PipelineConfig::Forward(ForwardConfig::default()));
+    let islands = object_islands(&scene);
     let mut results = Vec::new();
     for &mip_bias in mip_biases {
         let objectspace = ObjectSpaceConfig { texture_sizes: texture_sizes.clone(), mip_bias, ..Default::default() };
         let (test, ids) = render(PipelineConfig::ObjectSpace(objectspace));
-        let charts = pixel_charts(&scene, &ids.unwrap());
+        let charts = pixel_charts(&islands, &ids.unwrap());
         let (w, h) = (WIDTH as i32, HEIGHT as i32);
         let at = |x: i32, y: i32| charts[(y * w + x) as usize];
         // A border pixel sees a surface and has a neighbour (8-connected) that
