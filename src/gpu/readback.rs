@@ -182,7 +182,10 @@ impl<T> ReadbackRing<T> {
         }
         let mut out = Vec::new();
         while let Some(f) = self.in_flight.front() {
-            let state = f.state.load(Ordering::Acquire);
+            let mut state = f.state.load(Ordering::Acquire);
+            if wait && state == MAPPING {
+                state = settled(device, &f.state);
+            }
             if state == RECORDED || state == MAPPING {
                 break;
             }
@@ -199,5 +202,21 @@ impl<T> ReadbackRing<T> {
             self.free.push(f.buffer);
         }
         out
+    }
+}
+
+/// The state of a mapping once its callback has run. Another thread polling
+/// the same device (tests share one; so may an embedding program) can be
+/// running the callback when this thread's wait returns: the callbacks are
+/// taken off the queue before they run. Gives up after ten seconds.
+fn settled(device: &wgpu::Device, state: &AtomicU8) -> u8 {
+    let start = std::time::Instant::now();
+    loop {
+        let s = state.load(Ordering::Acquire);
+        if s != MAPPING || start.elapsed() > std::time::Duration::from_secs(10) {
+            return s;
+        }
+        std::thread::yield_now();
+        let _ = device.poll(wgpu::PollType::Poll);
     }
 }
