@@ -30,6 +30,8 @@ pub use generate::{GeneratedChart, GeneratorSettings};
 pub use overlap::{OverlapReport, check_overlap, collapsed_area_fraction};
 pub use screen::{PACKING_SIZING, path_cameras, projected_densities, screen_sizings};
 
+use crate::hash::Fnv1a;
+use crate::memo::Memo;
 use crate::scene::{Mesh, Scene};
 
 /// Where the chart set in `uv1` of a [`ChartedMesh`] came from.
@@ -136,8 +138,28 @@ pub enum ChartError {
     },
 }
 
-/// Checks one UV set: the overlap report, and why it isn't unique if it isn't.
+/// Verdicts of [`judge`] remembered, at most this many: a few hundred
+/// bytes each.
+const VERDICTS: usize = 1 << 14;
+
+static JUDGED: Memo<(OverlapReport, Option<String>)> = Memo::new(VERDICTS, |_| 1);
+
+/// Checks one UV set: the overlap report, and why it isn't unique if it
+/// isn't. Remembered by content ([`crate::memo`]): every renderer built over
+/// a scene charts its meshes again, and checking a mesh's own UVs (drawing
+/// them at [`ChartSettings::check_resolution`]) was most of that.
 fn judge(mesh: &Mesh, uvs: &[glam::Vec2], settings: &ChartSettings) -> (OverlapReport, Option<String>) {
+    let mut h = Fnv1a::default();
+    h.write_pod(&[settings.check_resolution]);
+    h.write_pod(&[settings.tolerance]);
+    h.write_pod(uvs);
+    h.write_pod(&mesh.indices);
+    h.write_pod(&mesh.positions);
+    JUDGED.get(h.finish(), || judge_afresh(mesh, uvs, settings)).as_ref().clone()
+}
+
+/// [`judge`] as it is derived.
+fn judge_afresh(mesh: &Mesh, uvs: &[glam::Vec2], settings: &ChartSettings) -> (OverlapReport, Option<String>) {
     let report = check_overlap(uvs, &mesh.indices, settings.check_resolution);
     let reason = if report.out_of_range_vertices > 0 {
         Some(format!("{} vertices outside [0, 1]", report.out_of_range_vertices))

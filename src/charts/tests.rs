@@ -126,6 +126,26 @@ fn unique_uv1_is_used_as_is() {
     assert!((c.uv_coverage() - 0.64).abs() < 1e-5);
 }
 
+/// The verdicts `judge` remembers are keyed by everything it reads: the same
+/// triangles with other UVs, or checked at another resolution, are judged
+/// afresh, never given the verdict of what was judged before.
+#[test]
+fn remembered_verdicts_follow_the_uvs_and_the_settings() {
+    let m = quad(1.0);
+    let settings = ChartSettings::default();
+    assert_eq!(judge(&m, &m.uv0, &settings).1, None);
+    // Both triangles on one half of the square: they overlap.
+    let folded = vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0)];
+    let (report, reason) = judge(&m, &folded, &settings);
+    assert!(reason.is_some() && report.fraction > 0.5, "{report:?} {reason:?}");
+    assert_eq!(judge(&m, &m.uv0, &settings).1, None, "the first verdict again");
+    let coarse = ChartSettings { check_resolution: 64, ..settings };
+    assert_eq!(judge(&m, &m.uv0, &coarse).0.resolution, 64);
+    // Tolerating every overlap accepts the folded square.
+    let lenient = ChartSettings { tolerance: 1.0, ..settings };
+    assert_eq!(judge(&m, &folded, &lenient).1, None);
+}
+
 #[test]
 fn overlapping_uv1_falls_back_to_unique_uv0() {
     let mut m = cylinder(16, 4, false);
