@@ -2,10 +2,11 @@
 //! `LICENSES.md`): 40 files holding 30 distinct models (the Khronos box is
 //! in eight files, a cube from tinyobjloader's tests in three and the
 //! Cornell box in two; see [`MODELS`]). Every model renders with no option
-//! besides the image size, in forward through the command line and in
-//! object space through the library ([`shadespace::Stage`], in this process,
-//! so that the device's compiled pipelines serve every model;
-//! [`IN_PROCESS_CHECKED`] is drawn both ways, and the two images agree), to
+//! besides the image size, in forward and in object space, through the
+//! library as `shadespace render` sets it up ([`shadespace::Stage`], in this
+//! process, so that the device's compiled pipelines serve every model and no
+//! process starts per model; [`IN_PROCESS_CHECKED`] is drawn through the
+//! command line too, in both pipelines, and the images agree), to
 //! an image that shows the whole model framed and lit: its
 //! bounding rectangle covers 30-90 % of the frame without touching its edges
 //! (a long or flat model, which cannot cover 30 % of a 16:9 frame uncut,
@@ -167,23 +168,50 @@ const SPOT_MARGIN: f32 = 0.05;
 /// Most of the model's pixels that may be spot pixels.
 const MAX_SPOT_SHARE: f32 = 0.01;
 
-/// The model whose object-space image is drawn both ways, in this process
-/// and through the command line ([`MAX_IN_PROCESS_FLIP`]).
-const IN_PROCESS_CHECKED: &str = "knight.glb";
+/// The model whose images are drawn both ways, in this process and through
+/// the command line ([`MAX_IN_PROCESS_FLIP`]), whose warnings the command
+/// line prints too: textured, skinned and animated.
+const IN_PROCESS_CHECKED: &str = "fox.glb";
 /// Most mean FLIP between the two: the same frame drawn by the same code.
 const MAX_IN_PROCESS_FLIP: f32 = 0.01;
 
+/// A `std::io::Write` into a buffer the test reads afterwards.
+#[derive(Clone, Default)]
+struct Log(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+
+impl std::io::Write for Log {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        self.0.lock().unwrap().extend_from_slice(bytes);
+        Ok(bytes.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
 /// `pipeline`'s image of `file` as `shadespace render` draws it with no
-/// option besides the size, drawn through the library on `ctx`.
-fn render_in_process(ctx: &shadespace::GpuContext, file: &Path, pipeline: &str) -> RgbaImage {
+/// option besides the size, drawn through the library on `ctx`, and the
+/// warnings it logged on the way (as `RUST_LOG=warn` prints them).
+fn render_in_process(ctx: &shadespace::GpuContext, file: &Path, pipeline: &str) -> (RgbaImage, String) {
     use shadespace::{LightSpec, PipelineConfig, Stage};
-    let stage = Stage::load(file.to_str().unwrap(), WIDTH, HEIGHT).unwrap();
-    let lights = stage.lights(&LightSpec::Auto, 1).unwrap();
-    let mut renderer = stage.renderer(ctx, PipelineConfig::from_name(pipeline).unwrap()).unwrap();
-    renderer.render(ctx, &stage.camera(0), &lights, 0).unwrap();
-    let image = renderer.read_image(ctx).unwrap();
+    let log = Log::default();
+    let writer = log.clone();
+    let subscriber = tracing_subscriber::fmt()
+        .with_max_level(tracing::Level::WARN)
+        .with_ansi(false)
+        .with_writer(move || writer.clone())
+        .finish();
+    let image = tracing::subscriber::with_default(subscriber, || {
+        let stage = Stage::load(file.to_str().unwrap(), WIDTH, HEIGHT).unwrap();
+        let lights = stage.lights(&LightSpec::Auto, 1).unwrap();
+        let mut renderer = stage.renderer(ctx, PipelineConfig::from_name(pipeline).unwrap()).unwrap();
+        renderer.render(ctx, &stage.camera(0), &lights, 0).unwrap();
+        renderer.read_image(ctx).unwrap()
+    });
     ctx.check_errors().unwrap();
-    image
+    let warnings = String::from_utf8(log.0.lock().unwrap().clone()).unwrap();
+    (image, warnings)
 }
 
 fn render(file: &Path, pipeline: &str, out: &Path, extra: &[&str]) -> Output {
@@ -341,28 +369,23 @@ fn every_corpus_model_renders_framed_and_lit_in_forward_and_object_space() {
         for (p, pipeline) in PIPELINES.iter().enumerate() {
             let name = format!("{}-{pipeline}.png", m.file.replace(['/', ' '], "_"));
             let png = out.join(&name);
-            let image = if *pipeline == "forward" {
-                let run = render(&corpus().join(m.file), pipeline, &png, &[]);
+            let (image, warnings) = render_in_process(&ctx, &corpus().join(m.file), pipeline);
+            image.save(&png).unwrap();
+            for warning in m.warns {
+                assert!(warnings.contains(warning), "{}, {pipeline}: no warning '{warning}' in:\n{warnings}", m.file);
+            }
+            if m.file == IN_PROCESS_CHECKED {
+                let cli = out.join(format!("{name}-cli.png"));
+                let run = render(&corpus().join(m.file), pipeline, &cli, &[]);
                 let stderr = String::from_utf8_lossy(&run.stderr);
-                assert!(!stderr.contains("panicked"), "{}, {pipeline}: panicked:\n{stderr}", m.file);
-                assert!(run.status.success(), "{}, {pipeline}: exit {:?}:\n{stderr}", m.file, run.status.code());
+                assert!(run.status.success() && !stderr.contains("panicked"), "{}: {stderr}", m.file);
                 for warning in m.warns {
-                    assert!(stderr.contains(warning), "{}: no warning '{warning}' in:\n{stderr}", m.file);
+                    assert!(stderr.contains(warning), "{}: the command line printed no '{warning}':\n{stderr}", m.file);
                 }
-                image::open(&png).unwrap().to_rgba8()
-            } else {
-                let image = render_in_process(&ctx, &corpus().join(m.file), pipeline);
-                image.save(&png).unwrap();
-                if m.file == IN_PROCESS_CHECKED {
-                    let cli = out.join(format!("{name}-cli.png"));
-                    let run = render(&corpus().join(m.file), pipeline, &cli, &[]);
-                    assert!(run.status.success(), "{}: {}", m.file, String::from_utf8_lossy(&run.stderr));
-                    let flip = metrics::compare(&image::open(&cli).unwrap().to_rgba8(), &image).0.flip_mean;
-                    eprintln!("{}, {pipeline}: in this process against the command line: FLIP {flip:.4}", m.file);
-                    assert!(flip <= MAX_IN_PROCESS_FLIP, "{}: in-process image off the command line's: {flip}", m.file);
-                }
-                image
-            };
+                let flip = metrics::compare(&image::open(&cli).unwrap().to_rgba8(), &image).0.flip_mean;
+                eprintln!("{}, {pipeline}: in this process against the command line: FLIP {flip:.4}", m.file);
+                assert!(flip <= MAX_IN_PROCESS_FLIP, "{}: in-process image off the command line's: {flip}", m.file);
+            }
             let shot = measure(&image);
             let flip = forward.as_ref().map_or(0.0, |f| metrics::compare(f, &image).0.flip_mean);
             let spots = spots(&image, palette);
