@@ -58,6 +58,7 @@
 //! ```
 
 pub mod bench;
+pub mod cache_dir;
 pub mod charts;
 pub mod color;
 pub mod experiments;

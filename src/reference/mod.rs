@@ -328,14 +328,7 @@ impl ReferenceCache {
 /// Empty values count as unset and a relative `XDG_CACHE_HOME` is ignored,
 /// as for the charts.
 pub fn cache_dir_from(var: impl Fn(&str) -> Option<OsString>) -> Option<PathBuf> {
-    let set = |name: &str| var(name).filter(|v| !v.is_empty()).map(PathBuf::from);
-    if let Some(dir) = set("SHADESPACE_CACHE_DIR") {
-        return Some(dir.join("references"));
-    }
-    if let Some(xdg) = set("XDG_CACHE_HOME").filter(|p| p.is_absolute()) {
-        return Some(xdg.join("shadespace").join("references"));
-    }
-    set("HOME").map(|home| home.join(".cache").join("shadespace").join("references"))
+    crate::cache_dir::cache_root_from(var).map(|root| root.join("references"))
 }
 
 fn encode(r: &Reference) -> Vec<u8> {

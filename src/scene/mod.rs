@@ -18,6 +18,7 @@ pub mod gltf;
 pub mod lights;
 pub mod obj;
 pub mod path;
+mod tangent_cache;
 
 use std::path::Path;
 
@@ -92,7 +93,15 @@ impl Mesh {
             self.uv0 = vec![Vec2::ZERO; self.positions.len()];
         }
         if self.tangents.len() != self.positions.len() {
-            self.tangents = generate_tangents(&self.positions, &self.normals, &self.uv0, &self.indices);
+            let inputs = tangent_cache::TangentInputs {
+                positions: &self.positions,
+                normals: &self.normals,
+                uvs: &self.uv0,
+                indices: &self.indices,
+            };
+            self.tangents = tangent_cache::cached(&inputs, || {
+                generate_tangents(inputs.positions, inputs.normals, inputs.uvs, inputs.indices)
+            });
         }
     }
 

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 /// Top-level modules of `src/`, lowest layer first; modules of one layer
 /// may use each other.
 const LAYERS: &[&[&str]] = &[
-    &["color", "hash", "memo", "gpu", "metrics", "shaders"],
+    &["cache_dir", "color", "hash", "memo", "gpu", "metrics", "shaders"],
     &["scene", "materials"],
     &["charts"],
     &["render"],
