@@ -38,6 +38,22 @@ impl Fnv1a {
     }
 }
 
+/// Appends the FNV-1a checksum of `out` (the trailer of the cache files).
+pub fn seal(out: &mut Vec<u8>) {
+    let sum = fnv1a(out);
+    out.extend_from_slice(&sum.to_le_bytes());
+}
+
+/// The bytes [`seal`] was given, if `bytes` ends in their checksum.
+pub fn unseal(bytes: &[u8]) -> Result<&[u8], String> {
+    let Some(split) = bytes.len().checked_sub(8) else { return Err("shorter than its checksum".into()) };
+    let (body, tail) = bytes.split_at(split);
+    if fnv1a(body).to_le_bytes() != tail {
+        return Err("checksum mismatch (truncated or corrupt)".into());
+    }
+    Ok(body)
+}
+
 /// FNV-1a of a byte string.
 pub fn fnv1a(bytes: &[u8]) -> u64 {
     let mut h = Fnv1a::default();

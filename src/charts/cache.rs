@@ -173,9 +173,7 @@ fn encode(key: u64, chart: &GeneratedChart) -> Vec<u8> {
     for &i in &chart.indices {
         out.extend_from_slice(&i.to_le_bytes());
     }
-    let mut h = Fnv1a::default();
-    h.write(&out);
-    out.extend_from_slice(&h.finish().to_le_bytes());
+    crate::hash::seal(&mut out);
     out
 }
 
@@ -184,12 +182,7 @@ fn decode(bytes: &[u8], key: u64, mesh: &Mesh) -> Result<GeneratedChart, String>
     if bytes.len() < HEADER_LEN + 8 || &bytes[..8] != MAGIC {
         return Err("not a chart cache file".into());
     }
-    let (body, tail) = bytes.split_at(bytes.len() - 8);
-    let mut h = Fnv1a::default();
-    h.write(body);
-    if h.finish().to_le_bytes() != tail {
-        return Err("checksum mismatch (truncated or corrupt)".into());
-    }
+    let body = crate::hash::unseal(bytes)?;
     let u32_at = |at: usize| u32::from_le_bytes(body[at..at + 4].try_into().expect("4 bytes"));
     let version = u32_at(8);
     if version != FORMAT_VERSION {

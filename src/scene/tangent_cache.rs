@@ -98,9 +98,7 @@ fn encode(key: u64, tangents: &[Vec4]) -> Vec<u8> {
     for v in tangents.iter().flat_map(|t| t.to_array()) {
         out.extend_from_slice(&v.to_le_bytes());
     }
-    let mut h = Fnv1a::default();
-    h.write(&out);
-    out.extend_from_slice(&h.finish().to_le_bytes());
+    crate::hash::seal(&mut out);
     out
 }
 
@@ -108,18 +106,16 @@ fn decode(bytes: &[u8], key: u64, count: usize) -> Result<Vec<Vec4>, String> {
     if bytes.len() != HEADER_LEN + count * 16 + 8 || &bytes[..8] != MAGIC {
         return Err(format!("not a tangent file of {count} vertices"));
     }
-    let (body, tail) = bytes.split_at(bytes.len() - 8);
-    let mut h = Fnv1a::default();
-    h.write(body);
-    if h.finish().to_le_bytes() != tail {
-        return Err("checksum mismatch (truncated or corrupt)".into());
-    }
+    let body = crate::hash::unseal(bytes)?;
     let u32_at = |at: usize| u32::from_le_bytes(body[at..at + 4].try_into().expect("4 bytes"));
     if u32_at(8) != VERSION || u64::from_le_bytes(body[12..20].try_into().expect("8 bytes")) != key {
         return Err("another version or key".into());
     }
-    let floats = body[HEADER_LEN..].chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().expect("4 bytes")));
-    Ok(floats.collect::<Vec<_>>().chunks_exact(4).map(Vec4::from_slice).collect())
+    let float = |b: &[u8]| f32::from_le_bytes(b.try_into().expect("4 bytes"));
+    Ok(body[HEADER_LEN..]
+        .chunks_exact(16)
+        .map(|t| Vec4::from_array(std::array::from_fn(|k| float(&t[4 * k..][..4]))))
+        .collect())
 }
 
 #[cfg(test)]
