@@ -7,10 +7,9 @@
 //! SSIM), so that speed and quality stand side by side.
 
 use std::collections::BTreeMap;
-use std::sync::{Arc, mpsc};
+use std::sync::{Arc, Mutex, PoisonError, mpsc};
 
 use image::RgbaImage;
-use rayon::iter::{ParallelBridge, ParallelIterator};
 use serde::Serialize;
 
 use super::plot::{LinePlot, Series};
@@ -126,15 +125,25 @@ pub fn run(bench: &Bench, output: Output) -> Result<Findings, ExperimentError> {
     let grid = bench.grid;
     // Image comparisons (about a second each at 1920x1080 on the CPU) run on
     // rayon's threads while the GPU renders the next points, so that they do
-    // not add to the GPU machine's time.
+    // not add to the GPU machine's time. The worker waits for them on its own
+    // thread and hands each to rayon as it comes: waiting inside rayon (as
+    // `par_bridge` over the channel did) held every rayon thread of the
+    // process until the GPU sent the next image, so that any other parallel
+    // work of the process (a census, a FLIP map) stood still meanwhile.
     let (jobs, queue) = mpsc::channel::<Comparison>();
     let (measurements, quality) = std::thread::scope(|scope| {
         let worker = scope.spawn(move || {
-            let compare = |c: Comparison| {
-                let quality = c.quality();
-                (c.key, quality)
-            };
-            queue.into_iter().par_bridge().map(compare).collect::<BTreeMap<_, _>>()
+            let quality = Mutex::new(BTreeMap::new());
+            rayon::in_place_scope(|comparisons| {
+                for c in queue {
+                    let quality = &quality;
+                    comparisons.spawn(move |_| {
+                        let q = c.quality();
+                        quality.lock().unwrap_or_else(PoisonError::into_inner).insert(c.key, q);
+                    });
+                }
+            });
+            quality.into_inner().unwrap_or_else(PoisonError::into_inner)
         });
         let mut references: BTreeMap<(Scenario, u32), Arc<RgbaImage>> = BTreeMap::new();
         let mut measurements = Vec::new();

@@ -5,7 +5,6 @@ pub mod gltf;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{LazyLock, Mutex};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -19,20 +18,35 @@ use shadespace::scene::{Camera, Light, LightKind, Material, Mesh, Object, Scene,
 const DEVICES: usize = 2;
 
 /// The GPU context of a test: each test thread (libtest runs each test on
-/// its own) takes the next of [`DEVICES`] shared devices in turn and keeps
-/// it, so a test's resources all live on one device and a compute pipeline
-/// is compiled once per device (`gpu::pipelines`), not in every test.
-/// Panics when none can be opened (CI installs lavapipe first, so "no
-/// adapter" is a real failure, not a skip). Tests running at once on one
-/// device share its validation errors: one that calls `check_errors` may
-/// report another's, so the suite still fails.
+/// its own) takes the shared device that the fewest running tests hold, of
+/// [`DEVICES`], and keeps it until its thread ends, so a test's resources all
+/// live on one device and a compute pipeline is compiled once per device
+/// (`gpu::pipelines`), not in every test. Taking devices in turn instead
+/// left one device's queue thread with three long tests and the other idle
+/// at times: the cores then stood half idle. Panics when none can be opened
+/// (CI installs lavapipe first, so "no adapter" is a real failure, not a
+/// skip). Tests running at once on one device share its validation errors:
+/// one that calls `check_errors` may report another's, so the suite still
+/// fails.
 pub fn gpu() -> GpuContext {
     static SHARED: [LazyLock<GpuContext>; DEVICES] = [const { LazyLock::new(open) }; DEVICES];
-    static NEXT: AtomicUsize = AtomicUsize::new(0);
-    thread_local! {
-        static MINE: usize = NEXT.fetch_add(1, Ordering::Relaxed) % DEVICES;
+    static HOLDERS: Mutex<[usize; DEVICES]> = Mutex::new([0; DEVICES]);
+    /// A test thread's hold on one device, given up when the thread ends.
+    struct Hold(usize);
+    impl Drop for Hold {
+        fn drop(&mut self) {
+            HOLDERS.lock().unwrap_or_else(|e| e.into_inner())[self.0] -= 1;
+        }
     }
-    MINE.with(|&i| SHARED[i].clone())
+    thread_local! {
+        static MINE: Hold = {
+            let mut holders = HOLDERS.lock().unwrap_or_else(|e| e.into_inner());
+            let least = (0..DEVICES).min_by_key(|&i| holders[i]).unwrap_or(0);
+            holders[least] += 1;
+            Hold(least)
+        };
+    }
+    MINE.with(|hold| SHARED[hold.0].clone())
 }
 
 fn open() -> GpuContext {
