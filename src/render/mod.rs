@@ -371,6 +371,26 @@ pub struct Renderer {
     lights_hash: Option<u64>,
     /// Submissions of the frames the GPU may still be working on.
     in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
+    /// Counters of finished frames that [`Renderer::render`] collected
+    /// (so that object space's budget and residency follow them in every
+    /// frame loop, whether or not its caller reads them), kept for
+    /// [`Renderer::collect_counters`]: at most [`KEPT_COUNTERS`] frames.
+    arrived: std::collections::VecDeque<(u64, Counters)>,
+}
+
+/// Most frames of counters a renderer keeps for a caller that never reads
+/// them ([`Renderer::collect_counters`]): the oldest go first.
+pub const KEPT_COUNTERS: usize = 256;
+
+/// Adds `new` frames' counters to `into`, a frame's counters to its entry
+/// where it has one (the shadow maps' culling counts join the pipeline's).
+fn merge_counters(into: &mut std::collections::VecDeque<(u64, Counters)>, new: Vec<(u64, Counters)>) {
+    for (frame, counters) in new {
+        match into.iter_mut().find(|(f, _)| *f == frame) {
+            Some((_, c)) => c.extend(counters),
+            None => into.push_back((frame, counters)),
+        }
+    }
 }
 
 /// The values [`Renderer::texture_anisotropy`] takes (`--aniso`).
@@ -473,6 +493,7 @@ impl Renderer {
             cluster_culling_built: false,
             lights_hash: None,
             in_flight: Default::default(),
+            arrived: Default::default(),
         })
     }
 
@@ -507,6 +528,16 @@ impl Renderer {
             ctx.device
                 .poll(wait)
                 .map_err(|e| RenderError::Gpu(GpuError::Readback(format!("waiting for a frame: {e}"))))?;
+        }
+        // Counters of finished frames drive object space's budget and
+        // residency as they are collected: a frame loop that never asked
+        // for them (the quality experiment's did not) left the atlas at its
+        // first size and the mip bias at 0, so that a view needing more
+        // pages than the atlas holds had them shaded forward every frame.
+        let arrived = self.gather_counters(ctx, false);
+        merge_counters(&mut self.arrived, arrived);
+        while self.arrived.len() > KEPT_COUNTERS {
+            self.arrived.pop_front();
         }
         let start = Instant::now();
         if !(0.0..=1.0).contains(&self.bloom) {
@@ -659,15 +690,20 @@ impl Renderer {
     /// Pipeline counters of finished frames, with the shadow maps' culling
     /// counts ([`passes::shadows::cull::ShadowCull::collect_counts`]) in
     /// the frames that culled them; `wait` blocks until all are in.
+    /// Those [`Renderer::render`] collected on its own come first (the last
+    /// [`KEPT_COUNTERS`] frames of them).
     pub fn collect_counters(&mut self, ctx: &GpuContext, wait: bool) -> Vec<(u64, Counters)> {
-        let mut counters = self.pipeline.collect_counters(&ctx.device, wait);
-        for (frame, shadow) in self.shadows.collect_counts(&ctx.device, wait) {
-            match counters.iter_mut().find(|(f, _)| *f == frame) {
-                Some((_, c)) => c.extend(shadow),
-                None => counters.push((frame, shadow)),
-            }
-        }
-        counters
+        let arrived = self.gather_counters(ctx, wait);
+        let mut counters = std::mem::take(&mut self.arrived);
+        merge_counters(&mut counters, arrived);
+        counters.into()
+    }
+
+    /// The pipeline's and the shadow maps' counters that have arrived.
+    fn gather_counters(&mut self, ctx: &GpuContext, wait: bool) -> Vec<(u64, Counters)> {
+        let mut counters = std::collections::VecDeque::from(self.pipeline.collect_counters(&ctx.device, wait));
+        merge_counters(&mut counters, self.shadows.collect_counts(&ctx.device, wait));
+        counters.into()
     }
 
     /// The pipeline's settings, memory and setup, with what the renderer

@@ -193,6 +193,46 @@ fn an_atlas_ten_times_over_budget_biases_until_the_pages_fit() {
     assert!(err.flip_mean < 0.05, "coarser shading in a small atlas: {err:?}");
 }
 
+/// A frame loop that never reads the counters (a program embedding the
+/// renderer; the quality experiment's loop was one): the renderer feeds them
+/// to object space's budget itself, so a view asking for ten times the
+/// pages the atlas holds still settles to a bias at which every page fits,
+/// instead of shading the tiles that found none forward in every frame.
+#[test]
+fn the_budget_follows_the_frames_when_nobody_reads_the_counters() {
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let options = |mip_bias: f32, atlas_budget_texels: Option<u64>| RenderOptions {
+        width: 480,
+        height: 360,
+        pipeline: PipelineConfig::ObjectSpace(ObjectSpaceConfig {
+            texture_sizes: vec![Some(4096)],
+            mip_bias,
+            atlas_budget_texels,
+            ..Default::default()
+        }),
+        samples: 1,
+    };
+    let mut free = Renderer::new(&ctx, &scene, &options(0.0, None)).unwrap();
+    free.render(&ctx, &camera, &lights, 0).unwrap();
+    let need = counter(&free.collect_counters(&ctx, true), "page_texels")[0];
+    let atlas = (need / 0.95 * 1.1) as u64;
+    let mut os = Renderer::new(&ctx, &scene, &options(-(10f32.ln() / 4f32.ln()), Some(atlas))).unwrap();
+    const FRAMES: u64 = 16;
+    for frame in 0..FRAMES {
+        os.render(&ctx, &camera, &lights, frame).unwrap();
+    }
+    ctx.check_errors().unwrap();
+    let counters = os.collect_counters(&ctx, true);
+    let frames: Vec<u64> = counters.iter().map(|(f, _)| *f).collect();
+    assert_eq!(frames, (0..FRAMES).collect::<Vec<_>>(), "every frame's counters, once, in order");
+    let (failed, bias) = (counter(&counters, "pages_failed"), counter(&counters, "budget_bias"));
+    eprintln!("atlas {atlas} texels: failed {failed:?}, bias {bias:?}");
+    assert!(failed[0] > 0.0, "the first frame needs more pages than the atlas holds");
+    assert_eq!(failed[15], 0.0, "the last frame still finds no page for some tiles: the budget saw no counters");
+    assert!(bias[15] >= 1.0, "bias {} levels for pages 10x over the atlas", bias[15]);
+}
+
 /// Decoupled shading rate: with re-shading spread over N = 4 frames, a view
 /// moving by a millimetre each frame shades every visible tile in the first frame, then about a quarter of
 /// them in every frame after it (no frame shading all of them again), the
