@@ -11,6 +11,7 @@ use shadespace::experiments::quality::{self, Shard};
 use shadespace::experiments::scenarios::Scenario;
 use shadespace::experiments::timing::{Sweep, TimingGrid};
 use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid};
+use shadespace::render::objectspace::MAX_ATLAS_BUDGET_MI;
 
 use super::options::GpuArgs;
 use super::output::command_line;
@@ -184,6 +185,13 @@ pub struct TimingArgs {
     /// each cell's frames, so the timed frames read nothing back.
     #[arg(long)]
     pub breakdown: bool,
+    /// `quality`: object space's physical atlas budget in Mi texels, as
+    /// `render --atlas-budget` (default: 1 texel per pixel at 1920x1080,
+    /// growing as the square root of the pixels). `--os-aniso` and finer
+    /// levels need several times the default's pages; with too small an
+    /// atlas the budget biases their levels coarser.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=MAX_ATLAS_BUDGET_MI))]
+    pub atlas_budget: Option<u64>,
 }
 
 /// Runs the experiment and prints its headline and report path.
@@ -227,6 +235,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
             ("--configs", !a.timing.configs.is_empty()),
             ("--textures", !a.timing.textures.is_empty()),
             ("--breakdown", a.timing.breakdown),
+            ("--atlas-budget", a.timing.atlas_budget.is_some()),
         ];
         if let Some((flag, _)) = quality_only.iter().find(|(_, given)| *given) {
             return input(Err(anyhow::anyhow!("{flag}: only the quality experiment takes it")));
@@ -323,6 +332,7 @@ fn timing_grid(mut grid: TimingGrid, a: &TimingArgs) -> TimingGrid {
     grid.configs = a.configs.clone();
     grid.textures = a.textures.clone();
     grid.breakdown = a.breakdown;
+    grid.atlas_budget_mi = a.atlas_budget;
     if !a.counts.is_empty() {
         let mut counts = a.counts.clone();
         counts.sort_unstable();

@@ -380,12 +380,13 @@ pub fn measure(
         progress.set_message(format!("{label} {} {} {spec}", cell.textures, cell.gloss.name()));
         // As `--visibility auto` picks it.
         let visibility = VisibilityMethod::preferred_for(features, cell.msaa);
-        let render_options = |config: &Config| RenderOptions {
-            width: grid.width,
-            height: grid.height,
+        let render_options = |config: &Config| {
             // Gloss and detail change materials, not geometry: the study scene's texture sizes hold.
-            pipeline: config.render_config(&scene.density_sizes, visibility),
-            samples: cell.msaa,
+            let mut pipeline = config.render_config(&scene.density_sizes, visibility);
+            if let PipelineConfig::ObjectSpace(os) = &mut pipeline {
+                os.atlas_budget_texels = grid.atlas_budget_mi.map(|mi| mi << 20).or(os.atlas_budget_texels);
+            }
+            RenderOptions { width: grid.width, height: grid.height, pipeline, samples: cell.msaa }
         };
         let conventional = cell.config.shading.is_conventional();
         let shaded = if conventional { &variant.render } else { &variant.charted };

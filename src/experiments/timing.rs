@@ -149,6 +149,10 @@ pub struct TimingGrid {
     /// class (`experiments::breakdown`).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub breakdown: bool,
+    /// The quality experiment: object space's atlas budget, Mi texels
+    /// (`ObjectSpaceConfig::atlas_budget_texels`; none: its default).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub atlas_budget_mi: Option<u64>,
 }
 
 impl TimingGrid {
@@ -174,6 +178,7 @@ impl TimingGrid {
             configs: Vec::new(),
             textures: Vec::new(),
             breakdown: false,
+            atlas_budget_mi: None,
         }
     }
 

@@ -72,6 +72,12 @@ fn bad_options_say_what_is_wrong() {
     let (code, err) = run(&["experiment", "lights", "--quick", "--msaa", "4"]);
     assert_eq!(code, 2);
     assert!(err.contains("only the quality experiment has an MSAA axis"), "{err}");
+    let (code, err) = run(&["experiment", "lights", "--quick", "--atlas-budget", "8"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--atlas-budget: only the quality experiment takes it"), "{err}");
+    let (code, err) = run(&["experiment", "quality", "--quick", "--atlas-budget", "0"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--atlas-budget") && err.contains("0"), "{err}");
     let (code, err) = run(&["render", "--size", "12x"]);
     assert_eq!(code, 2);
     assert!(err.contains("12x"), "{err}");
