@@ -383,8 +383,8 @@ pub fn measure(
         let render_options = |config: &Config| {
             // Gloss and detail change materials, not geometry: the study scene's texture sizes hold.
             let mut pipeline = config.render_config(&scene.density_sizes, visibility);
-            if let PipelineConfig::ObjectSpace(os) = &mut pipeline {
-                os.atlas_budget_texels = grid.atlas_budget_mi.map(|mi| mi << 20).or(os.atlas_budget_texels);
+            if let (PipelineConfig::ObjectSpace(os), Some(mi)) = (&mut pipeline, grid.atlas_budget_mi) {
+                os.atlas_budget_texels = Some(mi << 20);
             }
             RenderOptions { width: grid.width, height: grid.height, pipeline, samples: cell.msaa }
         };
@@ -609,7 +609,7 @@ pub fn summarize(setup: &Setup, rows: &[Row], output: Output) -> Result<Findings
         let flicker = |config: &str| members.iter().find(|r| r.config == config).map(|r| r.flicker_mean);
         if let (Some(best), Some(os), Some(fw)) = (front.last(), flicker("objectspace"), flicker("forward")) {
             headline.push(format!(
-                "{textures}/{gloss}: least error {} ({:.4}); flicker objectspace {os:.3}, forward {fw:.3}",
+                "{textures}/{gloss}/{msaa} spp: least error {} ({:.4}); flicker objectspace {os:.3}, forward {fw:.3}",
                 best.config, best.error
             ));
         }

@@ -386,7 +386,7 @@ pub const KEPT_COUNTERS: usize = 256;
 /// where it has one (the shadow maps' culling counts join the pipeline's).
 fn merge_counters(into: &mut std::collections::VecDeque<(u64, Counters)>, new: Vec<(u64, Counters)>) {
     for (frame, counters) in new {
-        match into.iter_mut().find(|(f, _)| *f == frame) {
+        match into.iter_mut().rev().find(|(f, _)| *f == frame) {
             Some((_, c)) => c.extend(counters),
             None => into.push_back((frame, counters)),
         }
@@ -534,8 +534,7 @@ impl Renderer {
         // for them (the quality experiment's did not) left the atlas at its
         // first size and the mip bias at 0, so that a view needing more
         // pages than the atlas holds had them shaded forward every frame.
-        let arrived = self.gather_counters(ctx, false);
-        merge_counters(&mut self.arrived, arrived);
+        self.gather_counters(ctx, false);
         while self.arrived.len() > KEPT_COUNTERS {
             self.arrived.pop_front();
         }
@@ -693,17 +692,17 @@ impl Renderer {
     /// Those [`Renderer::render`] collected on its own come first (the last
     /// [`KEPT_COUNTERS`] frames of them).
     pub fn collect_counters(&mut self, ctx: &GpuContext, wait: bool) -> Vec<(u64, Counters)> {
-        let arrived = self.gather_counters(ctx, wait);
-        let mut counters = std::mem::take(&mut self.arrived);
-        merge_counters(&mut counters, arrived);
-        counters.into()
+        self.gather_counters(ctx, wait);
+        std::mem::take(&mut self.arrived).into()
     }
 
-    /// The pipeline's and the shadow maps' counters that have arrived.
-    fn gather_counters(&mut self, ctx: &GpuContext, wait: bool) -> Vec<(u64, Counters)> {
-        let mut counters = std::collections::VecDeque::from(self.pipeline.collect_counters(&ctx.device, wait));
-        merge_counters(&mut counters, self.shadows.collect_counts(&ctx.device, wait));
-        counters.into()
+    /// Moves the pipeline's and the shadow maps' counters that have arrived
+    /// into `arrived` (collecting the pipeline's feeds its controllers).
+    fn gather_counters(&mut self, ctx: &GpuContext, wait: bool) {
+        let pipeline = self.pipeline.collect_counters(&ctx.device, wait);
+        let shadows = self.shadows.collect_counts(&ctx.device, wait);
+        merge_counters(&mut self.arrived, pipeline);
+        merge_counters(&mut self.arrived, shadows);
     }
 
     /// The pipeline's settings, memory and setup, with what the renderer
