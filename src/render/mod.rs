@@ -52,6 +52,7 @@ pub use passes::shadows::ShadowRefresh;
 use passes::shadows::{ShadowMaps, SunView, shadow_maps};
 use passes::tonemap::{Tonemap, tonemap};
 pub use passes::visibility::VisibilityMethod;
+pub use passes::visibility::compute::BigTriangles;
 pub use report::{Counters, PipelineReport};
 use scene_gpu::SceneGpu;
 use targets::Targets;
@@ -333,6 +334,11 @@ pub struct Renderer {
     /// something nearer (default false: fewer atomics but, on the H200, a
     /// slower pass; the ids are the same either way).
     pub vis_depth_test: bool,
+    /// Most pixels of a triangle's bounds that the compute rasterizer draws
+    /// in the triangle's own thread (default
+    /// [`scene_gpu::DEFAULT_SMALL_AREA`]); bigger ones are set up once and
+    /// drawn by workgroups ([`BigTriangles`]). The ids are the same whatever it is.
+    pub vis_small_area: u32,
     /// How the hardware raster passes draw the clusters culling keeps
     /// (default indexed, where the adapter can: [`passes::cluster_draws`]).
     /// Read when culling is first built, before the first frame that culls.
@@ -483,6 +489,7 @@ impl Renderer {
             shading: ShadingModel::Phong,
             culling: Culling::for_scene(scene.objects.len()),
             vis_depth_test: false,
+            vis_small_area: scene_gpu::DEFAULT_SMALL_AREA,
             cluster_draws: ClusterDraws::default(),
             cull_plain_above: clusters::CULL_PLAIN_ABOVE,
             jitter: glam::Vec2::ZERO,
@@ -628,6 +635,7 @@ impl Renderer {
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         self.scene.culling = self.culling;
         self.scene.vis_depth_test = self.vis_depth_test;
+        self.scene.vis_small_area = self.vis_small_area;
         self.scene.cull_plain_above = self.cull_plain_above;
         if self.culling != Culling::None && !self.cluster_culling_built {
             self.scene.cluster_draws = passes::cluster_draws::draws_for(self.cluster_draws, &ctx.device, &self.scene);

@@ -21,6 +21,9 @@ use crate::scene::{Aabb, Camera, Light, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
 pub const MAX_ALBEDO_SIZE: u32 = 1024;
+/// [`SceneGpu::vis_small_area`]'s default: a 16x16 box. Lower (64) overflowed
+/// the tile queue's triangle setups on Sponza (BENCHMARKS.md, "Compute visibility").
+pub const DEFAULT_SMALL_AREA: u32 = 256;
 
 /// Where one object's triangles are in the shared buffers (the same range
 /// for every instance of a mesh).
@@ -110,6 +113,11 @@ pub struct SceneGpu {
     /// sets it from [`super::Renderer::vis_depth_test`]; the ids are the same
     /// either way).
     pub vis_depth_test: bool,
+    /// Most pixels of a triangle's bounds that the compute rasterizer draws
+    /// in the triangle's own thread; bigger triangles are drawn by
+    /// workgroups (the renderer sets it from [`super::Renderer::vis_small_area`];
+    /// the ids are the same whatever it is).
+    pub vis_small_area: u32,
     /// How the raster passes draw culled clusters: the renderer sets it from
     /// [`super::Renderer::cluster_draws`] where the adapter can
     /// ([`super::passes::cluster_draws::draws_for`]) before culling is built.
@@ -336,6 +344,7 @@ impl SceneGpu {
             instance_clusters: slots,
             culling: Culling::default(),
             vis_depth_test: false,
+            vis_small_area: DEFAULT_SMALL_AREA,
             cluster_draws: ClusterDraws::default(),
             cull_plain_above: super::clusters::CULL_PLAIN_ABOVE,
             masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),

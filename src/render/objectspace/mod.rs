@@ -52,7 +52,7 @@ use super::passes::depth_prepass::{DepthPrepass, culled_depth_prepass};
 use super::passes::light_grid::LightGrid;
 use super::passes::light_grid::world::{WorldGrid, build_world_grid};
 use super::passes::visibility::VisibilityBuffer;
-use super::passes::visibility::compute::{ComputeVisibility, ComputeVisibilityError, compute_visibility};
+use super::passes::visibility::compute::{BigTriangles, ComputeVisibility, ComputeVisibilityError, compute_visibility};
 use super::passes::visibility::{VisibilityMethod, VisibilityPass, visibility};
 use super::report::{Counters, ObjectMemory, PipelineReport};
 use super::scene_gpu::SceneGpu;
@@ -634,6 +634,8 @@ pub struct ObjectSpaceConfig {
     /// Compute visibility: count the rasterizer's work every frame into the
     /// counters (adds atomics: for profiling, not timing).
     pub count_visibility: bool,
+    /// Compute visibility: how big triangles are drawn (the same ids).
+    pub big_triangles: BigTriangles,
     /// How marking writes the global tile state.
     pub marking: Marking,
     /// Count the mark pass's global tile marks and atomics every frame into
@@ -696,6 +698,7 @@ impl Default for ObjectSpaceConfig {
             visibility_prepass: true,
             visibility: VisibilityMethod::Raster,
             count_visibility: false,
+            big_triangles: BigTriangles::default(),
             marking: Marking::Workgroup,
             count_mark_atomics: false,
             shade_budget_texels: None,
@@ -953,6 +956,7 @@ impl ObjectSpace {
                     targets,
                     &res.visibility,
                     counting,
+                    config.big_triangles,
                 )?))
             }
         };
@@ -970,7 +974,8 @@ impl ObjectSpace {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let visibility = Box::new(ComputeVisibility::new(device, shaders, scene, targets, &ids, false)?);
+            let visibility =
+                Box::new(ComputeVisibility::new(device, shaders, scene, targets, &ids, false, config.big_triangles)?);
             extra_views.push(ExtraView { uniform, visibility, hdr });
         }
         // The compute rasterizer leaves the depth target to the blended passes.

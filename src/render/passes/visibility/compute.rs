@@ -11,7 +11,10 @@
 //! whose bounds exceed 256 pixels are set up once into a buffer and queued as
 //! 32x32 tiles), `vis: raster big` (one workgroup per queued tile: its 8x8
 //! squares are tested against the triangle's edges, then every pixel of the
-//! squares that pass) and `vis: resolve` (payload to (object + 1, triangle)).
+//! squares that pass; with [`BigTriangles::Bins`] the triangles are listed
+//! per 32x32 screen bin and a workgroup per bin keeps its pixels' nearest
+//! surfaces in workgroup memory, then writes each once) and `vis: resolve`
+//! (payload to (object + 1, triangle)).
 //!
 //! Under MSAA (the targets' samples, shaders built with `MSAA`) each pixel
 //! has one 64-bit entry per sample, tested at Vulkan's standard sample
@@ -90,6 +93,64 @@ pub(crate) const CULL_CHUNK: u32 = 64;
 /// Workgroups of `raster_big`, which loop over the queued tiles
 /// (`BIG_WORKGROUPS` in `raster.wgsl`).
 const BIG_WORKGROUPS: u32 = 1024;
+/// Workgroups of `bin_fill` and `raster_bins`, which loop over their work
+/// (`BIN_WORKGROUPS` in `raster.wgsl`).
+const BIN_WORKGROUPS: u32 = 2048;
+/// Side of a screen bin of [`BigTriangles::Bins`], in pixels (`BIG_TILE`).
+const BIN_SIZE: u32 = 32;
+/// Entries of a bin's list one workgroup draws by default (`--vis-big bins`).
+pub const DEFAULT_BIN_CHUNK: u32 = 32;
+
+/// How the compute rasterizer draws the triangles whose bounds exceed 256
+/// pixels (`--vis-big`); the visibility buffer is the same either way
+/// (tested), only the work differs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BigTriangles {
+    /// A workgroup per 32x32 tile of each triangle's bounds: one 64-bit
+    /// atomicMax per covered pixel of every triangle.
+    #[default]
+    Tiles,
+    /// Each triangle listed in the screen's 32x32 bins it overlaps; a
+    /// workgroup per bin, per chunk of up to this many of its triangles,
+    /// keeps each pixel's nearest surface in workgroup memory and writes the
+    /// covered pixels once (one global atomic per pixel and chunk instead of
+    /// one per covered layer). Under MSAA it falls back to
+    /// [`BigTriangles::Tiles`] (the samples' depths do not fit a workgroup's memory).
+    Bins(u32),
+}
+
+impl std::str::FromStr for BigTriangles {
+    type Err = String;
+
+    /// `tiles`, `bins` or `bins:N` (N entries per workgroup, at least 1).
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.split_once(':') {
+            None if s == "tiles" => Ok(Self::Tiles),
+            None if s == "bins" => Ok(Self::Bins(DEFAULT_BIN_CHUNK)),
+            Some(("bins", n)) => match n.parse::<u32>() {
+                Ok(n) if n >= 1 => Ok(Self::Bins(n)),
+                _ => Err(format!("`{n}` is not a chunk of at least 1 triangle (bins:N)")),
+            },
+            _ => Err(format!("`{s}` is not tiles, bins or bins:N")),
+        }
+    }
+}
+
+/// As written on the command line (reports name it so).
+impl serde::Serialize for BigTriangles {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(self)
+    }
+}
+
+impl std::fmt::Display for BigTriangles {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Tiles => write!(f, "tiles"),
+            Self::Bins(n) => write!(f, "bins:{n}"),
+        }
+    }
+}
 /// Most workgroups along x of one dispatch (WebGPU's limit is 65535).
 const MAX_GROUPS_X: u32 = 32768;
 
@@ -113,8 +174,17 @@ gpu_struct! {
         /// 1: test each pixel with a load before its atomic
         /// ([`SceneGpu::vis_depth_test`]).
         pub depth_test: u32,
+        /// Screen bins along x and y ([`BigTriangles::Bins`]).
+        pub bins_x: u32,
+        pub bins_y: u32,
+        /// Most entries of a bin's list one workgroup draws.
+        pub bin_chunk: u32,
+        /// Entries of the chunk list.
+        pub chunk_capacity: u32,
+        /// Most pixels of a triangle's bounds that its own thread rasterizes
+        /// ([`SceneGpu::vis_small_area`]); bigger ones are set up and queued.
+        pub small_area: u32,
         pub pad_b: u32,
-        pub pad_c: u32,
     }
 }
 
@@ -229,11 +299,12 @@ pub enum RasterCount {
     SmallPixelsTested,
     /// Triangles set up once and queued as 32x32 tiles.
     BigTriangles,
-    /// Their queued tiles.
+    /// Their queued tiles (with [`BigTriangles::Bins`], their bins).
     BigTiles,
-    /// 8x8 squares of those tiles that passed the edge test.
+    /// 8x8 squares of those tiles that passed the edge test (with bins,
+    /// 4x4 blocks of a bin, per triangle).
     BigSquaresPassed,
-    /// Pixels the tile workgroups tested (in squares that passed).
+    /// Pixels the tile workgroups tested (in squares or blocks that passed).
     BigPixelsTested,
     /// 64-bit atomicMax issued: covered pixels inside the depth range that
     /// the depth test before the atomic did not reject.
@@ -245,12 +316,17 @@ pub enum RasterCount {
     BackFacingWrites,
     /// Covered pixels inside the depth range whose load found a value at
     /// least as large, so no atomicMax was issued
-    /// ([`SceneGpu::vis_depth_test`], and alpha-masked triangles always).
+    /// ([`SceneGpu::vis_depth_test`], and alpha-masked triangles always;
+    /// with [`BigTriangles::Bins`] the bins' compares in workgroup memory).
     DepthRejects,
+    /// With [`BigTriangles::Bins`]: the bins' 64-bit atomicMax into the
+    /// visibility buffer, one per covered pixel and chunk (their writes in
+    /// workgroup memory count as [`RasterCount::PixelsWritten`]).
+    BinWrites,
 }
 
 impl RasterCount {
-    pub const ALL: [Self; 10] = [
+    pub const ALL: [Self; 11] = [
         Self::SmallTriangles,
         Self::SmallPixelsTested,
         Self::BigTriangles,
@@ -261,6 +337,7 @@ impl RasterCount {
         Self::OverflowTriangles,
         Self::BackFacingWrites,
         Self::DepthRejects,
+        Self::BinWrites,
     ];
 
     /// Its name among the frame counters.
@@ -276,6 +353,7 @@ impl RasterCount {
             Self::OverflowTriangles => "vis_overflow_triangles",
             Self::BackFacingWrites => "vis_back_facing_writes",
             Self::DepthRejects => "vis_depth_rejects",
+            Self::BinWrites => "vis_bin_writes",
         }
     }
 }
@@ -330,10 +408,17 @@ pub enum ComputeVisibilityError {
 
 /// The compute rasterizer's pipelines, buffers and bind groups, for one
 /// resolution and one output buffer.
+/// How `vis: raster big` draws the big triangles ([`BigTriangles`]).
+enum BigPipelines {
+    Tiles(wgpu::ComputePipeline),
+    Bins { scan: wgpu::ComputePipeline, fill: wgpu::ComputePipeline, raster: wgpu::ComputePipeline },
+}
+
 pub struct ComputeVisibility {
     clear: wgpu::ComputePipeline,
     raster: wgpu::ComputePipeline,
-    raster_big: wgpu::ComputePipeline,
+    /// `raster_big`, or with bins `bin_scan`, `bin_fill` and `raster_bins`.
+    big: BigPipelines,
     resolve: wgpu::ComputePipeline,
     raster_params: wgpu::Buffer,
     resolve_params: wgpu::Buffer,
@@ -345,6 +430,13 @@ pub struct ComputeVisibility {
     setup_capacity: u32,
     /// Bytes of the big-triangle setups.
     setup_bytes: u64,
+    /// The bins' counts and fill positions (cleared with `big_count`).
+    bin_state: wgpu::Buffer,
+    bins: (u32, u32),
+    bin_chunk: u32,
+    chunk_capacity: u32,
+    /// Bytes of the bins' buffers.
+    bin_bytes: u64,
     cull: Cull,
     resolve_group: wgpu::BindGroup,
     /// Group 1 of passes that import `shadespace::visibility_read`: the ids
@@ -360,7 +452,8 @@ pub struct ComputeVisibility {
 
 impl ComputeVisibility {
     /// Fails where the device lacks [`FEATURES`]. `counting`: the variant
-    /// that counts its work ([`RasterCount`], see [`Self::collect_counts`]).
+    /// that counts its work ([`RasterCount`], see [`Self::collect_counts`]);
+    /// `big`: how it draws big triangles (tiles under MSAA whatever it says).
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
@@ -368,6 +461,7 @@ impl ComputeVisibility {
         targets: &Targets,
         out: &VisibilityBuffer,
         counting: bool,
+        big: BigTriangles,
     ) -> Result<Self, ComputeVisibilityError> {
         if !device.features().contains(FEATURES) {
             return Err(ComputeVisibilityError::NoInt64Atomics);
@@ -407,6 +501,19 @@ impl ComputeVisibility {
             crate::shaders::struct_size(&shaders.compose(RASTER)?, "Setup").expect("raster.wgsl declares struct Setup");
         let setup_bytes = setup_capacity as u64 * setup_size;
         let big_setups = buffer("vis big setups", setup_bytes, U::STORAGE);
+        // Bins: a list entry per queued (triangle, bin), a chunk per
+        // `bin_chunk` of them and one per bin at most besides.
+        let big = if samples > 1 { BigTriangles::Tiles } else { big };
+        let bins = (width.div_ceil(BIN_SIZE), height.div_ceil(BIN_SIZE));
+        let (bin_chunk, list_capacity, chunk_capacity) = match big {
+            BigTriangles::Tiles => (1, 1, 1),
+            BigTriangles::Bins(chunk) => (chunk, big_capacity, big_capacity.div_ceil(chunk) + bins.0 * bins.1),
+        };
+        let state_words = 4 + if matches!(big, BigTriangles::Bins(_)) { 2 * bins.0 * bins.1 } else { 0 };
+        let bin_state = buffer("vis bin state", state_words as u64 * 4, U::STORAGE | U::COPY_DST);
+        let bin_list = buffer("vis bin lists", list_capacity as u64 * 4, U::STORAGE);
+        let bin_chunks = buffer("vis bin chunks", chunk_capacity as u64 * 16, U::STORAGE);
+        let bin_bytes = bin_state.size() + bin_list.size() + bin_chunks.size();
 
         let read = Binding::Storage { read_only: true };
         let rw = Binding::Storage { read_only: false };
@@ -450,7 +557,7 @@ impl ComputeVisibility {
         let cull_params = buffer("vis cull params", size_of::<GpuCullParams>() as u64, U::UNIFORM | U::COPY_DST);
 
         let mut raster_bindings =
-            vec![Binding::Uniform, read, rw, rw, rw, rw, read, read, read, read, Binding::Uniform];
+            vec![Binding::Uniform, read, rw, rw, rw, rw, read, read, read, read, Binding::Uniform, rw, rw, rw];
         if counting.is_some() {
             raster_bindings.push(rw);
         }
@@ -471,6 +578,9 @@ impl ComputeVisibility {
                 lists.as_entire_binding(),
                 cull_counts.as_entire_binding(),
                 list.as_entire_binding(),
+                bin_state.as_entire_binding(),
+                bin_list.as_entire_binding(),
+                bin_chunks.as_entire_binding(),
             ];
             if let Some(c) = &counting {
                 resources.push(c.counts.as_entire_binding());
@@ -534,9 +644,25 @@ impl ComputeVisibility {
             (true, true) => RASTER_CULLING_COUNTING,
         };
         // Alpha testing is compiled in only for scenes that need it.
-        let defs: &[&str] = if scene.has_alpha_masks() { &[ALPHA_MASK] } else { &[] };
-        let mut raster = |entry| compute_pipeline_with(device, shaders, raster_shader, defs, entry, &raster_layouts);
-        let (plain, big, clustered) = (raster("raster")?, raster("raster_big")?, raster("raster_clusters")?);
+        let mut defs: Vec<&str> = if scene.has_alpha_masks() { vec![ALPHA_MASK] } else { vec![] };
+        let binned = matches!(big, BigTriangles::Bins(_));
+        if binned {
+            defs.push("BINS");
+        }
+        let mut raster =
+            |entry, defs: &[&str]| compute_pipeline_with(device, shaders, raster_shader, defs, entry, &raster_layouts);
+        let (plain, clustered) = (raster("raster", &defs)?, raster("raster_clusters", &defs)?);
+        let big = if binned {
+            // Only `raster_bins` keeps depths in workgroup memory.
+            let binned: Vec<&str> = defs.iter().copied().chain(["BIN_DEPTH"]).collect();
+            BigPipelines::Bins {
+                scan: raster("bin_scan", &defs)?,
+                fill: raster("bin_fill", &defs)?,
+                raster: raster("raster_bins", &binned)?,
+            }
+        } else {
+            BigPipelines::Tiles(raster("raster_big", &defs)?)
+        };
         let cull_layouts = [&scene.layout, &cull_layout];
         let cull = Cull {
             early: compute_pipeline(device, shaders, CULL, "cull_early", &cull_layouts)?,
@@ -555,7 +681,7 @@ impl ComputeVisibility {
         };
         Ok(Self {
             raster: plain,
-            raster_big: big,
+            big,
             cull,
             clear: compute_pipeline(device, shaders, RESOLVE, "clear", &[&resolve_layout])?,
             resolve: compute_pipeline(device, shaders, RESOLVE, "resolve", &[&resolve_layout])?,
@@ -566,6 +692,11 @@ impl ComputeVisibility {
             big_capacity,
             setup_capacity,
             setup_bytes,
+            bin_state,
+            bins,
+            bin_chunk,
+            chunk_capacity,
+            bin_bytes,
             resolve_group,
             read_layout,
             read_group,
@@ -634,11 +765,12 @@ impl ComputeVisibility {
     }
 
     /// Bytes of its buffers (the 64-bit one, the big-tile queue and setups,
-    /// the ranges, and culling's cluster lists, history and depth pyramid).
+    /// the bins, the ranges, and culling's cluster lists, history and depth pyramid).
     pub fn bytes(&self) -> u64 {
         self.width as u64 * self.height as u64 * u64::from(self.samples) * 8
             + self.big_capacity as u64 * 8
             + self.setup_bytes
+            + self.bin_bytes
             + self.ranges.size()
             + self.cull.bytes
     }
@@ -814,8 +946,12 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         setup_capacity: pass.setup_capacity,
         samples: pass.samples,
         depth_test: u32::from(frame.scene.vis_depth_test),
+        bins_x: pass.bins.0,
+        bins_y: pass.bins.1,
+        bin_chunk: pass.bin_chunk,
+        chunk_capacity: pass.chunk_capacity,
+        small_area: frame.scene.vis_small_area,
         pad_b: 0,
-        pad_c: 0,
     };
     frame.queue.write_buffer(&pass.raster_params, 0, bytemuck::bytes_of(&raster));
     let resolve = GpuResolveParams { width: pass.width, height: pass.height, range_count, samples: pass.samples };
@@ -848,6 +984,7 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         frame.encoder.clear_buffer(&pass.cull.counts, 0, None);
     }
     frame.encoder.clear_buffer(&pass.big_count, 0, None);
+    frame.encoder.clear_buffer(&pass.bin_state, 0, None);
     if let Some(c) = &pass.counting {
         frame.encoder.clear_buffer(&c.counts, 0, None);
     }
@@ -870,6 +1007,7 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
             pass.cull.pyramid.encode(frame, "vis: hiz");
             cull_pass(frame, pass, &pass.cull.late, "vis: cull late", groups);
             frame.encoder.clear_buffer(&pass.big_count, 0, None);
+            frame.encoder.clear_buffer(&pass.bin_state, 0, None);
             raster_passes(frame, pass, &pass.cull.raster, Some(1), groups, " late");
         }
     }
@@ -930,8 +1068,20 @@ fn raster_passes(
         }
     }
     let mut cp = frame.compute_pass(&format!("vis: raster big{suffix}"));
-    cp.set_pipeline(&pass.raster_big);
     cp.set_bind_group(0, scene, &[]);
     cp.set_bind_group(1, group, &[]);
-    cp.dispatch_workgroups(BIG_WORKGROUPS, 1, 1);
+    match &pass.big {
+        BigPipelines::Tiles(raster_big) => {
+            cp.set_pipeline(raster_big);
+            cp.dispatch_workgroups(BIG_WORKGROUPS, 1, 1);
+        }
+        BigPipelines::Bins { scan, fill, raster } => {
+            cp.set_pipeline(scan);
+            cp.dispatch_workgroups(1, 1, 1);
+            cp.set_pipeline(fill);
+            cp.dispatch_workgroups(BIN_WORKGROUPS, 1, 1);
+            cp.set_pipeline(raster);
+            cp.dispatch_workgroups(BIN_WORKGROUPS, 1, 1);
+        }
+    }
 }
