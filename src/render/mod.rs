@@ -339,6 +339,9 @@ pub struct Renderer {
     /// [`scene_gpu::DEFAULT_SMALL_AREA`]); bigger ones are set up once and
     /// drawn by workgroups ([`BigTriangles`]). The ids are the same whatever it is.
     pub vis_small_area: u32,
+    /// Workgroups of the compute rasterizer's big-triangle passes (default
+    /// [`scene_gpu::DEFAULT_BIG_WORKGROUPS`]), which loop over their work.
+    pub vis_big_workgroups: u32,
     /// How the hardware raster passes draw the clusters culling keeps
     /// (default indexed, where the adapter can: [`passes::cluster_draws`]).
     /// Read when culling is first built, before the first frame that culls.
@@ -490,6 +493,7 @@ impl Renderer {
             culling: Culling::for_scene(scene.objects.len()),
             vis_depth_test: false,
             vis_small_area: scene_gpu::DEFAULT_SMALL_AREA,
+            vis_big_workgroups: scene_gpu::DEFAULT_BIG_WORKGROUPS,
             cluster_draws: ClusterDraws::default(),
             cull_plain_above: clusters::CULL_PLAIN_ABOVE,
             jitter: glam::Vec2::ZERO,
@@ -636,6 +640,7 @@ impl Renderer {
         self.scene.culling = self.culling;
         self.scene.vis_depth_test = self.vis_depth_test;
         self.scene.vis_small_area = self.vis_small_area;
+        self.scene.vis_big_workgroups = self.vis_big_workgroups;
         self.scene.cull_plain_above = self.cull_plain_above;
         if self.culling != Culling::None && !self.cluster_culling_built {
             self.scene.cluster_draws = passes::cluster_draws::draws_for(self.cluster_draws, &ctx.device, &self.scene);

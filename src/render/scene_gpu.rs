@@ -24,6 +24,8 @@ pub const MAX_ALBEDO_SIZE: u32 = 1024;
 /// [`SceneGpu::vis_small_area`]'s default: a 16x16 box. Lower (64) overflowed
 /// the tile queue's triangle setups on Sponza (BENCHMARKS.md, "Compute visibility").
 pub const DEFAULT_SMALL_AREA: u32 = 256;
+/// [`SceneGpu::vis_big_workgroups`]'s default.
+pub const DEFAULT_BIG_WORKGROUPS: u32 = 1024;
 
 /// Where one object's triangles are in the shared buffers (the same range
 /// for every instance of a mesh).
@@ -118,6 +120,10 @@ pub struct SceneGpu {
     /// workgroups (the renderer sets it from [`super::Renderer::vis_small_area`];
     /// the ids are the same whatever it is).
     pub vis_small_area: u32,
+    /// Workgroups of the compute rasterizer's big-triangle passes, which
+    /// loop over their work (the renderer sets it from
+    /// [`super::Renderer::vis_big_workgroups`]; the ids are the same whatever it is).
+    pub vis_big_workgroups: u32,
     /// How the raster passes draw culled clusters: the renderer sets it from
     /// [`super::Renderer::cluster_draws`] where the adapter can
     /// ([`super::passes::cluster_draws::draws_for`]) before culling is built.
@@ -345,6 +351,7 @@ impl SceneGpu {
             culling: Culling::default(),
             vis_depth_test: false,
             vis_small_area: DEFAULT_SMALL_AREA,
+            vis_big_workgroups: DEFAULT_BIG_WORKGROUPS,
             cluster_draws: ClusterDraws::default(),
             cull_plain_above: super::clusters::CULL_PLAIN_ABOVE,
             masked: scene.objects.iter().map(|o| scene.materials[o.material].alpha_cutoff.is_some()).collect(),

@@ -410,15 +410,15 @@ fn depth_test_before_the_atomic_keeps_the_ids_with_fewer_atomics() {
 }
 
 /// The ids and the rasterizer's counters of one frame of `camera`'s view,
-/// big triangles (bounds over `small_area` pixels) drawn as `big` says,
-/// culling with `culling`.
+/// big triangles (bounds over `small_area` pixels) drawn as `big` says by
+/// `workgroups` workgroups, culling with `culling`.
 fn ids_drawn_with(
     ctx: &GpuContext,
     scene: &Scene,
     camera: &Camera,
     (size, culling): ((u32, u32), Culling),
     big: BigTriangles,
-    small_area: u32,
+    (small_area, workgroups): (u32, u32),
 ) -> (Vec<[u32; 2]>, shadespace::render::Counters) {
     let mut texture_sizes = vec![None; scene.objects.len()];
     texture_sizes[0] = Some(64);
@@ -433,6 +433,7 @@ fn ids_drawn_with(
     let mut renderer = Renderer::new(ctx, scene, &options).unwrap();
     renderer.culling = culling;
     renderer.vis_small_area = small_area;
+    renderer.vis_big_workgroups = workgroups;
     renderer.render(ctx, camera, &[], 0).unwrap();
     let ids = renderer.pipeline::<ObjectSpace>().unwrap().read_mark_state(ctx).unwrap().visibility;
     let counts = renderer.collect_counters(ctx, true).into_iter().flat_map(|(_, c)| c).collect();
@@ -446,7 +447,9 @@ fn ids_drawn_with(
 /// occlusion culling (two raster passes, the bins cleared between them), and
 /// on floors crossing the near plane (fixed-point and homogeneous edges);
 /// with chunks of 32 and of 1 triangle (a bin's list split over many
-/// workgroups), and with triangles over 32 pixels drawn as big. The bins write each covered pixel of their triangles once
+/// workgroups), with triangles over 32 pixels drawn as big, and by 3
+/// workgroups (each looping over many bins' chunks; the tile queue too).
+/// The bins write each covered pixel of their triangles once
 /// per chunk, not once per covered layer: fewer global atomics than the
 /// queue's writes where layers overlap.
 #[test]
@@ -471,14 +474,16 @@ fn bins_keep_the_ids_of_the_tile_queue() {
     }
     for (name, scene, camera, culling) in &views {
         let size = (192, 108);
-        let (tiles, queued) = ids_drawn_with(&ctx, scene, camera, (size, *culling), BigTriangles::Tiles, 256);
+        let (tiles, queued) = ids_drawn_with(&ctx, scene, camera, (size, *culling), BigTriangles::Tiles, (256, 1024));
         assert!(tiles.iter().any(|id| id[0] != 0), "{name}: nothing covered");
         assert!(queued["vis_big_triangles"] > 0.0, "{name}: no big triangle: {queued:?}");
+        let (few, _) = ids_drawn_with(&ctx, scene, camera, (size, *culling), BigTriangles::Tiles, (256, 3));
+        assert!(few == tiles, "{name}: 3 workgroups over the tile queue change the ids");
         let covered = |c: &shadespace::render::Counters| c["vis_pixels_written"] + c["vis_depth_rejects"];
         let mut writes = Vec::new();
-        for (chunk, small_area) in [(32, 256), (1, 256), (32, 32)] {
+        for (chunk, small_area, workgroups) in [(32, 256, 1024), (1, 256, 1024), (32, 32, 3)] {
             let big = BigTriangles::Bins(chunk);
-            let (bins, binned) = ids_drawn_with(&ctx, scene, camera, (size, *culling), big, small_area);
+            let (bins, binned) = ids_drawn_with(&ctx, scene, camera, (size, *culling), big, (small_area, workgroups));
             let differ = (0..tiles.len()).filter(|&i| tiles[i] != bins[i]).count();
             let run = format!("{name}, chunks of {chunk}, big above {small_area} pixels");
             assert_eq!(differ, 0, "{run}: {differ} pixels' ids differ from the tile queue's");

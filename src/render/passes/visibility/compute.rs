@@ -90,12 +90,6 @@ const _: () = assert!(crate::render::clusters::CLUSTER_TRIANGLES as u32 == RASTE
 /// a thread each (an object with more takes several).
 pub(crate) const CULL_CHUNK: u32 = 64;
 
-/// Workgroups of `raster_big`, which loop over the queued tiles
-/// (`BIG_WORKGROUPS` in `raster.wgsl`).
-const BIG_WORKGROUPS: u32 = 1024;
-/// Workgroups of `bin_fill` and `raster_bins`, which loop over their work
-/// (`BIN_WORKGROUPS` in `raster.wgsl`).
-const BIN_WORKGROUPS: u32 = 2048;
 /// Side of a screen bin of [`BigTriangles::Bins`], in pixels (`BIG_TILE`).
 const BIN_SIZE: u32 = 32;
 /// Entries of a bin's list one workgroup draws by default (`--vis-big bins`).
@@ -411,7 +405,12 @@ pub enum ComputeVisibilityError {
 /// How `vis: raster big` draws the big triangles ([`BigTriangles`]).
 enum BigPipelines {
     Tiles(wgpu::ComputePipeline),
-    Bins { scan: wgpu::ComputePipeline, fill: wgpu::ComputePipeline, raster: wgpu::ComputePipeline },
+    Bins {
+        count: wgpu::ComputePipeline,
+        scan: wgpu::ComputePipeline,
+        fill: wgpu::ComputePipeline,
+        raster: wgpu::ComputePipeline,
+    },
 }
 
 pub struct ComputeVisibility {
@@ -656,6 +655,7 @@ impl ComputeVisibility {
             // Only `raster_bins` keeps depths in workgroup memory.
             let binned: Vec<&str> = defs.iter().copied().chain(["BIN_DEPTH"]).collect();
             BigPipelines::Bins {
+                count: raster("bin_count", &defs)?,
                 scan: raster("bin_scan", &defs)?,
                 fill: raster("bin_fill", &defs)?,
                 raster: raster("raster_bins", &binned)?,
@@ -1067,21 +1067,24 @@ fn raster_passes(
             None => cp.dispatch_workgroups(groups.0, groups.1, 1),
         }
     }
+    let workgroups = frame.scene.vis_big_workgroups;
     let mut cp = frame.compute_pass(&format!("vis: raster big{suffix}"));
     cp.set_bind_group(0, scene, &[]);
     cp.set_bind_group(1, group, &[]);
     match &pass.big {
         BigPipelines::Tiles(raster_big) => {
             cp.set_pipeline(raster_big);
-            cp.dispatch_workgroups(BIG_WORKGROUPS, 1, 1);
+            cp.dispatch_workgroups(workgroups, 1, 1);
         }
-        BigPipelines::Bins { scan, fill, raster } => {
+        BigPipelines::Bins { count, scan, fill, raster } => {
+            cp.set_pipeline(count);
+            cp.dispatch_workgroups(workgroups, 1, 1);
             cp.set_pipeline(scan);
             cp.dispatch_workgroups(1, 1, 1);
             cp.set_pipeline(fill);
-            cp.dispatch_workgroups(BIN_WORKGROUPS, 1, 1);
+            cp.dispatch_workgroups(workgroups, 1, 1);
             cp.set_pipeline(raster);
-            cp.dispatch_workgroups(BIN_WORKGROUPS, 1, 1);
+            cp.dispatch_workgroups(workgroups, 1, 1);
         }
     }
 }

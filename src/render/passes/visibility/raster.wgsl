@@ -173,10 +173,9 @@ const RASTER_WORKGROUP: u32 = 64u;
 const BIG_TILE: i32 = 32;
 const SUB_TILE: i32 = 8;
 const SUB_TILES: i32 = 4;
-// Threads per workgroup of `raster_big` (`compute::BIG_WORKGROUP`), and its
-// fixed number of workgroups, which loop over the big tiles.
+// Threads per workgroup of `raster_big` (`compute::BIG_WORKGROUP`); its
+// workgroups (`SceneGpu::vis_big_workgroups`) loop over the big tiles.
 const BIG_WORKGROUP: u32 = 64u;
-const BIG_WORKGROUPS: u32 = 1024u;
 
 // Sub-pixel steps of snapped vertices (8 bits), and the guard band in pixels
 // beyond which a triangle is rasterized in homogeneous coordinates (keeps the
@@ -806,7 +805,8 @@ fn raster_triangle(s: Setup) {
     }
     big_setups[slot] = s;
 #ifdef BINS
-    // The screen's bins its bounds overlap, each counted for `bin_scan`.
+    // The screen's bins its bounds overlap (`bin_count` counts them per bin:
+    // an atomic per bin here made this pass 0.1 ms slower on Sponza).
     let bin_lo = vec2u(s.bounds.xy / BIG_TILE);
     let bins = vec2u(s.bounds.zw / BIG_TILE) - bin_lo + 1u;
     let tile_count = bins.x * bins.y;
@@ -822,7 +822,6 @@ fn raster_triangle(s: Setup) {
         let bin = b.y * params.bins_x + b.x;
         if first + t < params.big_capacity {
             big_tiles[first + t] = vec2u(slot, bin);
-            atomicAdd(&bin_state[BIN_COUNTS + bin], 1u);
         } else {
             let lo = max(vec2i(b) * BIG_TILE, s.bounds.xy);
             let hi = min(vec2i(b) * BIG_TILE + BIG_TILE - 1, s.bounds.zw);
@@ -875,12 +874,13 @@ var<workgroup> shared_count: u32;
 // Per square of the current tile: 1 when the triangle may cover it.
 var<workgroup> square_live: array<u32, 16>;
 
-// One workgroup per big-triangle tile (BIG_WORKGROUPS workgroups looping over
+// One workgroup per big-triangle tile (a fixed number of workgroups looping over
 // the queue). The first SUB_TILES^2 threads test the tile's SUB_TILE squares
 // against the triangle's edges (a thin triangle's box is mostly empty); then
 // each thread tests its pixel of every square that passed.
 @compute @workgroup_size(BIG_WORKGROUP)
-fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_index) local: u32) {
+fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
+              @builtin(local_invocation_index) local: u32) {
     if local == 0u {
         shared_count = min(atomicLoad(&big_count.tiles), params.big_capacity);
     }
@@ -890,7 +890,7 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_ind
     var written = 0u;
     var back_facing = 0u;
     let in_square = vec2i(i32(local) % SUB_TILE, i32(local) / SUB_TILE);
-    for (var i = group.x; i < queued; i += BIG_WORKGROUPS) {
+    for (var i = group.x; i < queued; i += groups.x) {
         let item = big_tiles[i];
         let s = big_setups[item.x];
         let r = big_tile_rect(s.bounds, item.y);
@@ -943,14 +943,10 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_ind
     count_writes(written, back_facing);
 }
 
-// Workgroups of `bin_fill` and `raster_bins` (`compute::BIN_WORKGROUPS`),
-// which loop over their work.
-const BIN_WORKGROUPS: u32 = 2048u;
-
 var<workgroup> scan_sums: array<vec2u, 256>;
 
 // One workgroup: each bin's first entry in `bin_list` (the entries before
-// it, a prefix sum of the counts `raster` made) for `bin_fill`, and the
+// it, a prefix sum of the counts of `bin_count`) for `bin_fill`, and the
 // chunks of at most `params.bin_chunk` entries for `raster_bins`.
 @compute @workgroup_size(256)
 fn bin_scan(@builtin(local_invocation_index) local: u32) {
@@ -990,12 +986,21 @@ fn bin_scan(@builtin(local_invocation_index) local: u32) {
     }
 }
 
+// Counts each queued (triangle, bin) entry in its bin, for `bin_scan`.
+@compute @workgroup_size(64)
+fn bin_count(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let queued = min(atomicLoad(&big_count.tiles), params.big_capacity);
+    for (var i = id.x; i < queued; i += groups.x * 64u) {
+        atomicAdd(&bin_state[BIN_COUNTS + big_tiles[i].y], 1u);
+    }
+}
+
 // Lists each queued (triangle, bin) entry in its bin.
 @compute @workgroup_size(64)
-fn bin_fill(@builtin(global_invocation_id) id: vec3u) {
+fn bin_fill(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let queued = min(atomicLoad(&big_count.tiles), params.big_capacity);
     let n = params.bins_x * params.bins_y;
-    for (var i = id.x; i < queued; i += BIN_WORKGROUPS * 64u) {
+    for (var i = id.x; i < queued; i += groups.x * 64u) {
         let e = big_tiles[i];
         bin_list[atomicAdd(&bin_state[BIN_COUNTS + n + e.y], 1u)] = e.x;
     }
@@ -1022,7 +1027,8 @@ fn bin_pixel(p: vec2i) -> u32 {
 // `bin_depth`, then writes its covered pixels with one atomicMax each.
 // Not built with MSAA (`raster_samples` writes the global buffer).
 @compute @workgroup_size(64)
-fn raster_bins(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_index) local: u32) {
+fn raster_bins(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
+               @builtin(local_invocation_index) local: u32) {
     let total = atomicLoad(&bin_state[BIN_TOTAL]);
     bin_invocation = local;
     var passed = 0u;
@@ -1030,7 +1036,7 @@ fn raster_bins(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_in
     var written = 0u;
     var back_facing = 0u;
     var merged = 0u;
-    for (var c = group.x; c < total; c += BIN_WORKGROUPS) {
+    for (var c = group.x; c < total; c += groups.x) {
         let chunk = bin_chunks[c];
         let bin = vec2i(vec2u(chunk.x % params.bins_x, chunk.x / params.bins_x));
         bin_block = bin * BIG_TILE + vec2i(i32(local % 8u), i32(local / 8u)) * 4;
