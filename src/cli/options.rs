@@ -11,7 +11,7 @@ use shadespace::render::objectspace::{
     PagingChain, TrimapSearch,
 };
 use shadespace::render::scene_gpu::{DEFAULT_BIG_WORKGROUPS, DEFAULT_SMALL_AREA};
-use shadespace::render::{BigTriangles, ClusterDraws, Culling, Exposure, ShadingModel, ShadowRefresh};
+use shadespace::render::{ClusterDraws, Culling, Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
 
 use super::parse::{self, Orbit, Views, VisibilityChoice};
@@ -190,23 +190,13 @@ pub struct SceneArgs {
     /// pixel against a fire-and-forget atomic; docs/culling.md).
     #[arg(long)]
     pub vis_depth_test: bool,
-    /// Compute visibility: how triangles whose bounds exceed 256 pixels are
-    /// drawn. `tiles`: a workgroup per 32x32 tile of each triangle's bounds,
-    /// one 64-bit atomicMax per covered pixel of every triangle. `bins`
-    /// (`bins:N`): each triangle listed in the 32x32 screen bins it
-    /// overlaps; a workgroup per bin and chunk of up to N of its triangles
-    /// (default 32) keeps each pixel's nearest surface in workgroup memory
-    /// and writes it once. The ids are the same either way; under MSAA
-    /// `tiles` is used.
-    #[arg(long, value_name = "tiles|bins[:N]", default_value = "tiles", value_parser = parse::vis_big)]
-    pub vis_big: BigTriangles,
     /// Compute visibility: the most pixels of a triangle's bounding box that
     /// one thread rasterizes alone; bigger triangles are drawn by workgroups
     /// (--vis-big). The ids are the same whatever it is.
     #[arg(long, value_name = "PIXELS", default_value_t = DEFAULT_SMALL_AREA, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub vis_small_area: u32,
-    /// Compute visibility: workgroups of the passes that draw big triangles
-    /// (--vis-big), which loop over their work. The ids are the same
+    /// Compute visibility: workgroups of the pass that draws big triangles,
+    /// which loop over their tiles. The ids are the same
     /// whatever it is.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_BIG_WORKGROUPS, value_parser = clap::value_parser!(u32).range(1..=65535))]
     pub vis_big_workgroups: u32,

@@ -5,7 +5,7 @@ use std::str::FromStr;
 
 use glam::Vec3;
 use shadespace::render::targets::SAMPLE_COUNTS;
-use shadespace::render::{BigTriangles, ClusterDraws, Culling, Exposure, VisibilityMethod};
+use shadespace::render::{ClusterDraws, Culling, Exposure, VisibilityMethod};
 
 /// A finite number in `range`, for a flag whose meaning needs one.
 fn finite_in(s: &str, range: std::ops::RangeInclusive<f32>, what: &str) -> Result<f32, String> {
@@ -99,11 +99,6 @@ pub fn visibility(s: &str) -> Result<VisibilityChoice, String> {
 /// `--culling`: `none`, `frustum` or `occlusion`.
 pub fn culling(s: &str) -> Result<Culling, String> {
     Culling::from_str(s)
-}
-
-/// `--vis-big`: `tiles`, `bins` or `bins:N`.
-pub fn vis_big(s: &str) -> Result<BigTriangles, String> {
-    s.parse()
 }
 
 /// `--cluster-draws`: `indexed` or `list`.

@@ -187,7 +187,6 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             visibility_prepass: !a.objectspace.no_visibility_prepass,
             visibility,
             count_visibility: a.count_visibility,
-            big_triangles: a.vis_big,
             marking: a.objectspace.marking,
             count_mark_atomics: a.objectspace.count_marks,
             paging_chain: a.objectspace.os_paging,
@@ -207,7 +206,6 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             depth_prepass: !a.no_depth_prepass,
             visibility,
             count_visibility: a.count_visibility,
-            big_triangles: a.vis_big,
         }),
     };
     RenderOptions { width: a.size.0, height: a.size.1, pipeline, samples: a.msaa }

@@ -10,7 +10,7 @@ use crate::render::RenderError;
 use crate::render::culling::{Frustum, LightLists};
 use crate::render::frame::Frame;
 use crate::render::gpu_types::GpuView;
-use crate::render::passes::visibility::compute::{BigTriangles, ComputeVisibility, compute_visibility};
+use crate::render::passes::visibility::compute::{ComputeVisibility, compute_visibility};
 use crate::render::passes::visibility::{VisibilityBuffer, VisibilityMethod, VisibilityPass, visibility};
 use crate::render::scene_gpu::{SceneGpu, gpu_view};
 use crate::render::targets::Targets;
@@ -69,15 +69,7 @@ impl VisibilityRenderer {
                         Pass::Raster(VisibilityPass::new(device, &mut shaders, &scene_gpu, false, 1)?)
                     }
                     VisibilityMethod::Compute => {
-                        let pass = ComputeVisibility::new(
-                            device,
-                            &mut shaders,
-                            &scene_gpu,
-                            &targets,
-                            &buffer,
-                            false,
-                            BigTriangles::default(),
-                        )?;
+                        let pass = ComputeVisibility::new(device, &mut shaders, &scene_gpu, &targets, &buffer, false)?;
                         Pass::Compute(Box::new(pass))
                     }
                 };

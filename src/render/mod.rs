@@ -52,7 +52,6 @@ pub use passes::shadows::ShadowRefresh;
 use passes::shadows::{ShadowMaps, SunView, shadow_maps};
 use passes::tonemap::{Tonemap, tonemap};
 pub use passes::visibility::VisibilityMethod;
-pub use passes::visibility::compute::BigTriangles;
 pub use report::{Counters, PipelineReport};
 use scene_gpu::SceneGpu;
 use targets::Targets;
@@ -337,7 +336,7 @@ pub struct Renderer {
     /// Most pixels of a triangle's bounds that the compute rasterizer draws
     /// in the triangle's own thread (default
     /// [`scene_gpu::DEFAULT_SMALL_AREA`]); bigger ones are set up once and
-    /// drawn by workgroups ([`BigTriangles`]). The ids are the same whatever it is.
+    /// drawn by workgroups, a 32x32 tile each. The ids are the same whatever it is.
     pub vis_small_area: u32,
     /// Workgroups of the compute rasterizer's big-triangle passes (default
     /// [`scene_gpu::DEFAULT_BIG_WORKGROUPS`]), which loop over their work.

@@ -24,8 +24,12 @@ pub const MAX_ALBEDO_SIZE: u32 = 1024;
 /// [`SceneGpu::vis_small_area`]'s default: a 16x16 box. Lower (64) overflowed
 /// the tile queue's triangle setups on Sponza (BENCHMARKS.md, "Compute visibility").
 pub const DEFAULT_SMALL_AREA: u32 = 256;
-/// [`SceneGpu::vis_big_workgroups`]'s default.
-pub const DEFAULT_BIG_WORKGROUPS: u32 = 1024;
+/// [`SceneGpu::vis_big_workgroups`]'s default. Each workgroup's loop over
+/// its tiles is a chain of dependent loads and barriers, so more of them
+/// run faster: on the H200, Sponza's `vis: raster big` took 0.222 ms with
+/// 1024, 0.179 with 4096, 0.161 with 32768 and 0.165 with 65535 at
+/// 1920x1080 (0.803, 0.650, 0.583, 0.580 at 3840x2160; BENCHMARKS.md).
+pub const DEFAULT_BIG_WORKGROUPS: u32 = 32768;
 
 /// Where one object's triangles are in the shared buffers (the same range
 /// for every instance of a mesh).

@@ -11,9 +11,7 @@ use std::path::Path;
 use glam::Vec3;
 use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::ObjectSpace;
-use shadespace::render::{
-    BigTriangles, Culling, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
-};
+use shadespace::render::{Culling, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
 use shadespace::scene::{BackFaces, Camera, Scene, Texture, path};
 
 const SPONZA: &str = "../shared/scenes/sponza-thesis";
@@ -410,14 +408,13 @@ fn depth_test_before_the_atomic_keeps_the_ids_with_fewer_atomics() {
 }
 
 /// The ids and the rasterizer's counters of one frame of `camera`'s view,
-/// big triangles (bounds over `small_area` pixels) drawn as `big` says by
-/// `workgroups` workgroups, culling with `culling`.
+/// with triangles over `small_area` pixels drawn as big by `workgroups`
+/// workgroups.
 fn ids_drawn_with(
     ctx: &GpuContext,
     scene: &Scene,
     camera: &Camera,
-    (size, culling): ((u32, u32), Culling),
-    big: BigTriangles,
+    size: (u32, u32),
     (small_area, workgroups): (u32, u32),
 ) -> (Vec<[u32; 2]>, shadespace::render::Counters) {
     let mut texture_sizes = vec![None; scene.objects.len()];
@@ -426,12 +423,10 @@ fn ids_drawn_with(
         texture_sizes,
         visibility: VisibilityMethod::Compute,
         count_visibility: true,
-        big_triangles: big,
         ..Default::default()
     };
     let options = RenderOptions::new(size.0, size.1, PipelineConfig::ObjectSpace(objectspace));
     let mut renderer = Renderer::new(ctx, scene, &options).unwrap();
-    renderer.culling = culling;
     renderer.vis_small_area = small_area;
     renderer.vis_big_workgroups = workgroups;
     renderer.render(ctx, camera, &[], 0).unwrap();
@@ -440,77 +435,52 @@ fn ids_drawn_with(
     (ids, counts)
 }
 
-/// Big triangles drawn by screen bins (`--vis-big bins`: each pixel's
-/// nearest kept in workgroup memory, written once per chunk) give the tile
-/// queue's ids bit for bit: on Sponza (alpha masks, bounds ending inside a
-/// bin: 108 rows are 3 bins and 12 rows), down the tiny city's street with
-/// occlusion culling (two raster passes, the bins cleared between them), and
-/// on floors crossing the near plane (fixed-point and homogeneous edges);
-/// with chunks of 32 and of 1 triangle (a bin's list split over many
-/// workgroups), with triangles over 32 pixels drawn as big, and by 3
-/// workgroups (each looping over many bins' chunks; the tile queue too).
-/// The bins write each covered pixel of their triangles once
-/// per chunk, not once per covered layer: fewer global atomics than the
-/// queue's writes where layers overlap.
+/// Which triangles count as big (`--vis-small-area`) and how many
+/// workgroups draw them (`--vis-big-workgroups`) change no id: on Sponza
+/// (alpha masks: its unmasked and masked triangles drawn by two builds of
+/// the rasterizer) and on floors crossing the near plane (fixed-point and
+/// homogeneous edges), every triangle drawn by its own thread, the default,
+/// and every triangle over 32 pixels drawn as big by 3 workgroups (each
+/// looping over many tiles): the same ids, the same covered pixels.
 #[test]
-fn bins_keep_the_ids_of_the_tile_queue() {
+fn big_triangle_settings_keep_the_ids() {
     let ctx = common::gpu();
     let (floor, camera, _) = common::floor_scene();
     let on_floor =
         Camera { position: Vec3::new(0.3, 0.02, 1.0), forward: Vec3::new(0.1, -0.2, -1.0).normalize(), ..camera };
     let mut huge = floor.clone();
     huge.meshes[0] = common::floor_quad(2000.0, 0.0);
-    let mut views = vec![
-        ("eye on the floor", floor, on_floor, Culling::None),
-        ("eye on a 2 km floor", huge, on_floor, Culling::None),
-    ];
-    let city = common::load("city:2");
-    views.push(("city:2 street, frame 4", city.clone(), path_camera("city:2", &city, 4), Culling::Occlusion));
+    let mut views = vec![("eye on the floor", floor, on_floor), ("eye on a 2 km floor", huge, on_floor)];
     if Path::new(SPONZA).is_dir() {
         let sponza = common::load(SPONZA);
-        views.push(("sponza, frame 100", sponza.clone(), path_camera(SPONZA, &sponza, 100), Culling::None));
+        views.push(("sponza, frame 100", sponza.clone(), path_camera(SPONZA, &sponza, 100)));
     } else {
         eprintln!("SKIPPED Sponza: {SPONZA} is absent");
     }
-    for (name, scene, camera, culling) in &views {
+    let covered = |c: &shadespace::render::Counters| c["vis_pixels_written"] + c["vis_depth_rejects"];
+    for (name, scene, camera) in &views {
         let size = (192, 108);
-        let (tiles, queued) = ids_drawn_with(&ctx, scene, camera, (size, *culling), BigTriangles::Tiles, (256, 1024));
-        assert!(tiles.iter().any(|id| id[0] != 0), "{name}: nothing covered");
-        assert!(queued["vis_big_triangles"] > 0.0, "{name}: no big triangle: {queued:?}");
-        let (few, _) = ids_drawn_with(&ctx, scene, camera, (size, *culling), BigTriangles::Tiles, (256, 3));
-        assert!(few == tiles, "{name}: 3 workgroups over the tile queue change the ids");
-        let covered = |c: &shadespace::render::Counters| c["vis_pixels_written"] + c["vis_depth_rejects"];
-        let mut writes = Vec::new();
-        for (chunk, small_area, workgroups) in [(32, 256, 1024), (1, 256, 1024), (32, 32, 3)] {
-            let big = BigTriangles::Bins(chunk);
-            let (bins, binned) = ids_drawn_with(&ctx, scene, camera, (size, *culling), big, (small_area, workgroups));
-            let differ = (0..tiles.len()).filter(|&i| tiles[i] != bins[i]).count();
-            let run = format!("{name}, chunks of {chunk}, big above {small_area} pixels");
-            assert_eq!(differ, 0, "{run}: {differ} pixels' ids differ from the tile queue's");
+        let settings = [(u32::MAX, 1), (256, 32768), (32, 3)];
+        let runs: Vec<_> = settings.iter().map(|&s| ids_drawn_with(&ctx, scene, camera, size, s)).collect();
+        let (ids, counts) = &runs[1];
+        assert!(ids.iter().any(|id| id[0] != 0), "{name}: nothing covered");
+        for ((other, other_counts), (small_area, workgroups)) in runs.iter().zip(settings) {
+            let differ = (0..ids.len()).filter(|&i| ids[i] != other[i]).count();
+            let run = format!("{name}, big above {small_area} pixels, {workgroups} workgroups");
             eprintln!(
-                "{run}: {} big triangles in {} bins, {} global atomics of the bins, {} atomics in all with tiles",
-                binned["vis_big_triangles"],
-                binned["vis_big_tiles"],
-                binned["vis_bin_writes"],
-                queued["vis_pixels_written"]
+                "{run}: {} big triangles, {} tiles",
+                other_counts["vis_big_triangles"], other_counts["vis_big_tiles"]
             );
-            if small_area != 256 {
-                assert!(binned["vis_big_triangles"] >= queued["vis_big_triangles"], "{run}: {binned:?}");
-                continue;
-            }
-            assert_eq!(binned["vis_big_triangles"], queued["vis_big_triangles"], "{name}: {binned:?}");
-            assert_eq!(binned["vis_overflow_triangles"], 0.0, "{name}: {binned:?}");
-            // Without alpha masks (whose loads before the atomic reject in
-            // whatever order the threads run) both test the same covered
-            // pixels: kept, or rejected by the bin's nearer surface.
+            assert_eq!(differ, 0, "{run}: {differ} pixels' ids differ from the default's");
             if !scene.has_alpha_masks() {
-                assert_eq!(covered(&binned), covered(&queued), "{name}: {binned:?} / {queued:?}");
+                assert_eq!(covered(other_counts), covered(counts), "{run}: {other_counts:?} / {counts:?}");
             }
-            writes.push(binned["vis_bin_writes"]);
         }
-        assert!(writes[0] > 0.0, "{name}: the bins wrote nothing");
-        // A pixel is written once per chunk that covers it: no more often
-        // with a bin's whole list in one chunk than with a chunk per triangle.
-        assert!(writes[0] <= writes[1], "{name}: chunks of 32 wrote {} times, of 1 {}", writes[0], writes[1]);
+        assert_eq!(runs[0].1["vis_big_triangles"], 0.0, "{name}: a big triangle with no limit");
+        assert!(
+            runs[2].1["vis_big_triangles"] >= counts["vis_big_triangles"],
+            "{name}: fewer big triangles over 32 px"
+        );
+        assert!(counts["vis_big_triangles"] > 0.0, "{name}: no big triangle by default");
     }
 }

@@ -37,7 +37,7 @@ use super::frame::Frame;
 use super::passes::background::{Background, Coverage, background};
 use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::gbuffer::{GbufferStage, geometry};
-use super::passes::visibility::compute::{BigTriangles, ComputeVisibility, compute_visibility};
+use super::passes::visibility::compute::{ComputeVisibility, compute_visibility};
 use super::passes::visibility::{VisibilityBuffer, VisibilityMethod};
 use super::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, hdr_output};
 use super::report::Counters;
@@ -84,18 +84,11 @@ pub struct DeferredComputeConfig {
     /// Compute visibility: count the rasterizer's work every frame into the
     /// counters (adds atomics: for profiling, not timing).
     pub count_visibility: bool,
-    /// Compute visibility: how big triangles are drawn (the same ids).
-    pub big_triangles: BigTriangles,
 }
 
 impl Default for DeferredComputeConfig {
     fn default() -> Self {
-        Self {
-            depth_prepass: true,
-            visibility: VisibilityMethod::Raster,
-            count_visibility: false,
-            big_triangles: BigTriangles::default(),
-        }
+        Self { depth_prepass: true, visibility: VisibilityMethod::Raster, count_visibility: false }
     }
 }
 
@@ -145,8 +138,7 @@ impl DeferredCompute {
             }
             VisibilityMethod::Compute => {
                 let ids = VisibilityBuffer::new(device, targets, VisibilityMethod::Compute);
-                let (counting, big) = (config.count_visibility, config.big_triangles);
-                let pass = ComputeVisibility::new(device, shaders, scene, targets, &ids, counting, big)?;
+                let pass = ComputeVisibility::new(device, shaders, scene, targets, &ids, config.count_visibility)?;
                 Surfaces::Visibility { ids, pass: Box::new(pass) }
             }
         };

@@ -52,7 +52,7 @@ use super::passes::depth_prepass::{DepthPrepass, culled_depth_prepass};
 use super::passes::light_grid::LightGrid;
 use super::passes::light_grid::world::{WorldGrid, build_world_grid};
 use super::passes::visibility::VisibilityBuffer;
-use super::passes::visibility::compute::{BigTriangles, ComputeVisibility, ComputeVisibilityError, compute_visibility};
+use super::passes::visibility::compute::{ComputeVisibility, ComputeVisibilityError, compute_visibility};
 use super::passes::visibility::{VisibilityMethod, VisibilityPass, visibility};
 use super::report::{Counters, ObjectMemory, PipelineReport};
 use super::scene_gpu::SceneGpu;
@@ -634,8 +634,6 @@ pub struct ObjectSpaceConfig {
     /// Compute visibility: count the rasterizer's work every frame into the
     /// counters (adds atomics: for profiling, not timing).
     pub count_visibility: bool,
-    /// Compute visibility: how big triangles are drawn (the same ids).
-    pub big_triangles: BigTriangles,
     /// How marking writes the global tile state.
     pub marking: Marking,
     /// Count the mark pass's global tile marks and atomics every frame into
@@ -698,7 +696,6 @@ impl Default for ObjectSpaceConfig {
             visibility_prepass: true,
             visibility: VisibilityMethod::Raster,
             count_visibility: false,
-            big_triangles: BigTriangles::default(),
             marking: Marking::Workgroup,
             count_mark_atomics: false,
             shade_budget_texels: None,
@@ -956,7 +953,6 @@ impl ObjectSpace {
                     targets,
                     &res.visibility,
                     counting,
-                    config.big_triangles,
                 )?))
             }
         };
@@ -974,8 +970,7 @@ impl ObjectSpace {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let visibility =
-                Box::new(ComputeVisibility::new(device, shaders, scene, targets, &ids, false, config.big_triangles)?);
+            let visibility = Box::new(ComputeVisibility::new(device, shaders, scene, targets, &ids, false)?);
             extra_views.push(ExtraView { uniform, visibility, hdr });
         }
         // The compute rasterizer leaves the depth target to the blended passes.

@@ -8,13 +8,12 @@
 //! 64-bit `atomicMax(depth << 32 | payload)` per covered pixel (with
 //! [`SceneGpu::vis_depth_test`], off by default, only where a load of the
 //! pixel finds nothing nearer: fewer atomics, but slower on the H200); triangles
-//! whose bounds exceed 256 pixels are set up once into a buffer and queued as
-//! 32x32 tiles), `vis: raster big` (one workgroup per queued tile: its 8x8
+//! whose bounds exceed 256 pixels ([`SceneGpu::vis_small_area`]) are set up
+//! once into a buffer and queued as 32x32 tiles), `vis: raster big` (a
+//! workgroup per queued tile, [`SceneGpu::vis_big_workgroups`] of them
+//! looping over the queue: its 8x8
 //! squares are tested against the triangle's edges, then every pixel of the
-//! squares that pass; with [`BigTriangles::Bins`] the triangles are listed
-//! per 32x32 screen bin and a workgroup per bin keeps its pixels' nearest
-//! surfaces in workgroup memory, then writes each once) and `vis: resolve`
-//! (payload to (object + 1, triangle)).
+//! squares that pass) and `vis: resolve` (payload to (object + 1, triangle)).
 //!
 //! Under MSAA (the targets' samples, shaders built with `MSAA`) each pixel
 //! has one 64-bit entry per sample, tested at Vulkan's standard sample
@@ -90,61 +89,6 @@ const _: () = assert!(crate::render::clusters::CLUSTER_TRIANGLES as u32 == RASTE
 /// a thread each (an object with more takes several).
 pub(crate) const CULL_CHUNK: u32 = 64;
 
-/// Side of a screen bin of [`BigTriangles::Bins`], in pixels (`BIG_TILE`).
-const BIN_SIZE: u32 = 32;
-/// Entries of a bin's list one workgroup draws by default (`--vis-big bins`).
-pub const DEFAULT_BIN_CHUNK: u32 = 32;
-
-/// How the compute rasterizer draws the triangles whose bounds exceed 256
-/// pixels (`--vis-big`); the visibility buffer is the same either way
-/// (tested), only the work differs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum BigTriangles {
-    /// A workgroup per 32x32 tile of each triangle's bounds: one 64-bit
-    /// atomicMax per covered pixel of every triangle.
-    #[default]
-    Tiles,
-    /// Each triangle listed in the screen's 32x32 bins it overlaps; a
-    /// workgroup per bin, per chunk of up to this many of its triangles,
-    /// keeps each pixel's nearest surface in workgroup memory and writes the
-    /// covered pixels once (one global atomic per pixel and chunk instead of
-    /// one per covered layer). Under MSAA it falls back to
-    /// [`BigTriangles::Tiles`] (the samples' depths do not fit a workgroup's memory).
-    Bins(u32),
-}
-
-impl std::str::FromStr for BigTriangles {
-    type Err = String;
-
-    /// `tiles`, `bins` or `bins:N` (N entries per workgroup, at least 1).
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s.split_once(':') {
-            None if s == "tiles" => Ok(Self::Tiles),
-            None if s == "bins" => Ok(Self::Bins(DEFAULT_BIN_CHUNK)),
-            Some(("bins", n)) => match n.parse::<u32>() {
-                Ok(n) if n >= 1 => Ok(Self::Bins(n)),
-                _ => Err(format!("`{n}` is not a chunk of at least 1 triangle (bins:N)")),
-            },
-            _ => Err(format!("`{s}` is not tiles, bins or bins:N")),
-        }
-    }
-}
-
-/// As written on the command line (reports name it so).
-impl serde::Serialize for BigTriangles {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.collect_str(self)
-    }
-}
-
-impl std::fmt::Display for BigTriangles {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::Tiles => write!(f, "tiles"),
-            Self::Bins(n) => write!(f, "bins:{n}"),
-        }
-    }
-}
 /// Most workgroups along x of one dispatch (WebGPU's limit is 65535).
 const MAX_GROUPS_X: u32 = 32768;
 
@@ -168,17 +112,10 @@ gpu_struct! {
         /// 1: test each pixel with a load before its atomic
         /// ([`SceneGpu::vis_depth_test`]).
         pub depth_test: u32,
-        /// Screen bins along x and y ([`BigTriangles::Bins`]).
-        pub bins_x: u32,
-        pub bins_y: u32,
-        /// Most entries of a bin's list one workgroup draws.
-        pub bin_chunk: u32,
-        /// Entries of the chunk list.
-        pub chunk_capacity: u32,
         /// Most pixels of a triangle's bounds that its own thread rasterizes
         /// ([`SceneGpu::vis_small_area`]); bigger ones are set up and queued.
         pub small_area: u32,
-        pub pad_b: u32,
+        pub pad_c: u32,
     }
 }
 
@@ -287,18 +224,18 @@ gpu_struct! {
 /// `counts` array, in this order).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RasterCount {
-    /// Triangles rasterized by their own thread (box of at most 256 pixels).
+    /// Triangles rasterized by their own thread (box of at most
+    /// [`SceneGpu::vis_small_area`] pixels).
     SmallTriangles,
     /// Pixels those threads tested (their boxes).
     SmallPixelsTested,
     /// Triangles set up once and queued as 32x32 tiles.
     BigTriangles,
-    /// Their queued tiles (with [`BigTriangles::Bins`], their bins).
+    /// Their queued tiles.
     BigTiles,
-    /// 8x8 squares of those tiles that passed the edge test (with bins,
-    /// 4x4 blocks of a bin, per triangle).
+    /// 8x8 squares of those tiles that passed the edge test.
     BigSquaresPassed,
-    /// Pixels the tile workgroups tested (in squares or blocks that passed).
+    /// Pixels the tile workgroups tested (in squares that passed).
     BigPixelsTested,
     /// 64-bit atomicMax issued: covered pixels inside the depth range that
     /// the depth test before the atomic did not reject.
@@ -310,17 +247,12 @@ pub enum RasterCount {
     BackFacingWrites,
     /// Covered pixels inside the depth range whose load found a value at
     /// least as large, so no atomicMax was issued
-    /// ([`SceneGpu::vis_depth_test`], and alpha-masked triangles always;
-    /// with [`BigTriangles::Bins`] the bins' compares in workgroup memory).
+    /// ([`SceneGpu::vis_depth_test`], and alpha-masked triangles always).
     DepthRejects,
-    /// With [`BigTriangles::Bins`]: the bins' 64-bit atomicMax into the
-    /// visibility buffer, one per covered pixel and chunk (their writes in
-    /// workgroup memory count as [`RasterCount::PixelsWritten`]).
-    BinWrites,
 }
 
 impl RasterCount {
-    pub const ALL: [Self; 11] = [
+    pub const ALL: [Self; 10] = [
         Self::SmallTriangles,
         Self::SmallPixelsTested,
         Self::BigTriangles,
@@ -331,7 +263,6 @@ impl RasterCount {
         Self::OverflowTriangles,
         Self::BackFacingWrites,
         Self::DepthRejects,
-        Self::BinWrites,
     ];
 
     /// Its name among the frame counters.
@@ -347,7 +278,6 @@ impl RasterCount {
             Self::OverflowTriangles => "vis_overflow_triangles",
             Self::BackFacingWrites => "vis_back_facing_writes",
             Self::DepthRejects => "vis_depth_rejects",
-            Self::BinWrites => "vis_bin_writes",
         }
     }
 }
@@ -402,22 +332,29 @@ pub enum ComputeVisibilityError {
 
 /// The compute rasterizer's pipelines, buffers and bind groups, for one
 /// resolution and one output buffer.
-/// How `vis: raster big` draws the big triangles ([`BigTriangles`]).
-enum BigPipelines {
-    Tiles(wgpu::ComputePipeline),
-    Bins {
-        count: wgpu::ComputePipeline,
-        scan: wgpu::ComputePipeline,
-        fill: wgpu::ComputePipeline,
-        raster: wgpu::ComputePipeline,
-    },
+/// Scenes with alpha masks, drawn without culling: `vis: raster` draws the
+/// unmasked objects' triangles with `raster.wgsl` built without alpha
+/// testing, then the masked objects' with it. Alpha testing's code slowed
+/// the whole pass, masked or not (on the H200, Sponza's `vis: raster` took
+/// 0.222 ms with it and 0.177 ms without at 1920x1080).
+struct MaskSplit {
+    /// `raster` without `ALPHA_MASK`.
+    unmasked: wgpu::ComputePipeline,
+    /// Per half (unmasked, masked): its parameters, its objects' ranges
+    /// (as [`visible_ranges`] numbers them, each list from 0) and the group
+    /// binding them. `raster_big` takes the masked half's group: alpha
+    /// testing finds a masked triangle's object in its ranges.
+    params: [wgpu::Buffer; 2],
+    ranges: [wgpu::Buffer; 2],
+    groups: [wgpu::BindGroup; 2],
 }
 
 pub struct ComputeVisibility {
     clear: wgpu::ComputePipeline,
+    /// `raster`, with alpha testing where the scene has masks.
     raster: wgpu::ComputePipeline,
-    /// `raster_big`, or with bins `bin_scan`, `bin_fill` and `raster_bins`.
-    big: BigPipelines,
+    split: Option<MaskSplit>,
+    raster_big: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
     raster_params: wgpu::Buffer,
     resolve_params: wgpu::Buffer,
@@ -429,13 +366,6 @@ pub struct ComputeVisibility {
     setup_capacity: u32,
     /// Bytes of the big-triangle setups.
     setup_bytes: u64,
-    /// The bins' counts and fill positions (cleared with `big_count`).
-    bin_state: wgpu::Buffer,
-    bins: (u32, u32),
-    bin_chunk: u32,
-    chunk_capacity: u32,
-    /// Bytes of the bins' buffers.
-    bin_bytes: u64,
     cull: Cull,
     resolve_group: wgpu::BindGroup,
     /// Group 1 of passes that import `shadespace::visibility_read`: the ids
@@ -451,8 +381,7 @@ pub struct ComputeVisibility {
 
 impl ComputeVisibility {
     /// Fails where the device lacks [`FEATURES`]. `counting`: the variant
-    /// that counts its work ([`RasterCount`], see [`Self::collect_counts`]);
-    /// `big`: how it draws big triangles (tiles under MSAA whatever it says).
+    /// that counts its work ([`RasterCount`], see [`Self::collect_counts`]).
     pub fn new(
         device: &wgpu::Device,
         shaders: &mut ShaderLibrary,
@@ -460,7 +389,6 @@ impl ComputeVisibility {
         targets: &Targets,
         out: &VisibilityBuffer,
         counting: bool,
-        big: BigTriangles,
     ) -> Result<Self, ComputeVisibilityError> {
         if !device.features().contains(FEATURES) {
             return Err(ComputeVisibilityError::NoInt64Atomics);
@@ -500,19 +428,6 @@ impl ComputeVisibility {
             crate::shaders::struct_size(&shaders.compose(RASTER)?, "Setup").expect("raster.wgsl declares struct Setup");
         let setup_bytes = setup_capacity as u64 * setup_size;
         let big_setups = buffer("vis big setups", setup_bytes, U::STORAGE);
-        // Bins: a list entry per queued (triangle, bin), a chunk per
-        // `bin_chunk` of them and one per bin at most besides.
-        let big = if samples > 1 { BigTriangles::Tiles } else { big };
-        let bins = (width.div_ceil(BIN_SIZE), height.div_ceil(BIN_SIZE));
-        let (bin_chunk, list_capacity, chunk_capacity) = match big {
-            BigTriangles::Tiles => (1, 1, 1),
-            BigTriangles::Bins(chunk) => (chunk, big_capacity, big_capacity.div_ceil(chunk) + bins.0 * bins.1),
-        };
-        let state_words = 4 + if matches!(big, BigTriangles::Bins(_)) { 2 * bins.0 * bins.1 } else { 0 };
-        let bin_state = buffer("vis bin state", state_words as u64 * 4, U::STORAGE | U::COPY_DST);
-        let bin_list = buffer("vis bin lists", list_capacity as u64 * 4, U::STORAGE);
-        let bin_chunks = buffer("vis bin chunks", chunk_capacity as u64 * 16, U::STORAGE);
-        let bin_bytes = bin_state.size() + bin_list.size() + bin_chunks.size();
 
         let read = Binding::Storage { read_only: true };
         let rw = Binding::Storage { read_only: false };
@@ -556,7 +471,7 @@ impl ComputeVisibility {
         let cull_params = buffer("vis cull params", size_of::<GpuCullParams>() as u64, U::UNIFORM | U::COPY_DST);
 
         let mut raster_bindings =
-            vec![Binding::Uniform, read, rw, rw, rw, rw, read, read, read, read, Binding::Uniform, rw, rw, rw];
+            vec![Binding::Uniform, read, rw, rw, rw, rw, read, read, read, read, Binding::Uniform];
         if counting.is_some() {
             raster_bindings.push(rw);
         }
@@ -564,9 +479,9 @@ impl ComputeVisibility {
         let dimension = if samples > 1 { wgpu::TextureViewDimension::D2Array } else { wgpu::TextureViewDimension::D2 };
         let out_binding = Binding::StorageTexture { format: super::FORMAT, dimension };
         let resolve_layout = bind_group_layout(device, "vis resolve", &[Binding::Uniform, read, rw, out_binding]);
-        let raster_group = |list: &wgpu::Buffer| {
+        let raster_group = |params: &wgpu::Buffer, ranges: &wgpu::Buffer, list: &wgpu::Buffer| {
             let mut resources = vec![
-                raster_params.as_entire_binding(),
+                params.as_entire_binding(),
                 ranges.as_entire_binding(),
                 depth_ids.as_entire_binding(),
                 big_tiles.as_entire_binding(),
@@ -577,16 +492,28 @@ impl ComputeVisibility {
                 lists.as_entire_binding(),
                 cull_counts.as_entire_binding(),
                 list.as_entire_binding(),
-                bin_state.as_entire_binding(),
-                bin_list.as_entire_binding(),
-                bin_chunks.as_entire_binding(),
             ];
             if let Some(c) = &counting {
                 resources.push(c.counts.as_entire_binding());
             }
             bind_group(device, "vis raster", &raster_layout, &resources)
         };
-        let raster_groups = [raster_group(&list_params[0]), raster_group(&list_params[1])];
+        let raster_groups = [
+            raster_group(&raster_params, &ranges, &list_params[0]),
+            raster_group(&raster_params, &ranges, &list_params[1]),
+        ];
+        // Unculled with alpha masks: the unmasked objects' triangles drawn by
+        // a `raster` without alpha testing, the masked ones' by one with it.
+        let split = scene.has_alpha_masks().then(|| {
+            let params = || buffer("vis raster params", size_of::<GpuRasterParams>() as u64, U::UNIFORM | U::COPY_DST);
+            let lists = || buffer("vis ranges", ranges.size(), U::STORAGE | U::COPY_DST);
+            let (params, ranges) = ([params(), params()], [lists(), lists()]);
+            let groups = [
+                raster_group(&params[0], &ranges[0], &list_params[0]),
+                raster_group(&params[1], &ranges[1], &list_params[0]),
+            ];
+            (params, ranges, groups)
+        });
         let pyramid = DepthPyramid::new(
             device,
             shaders,
@@ -643,25 +570,17 @@ impl ComputeVisibility {
             (true, true) => RASTER_CULLING_COUNTING,
         };
         // Alpha testing is compiled in only for scenes that need it.
-        let mut defs: Vec<&str> = if scene.has_alpha_masks() { vec![ALPHA_MASK] } else { vec![] };
-        let binned = matches!(big, BigTriangles::Bins(_));
-        if binned {
-            defs.push("BINS");
-        }
-        let mut raster =
-            |entry, defs: &[&str]| compute_pipeline_with(device, shaders, raster_shader, defs, entry, &raster_layouts);
-        let (plain, clustered) = (raster("raster", &defs)?, raster("raster_clusters", &defs)?);
-        let big = if binned {
-            // Only `raster_bins` keeps depths in workgroup memory.
-            let binned: Vec<&str> = defs.iter().copied().chain(["BIN_DEPTH"]).collect();
-            BigPipelines::Bins {
-                count: raster("bin_count", &defs)?,
-                scan: raster("bin_scan", &defs)?,
-                fill: raster("bin_fill", &defs)?,
-                raster: raster("raster_bins", &binned)?,
-            }
-        } else {
-            BigPipelines::Tiles(raster("raster_big", &defs)?)
+        let defs: &[&str] = if scene.has_alpha_masks() { &[ALPHA_MASK] } else { &[] };
+        let mut raster = |entry| compute_pipeline_with(device, shaders, raster_shader, defs, entry, &raster_layouts);
+        let (plain, big, clustered) = (raster("raster")?, raster("raster_big")?, raster("raster_clusters")?);
+        let split = match split {
+            Some((params, ranges, groups)) => Some(MaskSplit {
+                unmasked: compute_pipeline_with(device, shaders, raster_shader, &[], "raster", &raster_layouts)?,
+                params,
+                ranges,
+                groups,
+            }),
+            None => None,
         };
         let cull_layouts = [&scene.layout, &cull_layout];
         let cull = Cull {
@@ -681,7 +600,8 @@ impl ComputeVisibility {
         };
         Ok(Self {
             raster: plain,
-            big,
+            split,
+            raster_big: big,
             cull,
             clear: compute_pipeline(device, shaders, RESOLVE, "clear", &[&resolve_layout])?,
             resolve: compute_pipeline(device, shaders, RESOLVE, "resolve", &[&resolve_layout])?,
@@ -692,11 +612,6 @@ impl ComputeVisibility {
             big_capacity,
             setup_capacity,
             setup_bytes,
-            bin_state,
-            bins,
-            bin_chunk,
-            chunk_capacity,
-            bin_bytes,
             resolve_group,
             read_layout,
             read_group,
@@ -765,12 +680,11 @@ impl ComputeVisibility {
     }
 
     /// Bytes of its buffers (the 64-bit one, the big-tile queue and setups,
-    /// the bins, the ranges, and culling's cluster lists, history and depth pyramid).
+    /// the ranges, and culling's cluster lists, history and depth pyramid).
     pub fn bytes(&self) -> u64 {
         self.width as u64 * self.height as u64 * u64::from(self.samples) * 8
             + self.big_capacity as u64 * 8
             + self.setup_bytes
-            + self.bin_bytes
             + self.ranges.size()
             + self.cull.bytes
     }
@@ -925,6 +839,19 @@ pub fn visible_ranges(scene: &SceneGpu, visible: &[bool]) -> (Vec<[u32; 4]>, u32
     (ranges, total)
 }
 
+/// The entries of `ranges` ([`visible_ranges`]) whose objects are (`masked`)
+/// or are not alpha-masked, their first triangles numbered again from 0 in
+/// this list (the scene's numbering kept), and their triangles.
+fn masked_half(scene: &SceneGpu, ranges: &[[u32; 4]], masked: bool) -> (Vec<[u32; 4]>, u32) {
+    let mut list = Vec::new();
+    let mut total = 0;
+    for r in ranges.iter().filter(|r| scene.masked[r[0] as usize] == masked) {
+        list.push([r[0], total, r[2], 0]);
+        total += scene.draws[r[0] as usize].index_count / 3;
+    }
+    (list, total)
+}
+
 /// A 2D dispatch of `groups` workgroups (at most [`MAX_GROUPS_X`] along x).
 pub(crate) fn split(groups: u32) -> (u32, u32) {
     let x = groups.clamp(1, MAX_GROUPS_X);
@@ -946,12 +873,8 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         setup_capacity: pass.setup_capacity,
         samples: pass.samples,
         depth_test: u32::from(frame.scene.vis_depth_test),
-        bins_x: pass.bins.0,
-        bins_y: pass.bins.1,
-        bin_chunk: pass.bin_chunk,
-        chunk_capacity: pass.chunk_capacity,
         small_area: frame.scene.vis_small_area,
-        pad_b: 0,
+        pad_c: 0,
     };
     frame.queue.write_buffer(&pass.raster_params, 0, bytemuck::bytes_of(&raster));
     let resolve = GpuResolveParams { width: pass.width, height: pass.height, range_count, samples: pass.samples };
@@ -984,7 +907,6 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         frame.encoder.clear_buffer(&pass.cull.counts, 0, None);
     }
     frame.encoder.clear_buffer(&pass.big_count, 0, None);
-    frame.encoder.clear_buffer(&pass.bin_state, 0, None);
     if let Some(c) = &pass.counting {
         frame.encoder.clear_buffer(&c.counts, 0, None);
     }
@@ -996,19 +918,39 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         cp.set_bind_group(0, &pass.resolve_group, &[]);
         cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1);
     }
+    let [early, late] = &pass.cull.raster_groups;
     if range_count > 0 && culling == Culling::None {
-        let groups = split(triangles.div_ceil(RASTER_WORKGROUP));
-        raster_passes(frame, pass, &pass.raster, None, groups, "");
+        match &pass.split {
+            Some(halves) => {
+                let mut draws = Vec::new();
+                for (half, pipeline) in [&halves.unmasked, &pass.raster].into_iter().enumerate() {
+                    let masked = half == 1;
+                    let (list, count) = masked_half(frame.scene, &ranges, masked);
+                    if list.is_empty() {
+                        continue;
+                    }
+                    frame.queue.write_buffer(&halves.ranges[half], 0, bytemuck::cast_slice(&list));
+                    let params = GpuRasterParams { range_count: list.len() as u32, triangle_count: count, ..raster };
+                    frame.queue.write_buffer(&halves.params[half], 0, bytemuck::bytes_of(&params));
+                    let size = Size::Direct(split(count.div_ceil(RASTER_WORKGROUP)));
+                    draws.push((pipeline, &halves.groups[half], size));
+                }
+                raster_passes(frame, pass, &draws, &halves.groups[1], "");
+            }
+            None => {
+                let size = Size::Direct(split(triangles.div_ceil(RASTER_WORKGROUP)));
+                raster_passes(frame, pass, &[(&pass.raster, early, size)], early, "");
+            }
+        }
     } else if range_count > 0 {
         let groups = split(chunks.len() as u32);
         cull_pass(frame, pass, &pass.cull.early, "vis: cull", groups);
-        raster_passes(frame, pass, &pass.cull.raster, Some(0), groups, "");
+        raster_passes(frame, pass, &[(&pass.cull.raster, early, Size::Indirect(0))], early, "");
         if culling == Culling::Occlusion {
             pass.cull.pyramid.encode(frame, "vis: hiz");
             cull_pass(frame, pass, &pass.cull.late, "vis: cull late", groups);
             frame.encoder.clear_buffer(&pass.big_count, 0, None);
-            frame.encoder.clear_buffer(&pass.bin_state, 0, None);
-            raster_passes(frame, pass, &pass.cull.raster, Some(1), groups, " late");
+            raster_passes(frame, pass, &[(&pass.cull.raster, late, Size::Indirect(12))], late, " late");
         }
     }
     {
@@ -1044,47 +986,40 @@ fn cull_pass(
     cp.dispatch_workgroups(1, 1, 1);
 }
 
-/// `vis: raster{suffix}` with `entry` (`raster`: `groups` workgroups;
-/// `raster_clusters`: indirect, over cluster list `list`), then `vis: raster
-/// big{suffix}` over the tiles it queued.
+/// How one `vis: raster` dispatch is sized: `raster`'s workgroups, or
+/// `raster_clusters`' indirectly from the cull pass's sizes at this offset.
+enum Size {
+    Direct((u32, u32)),
+    Indirect(u64),
+}
+
+/// `vis: raster{suffix}`: each of `draws` (a pipeline, its group 1, its
+/// size), then `vis: raster big{suffix}` over the tiles they queued, with
+/// group 1 `big_group`.
 fn raster_passes(
     frame: &mut Frame,
     pass: &ComputeVisibility,
-    entry: &wgpu::ComputePipeline,
-    list: Option<usize>,
-    groups: (u32, u32),
+    draws: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, Size)],
+    big_group: &wgpu::BindGroup,
     suffix: &str,
 ) {
     let scene = frame.scene_group;
-    let group = &pass.cull.raster_groups[list.unwrap_or(0)];
     {
         let mut cp = frame.compute_pass(&format!("vis: raster{suffix}"));
-        cp.set_pipeline(entry);
         cp.set_bind_group(0, scene, &[]);
-        cp.set_bind_group(1, group, &[]);
-        match list {
-            Some(l) => cp.dispatch_workgroups_indirect(&pass.cull.dispatch, l as u64 * 12),
-            None => cp.dispatch_workgroups(groups.0, groups.1, 1),
+        for (pipeline, group, size) in draws {
+            cp.set_pipeline(pipeline);
+            cp.set_bind_group(1, *group, &[]);
+            match size {
+                Size::Direct(groups) => cp.dispatch_workgroups(groups.0, groups.1, 1),
+                Size::Indirect(offset) => cp.dispatch_workgroups_indirect(&pass.cull.dispatch, *offset),
+            }
         }
     }
     let workgroups = frame.scene.vis_big_workgroups;
     let mut cp = frame.compute_pass(&format!("vis: raster big{suffix}"));
+    cp.set_pipeline(&pass.raster_big);
     cp.set_bind_group(0, scene, &[]);
-    cp.set_bind_group(1, group, &[]);
-    match &pass.big {
-        BigPipelines::Tiles(raster_big) => {
-            cp.set_pipeline(raster_big);
-            cp.dispatch_workgroups(workgroups, 1, 1);
-        }
-        BigPipelines::Bins { count, scan, fill, raster } => {
-            cp.set_pipeline(count);
-            cp.dispatch_workgroups(workgroups, 1, 1);
-            cp.set_pipeline(scan);
-            cp.dispatch_workgroups(1, 1, 1);
-            cp.set_pipeline(fill);
-            cp.dispatch_workgroups(workgroups, 1, 1);
-            cp.set_pipeline(raster);
-            cp.dispatch_workgroups(workgroups, 1, 1);
-        }
-    }
+    cp.set_bind_group(1, big_group, &[]);
+    cp.dispatch_workgroups(workgroups, 1, 1);
 }

@@ -20,17 +20,6 @@
 // Two ways to find the triangles: `raster` runs one thread per triangle of
 // the visible objects (`ranges`); `raster_clusters` one workgroup per entry of
 // a list of clusters that `cull.wgsl` kept, one thread per triangle of it.
-//
-// Two ways to draw the big triangles (bounds over `params.small_area`
-// pixels, 256 by default): by
-// default (`raster_big`) a workgroup per 32x32 tile of a triangle's bounds,
-// one 64-bit atomic per covered pixel of every triangle; with `BINS`
-// (`--vis-big bins`) each triangle is listed in the screen's 32x32 bins it
-// overlaps (`bin_scan`, `bin_fill`) and a workgroup per bin (per chunk of
-// its list) keeps the nearest surface of each of its pixels in workgroup
-// memory (`raster_bins`, built with `BIN_DEPTH`), then writes each covered
-// pixel once: one global atomic per pixel and chunk instead of one per
-// covered layer (Sponza's depth complexity is about 4).
 #import shadespace::scene_bindings::{view, object_clip_position, objects, triangle_vertices}
 #ifdef MSAA
 #import shadespace::pixel_surface::standard_sample_position
@@ -55,17 +44,10 @@ struct RasterParams {
     // 1: read a pixel before its atomicMax and skip the atomic where the
     // pixel already holds a value at least as large (`keep_nearest`).
     depth_test: u32,
-    // Screen bins of BIG_TILE pixels along x and y (`BINS`).
-    bins_x: u32,
-    bins_y: u32,
-    // Most entries of a bin's list one `raster_bins` workgroup draws.
-    bin_chunk: u32,
-    // Entries of `bin_chunks`.
-    chunk_capacity: u32,
     // A thread rasterizes its triangle itself when the bounding box has at
-    // most this many pixels; bigger ones go to `raster_big` (`raster_bins`).
+    // most this many pixels; bigger ones go to `raster_big`.
     small_area: u32,
-    pad_b: u32,
+    pad_c: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: RasterParams;
@@ -116,21 +98,10 @@ struct ListParams {
 @group(1) @binding(9) var<storage, read> list_counts: array<u32>;
 @group(1) @binding(10) var<uniform> list: ListParams;
 
-// Binning of big triangles (`BINS`): per bin, the entries queued for it
-// (BIN_COUNTS + bin), then where `bin_fill` writes its next one
-// (BIN_COUNTS + bins + bin); at BIN_TOTAL the chunks `bin_scan` listed.
-@group(1) @binding(11) var<storage, read_write> bin_state: array<atomic<u32>>;
-const BIN_TOTAL: u32 = 0u;
-const BIN_COUNTS: u32 = 4u;
-// Per bin, its big triangles (entries of `big_setups`), back to back.
-@group(1) @binding(12) var<storage, read_write> bin_list: array<u32>;
-// The work of `raster_bins`: (bin, first entry of `bin_list`, entries, 0).
-@group(1) @binding(13) var<storage, read_write> bin_chunks: array<vec4u>;
-
 #ifdef COUNT
 // The profiling variant's work counts (`compute::RasterCount`), each added
 // once per thread.
-@group(1) @binding(14) var<storage, read_write> counts: array<atomic<u32>, 11>;
+@group(1) @binding(11) var<storage, read_write> counts: array<atomic<u32>, 10>;
 #endif
 
 // Adds n to work count `k` (nothing unless built with COUNT).
@@ -164,12 +135,12 @@ const PIXELS_WRITTEN: u32 = 6u;
 const OVERFLOW_TRIANGLES: u32 = 7u;
 const BACK_FACING_WRITES: u32 = 8u;
 const DEPTH_REJECTS: u32 = 9u;
-const BIN_WRITES: u32 = 10u;
 
 // Threads per workgroup of `raster` (`compute::RASTER_WORKGROUP`).
 const RASTER_WORKGROUP: u32 = 64u;
-// Big triangles go to `raster_big` in BIG_TILE squares, which it tests in
-// SUB_TILE squares (SUB_TILES^2 of them) before their pixels.
+// Big triangles (bounds over `params.small_area` pixels) go to `raster_big`
+// in BIG_TILE squares, which it tests in SUB_TILE squares (SUB_TILES^2 of
+// them) before their pixels.
 const BIG_TILE: i32 = 32;
 const SUB_TILE: i32 = 8;
 const SUB_TILES: i32 = 4;
@@ -557,26 +528,9 @@ fn keep_nearest(payload: u32, owns: u32, p: vec2i, depth: f32) -> u32 {
     if !(depth > 0.0 && depth <= 1.0) {
         return 0u;
     }
+    let pixel = pixel_index(p);
     let value = (u64(bitcast<u32>(depth)) << 32u) | u64(payload);
     let masked = (owns & MASKED) != 0u;
-#ifdef BIN_DEPTH
-    // The pixel is this invocation's alone in its bin: a plain compare.
-    let held = bin_pixel(p);
-    if bin_depth[held] >= value {
-#ifdef COUNT
-        rejects++;
-#endif
-        return 0u;
-    }
-#ifdef ALPHA_MASK
-    if masked && cut_away(payload, p) {
-        return 0u;
-    }
-#endif
-    bin_depth[held] = value;
-    return 1u;
-#else
-    let pixel = pixel_index(p);
     if (params.depth_test != 0u || masked) && beaten(pixel, value) {
         return 0u;
     }
@@ -587,7 +541,6 @@ fn keep_nearest(payload: u32, owns: u32, p: vec2i, depth: f32) -> u32 {
 #endif
     atomicMax(&depth_ids[pixel], value);
     return 1u;
-#endif
 }
 
 // (NDC x, y, 1) of the point `xy` pixels from the image's top-left corner.
@@ -793,9 +746,11 @@ fn raster_triangle(s: Setup) {
         count(SMALL_PIXELS_TESTED, area);
         return;
     }
-    // Big: set up once, its tiles (with `BINS` its bins) queued for whole
-    // workgroups; past either queue's capacity this thread rasterizes them
-    // itself (slow, but no pixel is lost).
+    // Big: set up once, its tiles queued for whole workgroups; past either
+    // queue's capacity this thread rasterizes them itself (slow, but no pixel
+    // is lost).
+    let tiles = vec2u((extent + BIG_TILE - 1) / BIG_TILE);
+    let tile_count = tiles.x * tiles.y;
     let slot = atomicAdd(&big_count.setups, 1u);
     if slot >= params.setup_capacity {
         let written = raster_rect(s, s.bounds.xy, s.bounds.zw);
@@ -804,37 +759,15 @@ fn raster_triangle(s: Setup) {
         return;
     }
     big_setups[slot] = s;
-#ifdef BINS
-    // The screen's bins its bounds overlap (`bin_count` counts them per bin:
-    // an atomic per bin here made this pass 0.1 ms slower on Sponza).
-    let bin_lo = vec2u(s.bounds.xy / BIG_TILE);
-    let bins = vec2u(s.bounds.zw / BIG_TILE) - bin_lo + 1u;
-    let tile_count = bins.x * bins.y;
-#else
-    let tiles = vec2u((extent + BIG_TILE - 1) / BIG_TILE);
-    let tile_count = tiles.x * tiles.y;
-#endif
     let first = atomicAdd(&big_count.tiles, tile_count);
     var written = 0u;
     for (var t = 0u; t < tile_count; t++) {
-#ifdef BINS
-        let b = bin_lo + vec2u(t % bins.x, t / bins.x);
-        let bin = b.y * params.bins_x + b.x;
-        if first + t < params.big_capacity {
-            big_tiles[first + t] = vec2u(slot, bin);
-        } else {
-            let lo = max(vec2i(b) * BIG_TILE, s.bounds.xy);
-            let hi = min(vec2i(b) * BIG_TILE + BIG_TILE - 1, s.bounds.zw);
-            written += raster_rect(s, lo, hi);
-        }
-#else
         if first + t < params.big_capacity {
             big_tiles[first + t] = vec2u(slot, t);
         } else {
             let r = big_tile_rect(s.bounds, t);
             written += raster_rect(s, r.xy, r.zw);
         }
-#endif
     }
     count_writes(written, written * s.back_facing);
     count(BIG_TRIANGLES, 1u);
@@ -874,8 +807,8 @@ var<workgroup> shared_count: u32;
 // Per square of the current tile: 1 when the triangle may cover it.
 var<workgroup> square_live: array<u32, 16>;
 
-// One workgroup per big-triangle tile (a fixed number of workgroups looping over
-// the queue). The first SUB_TILES^2 threads test the tile's SUB_TILE squares
+// One workgroup per big-triangle tile (a fixed number of workgroups looping
+// over the queue). The first SUB_TILES^2 threads test the tile's SUB_TILE squares
 // against the triangle's edges (a thin triangle's box is mostly empty); then
 // each thread tests its pixel of every square that passed.
 @compute @workgroup_size(BIG_WORKGROUP)
@@ -942,136 +875,3 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) grou
     count(BIG_PIXELS_TESTED, tested);
     count_writes(written, back_facing);
 }
-
-var<workgroup> scan_sums: array<vec2u, 256>;
-
-// One workgroup: each bin's first entry in `bin_list` (the entries before
-// it, a prefix sum of the counts of `bin_count`) for `bin_fill`, and the
-// chunks of at most `params.bin_chunk` entries for `raster_bins`.
-@compute @workgroup_size(256)
-fn bin_scan(@builtin(local_invocation_index) local: u32) {
-    let n = params.bins_x * params.bins_y;
-    let per = (n + 255u) / 256u;
-    let first = min(local * per, n);
-    let end = min(first + per, n);
-    // (entries, chunks) of this invocation's bins.
-    var own = vec2u(0u);
-    for (var b = first; b < end; b++) {
-        let c = atomicLoad(&bin_state[BIN_COUNTS + b]);
-        own += vec2u(c, (c + params.bin_chunk - 1u) / params.bin_chunk);
-    }
-    scan_sums[local] = own;
-    workgroupBarrier();
-    for (var d = 1u; d < 256u; d <<= 1u) {
-        var add = vec2u(0u);
-        if local >= d {
-            add = scan_sums[local - d];
-        }
-        workgroupBarrier();
-        scan_sums[local] += add;
-        workgroupBarrier();
-    }
-    var at = scan_sums[local] - own;
-    for (var b = first; b < end; b++) {
-        let c = atomicLoad(&bin_state[BIN_COUNTS + b]);
-        atomicStore(&bin_state[BIN_COUNTS + n + b], at.x);
-        for (var k = 0u; k < c && at.y < params.chunk_capacity; k += params.bin_chunk) {
-            bin_chunks[at.y] = vec4u(b, at.x + k, min(params.bin_chunk, c - k), 0u);
-            at.y++;
-        }
-        at.x += c;
-    }
-    if local == 255u {
-        atomicStore(&bin_state[BIN_TOTAL], min(scan_sums[255].y, params.chunk_capacity));
-    }
-}
-
-// Counts each queued (triangle, bin) entry in its bin, for `bin_scan`.
-@compute @workgroup_size(64)
-fn bin_count(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
-    let queued = min(atomicLoad(&big_count.tiles), params.big_capacity);
-    for (var i = id.x; i < queued; i += groups.x * 64u) {
-        atomicAdd(&bin_state[BIN_COUNTS + big_tiles[i].y], 1u);
-    }
-}
-
-// Lists each queued (triangle, bin) entry in its bin.
-@compute @workgroup_size(64)
-fn bin_fill(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
-    let queued = min(atomicLoad(&big_count.tiles), params.big_capacity);
-    let n = params.bins_x * params.bins_y;
-    for (var i = id.x; i < queued; i += groups.x * 64u) {
-        let e = big_tiles[i];
-        bin_list[atomicAdd(&bin_state[BIN_COUNTS + n + e.y], 1u)] = e.x;
-    }
-}
-
-#ifdef BIN_DEPTH
-// The nearest surface so far of each pixel of the chunk's bin: pixel k of
-// invocation i's 4x4 block at k * 64 + i (neighbouring invocations,
-// neighbouring words: no bank conflicts). Only that invocation touches it.
-var<workgroup> bin_depth: array<u64, 1024>;
-// This invocation's 4x4 block of the bin (its top-left pixel) and index.
-var<private> bin_block: vec2i;
-var<private> bin_invocation: u32;
-
-// Pixel p's word of `bin_depth` (p in this invocation's block).
-fn bin_pixel(p: vec2i) -> u32 {
-    let k = p - bin_block;
-    return u32(k.y * 4 + k.x) * 64u + bin_invocation;
-}
-
-// Workgroups loop over the chunks `bin_scan` listed; per chunk, each of the
-// 64 invocations draws every triangle of the chunk in its 4x4 block of the
-// bin (the block tested against the edges first), keeping the nearest in
-// `bin_depth`, then writes its covered pixels with one atomicMax each.
-// Not built with MSAA (`raster_samples` writes the global buffer).
-@compute @workgroup_size(64)
-fn raster_bins(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
-               @builtin(local_invocation_index) local: u32) {
-    let total = atomicLoad(&bin_state[BIN_TOTAL]);
-    bin_invocation = local;
-    var passed = 0u;
-    var tested = 0u;
-    var written = 0u;
-    var back_facing = 0u;
-    var merged = 0u;
-    for (var c = group.x; c < total; c += groups.x) {
-        let chunk = bin_chunks[c];
-        let bin = vec2i(vec2u(chunk.x % params.bins_x, chunk.x / params.bins_x));
-        bin_block = bin * BIG_TILE + vec2i(i32(local % 8u), i32(local / 8u)) * 4;
-        for (var k = 0u; k < 16u; k++) {
-            bin_depth[k * 64u + local] = 0lu;
-        }
-        // The next triangle's setup is loaded while this one is drawn.
-        var next = big_setups[bin_list[chunk.y]];
-        for (var j = 0u; j < chunk.z; j++) {
-            let s = next;
-            if j + 1u < chunk.z {
-                next = big_setups[bin_list[chunk.y + j + 1u]];
-            }
-            let lo = max(bin_block, s.bounds.xy);
-            let hi = min(bin_block + 3, s.bounds.zw);
-            if may_cover(s, lo, hi) {
-                passed++;
-                tested += u32((hi.x - lo.x + 1) * (hi.y - lo.y + 1));
-                let w = raster_rect(s, lo, hi);
-                written += w;
-                back_facing += w * s.back_facing;
-            }
-        }
-        for (var k = 0u; k < 16u; k++) {
-            let v = bin_depth[k * 64u + local];
-            if v != 0lu {
-                let p = bin_block + vec2i(i32(k % 4u), i32(k / 4u));
-                atomicMax(&depth_ids[pixel_index(p)], v);
-                merged++;
-            }
-        }
-    }
-    count(BIG_SQUARES_PASSED, passed);
-    count(BIG_PIXELS_TESTED, tested);
-    count(BIN_WRITES, merged);
-    count_writes(written, back_facing);
-}
-#endif
