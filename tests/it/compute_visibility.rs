@@ -437,8 +437,7 @@ fn ids_drawn_with(
 
 /// Which triangles count as big (`--vis-small-area`) and how many
 /// workgroups draw them (`--vis-big-workgroups`) change no id: on Sponza
-/// (alpha masks: its unmasked and masked triangles drawn by two builds of
-/// the rasterizer) and on floors crossing the near plane (fixed-point and
+/// (alpha masks, fetched once per triangle or tile) and on floors crossing the near plane (fixed-point and
 /// homogeneous edges), every triangle drawn by its own thread, the default,
 /// and every triangle over 32 pixels drawn as big by 3 workgroups (each
 /// looping over many tiles): the same ids, the same covered pixels.

@@ -78,7 +78,12 @@ struct View {
 // Whether the surface of `o` is cut away where its base colour texel's alpha
 // is `texel_alpha` (never for opaque objects, whose cutoff is 0).
 fn alpha_cut(o: Object, texel_alpha: f32) -> bool {
-    return o.base_color.a * texel_alpha < o.alpha_cutoff;
+    return alpha_cut_by(o.base_color.a, o.alpha_cutoff, texel_alpha);
+}
+
+// `alpha_cut` from an object's base colour alpha and cutoff.
+fn alpha_cut_by(base_alpha: f32, cutoff: f32, texel_alpha: f32) -> bool {
+    return base_alpha * texel_alpha < cutoff;
 }
 
 fn vertex_uv0(v: Vertex) -> vec2f {

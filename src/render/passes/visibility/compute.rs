@@ -9,9 +9,9 @@
 //! [`SceneGpu::vis_depth_test`], off by default, only where a load of the
 //! pixel finds nothing nearer: fewer atomics, but slower on the H200); triangles
 //! whose bounds exceed 256 pixels ([`SceneGpu::vis_small_area`]) are set up
-//! once into a buffer and queued as 32x32 tiles), `vis: raster big` (a
-//! workgroup per queued tile, [`SceneGpu::vis_big_workgroups`] of them
-//! looping over the queue: its 8x8
+//! once into a buffer), `vis: raster big` (their 32x32 tiles listed, a
+//! workgroup per big triangle, then a workgroup per tile,
+//! [`SceneGpu::vis_big_workgroups`] of them looping over the list: its 8x8
 //! squares are tested against the triangle's edges, then every pixel of the
 //! squares that pass) and `vis: resolve` (payload to (object + 1, triangle)).
 //!
@@ -89,6 +89,8 @@ const _: () = assert!(crate::render::clusters::CLUSTER_TRIANGLES as u32 == RASTE
 /// a thread each (an object with more takes several).
 pub(crate) const CULL_CHUNK: u32 = 64;
 
+/// Workgroups of `queue_big`, which loop over the big triangles.
+const QUEUE_BIG_WORKGROUPS: u32 = 1024;
 /// Most workgroups along x of one dispatch (WebGPU's limit is 65535).
 const MAX_GROUPS_X: u32 = 32768;
 
@@ -332,28 +334,10 @@ pub enum ComputeVisibilityError {
 
 /// The compute rasterizer's pipelines, buffers and bind groups, for one
 /// resolution and one output buffer.
-/// Scenes with alpha masks, drawn without culling: `vis: raster` draws the
-/// unmasked objects' triangles with `raster.wgsl` built without alpha
-/// testing, then the masked objects' with it. Alpha testing's code slowed
-/// the whole pass, masked or not (on the H200, Sponza's `vis: raster` took
-/// 0.222 ms with it and 0.177 ms without at 1920x1080).
-struct MaskSplit {
-    /// `raster` without `ALPHA_MASK`.
-    unmasked: wgpu::ComputePipeline,
-    /// Per half (unmasked, masked): its parameters, its objects' ranges
-    /// (as [`visible_ranges`] numbers them, each list from 0) and the group
-    /// binding them. `raster_big` takes the masked half's group: alpha
-    /// testing finds a masked triangle's object in its ranges.
-    params: [wgpu::Buffer; 2],
-    ranges: [wgpu::Buffer; 2],
-    groups: [wgpu::BindGroup; 2],
-}
-
 pub struct ComputeVisibility {
     clear: wgpu::ComputePipeline,
-    /// `raster`, with alpha testing where the scene has masks.
     raster: wgpu::ComputePipeline,
-    split: Option<MaskSplit>,
+    queue_big: wgpu::ComputePipeline,
     raster_big: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
     raster_params: wgpu::Buffer,
@@ -479,9 +463,9 @@ impl ComputeVisibility {
         let dimension = if samples > 1 { wgpu::TextureViewDimension::D2Array } else { wgpu::TextureViewDimension::D2 };
         let out_binding = Binding::StorageTexture { format: super::FORMAT, dimension };
         let resolve_layout = bind_group_layout(device, "vis resolve", &[Binding::Uniform, read, rw, out_binding]);
-        let raster_group = |params: &wgpu::Buffer, ranges: &wgpu::Buffer, list: &wgpu::Buffer| {
+        let raster_group = |list: &wgpu::Buffer| {
             let mut resources = vec![
-                params.as_entire_binding(),
+                raster_params.as_entire_binding(),
                 ranges.as_entire_binding(),
                 depth_ids.as_entire_binding(),
                 big_tiles.as_entire_binding(),
@@ -498,22 +482,7 @@ impl ComputeVisibility {
             }
             bind_group(device, "vis raster", &raster_layout, &resources)
         };
-        let raster_groups = [
-            raster_group(&raster_params, &ranges, &list_params[0]),
-            raster_group(&raster_params, &ranges, &list_params[1]),
-        ];
-        // Unculled with alpha masks: the unmasked objects' triangles drawn by
-        // a `raster` without alpha testing, the masked ones' by one with it.
-        let split = scene.has_alpha_masks().then(|| {
-            let params = || buffer("vis raster params", size_of::<GpuRasterParams>() as u64, U::UNIFORM | U::COPY_DST);
-            let lists = || buffer("vis ranges", ranges.size(), U::STORAGE | U::COPY_DST);
-            let (params, ranges) = ([params(), params()], [lists(), lists()]);
-            let groups = [
-                raster_group(&params[0], &ranges[0], &list_params[0]),
-                raster_group(&params[1], &ranges[1], &list_params[0]),
-            ];
-            (params, ranges, groups)
-        });
+        let raster_groups = [raster_group(&list_params[0]), raster_group(&list_params[1])];
         let pyramid = DepthPyramid::new(
             device,
             shaders,
@@ -573,15 +542,7 @@ impl ComputeVisibility {
         let defs: &[&str] = if scene.has_alpha_masks() { &[ALPHA_MASK] } else { &[] };
         let mut raster = |entry| compute_pipeline_with(device, shaders, raster_shader, defs, entry, &raster_layouts);
         let (plain, big, clustered) = (raster("raster")?, raster("raster_big")?, raster("raster_clusters")?);
-        let split = match split {
-            Some((params, ranges, groups)) => Some(MaskSplit {
-                unmasked: compute_pipeline_with(device, shaders, raster_shader, &[], "raster", &raster_layouts)?,
-                params,
-                ranges,
-                groups,
-            }),
-            None => None,
-        };
+        let queue_big = raster("queue_big")?;
         let cull_layouts = [&scene.layout, &cull_layout];
         let cull = Cull {
             early: compute_pipeline(device, shaders, CULL, "cull_early", &cull_layouts)?,
@@ -600,7 +561,7 @@ impl ComputeVisibility {
         };
         Ok(Self {
             raster: plain,
-            split,
+            queue_big,
             raster_big: big,
             cull,
             clear: compute_pipeline(device, shaders, RESOLVE, "clear", &[&resolve_layout])?,
@@ -839,19 +800,6 @@ pub fn visible_ranges(scene: &SceneGpu, visible: &[bool]) -> (Vec<[u32; 4]>, u32
     (ranges, total)
 }
 
-/// The entries of `ranges` ([`visible_ranges`]) whose objects are (`masked`)
-/// or are not alpha-masked, their first triangles numbered again from 0 in
-/// this list (the scene's numbering kept), and their triangles.
-fn masked_half(scene: &SceneGpu, ranges: &[[u32; 4]], masked: bool) -> (Vec<[u32; 4]>, u32) {
-    let mut list = Vec::new();
-    let mut total = 0;
-    for r in ranges.iter().filter(|r| scene.masked[r[0] as usize] == masked) {
-        list.push([r[0], total, r[2], 0]);
-        total += scene.draws[r[0] as usize].index_count / 3;
-    }
-    (list, total)
-}
-
 /// A 2D dispatch of `groups` workgroups (at most [`MAX_GROUPS_X`] along x).
 pub(crate) fn split(groups: u32) -> (u32, u32) {
     let x = groups.clamp(1, MAX_GROUPS_X);
@@ -918,39 +866,18 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
         cp.set_bind_group(0, &pass.resolve_group, &[]);
         cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1);
     }
-    let [early, late] = &pass.cull.raster_groups;
     if range_count > 0 && culling == Culling::None {
-        match &pass.split {
-            Some(halves) => {
-                let mut draws = Vec::new();
-                for (half, pipeline) in [&halves.unmasked, &pass.raster].into_iter().enumerate() {
-                    let masked = half == 1;
-                    let (list, count) = masked_half(frame.scene, &ranges, masked);
-                    if list.is_empty() {
-                        continue;
-                    }
-                    frame.queue.write_buffer(&halves.ranges[half], 0, bytemuck::cast_slice(&list));
-                    let params = GpuRasterParams { range_count: list.len() as u32, triangle_count: count, ..raster };
-                    frame.queue.write_buffer(&halves.params[half], 0, bytemuck::bytes_of(&params));
-                    let size = Size::Direct(split(count.div_ceil(RASTER_WORKGROUP)));
-                    draws.push((pipeline, &halves.groups[half], size));
-                }
-                raster_passes(frame, pass, &draws, &halves.groups[1], "");
-            }
-            None => {
-                let size = Size::Direct(split(triangles.div_ceil(RASTER_WORKGROUP)));
-                raster_passes(frame, pass, &[(&pass.raster, early, size)], early, "");
-            }
-        }
+        let groups = split(triangles.div_ceil(RASTER_WORKGROUP));
+        raster_passes(frame, pass, &pass.raster, None, groups, "");
     } else if range_count > 0 {
         let groups = split(chunks.len() as u32);
         cull_pass(frame, pass, &pass.cull.early, "vis: cull", groups);
-        raster_passes(frame, pass, &[(&pass.cull.raster, early, Size::Indirect(0))], early, "");
+        raster_passes(frame, pass, &pass.cull.raster, Some(0), groups, "");
         if culling == Culling::Occlusion {
             pass.cull.pyramid.encode(frame, "vis: hiz");
             cull_pass(frame, pass, &pass.cull.late, "vis: cull late", groups);
             frame.encoder.clear_buffer(&pass.big_count, 0, None);
-            raster_passes(frame, pass, &[(&pass.cull.raster, late, Size::Indirect(12))], late, " late");
+            raster_passes(frame, pass, &pass.cull.raster, Some(1), groups, " late");
         }
     }
     {
@@ -986,40 +913,35 @@ fn cull_pass(
     cp.dispatch_workgroups(1, 1, 1);
 }
 
-/// How one `vis: raster` dispatch is sized: `raster`'s workgroups, or
-/// `raster_clusters`' indirectly from the cull pass's sizes at this offset.
-enum Size {
-    Direct((u32, u32)),
-    Indirect(u64),
-}
-
-/// `vis: raster{suffix}`: each of `draws` (a pipeline, its group 1, its
-/// size), then `vis: raster big{suffix}` over the tiles they queued, with
-/// group 1 `big_group`.
+/// `vis: raster{suffix}` with `entry` (`raster`: `groups` workgroups;
+/// `raster_clusters`: indirect, over cluster list `list`), then `vis: raster
+/// big{suffix}` over the tiles it queued.
 fn raster_passes(
     frame: &mut Frame,
     pass: &ComputeVisibility,
-    draws: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, Size)],
-    big_group: &wgpu::BindGroup,
+    entry: &wgpu::ComputePipeline,
+    list: Option<usize>,
+    groups: (u32, u32),
     suffix: &str,
 ) {
     let scene = frame.scene_group;
+    let group = &pass.cull.raster_groups[list.unwrap_or(0)];
     {
         let mut cp = frame.compute_pass(&format!("vis: raster{suffix}"));
+        cp.set_pipeline(entry);
         cp.set_bind_group(0, scene, &[]);
-        for (pipeline, group, size) in draws {
-            cp.set_pipeline(pipeline);
-            cp.set_bind_group(1, *group, &[]);
-            match size {
-                Size::Direct(groups) => cp.dispatch_workgroups(groups.0, groups.1, 1),
-                Size::Indirect(offset) => cp.dispatch_workgroups_indirect(&pass.cull.dispatch, *offset),
-            }
+        cp.set_bind_group(1, group, &[]);
+        match list {
+            Some(l) => cp.dispatch_workgroups_indirect(&pass.cull.dispatch, l as u64 * 12),
+            None => cp.dispatch_workgroups(groups.0, groups.1, 1),
         }
     }
     let workgroups = frame.scene.vis_big_workgroups;
     let mut cp = frame.compute_pass(&format!("vis: raster big{suffix}"));
-    cp.set_pipeline(&pass.raster_big);
     cp.set_bind_group(0, scene, &[]);
-    cp.set_bind_group(1, big_group, &[]);
+    cp.set_bind_group(1, group, &[]);
+    cp.set_pipeline(&pass.queue_big);
+    cp.dispatch_workgroups(QUEUE_BIG_WORKGROUPS, 1, 1);
+    cp.set_pipeline(&pass.raster_big);
     cp.dispatch_workgroups(workgroups, 1, 1);
 }

@@ -25,7 +25,7 @@
 #import shadespace::pixel_surface::standard_sample_position
 #endif
 #ifdef ALPHA_MASK
-#import shadespace::scene::{alpha_cut, vertex_uv0}
+#import shadespace::scene::{alpha_cut_by, vertex_uv0}
 #import shadespace::scene_bindings::{vertices, albedo, albedo_sampler}
 #endif
 
@@ -165,12 +165,16 @@ struct Setup {
     owns: u32,
     // What `keep_nearest` stores with the depth (see the file's top).
     payload: u32,
+    // A big triangle's first entry in `big_tiles`, and the entries from
+    // there that hold its tiles (`queue_big` writes them).
+    first_tile: u32,
     // Sub-pixel position of the depth plane's origin (`depth`); sub-pixel
     // coordinates inside the guard band fit 32 bits.
     depth_origin: vec2i,
     // 1 when the triangle faces away (clockwise on screen): counted only,
     // as both facings are drawn.
     back_facing: u32,
+    queued_tiles: u32,
     // Per edge of the near-clipped polygon, in sub-pixels: the value at pixel (0, 0)'s centre (less one
     // where the edge does not own its pixels, so inside is >= 0), and the
     // steps one pixel right and one pixel down.
@@ -462,16 +466,28 @@ fn uv_at(n0: vec3f, n1: vec3f, n2: vec3f, uv0: vec2f, uv1: vec2f, uv2: vec2f, p:
     return (e.x * uv0 + e.y * uv1 + e.z * uv2) / (e.x + e.y + e.z);
 }
 
-// Whether scene triangle ~payload, of an alpha-masked object, is cut away at
-// pixel p: its base colour texel's alpha there, at the level its UV
-// derivatives across the pixel's 2x2 quad give, as fragment shaders take
-// them (coarse: from the quad's first pixel). On lavapipe the ids of masked
-// scenes then differ from the raster path's on 0.01-0.05 % of the pixels
-// (0.3 % with derivatives one pixel ahead, 0.04-0.08 % with fine ones); on
-// the H100 masked borders differ more, with either (BENCHMARKS.md). Simplified: the triangle is fetched again for
-// every pixel it covers nearer than what the pixel holds, rather than set
-// up once.
-fn cut_away(payload: u32, p: vec2i) -> bool {
+// What alpha testing needs of a masked triangle: its homogeneous edge
+// planes and vertex UVs (`uv_at`), its object's texture layer, base alpha
+// and cutoff. Fetched once per triangle (per tile of a big one: `load_mask`)
+// into `mask`: fetched per covered pixel (the triangle found by binary
+// search over the ranges, its indices, vertices and transform) it made
+// Sponza's `vis: raster` 0.045 ms slower on the H200 at 1920x1080 than the
+// same scene with no masks.
+struct Mask {
+    n0: vec3f,
+    n1: vec3f,
+    n2: vec3f,
+    t0: vec2f,
+    t1: vec2f,
+    t2: vec2f,
+    layer: u32,
+    base_alpha: f32,
+    cutoff: f32,
+}
+var<private> mask: Mask;
+
+// Fetches scene triangle ~payload's `Mask` into `mask`.
+fn load_mask(payload: u32) {
     let index = ~payload;
     let range = ranges[find_range(index, 2u)];
     let o = objects[range.x];
@@ -479,21 +495,30 @@ fn cut_away(payload: u32, p: vec2i) -> bool {
     let c0 = object_clip_position(range.x, tri.x).xyw;
     let c1 = object_clip_position(range.x, tri.y).xyw;
     let c2 = object_clip_position(range.x, tri.z).xyw;
-    let n0 = cross(c1, c2);
-    let n1 = cross(c2, c0);
-    let n2 = cross(c0, c1);
-    let t0 = vertex_uv0(vertices[tri.x]);
-    let t1 = vertex_uv0(vertices[tri.y]);
-    let t2 = vertex_uv0(vertices[tri.z]);
+    mask = Mask(cross(c1, c2), cross(c2, c0), cross(c0, c1), vertex_uv0(vertices[tri.x]),
+        vertex_uv0(vertices[tri.y]), vertex_uv0(vertices[tri.z]), o.albedo_layer, o.base_color.a, o.alpha_cutoff);
+}
+
+// Whether the triangle of `mask` (`load_mask`), of an alpha-masked object,
+// is cut away at pixel p: its base colour texel's alpha there, at the level
+// its UV derivatives across the pixel's 2x2 quad give, as fragment shaders
+// take them (coarse: from the quad's first pixel), against the object's
+// cutoff. On lavapipe the ids of masked scenes then
+// differ from the raster path's on 0.01-0.05 % of the pixels (0.3 % with
+// derivatives one pixel ahead, 0.04-0.08 % with fine ones); on the H100
+// masked borders differ more, with either (BENCHMARKS.md).
+fn cut_away(p: vec2i) -> bool {
+    let m = mask;
     let quad = vec2f(p & vec2i(-2));
-    let uv = uv_at(n0, n1, n2, t0, t1, t2, vec2f(p));
-    let corner = uv_at(n0, n1, n2, t0, t1, t2, quad);
+    let uv = uv_at(m.n0, m.n1, m.n2, m.t0, m.t1, m.t2, vec2f(p));
+    let corner = uv_at(m.n0, m.n1, m.n2, m.t0, m.t1, m.t2, quad);
     // Scaled by 2^bias: the view's texture_lod_bias, as the raster path's
     // `textureSampleBias` applies it.
     let scale = exp2(view.texture_lod_bias);
-    let ddx = (uv_at(n0, n1, n2, t0, t1, t2, quad + vec2f(1.0, 0.0)) - corner) * scale;
-    let ddy = (uv_at(n0, n1, n2, t0, t1, t2, quad + vec2f(0.0, 1.0)) - corner) * scale;
-    return alpha_cut(o, textureSampleGrad(albedo, albedo_sampler, uv, o.albedo_layer, ddx, ddy).a);
+    let ddx = (uv_at(m.n0, m.n1, m.n2, m.t0, m.t1, m.t2, quad + vec2f(1.0, 0.0)) - corner) * scale;
+    let ddy = (uv_at(m.n0, m.n1, m.n2, m.t0, m.t1, m.t2, quad + vec2f(0.0, 1.0)) - corner) * scale;
+    let alpha = textureSampleGrad(albedo, albedo_sampler, uv, m.layer, ddx, ddy).a;
+    return alpha_cut_by(m.base_alpha, m.cutoff, alpha);
 }
 #endif
 
@@ -535,7 +560,7 @@ fn keep_nearest(payload: u32, owns: u32, p: vec2i, depth: f32) -> u32 {
         return 0u;
     }
 #ifdef ALPHA_MASK
-    if masked && cut_away(payload, p) {
+    if masked && cut_away(p) {
         return 0u;
     }
 #endif
@@ -635,7 +660,7 @@ fn raster_samples(s: Setup, reach: vec4<i64>, p: vec2i, e: vec4<i64>) -> u32 {
         // The texture is read once, where the triangle would first be kept
         // (`written` is still 0): its cut decides every sample of the pixel.
         if masked {
-            if cut_away(s.payload, p) {
+            if cut_away(p) {
                 return 0u;
             }
             masked = false;
@@ -653,6 +678,11 @@ fn raster_samples(s: Setup, reach: vec4<i64>, p: vec2i, e: vec4<i64>) -> u32 {
 // it issued.
 fn raster_rect(s: Setup, lo: vec2i, hi: vec2i) -> u32 {
     var written = 0u;
+#ifdef ALPHA_MASK
+    if (s.owns & MASKED) != 0u {
+        load_mask(s.payload);
+    }
+#endif
 #ifdef MSAA
     let reach = sample_reach(s);
 #endif
@@ -758,20 +788,20 @@ fn raster_triangle(s: Setup) {
         count(OVERFLOW_TRIANGLES, 1u);
         return;
     }
-    big_setups[slot] = s;
     let first = atomicAdd(&big_count.tiles, tile_count);
+    var queued = s;
+    queued.first_tile = first;
+    queued.queued_tiles = min(tile_count, params.big_capacity - min(first, params.big_capacity));
+    big_setups[slot] = queued;
+    // `queue_big` lists the queued tiles; the rest are drawn here.
     var written = 0u;
-    for (var t = 0u; t < tile_count; t++) {
-        if first + t < params.big_capacity {
-            big_tiles[first + t] = vec2u(slot, t);
-        } else {
-            let r = big_tile_rect(s.bounds, t);
-            written += raster_rect(s, r.xy, r.zw);
-        }
+    for (var t = queued.queued_tiles; t < tile_count; t++) {
+        let r = big_tile_rect(s.bounds, t);
+        written += raster_rect(s, r.xy, r.zw);
     }
     count_writes(written, written * s.back_facing);
     count(BIG_TRIANGLES, 1u);
-    count(BIG_TILES, min(tile_count, params.big_capacity - min(first, params.big_capacity)));
+    count(BIG_TILES, queued.queued_tiles);
     count(OVERFLOW_TRIANGLES, select(0u, 1u, first + tile_count > params.big_capacity));
 }
 
@@ -803,6 +833,23 @@ fn may_cover(s: Setup, lo: vec2i, hi: vec2i) -> bool {
         && edge_max(s, 3u, lo, hi) >= 0li;
 }
 
+// Lists each big triangle's queued tiles in `big_tiles`: a workgroup per
+// triangle (looping over them), an invocation per tile. Listed by the
+// triangle's own thread in `raster`, a screen-wide triangle's 2,000 serial
+// writes (8,000 at 3840x2160) set the length of that whole pass.
+@compute @workgroup_size(BIG_WORKGROUP)
+fn queue_big(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
+             @builtin(local_invocation_index) local: u32) {
+    let setups = min(atomicLoad(&big_count.setups), params.setup_capacity);
+    for (var slot = group.x; slot < setups; slot += groups.x) {
+        let first = big_setups[slot].first_tile;
+        let count = big_setups[slot].queued_tiles;
+        for (var t = local; t < count; t += BIG_WORKGROUP) {
+            big_tiles[first + t] = vec2u(slot, t);
+        }
+    }
+}
+
 var<workgroup> shared_count: u32;
 // Per square of the current tile: 1 when the triangle may cover it.
 var<workgroup> square_live: array<u32, 16>;
@@ -827,6 +874,11 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) grou
         let item = big_tiles[i];
         let s = big_setups[item.x];
         let r = big_tile_rect(s.bounds, item.y);
+#ifdef ALPHA_MASK
+        if (s.owns & MASKED) != 0u {
+            load_mask(s.payload);
+        }
+#endif
 #ifdef MSAA
         let reach = sample_reach(s);
 #endif
@@ -840,33 +892,41 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) grou
         // functions there: the other squares are whole steps away.
         let p0 = r.xy + in_square;
         let e0 = s.fixed_origin + s.fixed_dx * i64(p0.x) + s.fixed_dy * i64(p0.y);
+        // Stepped square by square by additions: multiplying per square (by
+        // the square's column and row) took a quarter of the pass's
+        // instructions (64-bit multiplies are several each).
         let step_x = s.fixed_dx * i64(SUB_TILE);
         let step_y = s.fixed_dy * i64(SUB_TILE);
-        for (var k = 0; k < SUB_TILES * SUB_TILES; k++) {
-            let square = vec2i(k % SUB_TILES, k / SUB_TILES);
-            let p = p0 + square * SUB_TILE;
-            if square_live[k] == 0u || any(p > r.zw) {
-                continue;
-            }
-            tested++;
-            let e = e0 + step_x * i64(square.x) + step_y * i64(square.y);
+        var row = e0;
+        for (var sy = 0; sy < SUB_TILES; sy++) {
+            var e = row;
+            row += step_y;
+            for (var sx = 0; sx < SUB_TILES; sx++) {
+                let at = e;
+                e += step_x;
+                let p = p0 + vec2i(sx, sy) * SUB_TILE;
+                if square_live[sy * SUB_TILES + sx] == 0u || any(p > r.zw) {
+                    continue;
+                }
+                tested++;
 #ifdef MSAA
-            let w = raster_samples(s, reach, p, e);
-            written += w;
-            back_facing += w * s.back_facing;
+                let w = raster_samples(s, reach, p, at);
+                written += w;
+                back_facing += w * s.back_facing;
 #else
-            if s.fixed == 0u {
-                let w = raster_pixel_homogeneous(s, p);
-                written += w;
-                back_facing += w * s.back_facing;
-                continue;
-            }
-            if all(e >= vec4<i64>(0li)) {
-                let w = keep_nearest(s.payload, s.owns, p, fixed_depth(s, p));
-                written += w;
-                back_facing += w * s.back_facing;
-            }
+                if s.fixed == 0u {
+                    let w = raster_pixel_homogeneous(s, p);
+                    written += w;
+                    back_facing += w * s.back_facing;
+                    continue;
+                }
+                if all(at >= vec4<i64>(0li)) {
+                    let w = keep_nearest(s.payload, s.owns, p, fixed_depth(s, p));
+                    written += w;
+                    back_facing += w * s.back_facing;
+                }
 #endif
+            }
         }
         // `square_live` is rewritten next iteration.
         workgroupBarrier();
