@@ -1,7 +1,6 @@
-// The compute rasterizer's other passes: `clear` empties the 64-bit
-// depth-and-payload buffer before `raster.wgsl` runs, `resolve` turns it into
-// the visibility buffer every consumer reads: (object + 1, triangle), 0 =
-// background. Here the buffer is read as plain (payload, depth bits) pairs:
+// The compute rasterizer's resolve: the 64-bit depth-and-payload buffer of
+// `raster.wgsl` turned into the visibility buffer every consumer reads:
+// (object + 1, triangle), 0 = background. Here the buffer is read as plain (payload, depth bits) pairs:
 // 64-bit atomics other than min/max are optional (`SHADER_INT64_ATOMIC_ALL_OPS`).
 // Under MSAA (`MSAA` defined) a pixel has `params.samples` entries side by
 // side, and the visibility buffer one layer per sample (multisampled
@@ -22,22 +21,12 @@ struct ResolveParams {
 // list, index of its first triangle in the scene's numbering, 0).
 @group(0) @binding(1) var<storage, read> ranges: array<vec4u>;
 // Per pixel (sample): (payload, depth bits), the halves of `raster.wgsl`'s `depth_ids`.
-@group(0) @binding(2) var<storage, read_write> depth_ids: array<vec2u>;
+@group(0) @binding(2) var<storage, read> depth_ids: array<vec2u>;
 #ifdef MSAA
 @group(0) @binding(3) var visibility: texture_storage_2d_array<rg32uint, write>;
 #else
 @group(0) @binding(3) var visibility: texture_storage_2d<rg32uint, write>;
 #endif
-
-@compute @workgroup_size(8, 8)
-fn clear(@builtin(global_invocation_id) id: vec3u) {
-    if all(id.xy < vec2u(params.width, params.height)) {
-        let first = (id.y * params.width + id.x) * params.samples;
-        for (var s = 0u; s < params.samples; s++) {
-            depth_ids[first + s] = vec2u(0u);
-        }
-    }
-}
 
 @compute @workgroup_size(8, 8)
 fn resolve(@builtin(global_invocation_id) id: vec3u) {
