@@ -203,13 +203,27 @@ fn find_range(index: u32, k: u32) -> u32 {
     var hi = params.range_count - 1u;
     while lo < hi {
         let mid = (lo + hi + 1u) / 2u;
-        if ranges[mid][k] <= index {
+        if range_entry(mid)[k] <= index {
             lo = mid;
         } else {
             hi = mid - 1u;
         }
     }
     return lo;
+}
+
+// `raster`'s workgroup copies `ranges` where it holds at most one entry per
+// invocation (Sponza's 15): each thread's search for its triangle's object
+// (and alpha testing's) then reads workgroup memory, not the buffer.
+var<workgroup> cached_ranges: array<vec4u, RASTER_WORKGROUP>;
+var<private> ranges_cached: bool;
+
+// Entry `i` of `ranges`, from the workgroup's copy where there is one.
+fn range_entry(i: u32) -> vec4u {
+    if ranges_cached {
+        return cached_ranges[i];
+    }
+    return ranges[i];
 }
 
 // Whether a comes before b in a fixed order of points (lexicographic).
@@ -489,7 +503,7 @@ var<private> mask: Mask;
 // Fetches scene triangle ~payload's `Mask` into `mask`.
 fn load_mask(payload: u32) {
     let index = ~payload;
-    let range = ranges[find_range(index, 2u)];
+    let range = range_entry(find_range(index, 2u));
     let o = objects[range.x];
     let tri = triangle_vertices(o, index - range.z);
     let c0 = object_clip_position(range.x, tri.x).xyw;
@@ -729,11 +743,16 @@ fn raster(
     @builtin(num_workgroups) groups: vec3u,
     @builtin(local_invocation_index) local: u32,
 ) {
+    ranges_cached = params.range_count <= RASTER_WORKGROUP;
+    if ranges_cached && local < params.range_count {
+        cached_ranges[local] = ranges[local];
+    }
+    workgroupBarrier();
     let index = (group.y * groups.x + group.x) * RASTER_WORKGROUP + local;
     if index >= params.triangle_count {
         return;
     }
-    let range = ranges[find_range(index, 1u)];
+    let range = range_entry(find_range(index, 1u));
     let triangle = index - range.y;
     raster_triangle(setup_triangle(range.x, triangle, ~(range.z + triangle)));
 }
