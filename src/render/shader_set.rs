@@ -57,7 +57,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
     all.extend([forward_multipass::SHADER, passes::bloom::SHADER, passes::exposure::SHADER]);
     {
         use passes::visibility::compute::*;
-        all.extend([RASTER, RASTER_CULLING, RASTER_COUNTING, RASTER_CULLING_COUNTING, RESOLVE, CULL, HIZ]);
+        all.extend([RASTER, RASTER_CULLING, RASTER_COUNTING, RASTER_CULLING_COUNTING, CLEAR, RESOLVE, CULL, HIZ]);
         let msaa = &[crate::shaders::MSAA];
         let all_defs = &["CULL_BACK", "COUNT", crate::shaders::MSAA];
         all.extend([RASTER.with_defs(msaa), RASTER.with_defs(all_defs), RESOLVE.with_defs(msaa)]);

@@ -72,6 +72,10 @@ pub const RASTER_CULLING: ShaderSource = RASTER.with_defs(&["CULL_BACK"]);
 pub const RASTER_COUNTING: ShaderSource = RASTER.with_defs(&["COUNT"]);
 pub const RASTER_CULLING_COUNTING: ShaderSource = RASTER.with_defs(&["CULL_BACK", "COUNT"]);
 pub const RESOLVE: ShaderSource = ShaderSource::new("resolve.wgsl", include_str!("resolve.wgsl"));
+/// The clear of the 64-bit buffer (`vis: clear`).
+pub const CLEAR: ShaderSource = ShaderSource::new("clear.wgsl", include_str!("clear.wgsl"));
+/// Threads per workgroup of `clear.wgsl` (`CLEAR_WORKGROUP`), 16 bytes each.
+const CLEAR_WORKGROUP: u64 = 256;
 /// Cluster culling (`cull_early`, `cull_late`, `finish`), shared with the
 /// hardware raster passes' ([`crate::render::passes::cluster_draws`]).
 pub const CULL: ShaderSource = ShaderSource::new("cull.wgsl", include_str!("cull.wgsl"));
@@ -335,8 +339,10 @@ pub enum ComputeVisibilityError {
 /// The compute rasterizer's pipelines, buffers and bind groups, for one
 /// resolution and one output buffer.
 pub struct ComputeVisibility {
-    /// Per pixel (sample): depth << 32 | payload, the rasterizer's atomics' target.
-    depth_ids: wgpu::Buffer,
+    /// `clear.wgsl` over the 64-bit buffer (its group and workgroups).
+    clear: wgpu::ComputePipeline,
+    clear_group: wgpu::BindGroup,
+    clear_groups: (u32, u32),
     raster: wgpu::ComputePipeline,
     queue_big: wgpu::ComputePipeline,
     raster_big: wgpu::ComputePipeline,
@@ -395,7 +401,8 @@ impl ComputeVisibility {
             let (needed, max) = (depth_bytes.div_ceil(1 << 20), max >> 20);
             return Err(ComputeVisibilityError::TooLarge { width, height, samples, needed, max });
         }
-        let depth_ids = buffer("vis depth and ids", depth_bytes, U::STORAGE | U::COPY_DST);
+        // A whole number of 16 bytes: the clear writes 16 at a time.
+        let depth_ids = buffer("vis depth and ids", depth_bytes.next_multiple_of(16), U::STORAGE);
         // Room for big triangles' tiles covering every pixel 128 times over (a
         // tile holds up to 1024 pixels; boxes of thin triangles and hidden
         // layers count too: on the H100, Sponza at 1080p overflowed a
@@ -520,6 +527,10 @@ impl ComputeVisibility {
                 wgpu::BindingResource::TextureView(&out.view),
             ],
         );
+        let clear_layout = bind_group_layout(device, "vis clear", &[rw]);
+        let clear_group = bind_group(device, "vis clear", &clear_layout, &[depth_ids.as_entire_binding()]);
+        let clear = compute_pipeline(device, shaders, CLEAR, "clear", &[&clear_layout])?;
+        let clear_groups = split((depth_ids.size() / 16).div_ceil(CLEAR_WORKGROUP) as u32);
         let uint = wgpu::TextureSampleType::Uint;
         let read_layout = bind_group_layout(
             device,
@@ -561,7 +572,9 @@ impl ComputeVisibility {
             capacity,
         };
         Ok(Self {
-            depth_ids,
+            clear,
+            clear_group,
+            clear_groups,
             raster: plain,
             queue_big,
             raster_big: big,
@@ -861,9 +874,12 @@ pub fn compute_visibility(frame: &mut Frame, pass: &mut ComputeVisibility) {
     }
 
     let pixel_groups = (pass.width.div_ceil(8), pass.height.div_ceil(8));
-    // A fill (the driver's), timed as a pass: on the H200 a compute pass
-    // writing the zeros took 0.025 ms at 1920x1080.
-    frame.scope("vis: clear").clear_buffer(&pass.depth_ids, 0, None);
+    {
+        let mut cp = frame.compute_pass("vis: clear");
+        cp.set_pipeline(&pass.clear);
+        cp.set_bind_group(0, &pass.clear_group, &[]);
+        cp.dispatch_workgroups(pass.clear_groups.0, pass.clear_groups.1, 1);
+    }
     if range_count > 0 && culling == Culling::None {
         let groups = split(triangles.div_ceil(RASTER_WORKGROUP));
         raster_passes(frame, pass, &pass.raster, None, groups, "");

@@ -870,13 +870,17 @@ fn queue_big(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) group
 }
 
 var<workgroup> shared_count: u32;
-// Per square of the current tile: 1 when the triangle may cover it.
-var<workgroup> square_live: array<u32, 16>;
+// The squares of the current tile the triangle may cover, a bit each (two
+// masks, by the tile's parity in the workgroup's loop: the one for the next
+// tile is cleared while this one is read), and the edge functions at each
+// square's first pixel.
+var<workgroup> live_masks: array<atomic<u32>, 2>;
+var<workgroup> square_edges: array<vec4<i64>, 16>;
 
 // One workgroup per big-triangle tile (a fixed number of workgroups looping
 // over the queue). The first SUB_TILES^2 threads test the tile's SUB_TILE squares
 // against the triangle's edges (a thin triangle's box is mostly empty); then
-// each thread tests its pixel of every square that passed.
+// each thread tests its pixel of every square that passed, and only those.
 @compute @workgroup_size(BIG_WORKGROUP)
 fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
               @builtin(local_invocation_index) local: u32) {
@@ -889,6 +893,7 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) grou
     var written = 0u;
     var back_facing = 0u;
     let in_square = vec2i(i32(local) % SUB_TILE, i32(local) / SUB_TILE);
+    var parity = 0u;
     for (var i = group.x; i < queued; i += groups.x) {
         let item = big_tiles[i];
         let s = big_setups[item.x];
@@ -903,51 +908,49 @@ fn raster_big(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) grou
 #endif
         if local < u32(SUB_TILES * SUB_TILES) {
             let lo = r.xy + vec2i(i32(local) % SUB_TILES, i32(local) / SUB_TILES) * SUB_TILE;
-            square_live[local] = select(0u, 1u, may_cover(s, lo, min(lo + SUB_TILE - 1, r.zw)));
-            passed += square_live[local];
-        }
-        workgroupBarrier();
-        // This thread's pixel in the tile's first square, and its edge
-        // functions there: the other squares are whole steps away.
-        let p0 = r.xy + in_square;
-        let e0 = s.fixed_origin + s.fixed_dx * i64(p0.x) + s.fixed_dy * i64(p0.y);
-        // Stepped square by square by additions: multiplying per square (by
-        // the square's column and row) took a quarter of the pass's
-        // instructions (64-bit multiplies are several each).
-        let step_x = s.fixed_dx * i64(SUB_TILE);
-        let step_y = s.fixed_dy * i64(SUB_TILE);
-        var row = e0;
-        for (var sy = 0; sy < SUB_TILES; sy++) {
-            var e = row;
-            row += step_y;
-            for (var sx = 0; sx < SUB_TILES; sx++) {
-                let at = e;
-                e += step_x;
-                let p = p0 + vec2i(sx, sy) * SUB_TILE;
-                if square_live[sy * SUB_TILES + sx] == 0u || any(p > r.zw) {
-                    continue;
-                }
-                tested++;
-#ifdef MSAA
-                let w = raster_samples(s, reach, p, at);
-                written += w;
-                back_facing += w * s.back_facing;
-#else
-                if s.fixed == 0u {
-                    let w = raster_pixel_homogeneous(s, p);
-                    written += w;
-                    back_facing += w * s.back_facing;
-                    continue;
-                }
-                if all(at >= vec4<i64>(0li)) {
-                    let w = keep_nearest(s.payload, s.owns, p, fixed_depth(s, p));
-                    written += w;
-                    back_facing += w * s.back_facing;
-                }
-#endif
+            if may_cover(s, lo, min(lo + SUB_TILE - 1, r.zw)) {
+                atomicOr(&live_masks[parity], 1u << local);
+                square_edges[local] = s.fixed_origin + s.fixed_dx * i64(lo.x) + s.fixed_dy * i64(lo.y);
+                passed++;
             }
         }
-        // `square_live` is rewritten next iteration.
+        if local == 0u {
+            // Last read in the previous tile, before the barrier that ended it.
+            atomicStore(&live_masks[parity ^ 1u], 0u);
+        }
+        workgroupBarrier();
+        var live = atomicLoad(&live_masks[parity]);
+        // This thread's pixel's offset from each square's first pixel.
+        let offset = s.fixed_dx * i64(in_square.x) + s.fixed_dy * i64(in_square.y);
+        while live != 0u {
+            let k = firstTrailingBit(live);
+            live &= live - 1u;
+            let p = r.xy + vec2i(i32(k) % SUB_TILES, i32(k) / SUB_TILES) * SUB_TILE + in_square;
+            if any(p > r.zw) {
+                continue;
+            }
+            tested++;
+            let at = square_edges[k] + offset;
+#ifdef MSAA
+            let w = raster_samples(s, reach, p, at);
+            written += w;
+            back_facing += w * s.back_facing;
+#else
+            if s.fixed == 0u {
+                let w = raster_pixel_homogeneous(s, p);
+                written += w;
+                back_facing += w * s.back_facing;
+                continue;
+            }
+            if all(at >= vec4<i64>(0li)) {
+                let w = keep_nearest(s.payload, s.owns, p, fixed_depth(s, p));
+                written += w;
+                back_facing += w * s.back_facing;
+            }
+#endif
+        }
+        // The next tile's testers rewrite `square_edges` after this barrier.
+        parity ^= 1u;
         workgroupBarrier();
     }
     count(BIG_SQUARES_PASSED, passed);
