@@ -191,8 +191,9 @@ pub struct SceneArgs {
     #[arg(long)]
     pub vis_depth_test: bool,
     /// Compute visibility: the most pixels of a triangle's bounding box that
-    /// one thread rasterizes alone; bigger triangles are drawn by workgroups
-    /// (--vis-big). The ids are the same whatever it is.
+    /// one thread rasterizes alone; bigger triangles are set up once and
+    /// drawn by workgroups, a 32x32 tile each (--vis-big-workgroups). The
+    /// ids are the same whatever it is.
     #[arg(long, value_name = "PIXELS", default_value_t = DEFAULT_SMALL_AREA, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub vis_small_area: u32,
     /// Compute visibility: workgroups of the pass that draws big triangles,

@@ -338,8 +338,9 @@ pub struct Renderer {
     /// [`scene_gpu::DEFAULT_SMALL_AREA`]); bigger ones are set up once and
     /// drawn by workgroups, a 32x32 tile each. The ids are the same whatever it is.
     pub vis_small_area: u32,
-    /// Workgroups of the compute rasterizer's big-triangle passes (default
-    /// [`scene_gpu::DEFAULT_BIG_WORKGROUPS`]), which loop over their work.
+    /// Workgroups of the compute rasterizer's pass over big triangles' tiles
+    /// (default [`scene_gpu::DEFAULT_BIG_WORKGROUPS`]), which loop over them.
+    /// The ids are the same whatever it is.
     pub vis_big_workgroups: u32,
     /// How the hardware raster passes draw the clusters culling keeps
     /// (default indexed, where the adapter can: [`passes::cluster_draws`]).

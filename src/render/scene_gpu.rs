@@ -21,14 +21,16 @@ use crate::scene::{Aabb, Camera, Light, Scene};
 
 /// Largest side of a layer of the albedo array; bigger textures are resized.
 pub const MAX_ALBEDO_SIZE: u32 = 1024;
-/// [`SceneGpu::vis_small_area`]'s default: a 16x16 box. Lower (64) overflowed
-/// the tile queue's triangle setups on Sponza (BENCHMARKS.md, "Compute visibility").
+/// [`SceneGpu::vis_small_area`]'s default: a 16x16 box. On the H200 at
+/// 1920x1080 128 and 512 pixels were slower on Sponza's path (BENCHMARKS.md,
+/// "Compute visibility without its serial tail").
 pub const DEFAULT_SMALL_AREA: u32 = 256;
 /// [`SceneGpu::vis_big_workgroups`]'s default. Each workgroup's loop over
 /// its tiles is a chain of dependent loads and barriers, so more of them
 /// run faster: on the H200, Sponza's `vis: raster big` took 0.222 ms with
 /// 1024, 0.179 with 4096, 0.161 with 32768 and 0.165 with 65535 at
-/// 1920x1080 (0.803, 0.650, 0.583, 0.580 at 3840x2160; BENCHMARKS.md).
+/// 1920x1080 (0.803, 0.650, 0.583, 0.580 at 3840x2160; BENCHMARKS.md;
+/// measured before the tiles walked only their squares that pass).
 pub const DEFAULT_BIG_WORKGROUPS: u32 = 32768;
 
 /// Where one object's triangles are in the shared buffers (the same range
@@ -124,8 +126,8 @@ pub struct SceneGpu {
     /// workgroups (the renderer sets it from [`super::Renderer::vis_small_area`];
     /// the ids are the same whatever it is).
     pub vis_small_area: u32,
-    /// Workgroups of the compute rasterizer's big-triangle passes, which
-    /// loop over their work (the renderer sets it from
+    /// Workgroups of the compute rasterizer's pass over big triangles' tiles,
+    /// which loop over them (the renderer sets it from
     /// [`super::Renderer::vis_big_workgroups`]; the ids are the same whatever it is).
     pub vis_big_workgroups: u32,
     /// How the raster passes draw culled clusters: the renderer sets it from
