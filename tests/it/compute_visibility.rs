@@ -330,6 +330,36 @@ fn ids_agree_with_raster_with_back_faces_culled() {
     }
 }
 
+/// An object-space renderer of `scene` with compute visibility that counts
+/// its rasterizer's work; only the first object is in the atlas (the ids
+/// need no charts).
+fn counting_renderer(ctx: &GpuContext, scene: &Scene, size: (u32, u32)) -> Renderer {
+    let mut texture_sizes = vec![None; scene.objects.len()];
+    texture_sizes[0] = Some(64);
+    let objectspace = ObjectSpaceConfig {
+        texture_sizes,
+        visibility: VisibilityMethod::Compute,
+        count_visibility: true,
+        ..Default::default()
+    };
+    let options = RenderOptions::new(size.0, size.1, PipelineConfig::ObjectSpace(objectspace));
+    Renderer::new(ctx, scene, &options).unwrap()
+}
+
+/// Renders frame number `frame` of `camera`'s view; its ids and counters.
+fn ids_and_counts_of(
+    ctx: &GpuContext,
+    renderer: &mut Renderer,
+    camera: &Camera,
+    frame: u64,
+) -> (Vec<[u32; 2]>, shadespace::render::Counters) {
+    renderer.render(ctx, camera, &[], frame).unwrap();
+    let ids = renderer.pipeline::<ObjectSpace>().unwrap().read_mark_state(ctx).unwrap().visibility;
+    let counts =
+        renderer.collect_counters(ctx, true).into_iter().filter(|(f, _)| *f == frame).flat_map(|(_, c)| c).collect();
+    (ids, counts)
+}
+
 /// The ids and the rasterizer's counters of `camera`'s view with the load
 /// before each pixel's atomic (`Renderer::vis_depth_test`) on, then off,
 /// from one renderer culling with `culling` (stateless modes only: both
@@ -341,29 +371,12 @@ fn ids_and_counts(
     size: (u32, u32),
     culling: Culling,
 ) -> Vec<(Vec<[u32; 2]>, shadespace::render::Counters)> {
-    let mut texture_sizes = vec![None; scene.objects.len()];
-    texture_sizes[0] = Some(64);
-    let objectspace = ObjectSpaceConfig {
-        texture_sizes,
-        visibility: VisibilityMethod::Compute,
-        count_visibility: true,
-        ..Default::default()
-    };
-    let options = RenderOptions::new(size.0, size.1, PipelineConfig::ObjectSpace(objectspace));
-    let mut renderer = Renderer::new(ctx, scene, &options).unwrap();
+    let mut renderer = counting_renderer(ctx, scene, size);
     renderer.culling = culling;
     let mut out = Vec::new();
     for (frame, depth_test) in [true, false].into_iter().enumerate() {
         renderer.vis_depth_test = depth_test;
-        renderer.render(ctx, camera, &[], frame as u64).unwrap();
-        let ids = renderer.pipeline::<ObjectSpace>().unwrap().read_mark_state(ctx).unwrap().visibility;
-        let counts = renderer
-            .collect_counters(ctx, true)
-            .into_iter()
-            .filter(|(f, _)| *f == frame as u64)
-            .flat_map(|(_, c)| c)
-            .collect();
-        out.push((ids, counts));
+        out.push(ids_and_counts_of(ctx, &mut renderer, camera, frame as u64));
     }
     out
 }
@@ -417,22 +430,10 @@ fn ids_drawn_with(
     size: (u32, u32),
     (small_area, workgroups): (u32, u32),
 ) -> (Vec<[u32; 2]>, shadespace::render::Counters) {
-    let mut texture_sizes = vec![None; scene.objects.len()];
-    texture_sizes[0] = Some(64);
-    let objectspace = ObjectSpaceConfig {
-        texture_sizes,
-        visibility: VisibilityMethod::Compute,
-        count_visibility: true,
-        ..Default::default()
-    };
-    let options = RenderOptions::new(size.0, size.1, PipelineConfig::ObjectSpace(objectspace));
-    let mut renderer = Renderer::new(ctx, scene, &options).unwrap();
+    let mut renderer = counting_renderer(ctx, scene, size);
     renderer.vis_small_area = small_area;
     renderer.vis_big_workgroups = workgroups;
-    renderer.render(ctx, camera, &[], 0).unwrap();
-    let ids = renderer.pipeline::<ObjectSpace>().unwrap().read_mark_state(ctx).unwrap().visibility;
-    let counts = renderer.collect_counters(ctx, true).into_iter().flat_map(|(_, c)| c).collect();
-    (ids, counts)
+    ids_and_counts_of(ctx, &mut renderer, camera, 0)
 }
 
 /// Which triangles count as big (`--vis-small-area`) and how many
