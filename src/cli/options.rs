@@ -10,7 +10,7 @@ use shadespace::render::objectspace::{
     DEFAULT_PAGE_SIZE, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, MAX_TRIMAP_GRID, Marking, MsaaGather,
     PagingChain, TrimapSearch,
 };
-use shadespace::render::scene_gpu::{DEFAULT_BIG_WORKGROUPS, DEFAULT_SMALL_AREA};
+use shadespace::render::scene_gpu::DEFAULT_SMALL_AREA;
 use shadespace::render::{ClusterDraws, Culling, Exposure, ShadingModel, ShadowRefresh};
 use shadespace::scene::free_camera;
 
@@ -197,10 +197,10 @@ pub struct SceneArgs {
     #[arg(long, value_name = "PIXELS", default_value_t = DEFAULT_SMALL_AREA, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub vis_small_area: u32,
     /// Compute visibility: workgroups of the pass that draws big triangles,
-    /// which loop over their tiles. The ids are the same
-    /// whatever it is.
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_BIG_WORKGROUPS, value_parser = clap::value_parser!(u32).range(1..=65535))]
-    pub vis_big_workgroups: u32,
+    /// which loop over their tiles (default 32768 on GPUs, 1024 on CPU
+    /// drivers such as lavapipe). The ids are the same whatever it is.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=65535))]
+    pub vis_big_workgroups: Option<u32>,
     /// Compute visibility: how the meshes' clusters (up to 64 triangles) are
     /// culled on the GPU before rasterizing (objects outside the view are
     /// skipped on the CPU in every mode): `none` (every triangle of every

@@ -277,6 +277,8 @@ pub fn configure(renderer: &mut Renderer, a: &SceneArgs, s: &Setup) {
     renderer.cluster_draws = a.cluster_draws;
     renderer.vis_depth_test = a.vis_depth_test;
     renderer.vis_small_area = a.vis_small_area;
-    renderer.vis_big_workgroups = a.vis_big_workgroups;
+    if let Some(n) = a.vis_big_workgroups {
+        renderer.vis_big_workgroups = n;
+    }
     renderer.cull_plain_above = a.cull_plain_above;
 }

@@ -339,7 +339,7 @@ pub struct Renderer {
     /// drawn by workgroups, a 32x32 tile each. The ids are the same whatever it is.
     pub vis_small_area: u32,
     /// Workgroups of the compute rasterizer's pass over big triangles' tiles
-    /// (default [`scene_gpu::DEFAULT_BIG_WORKGROUPS`]), which loop over them.
+    /// (default [`scene_gpu::big_workgroups_for`] the adapter), which loop over them.
     /// The ids are the same whatever it is.
     pub vis_big_workgroups: u32,
     /// How the hardware raster passes draw the clusters culling keeps
@@ -493,7 +493,7 @@ impl Renderer {
             culling: Culling::for_scene(scene.objects.len()),
             vis_depth_test: false,
             vis_small_area: scene_gpu::DEFAULT_SMALL_AREA,
-            vis_big_workgroups: scene_gpu::DEFAULT_BIG_WORKGROUPS,
+            vis_big_workgroups: scene_gpu::big_workgroups_for(ctx.info.device_type),
             cluster_draws: ClusterDraws::default(),
             cull_plain_above: clusters::CULL_PLAIN_ABOVE,
             jitter: glam::Vec2::ZERO,

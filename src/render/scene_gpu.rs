@@ -32,6 +32,16 @@ pub const DEFAULT_SMALL_AREA: u32 = 256;
 /// 1920x1080 (0.803, 0.650, 0.583, 0.580 at 3840x2160; BENCHMARKS.md;
 /// measured before the tiles walked only their squares that pass).
 pub const DEFAULT_BIG_WORKGROUPS: u32 = 32768;
+/// [`big_workgroups_for`] on a CPU driver, which runs workgroups a few at a
+/// time and pays for each: on lavapipe 32768 made Sponza's `vis: raster
+/// big` take 318 ms at 1280x720 where 1024 took 198.
+pub const CPU_BIG_WORKGROUPS: u32 = 1024;
+
+/// The big-triangle pass's workgroups for an adapter of `device_type`:
+/// [`DEFAULT_BIG_WORKGROUPS`] on GPUs, [`CPU_BIG_WORKGROUPS`] on CPU drivers.
+pub fn big_workgroups_for(device_type: wgpu::DeviceType) -> u32 {
+    if device_type == wgpu::DeviceType::Cpu { CPU_BIG_WORKGROUPS } else { DEFAULT_BIG_WORKGROUPS }
+}
 
 /// Where one object's triangles are in the shared buffers (the same range
 /// for every instance of a mesh).
