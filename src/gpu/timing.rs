@@ -76,6 +76,24 @@ impl GpuTimer {
             tracing::warn!("timer: poll failed: {e}");
         }
         let mut out = Vec::new();
+        self.take_finished(&mut out);
+        // Another thread polling the same device (tests share one; so may an
+        // embedding program) can be running a frame's mapping callbacks when
+        // this thread's wait returns, as `readback::settled` says: wait for
+        // them rather than lose the frame's timings (a timing study's row
+        // once came back one frame short under four tests at once). Gives
+        // up after ten seconds.
+        let start = std::time::Instant::now();
+        while wait && !self.pending.is_empty() && start.elapsed() < std::time::Duration::from_secs(10) {
+            std::thread::yield_now();
+            let _ = device.poll(wgpu::PollType::Poll);
+            self.take_finished(&mut out);
+        }
+        out
+    }
+
+    /// Appends the timings of the frames whose read-back has finished, oldest first.
+    fn take_finished(&mut self, out: &mut Vec<FrameTimings>) {
         while let Some(results) = self.profiler.process_finished_frame(self.period) {
             let frame = self.pending.pop_front().expect("one pending frame number per profiler frame");
             if self.enabled {
@@ -83,7 +101,6 @@ impl GpuTimer {
                 self.last = Some(results);
             }
         }
-        out
     }
 
     /// Writes the newest collected frame as a Chrome trace (chrome://tracing,
