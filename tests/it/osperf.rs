@@ -16,7 +16,7 @@ use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Rende
 use shadespace::scene::{Camera, Light, Scene};
 
 /// The passes the fused chain does not record.
-const SPLIT_ONLY: [&str; 3] = ["backed args", "mark backed", "queue"];
+const SPLIT_ONLY: [&str; 2] = ["backed args", "mark backed"];
 
 /// One frame's state: tile stamps per virtual tile, the queue sorted, the
 /// counters, and the triangle maps and shades of the backed pages.

@@ -35,7 +35,8 @@ pub struct MarkState {
     pub tile_visible: Vec<u32>,
     /// Per virtual tile: stamp of the last frame it was shaded.
     pub tile_shaded: Vec<u32>,
-    /// This frame's shade queue: (virtual tile, object << 8 | level), in GPU order.
+    /// This frame's shade queue: (virtual tile, object << 8 | level), in
+    /// physical tile order.
     pub queue: Vec<[u32; 2]>,
     /// Indexed by [`super::TileCounter`].
     pub counters: [u32; super::TileCounter::SLOTS],
@@ -297,11 +298,13 @@ impl ObjectSpace {
             tile_visible[v] = visible[p];
             tile_shaded[v] = shaded[p];
         });
-        let c = Self::words(ctx, &res.counters)?;
-        let queued =
-            (c[super::TileCounter::Queued as usize] as usize).min(res.max_queue(self.layout.tile_size) as usize);
-        let queue =
-            Self::words(ctx, &res.physical.work_queue)?.chunks_exact(2).take(queued).map(|c| [c[0], c[1]]).collect();
+        let counters = super::TileCounter::fold(&Self::words(ctx, &res.counters)?);
+        // The queue holds an entry per physical tile; those shaded this
+        // frame are this frame's.
+        let queue = (Self::words(ctx, &res.physical.work_queue)?.chunks_exact(2).zip(&shaded))
+            .filter(|&(_, &s)| s == self.frames)
+            .map(|(c, _)| [c[0], c[1]])
+            .collect();
         Ok(MarkState {
             stamp: self.frames,
             valid_since: res.entry_data.iter().map(|e| e.valid_since).collect(),
@@ -311,7 +314,7 @@ impl ObjectSpace {
             tile_visible,
             tile_shaded,
             queue,
-            counters: std::array::from_fn(|i| c[i]),
+            counters,
             page_owner,
         })
     }

@@ -14,7 +14,7 @@
 //! or stale; tiles on pages with no physical page request one) -> *paging*
 //! (requested pages get physical pages) -> *triangle maps* of the pages
 //! backed this frame -> *mark backed* (their requested tiles) -> *shade*
-//! (one workgroup per queued tile, indirect) -> *gather* (compute per
+//! (one workgroup per physical tile, those not queued returning) -> *gather* (compute per
 //! pixel: bilinear from the atlas). Texels are lit by
 //! the global lights and the lights of their cell of the world grid (Oxide's
 //! light matrix), built on the GPU before shading; no CPU light culling. No
@@ -86,7 +86,7 @@ pub const SHARED_WGSL: [ShaderSource; 3] = [
 /// The object-space pass shaders, for the test that validates every shader.
 pub const PASS_SHADERS: &[ShaderSource] = &[
     mark::SHADER,
-    paging::SHADER,
+    // paging::SHADER: only with its defs (`paging::VARIANTS`).
     paging::RELEASE_SHADER,
     paging::resize::SHADER,
     trimap::SHADER,
@@ -334,6 +334,26 @@ impl TileCounter {
     pub const AGE_BUCKETS: usize = 9;
     /// Slots in the counter buffer (a multiple of four: 16-byte rows).
     pub const SLOTS: usize = 32;
+    /// Copies of the slots after the first that the counts many workgroups
+    /// add to are spread over, by workgroup (`count` in `objectspace.wgsl`),
+    /// and the CPU sums ([`Self::fold`]): atomics on one word serialize at
+    /// about one a clock, and one word per counter made the mark pass wait
+    /// on them (its own time fell from 0.146 to 0.055 ms at 1920x1080 on
+    /// the H100 with them knocked out: BENCHMARKS.md, "Where marking's time
+    /// goes").
+    pub const STRIPES: usize = 64;
+    /// Words of the counter buffer: the slots, then the stripes.
+    pub const WORDS: usize = Self::SLOTS * (1 + Self::STRIPES);
+
+    /// The counters from the counter buffer's words: each slot plus its
+    /// stripes.
+    pub fn fold(words: &[u32]) -> [u32; Self::SLOTS] {
+        std::array::from_fn(|slot| {
+            (0..=Self::STRIPES)
+                .filter_map(|k| words.get(k * Self::SLOTS + slot))
+                .fold(0u32, |sum, &w| sum.wrapping_add(w))
+        })
+    }
 
     pub fn wgsl_name(self) -> &'static str {
         match self {
@@ -435,15 +455,16 @@ pub enum Marking {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum PagingChain {
-    /// Six passes, eleven dispatches: paging (age, offsets, list), allocate
+    /// Five passes, ten dispatches: paging (age, offsets, list), allocate
     /// (allocate, release chunks, claim blocks, bind pages), backed args,
-    /// triangle maps, mark backed, queue (the shade dispatch's arguments).
+    /// triangle maps, mark backed.
     Split,
     /// Three passes, eight dispatches: the offsets write the backed pages'
-    /// and the shade's dispatch arguments as bounds (known once marking is
-    /// done; extra workgroups return), and the triangle-map workgroup of a
-    /// page also marks its requested tiles: no backed args, mark backed or
-    /// queue pass, each a launch and a barrier. The default: 0.04 ms less
+    /// dispatch arguments as a bound (known once marking is done; extra
+    /// workgroups return), and the triangle-map workgroup of a page also
+    /// marks its requested tiles: no backed args or mark backed pass, each
+    /// a launch and a barrier (the chain also dropped a queue pass since,
+    /// when the shade queue became per physical tile). The default: 0.04 ms less
     /// a frame along Sponza's path at 1920x1080 on the H200 (BENCHMARKS.md,
     /// "Object space's variants").
     #[default]
@@ -1006,7 +1027,7 @@ impl ObjectSpace {
             res,
             layout,
             config,
-            readback: ReadbackRing::new("tile counters", TileCounter::SLOTS as u64 * 4),
+            readback: ReadbackRing::new("tile counters", TileCounter::WORDS as u64 * 4),
             frames: 0,
             last_view: None,
             view_since: 0,
@@ -1232,7 +1253,7 @@ impl Pipeline for ObjectSpace {
         }
         build_world_grid(frame, &mut self.grid);
         if !quiet {
-            shade_tiles(frame, &self.shade, &self.res, &self.grid.grid);
+            shade_tiles(frame, &self.shade, &self.res, &self.grid.grid, self.layout.tile_size);
         }
         gather(frame, &self.gather, &self.res, &self.grid.grid, 0);
         for (k, group) in views.iter().enumerate() {
@@ -1248,7 +1269,7 @@ impl Pipeline for ObjectSpace {
         if let Some(pass) = &self.atlas_view {
             draw_atlas_pages(frame, pass, &self.res, self.atlas_pages);
         }
-        let counter_bytes = TileCounter::SLOTS as u64 * 4;
+        let counter_bytes = TileCounter::WORDS as u64 * 4;
         self.readback.copy(frame.device, frame.encoder, &self.res.counters, counter_bytes, frame.number);
     }
 
@@ -1329,7 +1350,7 @@ impl Pipeline for ObjectSpace {
             .collect(device, wait)
             .into_iter()
             .map(|(frame, bytes)| {
-                let c: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+                let c = TileCounter::fold(&bytemuck::pod_collect_to_vec::<u8, u32>(&bytes));
                 let count = |t: TileCounter| c[t as usize] as f64;
                 let (shaded, visible, new) =
                     (count(TileCounter::Queued), count(TileCounter::Visible), count(TileCounter::New));

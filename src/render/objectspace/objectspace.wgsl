@@ -2,7 +2,8 @@
 // visibility buffer, and the per-pixel mip selection that tile marking and
 // gathering must compute identically.
 #define_import_path shadespace::objectspace
-#import shadespace::contract::{MAX_LEVELS, TILE_COUNTER_SLOTS, BLOCK_SIDE, AGE_BUCKETS}
+#import shadespace::contract::{MAX_LEVELS, TILE_COUNTER_SLOTS, TILE_COUNTER_WORDS, COUNTER_STRIPES, BLOCK_SIDE,
+    AGE_BUCKETS}
 #import shadespace::scene_bindings::{vertices, objects, triangle_vertices, object_clip_position}
 #import shadespace::scene::vertex_uv0
 #import shadespace::pixel_surface::{PixelSample, interpolate2}
@@ -95,10 +96,32 @@ fn filter_margin() -> u32 {
 @group(1) @binding(2) var<storage, read_write> tile_visible: array<atomic<u32>>;
 // Per physical tile: stamp of the last frame it was shaded (the cache age).
 @group(1) @binding(3) var<storage, read_write> tile_shaded: array<u32>;
-// Work list: (global virtual tile, object << 8 | level).
+// The shade queue, per physical tile: (global virtual tile, object << 8 |
+// level), this frame's where `tile_shaded` holds this frame's stamp. By
+// tile, not appended: an append is an atomic on one word per queued tile
+// (28,000 a frame along Sponza's path at 1920x1080), and those serialize.
 @group(1) @binding(4) var<storage, read_write> queue: array<vec2u>;
-// Indexed by the `COUNT_*` constants.
-@group(1) @binding(5) var<storage, read_write> counters: array<atomic<u32>, TILE_COUNTER_SLOTS>;
+// Indexed by the `COUNT_*` constants; then COUNTER_STRIPES copies of them,
+// which `count` spreads counts over (the CPU sums them).
+@group(1) @binding(5) var<storage, read_write> counters: array<atomic<u32>, TILE_COUNTER_WORDS>;
+
+// This invocation's copy of the counters for `count` (`set_stripe`).
+var<private> stripe: u32;
+
+// Spreads this invocation's counts over the stripes by its workgroup's
+// linear index: neighbouring workgroups, which run together, add to
+// different words.
+fn set_stripe(workgroup: vec3u, groups: vec3u) {
+    stripe = (workgroup.y * groups.x + workgroup.x) % COUNTER_STRIPES;
+}
+
+// Adds `n` to counter `counter` in this invocation's stripe: for counts
+// that many workgroups add to in one pass (atomics on one word serialize,
+// about one a clock); read them on the CPU, summed (`TileCounter::fold`),
+// never on the GPU.
+fn count(counter: u32, n: u32) {
+    atomicAdd(&counters[TILE_COUNTER_SLOTS * (1u + stripe) + counter], n);
+}
 // Visibility buffer: (object + 1, triangle); 0 = background. Under MSAA one
 // per sample: multisampled from the raster pass, a layer per sample from
 // the compute rasterizer (`VISIBILITY_LAYERS`). Read with `visibility_ids`.
@@ -169,7 +192,23 @@ struct ViewSlot {
 @group(1) @binding(16) var<storage, read_write> tile_views: array<atomic<u32>>;
 // The page table's first level: per block of pages, its chunk + 1 (0 = no
 // page of the block is backed).
+#ifdef DIRECTORY_ATOMIC
 @group(1) @binding(17) var<storage, read_write> page_directory: array<atomic<u32>>;
+#else
+// Passes that do not write the directory (all but paging's) read it with
+// plain loads, which the GPU may cache: an atomic load goes to L2 every
+// time, and marking and the gather read it for every pixel.
+@group(1) @binding(17) var<storage, read_write> page_directory: array<u32>;
+#endif
+
+// The directory's word for block `block`: its chunk + 1, or 0.
+fn directory_word(block: u32) -> u32 {
+#ifdef DIRECTORY_ATOMIC
+    return atomicLoad(&page_directory[block]);
+#else
+    return page_directory[block];
+#endif
+}
 
 // A chunk's state, kept by the GPU alone (tests read it back as
 // `debug::PageTableState::chunks`).
@@ -197,7 +236,7 @@ fn age_bucket(page: u32) -> u32 {
 
 // The table word of virtual page `page`, which is backed (its block has a chunk).
 fn table_word(page: u32) -> u32 {
-    return (atomicLoad(&page_directory[page / BLOCK_PAGES]) - 1u) * BLOCK_PAGES + page % BLOCK_PAGES;
+    return (directory_word(page / BLOCK_PAGES) - 1u) * BLOCK_PAGES + page % BLOCK_PAGES;
 }
 
 // Takes physical page `physical` from the virtual page it backs, if any
@@ -246,7 +285,7 @@ fn page_origin(l: AtlasLevel, page: u32) -> vec2u {
 // The physical page backing virtual page `page`, or NOT_BACKED: the block's
 // chunk from the directory, the page's word in the chunk.
 fn physical_page(page: u32) -> u32 {
-    let chunk = atomicLoad(&page_directory[page / BLOCK_PAGES]);
+    let chunk = directory_word(page / BLOCK_PAGES);
     if chunk == 0u {
         return NOT_BACKED;
     }

@@ -92,7 +92,7 @@ pub struct Resources {
     pub page_requests: wgpu::Buffer,
     /// This frame's requested pages (a slot per page of the budget).
     pub request_list: wgpu::Buffer,
-    /// Indirect dispatch arguments (`dispatch.wgsl`): shade, allocate, backed pages.
+    /// Indirect dispatch arguments (`dispatch.wgsl`): allocate, backed pages.
     pub dispatch: wgpu::Buffer,
     /// `dispatch` as storage, for the passes that write it (group 2).
     pub dispatch_layout: wgpu::BindGroupLayout,
@@ -219,9 +219,8 @@ fn directory_buffers(device: &wgpu::Device, layout: &AtlasLayout) -> (wgpu::Buff
 }
 
 /// Indirect dispatch offsets in [`Resources::dispatch`] (bytes).
-pub const SHADE_ARGS: u64 = 0;
-pub const ALLOCATE_ARGS: u64 = 16;
-pub const BACKED_ARGS: u64 = 32;
+pub const ALLOCATE_ARGS: u64 = 0;
+pub const BACKED_ARGS: u64 = 16;
 
 impl Resources {
     pub fn new(
@@ -249,7 +248,7 @@ impl Resources {
             contents: bytemuck::cast_slice(&entry_data),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         });
-        let counters = storage("tile counters", TileCounter::SLOTS as u64 * 4, wgpu::BufferUsages::COPY_DST);
+        let counters = storage("tile counters", TileCounter::WORDS as u64 * 4, wgpu::BufferUsages::COPY_DST);
         // Chunks for the whole budget: a resize leaves the table as it is.
         let chunks = table_chunks(pool.pages);
         let block_pages = super::atlas::BLOCK_PAGES as u64;
@@ -258,7 +257,7 @@ impl Resources {
         let table_chunk_state = storage("page table chunks", chunks as u64 * 8, none);
         let free_chunks = storage("free page table chunks", chunks as u64 * 4, none);
         let request_list = storage("page request list", pool.pages as u64 * 8, none);
-        let dispatch = storage("object-space dispatch", 48, wgpu::BufferUsages::INDIRECT);
+        let dispatch = storage("object-space dispatch", 32, wgpu::BufferUsages::INDIRECT);
         let dispatch_layout =
             bind_group_layout(device, "object-space dispatch", &[Binding::Storage { read_only: false }]);
         let dispatch_group =

@@ -35,9 +35,9 @@
 #import shadespace::pixel_surface::sample_pixel_at
 #import shadespace::contract::{COUNT_MSAA_EDGE_PIXELS, COUNT_MSAA_POINTS}
 #endif
-#import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace_mark_backed::mark_backed_page
-#import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, visibility,
+#import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, count,
+    set_stripe, visibility,
     chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
     page_request_bit, tile_request_bit, page_tile_origin, forget_request, BlendedVertex, blended_vertex, filter_margin,
@@ -89,10 +89,8 @@ fn queue_if_due(slot: u32, tile: u32, object: u32, level_index: u32, valid_since
     // Only this invocation touches tile_shaded[slot] this frame.
     if due(tile_shaded[slot], valid_since, tile) {
         tile_shaded[slot] = params.stamp;
-        let n = atomicAdd(&counters[COUNT_QUEUED], 1u);
-        if n < params.max_queue {
-            queue[n] = vec2u(tile, (object << 8u) | level_index);
-        }
+        queue[slot] = vec2u(tile, (object << 8u) | level_index);
+        count(COUNT_QUEUED, 1u);
         return true;
     }
     return false;
@@ -173,7 +171,7 @@ fn mark_tile(object: u32, level_index: u32, l: AtlasLevel, valid_since: u32, tex
             return;
         }
         count_atomics(1u);
-        atomicAdd(&counters[COUNT_VIEW_TILES], 1u);
+        count(COUNT_VIEW_TILES, 1u);
     }
     // Most pixels find their tile already marked: read before writing.
     count_atomics(1u);
@@ -188,12 +186,12 @@ fn mark_tile(object: u32, level_index: u32, l: AtlasLevel, valid_since: u32, tex
     count_atomics(2u);
     if atomicExchange(&page_used[physical], params.stamp) != params.stamp {
         count_atomics(1u);
-        atomicAdd(&counters[COUNT_PAGES_USED], 1u);
+        count(COUNT_PAGES_USED, 1u);
     }
-    atomicAdd(&counters[COUNT_VISIBLE], 1u);
+    count(COUNT_VISIBLE, 1u);
     if previous == 0u || previous + 1u != params.stamp {
         count_atomics(1u);
-        atomicAdd(&counters[COUNT_NEW], 1u);
+        count(COUNT_NEW, 1u);
     }
     if queue_if_due(slot, virtual_tile(l, t), object, level_index, valid_since) {
         count_atomics(1u);
@@ -305,14 +303,17 @@ var<private> pixel_points: u32;
 // naga takes the subgroup builtins only with a one-dimensional workgroup:
 // its 64 invocations cover the 8x8 pixels row by row, as (8, 8) numbers them.
 @compute @workgroup_size(64)
-fn mark(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) local: u32,
-        @builtin(subgroup_invocation_id) subgroup_lane: u32) {
+fn mark(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+        @builtin(local_invocation_index) local: u32, @builtin(subgroup_invocation_id) subgroup_lane: u32) {
     lane = subgroup_lane;
+    set_stripe(wg, groups);
     let pixel = wg.xy * 8u + vec2u(local % 8u, local / 8u);
 #else
 @compute @workgroup_size(8, 8)
-fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) local: u32) {
+fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(workgroup_id) wg: vec3u,
+        @builtin(num_workgroups) groups: vec3u, @builtin(local_invocation_index) local: u32) {
     let pixel = id.xy;
+    set_stripe(wg, groups);
 #endif
 #ifndef MARK_PER_PIXEL
     for (var i = local; i < MARK_SLOTS; i += 64u) {
@@ -354,16 +355,16 @@ fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_inde
 #endif
     workgroupBarrier();
     if local == 0u {
-        atomicAdd(&counters[COUNT_ATLAS_PIXELS], atomicLoad(&atlas_pixels));
-        atomicAdd(&counters[COUNT_UNDER_SHADED_PIXELS], atomicLoad(&under_shaded_pixels));
+        count(COUNT_ATLAS_PIXELS, atomicLoad(&atlas_pixels));
+        count(COUNT_UNDER_SHADED_PIXELS, atomicLoad(&under_shaded_pixels));
 #ifdef MSAA
-        atomicAdd(&counters[COUNT_MSAA_EDGE_PIXELS], atomicLoad(&edge_pixels));
-        atomicAdd(&counters[COUNT_MSAA_POINTS], atomicLoad(&atlas_points));
+        count(COUNT_MSAA_EDGE_PIXELS, atomicLoad(&edge_pixels));
+        count(COUNT_MSAA_POINTS, atomicLoad(&atlas_points));
 #endif
 #ifdef COUNT_MARK_ATOMICS
-        atomicAdd(&counters[COUNT_MARK_TILES], atomicLoad(&mark_tiles_counted));
-        atomicAdd(&counters[COUNT_MARK_ATOMICS], atomicLoad(&mark_atomics_counted));
-        atomicAdd(&counters[COUNT_MARK_CLAIMS], atomicLoad(&mark_claims_counted));
+        count(COUNT_MARK_TILES, atomicLoad(&mark_tiles_counted));
+        count(COUNT_MARK_ATOMICS, atomicLoad(&mark_atomics_counted));
+        count(COUNT_MARK_CLAIMS, atomicLoad(&mark_claims_counted));
 #endif
     }
 }
@@ -488,6 +489,7 @@ fn fs_mark_blended(in: BlendedVertex) {
 @compute @workgroup_size(16)
 fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
                @builtin(local_invocation_index) lid: u32) {
+    set_stripe(wg, groups);
     let index = wg.y * groups.x + wg.x;
     if index >= min(atomicLoad(&counters[COUNT_PAGES_BACKED]), params.physical_pages) {
         return;
@@ -495,8 +497,3 @@ fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups
     mark_backed_page(index, lid);
 }
 
-// Indirect dispatch arguments for shading: one workgroup per queued tile.
-@compute @workgroup_size(1)
-fn queue_args() {
-    write_dispatch(SHADE_ARGS, min(atomicLoad(&counters[COUNT_QUEUED]), params.max_queue));
-}

@@ -3,7 +3,7 @@
 // map pass in the same workgroup as the page's map (`trimap.wgsl`).
 #define_import_path shadespace::objectspace_mark_backed
 #import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_BACKED_TILES}
-#import shadespace::objectspace::{params, entry_level, tile_visible, tile_shaded, queue, counters, page_requests,
+#import shadespace::objectspace::{params, entry_level, tile_visible, tile_shaded, queue, count, page_requests,
     backed, virtual_tile, page_origin, page_request_bit, tile_request_bit, page_tile_origin}
 
 // Backed page `index` of this frame's list, by invocation `lid` of its
@@ -29,14 +29,12 @@ fn mark_backed_page(index: u32, lid: u32) {
         atomicStore(&tile_visible[slot], select(0u, params.stamp, requested));
         tile_shaded[slot] = 0u;
         if requested {
-            atomicAdd(&counters[COUNT_VISIBLE], 1u);
-            atomicAdd(&counters[COUNT_BACKED_TILES], 1u);
-            atomicAdd(&counters[COUNT_NEW], 1u);
+            count(COUNT_VISIBLE, 1u);
+            count(COUNT_BACKED_TILES, 1u);
+            count(COUNT_NEW, 1u);
             tile_shaded[slot] = params.stamp;
-            let n = atomicAdd(&counters[COUNT_QUEUED], 1u);
-            if n < params.max_queue {
-                queue[n] = vec2u(virtual_tile(l, texel), (object << 8u) | level_index);
-            }
+            queue[slot] = vec2u(virtual_tile(l, texel), (object << 8u) | level_index);
+            count(COUNT_QUEUED, 1u);
         }
     }
     if lid == 0u {

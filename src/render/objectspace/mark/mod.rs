@@ -2,9 +2,8 @@
 //! buffer, the mip level and the tiles of its bilinear footprint are marked
 //! visible; a tile whose cached shade is too old or stale is queued, and a
 //! tile whose page has no physical page yet is requested. After paging,
-//! the tiles requested on the pages it backed are marked and queued. Then
-//! one invocation turns the queue length into the shade pass's indirect
-//! dispatch. `cpu.rs` is the CPU twin that tests check this pass against.
+//! the tiles requested on the pages it backed are marked and queued (the
+//! queue is kept per physical tile). `cpu.rs` is the CPU twin that tests check this pass against.
 //! [`Marking`] picks whether each pixel or each workgroup's first pixel of
 //! a tile marks it globally, and whether a subgroup elects one claimant per
 //! tile before the workgroup's table.
@@ -45,7 +44,6 @@ pub struct MarkPass {
     /// With [`super::GatherInput::Record`]: the pixel records (group 2).
     records: Option<wgpu::BindGroup>,
     mark_backed: wgpu::ComputePipeline,
-    queue_args: wgpu::ComputePipeline,
 }
 
 impl MarkPass {
@@ -59,7 +57,6 @@ impl MarkPass {
         records: Option<&wgpu::Buffer>,
     ) -> Result<Self, ShaderError> {
         let plain = [&scene.layout, &res.layout];
-        let with_dispatch = [&scene.layout, &res.layout, &res.dispatch_layout];
         let records_layout = bind_group_layout(device, "pixel records", &[Binding::Storage { read_only: false }]);
         let records = records.map(|b| bind_group(device, "pixel records", &records_layout, &[b.as_entire_binding()]));
         let mark_groups: &[&wgpu::BindGroupLayout] =
@@ -80,7 +77,6 @@ impl MarkPass {
             mark: compute_pipeline_with(device, shaders, SHADER, &defs, "mark", mark_groups)?,
             records,
             mark_backed: compute_pipeline(device, shaders, SHADER, "mark_backed", &plain)?,
-            queue_args: compute_pipeline(device, shaders, SHADER, "queue_args", &with_dispatch)?,
         })
     }
 }
@@ -102,19 +98,11 @@ pub fn mark_tiles(frame: &mut Frame, pass: &MarkPass, res: &Resources, view: usi
 }
 
 /// Reads: the backed-page list, the page requests. Writes: the tile stamps
-/// of the backed pages, the shade queue, the counters; then the shade
-/// dispatch.
+/// of the backed pages, the shade queue, the counters.
 pub fn mark_backed_pages(frame: &mut Frame, pass: &MarkPass, res: &Resources) {
     let scene = frame.scene_group;
-    {
-        let mut cp = frame.compute_pass("mark backed");
-        cp.set_pipeline(&pass.mark_backed);
-        res.bind(&mut cp, scene);
-        cp.dispatch_workgroups_indirect(&res.dispatch, BACKED_ARGS);
-    }
-    let mut cp = frame.compute_pass("queue");
-    cp.set_pipeline(&pass.queue_args);
+    let mut cp = frame.compute_pass("mark backed");
+    cp.set_pipeline(&pass.mark_backed);
     res.bind(&mut cp, scene);
-    cp.set_bind_group(2, &res.dispatch_group, &[]);
-    cp.dispatch_workgroups(1, 1, 1);
+    cp.dispatch_workgroups_indirect(&res.dispatch, BACKED_ARGS);
 }

@@ -22,10 +22,14 @@ pub const SHADER: ShaderSource = ShaderSource::new("paging.wgsl", include_str!("
 /// Frees the pages of slots given back (`slots`).
 pub const RELEASE_SHADER: ShaderSource = ShaderSource::new("release.wgsl", include_str!("release.wgsl"));
 /// Defined for [`PagingChain::Fused`]: `page_offsets` also writes the backed
-/// pages' and the shade's dispatch arguments.
+/// pages' dispatch arguments.
 pub const FUSED: &str = "FUSED_PAGING";
+/// Defined for every paging pipeline: they write the page directory, with
+/// atomics; the other passes read it with plain loads (`objectspace.wgsl`).
+pub const DIRECTORY_ATOMIC: &str = "DIRECTORY_ATOMIC";
 /// The variants besides [`SHADER`], for the test that validates every shader.
-pub const VARIANTS: [ShaderSource; 1] = [SHADER.with_defs(&[FUSED])];
+pub const VARIANTS: [ShaderSource; 2] =
+    [SHADER.with_defs(&[FUSED, DIRECTORY_ATOMIC]), SHADER.with_defs(&[DIRECTORY_ATOMIC])];
 
 pub struct PagingPass {
     age_pages: wgpu::ComputePipeline,
@@ -56,27 +60,37 @@ impl PagingPass {
         let with_dispatch = [&scene.layout, &res.layout, &res.dispatch_layout];
         let release_layout = bind_group_layout(device, "released slots", &[Binding::Storage { read_only: true }]);
         let with_ranges = [&scene.layout, &res.layout, &release_layout];
-        let offsets_defs: &[&str] = if chain == PagingChain::Fused { &[FUSED] } else { &[] };
+        let offsets_defs: &[&str] =
+            if chain == PagingChain::Fused { &[FUSED, DIRECTORY_ATOMIC] } else { &[DIRECTORY_ATOMIC] };
+        let atomic = &[DIRECTORY_ATOMIC][..];
         Ok(Self {
             chain,
             release_slots: compute_pipeline(device, shaders, RELEASE_SHADER, "release_slots", &with_ranges)?,
             release_layout,
-            age_pages: compute_pipeline(device, shaders, SHADER, "age_pages", &plain)?,
+            age_pages: compute_pipeline_with(device, shaders, SHADER, atomic, "age_pages", &plain)?,
             page_offsets: compute_pipeline_with(device, shaders, SHADER, offsets_defs, "page_offsets", &with_dispatch)?,
-            list_candidates: compute_pipeline(device, shaders, SHADER, "list_candidates", &plain)?,
-            age_pages_if_requested: compute_pipeline(device, shaders, SHADER, "age_pages_if_requested", &plain)?,
-            list_candidates_if_requested: compute_pipeline(
+            list_candidates: compute_pipeline_with(device, shaders, SHADER, atomic, "list_candidates", &plain)?,
+            age_pages_if_requested: compute_pipeline_with(
                 device,
                 shaders,
                 SHADER,
+                atomic,
+                "age_pages_if_requested",
+                &plain,
+            )?,
+            list_candidates_if_requested: compute_pipeline_with(
+                device,
+                shaders,
+                SHADER,
+                atomic,
                 "list_candidates_if_requested",
                 &plain,
             )?,
-            allocate: compute_pipeline(device, shaders, SHADER, "allocate", &plain)?,
-            release_chunks: compute_pipeline(device, shaders, SHADER, "release_chunks", &plain)?,
-            claim_blocks: compute_pipeline(device, shaders, SHADER, "claim_blocks", &plain)?,
-            bind_pages: compute_pipeline(device, shaders, SHADER, "bind_pages", &plain)?,
-            backed_args: compute_pipeline(device, shaders, SHADER, "backed_args", &with_dispatch)?,
+            allocate: compute_pipeline_with(device, shaders, SHADER, atomic, "allocate", &plain)?,
+            release_chunks: compute_pipeline_with(device, shaders, SHADER, atomic, "release_chunks", &plain)?,
+            claim_blocks: compute_pipeline_with(device, shaders, SHADER, atomic, "claim_blocks", &plain)?,
+            bind_pages: compute_pipeline_with(device, shaders, SHADER, atomic, "bind_pages", &plain)?,
+            backed_args: compute_pipeline_with(device, shaders, SHADER, atomic, "backed_args", &with_dispatch)?,
         })
     }
 }
@@ -84,7 +98,7 @@ impl PagingPass {
 /// Reads: the page requests, page use and owners. Writes: the page
 /// directory and table chunks, page owners and use, the backed-page list,
 /// the counters, the dispatches of allocation and of the backed pages' passes
-/// (with [`PagingChain::Fused`], bounds, and the shade dispatch's too).
+/// (with [`PagingChain::Fused`], a bound).
 pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass("paging");

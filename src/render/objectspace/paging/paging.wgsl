@@ -17,10 +17,6 @@
 #import shadespace::objectspace::{params, atlas_entries, counters, page_table, page_used, page_owner, request_list,
     candidates, backed, page_directory, table_chunks, free_chunks, forget_request, unbind_page, age_bucket, BLOCK_PAGES}
 #import shadespace::objectspace_dispatch::{write_dispatch, ALLOCATE_ARGS, BACKED_ARGS}
-#ifdef FUSED_PAGING
-#import shadespace::contract::COUNT_QUEUED
-#import shadespace::objectspace_dispatch::SHADE_ARGS
-#endif
 
 fn evictable(page: u32) -> bool {
     return page < params.physical_pages && atomicLoad(&page_used[page]) != params.stamp;
@@ -82,14 +78,10 @@ fn page_offsets() {
     write_dispatch(ALLOCATE_ARGS, (requests() + 63u) / 64u);
 #ifdef FUSED_PAGING
     // The fused chain records no pass after paging to count what it did:
-    // the backed pages' and shading's dispatches take bounds known now (a
-    // request may still fail in `bind_pages`; their extra workgroups see
-    // the counts and return), the tiles marking queued plus every tile of
-    // every page that may be backed.
-    let allocated = min(requests(), offset);
-    write_dispatch(BACKED_ARGS, allocated);
-    let page_tiles = (params.page_size / params.tile_size) * (params.page_size / params.tile_size);
-    write_dispatch(SHADE_ARGS, min(atomicLoad(&counters[COUNT_QUEUED]) + allocated * page_tiles, params.max_queue));
+    // the backed pages' dispatch takes a bound known now (a request may
+    // still fail in `bind_pages`; its extra workgroups see the count and
+    // return).
+    write_dispatch(BACKED_ARGS, min(requests(), offset));
 #endif
 }
 

@@ -12,7 +12,7 @@
 #import shadespace::contract::{COUNT_PAGES_BACKED, COUNT_TRIMAP_PAGES, COUNT_TRIMAP_WEIGHED, COUNT_TRIMAP_SHARED}
 #import shadespace::scene_bindings::{vertices, objects, triangle_vertices}
 #import shadespace::scene::Object
-#import shadespace::objectspace::{params, entry_level, counters, backed, atlas_texel, page_origin}
+#import shadespace::objectspace::{params, entry_level, counters, backed, atlas_texel, page_origin, set_stripe}
 #ifdef MARK_BACKED
 #import shadespace::objectspace_mark_backed::mark_backed_page
 #endif
@@ -416,6 +416,7 @@ fn covering_triangle(search: ptr<function, Search>, o: Object, g: ChartGrid, siz
 @compute @workgroup_size(8, 8)
 fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
          @builtin(local_invocation_id) lid: vec3u, @builtin(local_invocation_index) li: u32) {
+    set_stripe(wg, groups);
     let index = wg.y * groups.x + wg.x;
     if !claim_page(index, li) {
         return;
@@ -486,6 +487,7 @@ fn nearer(a: Nearest, b: Nearest) -> Nearest {
 @compute @workgroup_size(LANES, 8, 8)
 fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
          @builtin(local_invocation_id) lid: vec3u, @builtin(local_invocation_index) li: u32) {
+    set_stripe(wg, groups);
     let index = wg.y * groups.x + wg.x;
     if !claim_page(index, li) {
         return;
