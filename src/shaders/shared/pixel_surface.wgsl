@@ -66,6 +66,31 @@ fn standard_sample_position(count: u32, s: u32) -> vec2f {
     }
 }
 
+// What rebuilding a pixel needs of its triangle, whatever the pixel: its
+// ids and clip-space vertices (x, y, w). A pass that rebuilds several
+// pixels of one triangle loads and transforms it once.
+struct TriangleSetup {
+    // (object + 1, triangle); non-zero.
+    ids: vec2u,
+    tri: vec3u,
+    clip_a: vec3f,
+    clip_b: vec3f,
+    clip_c: vec3f,
+}
+
+// The setup of the triangle `ids` = (object + 1, triangle), non-zero.
+fn triangle_setup(ids: vec2u) -> TriangleSetup {
+    var t: TriangleSetup;
+    t.ids = ids;
+    let o = objects[ids.x - 1u];
+    t.tri = triangle_vertices(o, ids.y);
+    let mvp = view.view_proj * o.model;
+    t.clip_a = (mvp * vec4f(vertices[t.tri.x].position, 1.0)).xyw;
+    t.clip_b = (mvp * vec4f(vertices[t.tri.y].position, 1.0)).xyw;
+    t.clip_c = (mvp * vec4f(vertices[t.tri.z].position, 1.0)).xyw;
+    return t;
+}
+
 // Rebuilds a visibility-buffer pixel; `ids` = (object + 1, triangle), non-zero.
 fn sample_pixel(pixel: vec2u, ids: vec2u) -> PixelSample {
     return sample_pixel_at(pixel, vec2f(0.5), ids);
@@ -74,23 +99,20 @@ fn sample_pixel(pixel: vec2u, ids: vec2u) -> PixelSample {
 // `sample_pixel` at the point `at` of the pixel (0..1 from its top-left
 // corner; an MSAA sample's position), derivatives one pixel apart.
 fn sample_pixel_at(pixel: vec2u, at: vec2f, ids: vec2u) -> PixelSample {
+    return sample_setup_at(triangle_setup(ids), pixel, at);
+}
+
+// `sample_pixel_at` of a pixel of triangle `t`: the same values.
+fn sample_setup_at(t: TriangleSetup, pixel: vec2u, at: vec2f) -> PixelSample {
     var p: PixelSample;
-    p.object = ids.x - 1u;
-    p.triangle = ids.y;
-    let o = objects[p.object];
-    p.tri = triangle_vertices(o, p.triangle);
-    let mvp = view.view_proj * o.model;
-    let h0 = mvp * vec4f(vertices[p.tri.x].position, 1.0);
-    let h1 = mvp * vec4f(vertices[p.tri.y].position, 1.0);
-    let h2 = mvp * vec4f(vertices[p.tri.z].position, 1.0);
-    let c0 = h0.xyw;
-    let c1 = h1.xyw;
-    let c2 = h2.xyw;
+    p.object = t.ids.x - 1u;
+    p.triangle = t.ids.y;
+    p.tri = t.tri;
     let q = point_ndc(vec2f(pixel) + at);
     let step = 2.0 * view.viewport.zw;
-    p.b = barycentrics(c0, c1, c2, q);
-    p.b_dx = barycentrics(c0, c1, c2, q + vec2f(step.x, 0.0));
-    p.b_dy = barycentrics(c0, c1, c2, q - vec2f(0.0, step.y));
+    p.b = barycentrics(t.clip_a, t.clip_b, t.clip_c, q);
+    p.b_dx = barycentrics(t.clip_a, t.clip_b, t.clip_c, q + vec2f(step.x, 0.0));
+    p.b_dy = barycentrics(t.clip_a, t.clip_b, t.clip_c, q - vec2f(0.0, step.y));
     return p;
 }
 

@@ -23,7 +23,8 @@
 // place of the object, indices, vertices and footprint.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
-#import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample}
+#import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample, TriangleSetup, triangle_setup,
+    sample_setup_at}
 #ifdef MSAA
 #import shadespace::pixel_surface::sample_pixel_at
 #import shadespace::objectspace::{sample_group, visibility_samples}
@@ -120,7 +121,7 @@ fn filter_level(own: OwnSurface, level_index: u32, uv: vec2f) -> vec4f {
     // The taps share a page but across a page edge: each distinct page is
     // looked up once (the same pages as a lookup per tap).
     let crosses = hi / params.page_size != lo / params.page_size;
-    let page_lo = physical_page(virtual_page(l, lo));
+    let page_lo = page_of(virtual_page(l, lo));
     var page_x = page_lo;
     var page_y = page_lo;
     if crosses.x {
@@ -251,13 +252,59 @@ fn filter_level_cubic(own: OwnSurface, level_index: u32, uv: vec2f) -> vec4f {
     return vec4f(all, 1.0);
 }
 
+// The last virtual page `page_of` looked up (+ 1; 0: none) and its
+// physical page: a quad's pixels mostly read one page.
+var<private> last_page: vec2u;
+
+// `physical_page(page)`, looked up once for consecutive calls on one page.
+fn page_of(page: u32) -> u32 {
+    if last_page.x != page + 1u {
+        last_page = vec2u(page + 1u, physical_page(page));
+    }
+    return last_page.y;
+}
+
+#ifndef MSAA
+// The triangle of the quad's last pixel on a surface (ids 0: none yet).
+var<private> setup: TriangleSetup;
+
+// Pixels along a side of the square an invocation gathers
+// (`mark::quad_side`): a 2x2 quad, whose pixels mostly share a triangle
+// and a page, loaded and looked up once for them.
+const QUAD: u32 = 2u;
+
+// Gathers `pixel` (in the image).
+fn gather_pixel(pixel: vec2u, size: vec2u) {
+    let ids = visibility_ids(pixel, 0u);
+    if ids.x == 0u {
+        textureStore(hdr, pixel, vec4f(0.0, 0.0, 0.0, 1.0));
+        return;
+    }
+#ifdef PIXEL_RECORD
+    textureStore(hdr, pixel, gather_recorded(pixel, ids, size));
+#else
+    if any(ids != setup.ids) {
+        setup = triangle_setup(ids);
+    }
+    textureStore(hdr, pixel, gather_surface(sample_setup_at(setup, pixel, vec2f(0.5))));
+#endif
+}
+#endif
+
 @compute @workgroup_size(8, 8)
 fn gather(@builtin(global_invocation_id) id: vec3u) {
     let size = textureDimensions(visibility);
+#ifndef MSAA
+    for (var q = 0u; q < QUAD * QUAD; q++) {
+        let pixel = id.xy * QUAD + vec2u(q % QUAD, q / QUAD);
+        if all(pixel < size) {
+            gather_pixel(pixel, size);
+        }
+    }
+#else
     if id.x >= size.x || id.y >= size.y {
         return;
     }
-#ifdef MSAA
     // One call site for every group: a pixel of two surfaces costs its
     // subgroup two gathers, not one and then one per sample.
     let n = visibility_samples();
@@ -274,17 +321,6 @@ fn gather(@builtin(global_invocation_id) id: vec3u) {
         }
     }
     textureStore(hdr, id.xy, vec4f(sum / f32(n), 1.0));
-#else
-    let ids = visibility_ids(id.xy, 0u);
-    if ids.x == 0u {
-        textureStore(hdr, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
-        return;
-    }
-#ifdef PIXEL_RECORD
-    textureStore(hdr, id.xy, gather_recorded(id.xy, ids, size));
-#else
-    textureStore(hdr, id.xy, gather_surface(sample_pixel(id.xy, ids)));
-#endif
 #endif
 }
 

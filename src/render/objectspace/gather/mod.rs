@@ -3,7 +3,7 @@
 //! the HDR target (objects outside the atlas are shaded here per pixel, with
 //! the world grid's lights).
 
-use super::mark::PIXEL_RECORD;
+use super::mark::{PIXEL_RECORD, quad_side};
 use super::resources::Resources;
 use crate::render::frame::Frame;
 use crate::render::passes::light_grid::{LightGrid, READ_GROUP};
@@ -167,7 +167,8 @@ pub fn classify(
 /// stamps for the debug views; the world grid for forward-only objects).
 /// Writes: view `view`'s HDR target (`targets.hdr` for view 0).
 pub fn gather(frame: &mut Frame, pass: &GatherPass, res: &Resources, grid: &LightGrid, view: usize) {
-    let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
+    let side = 8 * quad_side(res.visibility.samples());
+    let (w, h) = (frame.targets.width.div_ceil(side), frame.targets.height.div_ceil(side));
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass(if view == 0 { "gather" } else { "gather: other views" });
     cp.set_pipeline(&pass.pipeline);

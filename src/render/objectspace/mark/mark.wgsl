@@ -30,7 +30,7 @@
 #ifdef COUNT_MARK_ATOMICS
 #import shadespace::contract::{COUNT_MARK_TILES, COUNT_MARK_ATOMICS, COUNT_MARK_CLAIMS}
 #endif
-#import shadespace::pixel_surface::{sample_pixel, PixelSample}
+#import shadespace::pixel_surface::{sample_pixel, PixelSample, TriangleSetup, triangle_setup, sample_setup_at}
 #ifdef MSAA
 #import shadespace::pixel_surface::sample_pixel_at
 #import shadespace::contract::{COUNT_MSAA_EDGE_PIXELS, COUNT_MSAA_POINTS}
@@ -299,20 +299,30 @@ var<private> pixel_edge: bool;
 var<private> pixel_points: u32;
 #endif
 
+// Pixels along a side of the square an invocation marks (`mark::quad_side`):
+// without MSAA a 2x2 quad, whose pixels mostly lie on one triangle, loaded
+// and transformed once for them (`setup`); under MSAA one pixel, its
+// sample groups the loop.
+#ifdef MSAA
+const QUAD: u32 = 1u;
+#else
+const QUAD: u32 = 2u;
+#endif
+
 #ifdef MARK_SUBGROUP
 // naga takes the subgroup builtins only with a one-dimensional workgroup:
-// its 64 invocations cover the 8x8 pixels row by row, as (8, 8) numbers them.
+// its 64 invocations cover its 8x8 squares row by row, as (8, 8) numbers them.
 @compute @workgroup_size(64)
 fn mark(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
         @builtin(local_invocation_index) local: u32, @builtin(subgroup_invocation_id) subgroup_lane: u32) {
     lane = subgroup_lane;
     set_stripe(wg, groups);
-    let pixel = wg.xy * 8u + vec2u(local % 8u, local / 8u);
+    let square = wg.xy * 8u + vec2u(local % 8u, local / 8u);
 #else
 @compute @workgroup_size(8, 8)
 fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(workgroup_id) wg: vec3u,
         @builtin(num_workgroups) groups: vec3u, @builtin(local_invocation_index) local: u32) {
-    let pixel = id.xy;
+    let square = id.xy;
     set_stripe(wg, groups);
 #endif
 #ifndef MARK_PER_PIXEL
@@ -321,37 +331,40 @@ fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(workgroup_id) wg: vec
     }
     workgroupBarrier();
 #endif
-    let kind = mark_pixel(pixel);
-    // Counted per workgroup first: one global atomic per 64 pixels.
+    var atlas = 0u;
+    var under = 0u;
+#ifdef MSAA
+    var edges = 0u;
+    var points = 0u;
+#endif
+    for (var q = 0u; q < QUAD * QUAD; q++) {
+        let kind = mark_pixel(square * QUAD + vec2u(q % QUAD, q / QUAD));
+        atlas += u32(kind != PIXEL_NOT_IN_ATLAS);
+        under += u32(kind == PIXEL_UNDER_SHADED);
+#ifdef MSAA
+        edges += u32(pixel_edge);
+        points += pixel_points;
+#endif
+    }
+    // Counted per workgroup first: one global atomic per workgroup.
 #ifdef MARK_SUBGROUP
     // ... and per subgroup before that: one workgroup atomic per subgroup.
-    let atlas = subgroupAdd(u32(kind != PIXEL_NOT_IN_ATLAS));
-    let under = subgroupAdd(u32(kind == PIXEL_UNDER_SHADED));
+    atlas = subgroupAdd(atlas);
+    under = subgroupAdd(under);
 #ifdef MSAA
-    let edges = subgroupAdd(u32(pixel_edge));
-    let points = subgroupAdd(pixel_points);
+    edges = subgroupAdd(edges);
+    points = subgroupAdd(points);
 #endif
     if elected() {
+#endif
         atomicAdd(&atlas_pixels, atlas);
         atomicAdd(&under_shaded_pixels, under);
 #ifdef MSAA
         atomicAdd(&edge_pixels, edges);
         atomicAdd(&atlas_points, points);
 #endif
+#ifdef MARK_SUBGROUP
     }
-#else
-    if kind != PIXEL_NOT_IN_ATLAS {
-        atomicAdd(&atlas_pixels, 1u);
-    }
-    if kind == PIXEL_UNDER_SHADED {
-        atomicAdd(&under_shaded_pixels, 1u);
-    }
-#ifdef MSAA
-    if pixel_edge {
-        atomicAdd(&edge_pixels, 1u);
-    }
-    atomicAdd(&atlas_points, pixel_points);
-#endif
 #endif
     workgroupBarrier();
     if local == 0u {
@@ -434,9 +447,17 @@ fn mark_pixel(pixel: vec2u) -> u32 {
 #ifdef PIXEL_RECORD
     record_index = pixel.y * size.x + pixel.x;
 #endif
-    return mark_surface(sample_pixel(pixel, ids));
+    if any(ids != setup.ids) {
+        setup = triangle_setup(ids);
+    }
+    return mark_surface(sample_setup_at(setup, pixel, vec2f(0.5)));
 #endif
 }
+
+#ifndef MSAA
+// The triangle of the quad's last pixel on a surface (ids 0: none yet).
+var<private> setup: TriangleSetup;
+#endif
 
 // Marks the tiles of one surface point's footprint; returns what kind of
 // pixel it makes.

@@ -81,12 +81,21 @@ impl MarkPass {
     }
 }
 
+/// Pixels along a side of the square each invocation of the mark pass
+/// marks (`QUAD` in `mark.wgsl`): a 2x2 quad at one sample per pixel (its
+/// pixels mostly share a triangle, whose vertices it then loads and
+/// transforms once), one pixel under MSAA (its samples are the loop).
+pub fn quad_side(samples: u32) -> u32 {
+    if samples > 1 { 1 } else { 2 }
+}
+
 /// Reads: the visibility buffer, the atlas table, the page table, the tile
 /// stamps. Writes: the tile stamps, page use, page requests, the shade
 /// queue, the counters (and the pixel records, when the gather reads them).
 /// `view`: which view's visibility buffer (0: the main view).
 pub fn mark_tiles(frame: &mut Frame, pass: &MarkPass, res: &Resources, view: usize) {
-    let (w, h) = (frame.targets.width.div_ceil(8), frame.targets.height.div_ceil(8));
+    let side = 8 * quad_side(res.visibility.samples());
+    let (w, h) = (frame.targets.width.div_ceil(side), frame.targets.height.div_ceil(side));
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass(if view == 0 { "mark" } else { "mark: other views" });
     cp.set_pipeline(&pass.mark);
