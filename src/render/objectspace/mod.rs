@@ -1495,3 +1495,28 @@ impl Pipeline for ObjectSpace {
         report
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::TileCounter;
+
+    /// Each counter is its slot plus its copy in every stripe; a buffer
+    /// shorter than the stripes (an older read-back) folds what it has.
+    #[test]
+    fn striped_counts_fold_into_their_slots() {
+        let mut words = vec![0u32; TileCounter::WORDS];
+        let queued = TileCounter::Queued as usize;
+        let visible = TileCounter::Visible as usize;
+        words[queued] = 5;
+        for k in 1..=TileCounter::STRIPES {
+            words[k * TileCounter::SLOTS + queued] = k as u32;
+            words[k * TileCounter::SLOTS + visible] = 1;
+        }
+        let folded = TileCounter::fold(&words);
+        let stripes = TileCounter::STRIPES as u32;
+        assert_eq!(folded[queued], 5 + stripes * (stripes + 1) / 2);
+        assert_eq!(folded[visible], stripes);
+        assert_eq!(folded[TileCounter::New as usize], 0);
+        assert_eq!(TileCounter::fold(&words[..TileCounter::SLOTS])[queued], 5);
+    }
+}
