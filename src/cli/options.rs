@@ -409,11 +409,12 @@ pub struct ObjectSpaceArgs {
     /// once) or `off` (every page builds its own). The maps are the same.
     #[arg(long, default_value = "on", value_parser = parse::on_off, action = clap::ArgAction::Set)]
     pub os_trimap_share: bool,
-    /// What the gather reads for each pixel's chart UV and levels: `surface`
-    /// (default: it rebuilds the pixel's surface as marking did) or `record`
+    /// What the gather reads for each pixel's chart UV and levels: `record`
     /// (marking writes them, 16 bytes a pixel, and the gather reads them; one
-    /// view, no MSAA). Both give the same image.
-    #[arg(long, value_enum, default_value = "surface")]
+    /// view, no MSAA, --os-aniso 1), `surface` (it rebuilds the pixel's
+    /// surface as marking did) or `auto` (default: `record` where it can,
+    /// else `surface`). All give the same image.
+    #[arg(long, value_enum, default_value = "auto")]
     pub os_gather: GatherInput,
     /// How the gather filters each level's shades: `bilinear` (default: the
     /// 2x2 texels around the point), `bspline` (the cubic B-spline over the

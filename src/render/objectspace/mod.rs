@@ -472,18 +472,37 @@ pub enum PagingChain {
 }
 
 /// What the gather reads to find a pixel's chart UV and levels
-/// (`--os-gather`); both give the same image.
+/// (`--os-gather`); all give the same image.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum GatherInput {
+    /// [`Self::Record`] where it can serve (one view, one sample per pixel,
+    /// `--os-aniso 1`), else [`Self::Surface`]: along Sponza's path on the
+    /// H100 the records took 0.015-0.019 ms off a frame at 1920x1080 and
+    /// 0.057-0.063 at 3840x2160, once marking and gathering went two by
+    /// two (BENCHMARKS.md, "Marking without same-word atomics"). The
+    /// configuration reports which it became.
+    #[default]
+    Auto,
     /// Rebuilds the pixel's surface as marking did: visibility, object,
     /// indices, vertices, footprint, level, then page, texel, shade.
-    #[default]
     Surface,
     /// Marking writes each pixel's chart UV and levels (16 bytes) and the
     /// gather reads them: a write and a read per pixel against a chain of
     /// dependent loads. One view, one sample per pixel.
     Record,
+}
+
+impl GatherInput {
+    /// What [`Self::Auto`] becomes for `views` views of `samples` samples
+    /// per pixel gathered with `aniso` taps; the others stay.
+    pub fn resolve(self, views: u32, samples: u32, aniso: u32) -> Self {
+        match self {
+            Self::Auto if views == 1 && samples == 1 && aniso == 1 => Self::Record,
+            Self::Auto => Self::Surface,
+            chosen => chosen,
+        }
+    }
 }
 
 /// How the gather reconstructs a pixel's shade from a level's texels
@@ -727,7 +746,7 @@ impl Default for ObjectSpaceConfig {
             trimap_search: TrimapSearch::Rings,
             trimap_grid: 1,
             trimap_share: true,
-            gather_input: GatherInput::Surface,
+            gather_input: GatherInput::Auto,
         }
     }
 }
@@ -866,7 +885,7 @@ impl ObjectSpace {
         scene_cpu: &Scene,
         scene: &SceneGpu,
         targets: &Targets,
-        config: ObjectSpaceConfig,
+        mut config: ObjectSpaceConfig,
     ) -> Result<Self, ObjectSpaceError> {
         let device = &ctx.device;
         if config.reuse == 0 {
@@ -944,6 +963,7 @@ impl ObjectSpace {
         if view_count > 1 && config.visibility != VisibilityMethod::Compute {
             return Err(ObjectSpaceError::ViewsNeedComputeVisibility);
         }
+        config.gather_input = config.gather_input.resolve(view_count, targets.samples, config.aniso);
         if config.gather_input == GatherInput::Record && (view_count > 1 || targets.samples > 1) {
             return Err(ObjectSpaceError::RecordNeedsOneSample { views: view_count, samples: targets.samples });
         }
@@ -1154,6 +1174,13 @@ impl ObjectSpace {
         self.res.set_entries(frame.queue, &self.layout, &changes.moved);
         self.released = changes.released;
         !changes.moved.is_empty()
+    }
+
+    /// Bytes of the pixel records marking writes for the gather
+    /// ([`GatherInput::Record`]): 16 a pixel; 0 without them.
+    fn pixel_record_bytes(&self) -> u64 {
+        let (w, h) = (self.res.visibility.texture.width() as u64, self.res.visibility.texture.height() as u64);
+        if self.config.gather_input == GatherInput::Record { w * h * 16 } else { 0 }
     }
 
     /// The world grid (its last build can be read back).
@@ -1467,6 +1494,7 @@ impl Pipeline for ObjectSpace {
             .memory("chart_grids", self.trimap.grid_bytes)
             .memory("trimap_share", self.trimap.share_bytes)
             .memory("visibility", self.res.visibility.bytes())
+            .memory("pixel_records", self.pixel_record_bytes())
             .memory("world_grid", self.grid.grid.bytes())
             .setup("physical_pages", pool.pages as u64)
             .setup("budget_pages", self.budget_pool.pages as u64)
