@@ -35,7 +35,6 @@ pub fn contract_constants() -> Vec<(&'static str, u32)> {
     let mut c = vec![("MAX_LEVELS", MAX_LEVELS as u32), ("TILE_COUNTER_SLOTS", TileCounter::SLOTS as u32)];
     c.push(("TILE_COUNTER_WORDS", TileCounter::WORDS as u32));
     c.push(("COUNTER_STRIPES", TileCounter::STRIPES as u32));
-    c.push(("SHADE_TILES_PER_GROUP", objectspace::shade::TILES_PER_GROUP));
     c.push(("PAIR_EMISSION", forward_multipass::EMISSION));
     c.extend(GpuLightKind::ALL.iter().map(|k| (k.wgsl_name(), *k as u32)));
     c.extend(ShadingModel::ALL.iter().map(|m| (m.wgsl_name(), *m as u32)));

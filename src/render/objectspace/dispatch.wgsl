@@ -1,14 +1,15 @@
-// The object-space passes' indirect dispatch arguments: one buffer, two
+// The object-space passes' indirect dispatch arguments: one buffer, three
 // dispatches, bound as storage (group 2) by the small passes that write
 // them; the passes they launch read it as INDIRECT, which excludes storage
 // use in the same pass.
 #define_import_path shadespace::objectspace_dispatch
 
-// Word offsets of the two dispatches.
+// Word offsets of the three dispatches.
 const ALLOCATE_ARGS: u32 = 0u;
 const BACKED_ARGS: u32 = 4u;
+const SHADE_ARGS: u32 = 8u;
 
-@group(2) @binding(0) var<storage, read_write> dispatch: array<u32, 8>;
+@group(2) @binding(0) var<storage, read_write> dispatch: array<u32, 12>;
 
 // `n` workgroups at word `at`, spread over x and y because one dimension
 // holds at most 65535 groups.

@@ -66,7 +66,7 @@ use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 use atlas::{AtlasError, AtlasLayout, PagePool};
 use atlas_view::{AtlasPages, AtlasPagesError, AtlasViewPass, draw_atlas_pages};
 use gather::{GatherPass, gather};
-use mark::{MarkPass, mark_backed_pages, mark_tiles};
+use mark::{MarkPass, compact_shade_queue, mark_backed_pages, mark_tiles};
 use paging::resize::{ResizePass, compact_pages, copy_pages};
 use paging::{PagingPass, back_pages, release_slots};
 use residency::Residency;
@@ -1277,10 +1277,11 @@ impl Pipeline for ObjectSpace {
             if self.config.paging_chain == PagingChain::Split {
                 mark_backed_pages(frame, &self.mark, &self.res);
             }
+            compact_shade_queue(frame, &self.mark, &self.res);
         }
         build_world_grid(frame, &mut self.grid);
         if !quiet {
-            shade_tiles(frame, &self.shade, &self.res, &self.grid.grid, self.layout.tile_size);
+            shade_tiles(frame, &self.shade, &self.res, &self.grid.grid);
         }
         gather(frame, &self.gather, &self.res, &self.grid.grid, 0);
         for (k, group) in views.iter().enumerate() {

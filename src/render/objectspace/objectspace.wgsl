@@ -99,7 +99,9 @@ fn filter_margin() -> u32 {
 // The shade queue, per physical tile: (global virtual tile, object << 8 |
 // level), this frame's where `tile_shaded` holds this frame's stamp. By
 // tile, not appended: an append is an atomic on one word per queued tile
-// (28,000 a frame along Sponza's path at 1920x1080), and those serialize.
+// (28,000 a frame along Sponza's path at 1920x1080), and those serialize;
+// `compact_queue` packs the queued tiles into `shade_list` with an atomic
+// per 64 tiles.
 @group(1) @binding(4) var<storage, read_write> queue: array<vec2u>;
 // Indexed by the `COUNT_*` constants; then COUNTER_STRIPES copies of them,
 // which `count` spreads counts over (the CPU sums them).
@@ -222,6 +224,9 @@ struct TableChunk {
 @group(1) @binding(18) var<storage, read_write> table_chunks: array<TableChunk>;
 // This frame's free chunks (their count in COUNT_FREE_CHUNKS).
 @group(1) @binding(19) var<storage, read_write> free_chunks: array<u32>;
+// This frame's queued physical tiles, packed for the shade pass's
+// dispatch (`compact_queue` in `mark.wgsl`); COUNT_QUEUED of them.
+@group(1) @binding(20) var<storage, read_write> shade_list: array<u32>;
 
 const BLOCK_PAGES: u32 = BLOCK_SIDE * BLOCK_SIDE;
 

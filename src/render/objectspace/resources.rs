@@ -92,7 +92,7 @@ pub struct Resources {
     pub page_requests: wgpu::Buffer,
     /// This frame's requested pages (a slot per page of the budget).
     pub request_list: wgpu::Buffer,
-    /// Indirect dispatch arguments (`dispatch.wgsl`): allocate, backed pages.
+    /// Indirect dispatch arguments (`dispatch.wgsl`): allocate, backed pages, shade.
     pub dispatch: wgpu::Buffer,
     /// `dispatch` as storage, for the passes that write it (group 2).
     pub dispatch_layout: wgpu::BindGroupLayout,
@@ -106,7 +106,8 @@ pub struct Resources {
     /// when the atlas is resized.
     views: Vec<(wgpu::TextureView, wgpu::Buffer)>,
     view_count: u32,
-    tile_size: u32,
+    /// The atlas layout's tile side.
+    pub tile_size: u32,
     virtual_pages: u32,
     request_tile_base: u32,
     /// Physical pages at the whole budget: the page table's chunks and the
@@ -128,8 +129,11 @@ pub struct PhysicalPages {
     pub tile_visible: wgpu::Buffer,
     /// Per physical tile: stamp of the last frame it was shaded.
     pub tile_shaded: wgpu::Buffer,
-    /// This frame's tiles to shade: (virtual tile, object << 8 | level).
+    /// Per physical tile: its shade-queue entry (virtual tile, object << 8
+    /// | level), this frame's where `tile_shaded` holds the frame's stamp.
     pub work_queue: wgpu::Buffer,
+    /// This frame's queued physical tiles, packed (`compact_queue`).
+    pub shade_list: wgpu::Buffer,
     /// Per physical page: stamp of its last use.
     pub page_used: wgpu::Buffer,
     /// Per physical page: the virtual page it backs + 1 (0: free).
@@ -173,6 +177,7 @@ impl PhysicalPages {
             tile_visible: storage(device, "tile visible", tiles * 4, copy),
             tile_shaded: storage(device, "tile shaded", tiles * 4, copy),
             work_queue: storage(device, "shade queue", tiles * 8, none),
+            shade_list: storage(device, "shade list", tiles * 4, none),
             page_used: storage(device, "page used", pages * 4, copy),
             page_owner: storage(device, "page owner", pages * 4, copy),
             candidates: storage(device, "page candidates", pages * 4, none),
@@ -221,6 +226,7 @@ fn directory_buffers(device: &wgpu::Device, layout: &AtlasLayout) -> (wgpu::Buff
 /// Indirect dispatch offsets in [`Resources::dispatch`] (bytes).
 pub const ALLOCATE_ARGS: u64 = 0;
 pub const BACKED_ARGS: u64 = 16;
+pub const SHADE_ARGS: u64 = 32;
 
 impl Resources {
     pub fn new(
@@ -257,7 +263,7 @@ impl Resources {
         let table_chunk_state = storage("page table chunks", chunks as u64 * 8, none);
         let free_chunks = storage("free page table chunks", chunks as u64 * 4, none);
         let request_list = storage("page request list", pool.pages as u64 * 8, none);
-        let dispatch = storage("object-space dispatch", 32, wgpu::BufferUsages::INDIRECT);
+        let dispatch = storage("object-space dispatch", 48, wgpu::BufferUsages::INDIRECT);
         let dispatch_layout =
             bind_group_layout(device, "object-space dispatch", &[Binding::Storage { read_only: false }]);
         let dispatch_group =
@@ -297,6 +303,7 @@ impl Resources {
                 rw,
                 rw,
                 Binding::Storage { read_only: true },
+                rw,
                 rw,
                 rw,
                 rw,
@@ -436,6 +443,7 @@ impl Resources {
                 self.page_directory.as_entire_binding(),
                 self.table_chunks.as_entire_binding(),
                 self.free_chunks.as_entire_binding(),
+                p.shade_list.as_entire_binding(),
             ],
         )
     }

@@ -36,8 +36,9 @@
 #import shadespace::contract::{COUNT_MSAA_EDGE_PIXELS, COUNT_MSAA_POINTS}
 #endif
 #import shadespace::objectspace_mark_backed::mark_backed_page
+#import shadespace::objectspace_dispatch::{write_dispatch, SHADE_ARGS}
 #import shadespace::objectspace::{params, atlas_entries, entry_level, tile_visible, tile_shaded, queue, counters, count,
-    set_stripe, visibility,
+    set_stripe, visibility, shade_list,
     chart_footprint, select_levels, footprint_level, bilinear, AtlasLevel, page_used, page_requests, request_list, backed,
     virtual_page, physical_page, virtual_tile, physical_tile, NOT_BACKED, view_slot, tile_views, page_origin,
     page_request_bit, tile_request_bit, page_tile_origin, forget_request, BlendedVertex, blended_vertex, filter_margin,
@@ -90,7 +91,6 @@ fn queue_if_due(slot: u32, tile: u32, object: u32, level_index: u32, valid_since
     if due(tile_shaded[slot], valid_since, tile) {
         tile_shaded[slot] = params.stamp;
         queue[slot] = vec2u(tile, (object << 8u) | level_index);
-        count(COUNT_QUEUED, 1u);
         return true;
     }
     return false;
@@ -518,3 +518,40 @@ fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups
     mark_backed_page(index, lid);
 }
 
+
+var<workgroup> group_queued: atomic<u32>;
+var<workgroup> group_base: u32;
+
+// Packs this frame's queued physical tiles (those shaded this frame:
+// marking, the backed pages' marking) into `shade_list`, COUNT_QUEUED of
+// them: an atomic per workgroup of 64 tiles, where appending each tile as
+// marking queued it was an atomic on one word per tile. So the shade pass
+// runs a workgroup per queued tile, as many in flight as there are.
+@compute @workgroup_size(64)
+fn compact_queue(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+                 @builtin(local_invocation_index) lid: u32) {
+    if lid == 0u {
+        atomicStore(&group_queued, 0u);
+    }
+    workgroupBarrier();
+    let slot = (wg.y * groups.x + wg.x) * 64u + lid;
+    let queued = slot < params.max_queue && tile_shaded[slot] == params.stamp;
+    var at = 0u;
+    if queued {
+        at = atomicAdd(&group_queued, 1u);
+    }
+    workgroupBarrier();
+    if lid == 0u {
+        group_base = atomicAdd(&counters[COUNT_QUEUED], atomicLoad(&group_queued));
+    }
+    let base = workgroupUniformLoad(&group_base);
+    if queued {
+        shade_list[base + at] = slot;
+    }
+}
+
+// The shade pass's indirect dispatch: a workgroup per packed tile.
+@compute @workgroup_size(1)
+fn shade_args() {
+    write_dispatch(SHADE_ARGS, min(atomicLoad(&counters[COUNT_QUEUED]), params.max_queue));
+}

@@ -2,7 +2,7 @@
 // pass (`mark.wgsl`) runs it, or, with the fused paging chain, the triangle
 // map pass in the same workgroup as the page's map (`trimap.wgsl`).
 #define_import_path shadespace::objectspace_mark_backed
-#import shadespace::contract::{COUNT_QUEUED, COUNT_VISIBLE, COUNT_NEW, COUNT_BACKED_TILES}
+#import shadespace::contract::{COUNT_VISIBLE, COUNT_NEW, COUNT_BACKED_TILES}
 #import shadespace::objectspace::{params, entry_level, tile_visible, tile_shaded, queue, count, page_requests,
     backed, virtual_tile, page_origin, page_request_bit, tile_request_bit, page_tile_origin}
 
@@ -34,7 +34,6 @@ fn mark_backed_page(index: u32, lid: u32) {
             count(COUNT_NEW, 1u);
             tile_shaded[slot] = params.stamp;
             queue[slot] = vec2u(virtual_tile(l, texel), (object << 8u) | level_index);
-            count(COUNT_QUEUED, 1u);
         }
     }
     if lid == 0u {

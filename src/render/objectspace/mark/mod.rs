@@ -44,6 +44,8 @@ pub struct MarkPass {
     /// With [`super::GatherInput::Record`]: the pixel records (group 2).
     records: Option<wgpu::BindGroup>,
     mark_backed: wgpu::ComputePipeline,
+    compact_queue: wgpu::ComputePipeline,
+    shade_args: wgpu::ComputePipeline,
 }
 
 impl MarkPass {
@@ -57,6 +59,7 @@ impl MarkPass {
         records: Option<&wgpu::Buffer>,
     ) -> Result<Self, ShaderError> {
         let plain = [&scene.layout, &res.layout];
+        let with_dispatch = [&scene.layout, &res.layout, &res.dispatch_layout];
         let records_layout = bind_group_layout(device, "pixel records", &[Binding::Storage { read_only: false }]);
         let records = records.map(|b| bind_group(device, "pixel records", &records_layout, &[b.as_entire_binding()]));
         let mark_groups: &[&wgpu::BindGroupLayout] =
@@ -77,6 +80,8 @@ impl MarkPass {
             mark: compute_pipeline_with(device, shaders, SHADER, &defs, "mark", mark_groups)?,
             records,
             mark_backed: compute_pipeline(device, shaders, SHADER, "mark_backed", &plain)?,
+            compact_queue: compute_pipeline(device, shaders, SHADER, "compact_queue", &plain)?,
+            shade_args: compute_pipeline(device, shaders, SHADER, "shade_args", &with_dispatch)?,
         })
     }
 }
@@ -114,4 +119,21 @@ pub fn mark_backed_pages(frame: &mut Frame, pass: &MarkPass, res: &Resources) {
     cp.set_pipeline(&pass.mark_backed);
     res.bind(&mut cp, scene);
     cp.dispatch_workgroups_indirect(&res.dispatch, BACKED_ARGS);
+}
+
+/// Reads: the tiles' shade stamps. Writes: the packed shade queue and its
+/// count, then the shade pass's dispatch (`compact_queue`, `shade_args`).
+pub fn compact_shade_queue(frame: &mut Frame, pass: &MarkPass, res: &Resources) {
+    let scene = frame.scene_group;
+    let mut cp = frame.compute_pass("queue");
+    res.bind(&mut cp, scene);
+    cp.set_pipeline(&pass.compact_queue);
+    // A workgroup per 64 physical tiles, over x and y (a dimension holds
+    // at most 65535 groups).
+    let groups = res.max_queue(res.tile_size).div_ceil(64);
+    let x = groups.clamp(1, 65535);
+    cp.dispatch_workgroups(x, groups.div_ceil(x), 1);
+    cp.set_pipeline(&pass.shade_args);
+    cp.set_bind_group(2, &res.dispatch_group, &[]);
+    cp.dispatch_workgroups(1, 1, 1);
 }

@@ -1,10 +1,10 @@
-//! Shade evaluation (`shade.wgsl`): one workgroup per [`TILES_PER_GROUP`]
-//! physical tiles, shading those queued this frame (the queue is kept per physical
+//! Shade evaluation (`shade.wgsl`): one workgroup per queued tile, through
+//! an indirect dispatch (`mark::compact_shade_queue` packs them) (the queue is kept per physical
 //! tile: `objectspace.wgsl`); each texel finds its triangle in the triangle-index
 //! map and runs the shared lighting model with the global lights and the
 //! lights of its world-grid cell.
 
-use super::resources::{ATLAS_FORMAT, Resources};
+use super::resources::{ATLAS_FORMAT, Resources, SHADE_ARGS};
 use crate::render::frame::Frame;
 use crate::render::passes::light_grid::{LightGrid, READ_GROUP};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
@@ -12,12 +12,6 @@ use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("shade.wgsl", include_str!("shade.wgsl"));
-/// Physical tiles each workgroup of the shade pass looks at
-/// (`SHADE_TILES_PER_GROUP` in WGSL): a workgroup that finds its tile not
-/// queued costs its launch, and at a shading rate of 30 Hz half are not
-/// (one tile a workgroup made shading 0.034 ms slower at 3840x2160 on the
-/// H100 than a dispatch of the queued tiles).
-pub const TILES_PER_GROUP: u32 = 4;
 
 pub struct ShadePass {
     pipeline: wgpu::ComputePipeline,
@@ -67,19 +61,15 @@ impl ShadePass {
     }
 }
 
-/// Reads: the shade queue and the tiles' shade stamps, the triangle-index
-/// maps, the scene, its lights and the world grid. Writes: the queued tiles
-/// of the atlas. `tile_size`: the atlas's tile side.
-pub fn shade_tiles(frame: &mut Frame, pass: &ShadePass, res: &Resources, grid: &LightGrid, tile_size: u32) {
+/// Reads: the packed shade queue and its count, the triangle-index maps,
+/// the scene, its lights and the world grid. Writes: the queued tiles of
+/// the atlas.
+pub fn shade_tiles(frame: &mut Frame, pass: &ShadePass, res: &Resources, grid: &LightGrid) {
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass("shade");
     cp.set_pipeline(&pass.pipeline);
     res.bind(&mut cp, scene);
     cp.set_bind_group(2, &pass.outputs, &[]);
     cp.set_bind_group(READ_GROUP, grid.bind_group(), &[]);
-    // A workgroup per TILES_PER_GROUP physical tiles, over x and y (a
-    // dimension holds at most 65535 groups).
-    let groups = res.max_queue(tile_size).div_ceil(TILES_PER_GROUP);
-    let x = groups.clamp(1, 65535);
-    cp.dispatch_workgroups(x, groups.div_ceil(x), 1);
+    cp.dispatch_workgroups_indirect(&res.dispatch, SHADE_ARGS);
 }

@@ -1,5 +1,5 @@
-// Shade evaluation: one workgroup per physical tile, returning at once
-// unless the tile was queued this frame, one invocation per texel
+// Shade evaluation: one workgroup per queued tile (`shade_list`, packed by
+// `compact_queue`), one invocation per texel
 // (tiles larger than 8x8 loop over 8x8 blocks). Each texel finds its triangle
 // in the triangle-index map, interpolates the vertex attributes at the texel
 // centre in chart space, applies the object's current transform, and runs the
@@ -9,12 +9,12 @@
 // triangle, extrapolated past its edges as the centre is): the shade
 // filtered over the texel's footprint instead of sampled at its centre.
 
-#import shadespace::contract::SHADE_TILES_PER_GROUP
+#import shadespace::contract::COUNT_QUEUED
 #import shadespace::scene::vertex_uv0
 #import shadespace::scene_bindings::{objects, vertices, triangle_vertices}
 #import shadespace::surface::{surface_point, albedo_lod}
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
-#import shadespace::objectspace::{params, entry_level, queue, tile_shaded, virtual_page, physical_page,
+#import shadespace::objectspace::{params, entry_level, queue, counters, shade_list, virtual_page, physical_page,
     atlas_texel}
 
 @group(2) @binding(0) var atlas: texture_storage_2d_array<rgba16float, write>;
@@ -39,19 +39,11 @@ fn chart_barycentrics(a: vec2f, c: vec2f, d: vec2f, uv: vec2f) -> vec3f {
 
 @compute @workgroup_size(8, 8)
 fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u, @builtin(local_invocation_id) lid: vec3u) {
-    let first = (wg.y * groups.x + wg.x) * SHADE_TILES_PER_GROUP;
-    for (var slot = first; slot < min(first + SHADE_TILES_PER_GROUP, params.max_queue); slot++) {
-        // Physical tile `slot` was queued this frame when it was shaded this frame.
-        if tile_shaded[slot] == params.stamp {
-            shade_tile(slot, lid.xy);
-        }
+    let index = wg.y * groups.x + wg.x;
+    if index >= min(atomicLoad(&counters[COUNT_QUEUED]), params.max_queue) {
+        return;
     }
-}
-
-// Shades the 8x8 texels of queued physical tile `slot` at `lid` (each 8x8
-// block of a larger tile).
-fn shade_tile(slot: u32, lid: vec2u) {
-    let item = queue[slot];
+    let item = queue[shade_list[index]];
     let object = item.y >> 8u;
     let level_index = item.y & 0xffu;
     let o = objects[object];
@@ -64,7 +56,7 @@ fn shade_tile(slot: u32, lid: vec2u) {
     let blocks = params.tile_size / 8u;
     for (var by = 0u; by < blocks; by++) {
         for (var bx = 0u; bx < blocks; bx++) {
-            let texel = tile_origin + vec2u(bx, by) * 8u + lid;
+            let texel = tile_origin + vec2u(bx, by) * 8u + lid.xy;
             let at = atlas_texel(page, texel);
             let id = textureLoad(triangle_map, at.xy, at.layer, 0).x;
             var color = vec3f(0.0);
