@@ -457,14 +457,14 @@ pub enum Marking {
 pub enum PagingChain {
     /// Five passes, ten dispatches: paging (age, offsets, list), allocate
     /// (allocate, release chunks, claim blocks, bind pages), backed args,
-    /// triangle maps, mark backed.
+    /// triangle maps, mark backed (then, in either chain, the queue pass
+    /// that packs the shade queue).
     Split,
     /// Three passes, eight dispatches: the offsets write the backed pages'
     /// dispatch arguments as a bound (known once marking is done; extra
     /// workgroups return), and the triangle-map workgroup of a page also
     /// marks its requested tiles: no backed args or mark backed pass, each
-    /// a launch and a barrier (the chain also dropped a queue pass since,
-    /// when the shade queue became per physical tile). The default: 0.04 ms less
+    /// a launch and a barrier. The default: 0.04 ms less
     /// a frame along Sponza's path at 1920x1080 on the H200 (BENCHMARKS.md,
     /// "Object space's variants").
     #[default]
