@@ -9,13 +9,14 @@
 //! Per frame ([`ObjectSpace::encode`]): *visibility* (object and triangle id
 //! per pixel: hardware raster after an optional depth pre-pass, or the
 //! compute rasterizer) -> *mark*
-//! (compute per pixel: mip level, bilinear footprint, tiles marked visible;
-//! the first marker of a tile queues it when its shade is `reuse` frames old
-//! or stale; tiles on pages with no physical page request one) -> *paging*
-//! (requested pages get physical pages) -> *triangle maps* of the pages
-//! backed this frame -> *mark backed* (their requested tiles) -> *shade*
-//! (one workgroup per physical tile, those not queued returning) -> *gather* (compute per
-//! pixel: bilinear from the atlas). Texels are lit by
+//! (compute per 2x2 pixels: mip level, bilinear footprint, tiles marked
+//! visible; the first marker of a tile queues it when its shade is `reuse`
+//! frames old or stale; tiles on pages with no physical page request one)
+//! -> *paging* (requested pages get physical pages) -> *triangle maps* of
+//! the pages backed this frame -> *mark backed* (their requested tiles) ->
+//! *queue* (the queued tiles packed) -> *shade* (one workgroup per queued
+//! tile, indirect) -> *gather* (compute per 2x2 pixels: bilinear from the
+//! atlas, at the chart point and levels marking recorded). Texels are lit by
 //! the global lights and the lights of their cell of the world grid (Oxide's
 //! light matrix), built on the GPU before shading; no CPU light culling. No
 //! CPU read-back inside the frame: the counters are copied out and read a few
