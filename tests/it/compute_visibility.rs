@@ -264,16 +264,7 @@ fn counts_add_up_on_a_floor_filling_the_view() {
     let camera = Camera { position: Vec3::new(0.2, 2.0, 0.1), forward: Vec3::NEG_Y, up: Vec3::Z, ..camera };
     let (width, height) = (160u32, 120u32);
     let counts = |scene: &Scene| {
-        let mut texture_sizes = vec![None; scene.objects.len()];
-        texture_sizes[0] = Some(128);
-        let objectspace = ObjectSpaceConfig {
-            texture_sizes,
-            visibility: VisibilityMethod::Compute,
-            count_visibility: true,
-            ..Default::default()
-        };
-        let options = RenderOptions { width, height, pipeline: PipelineConfig::ObjectSpace(objectspace), samples: 1 };
-        let mut renderer = Renderer::new(&ctx, scene, &options).unwrap();
+        let mut renderer = common::counting_renderer(&ctx, scene, (width, height));
         renderer.render(&ctx, &camera, &[], 0).unwrap();
         let mut counts = std::collections::BTreeMap::new();
         for (_, c) in renderer.collect_counters(&ctx, true) {
@@ -330,22 +321,6 @@ fn ids_agree_with_raster_with_back_faces_culled() {
     }
 }
 
-/// An object-space renderer of `scene` with compute visibility that counts
-/// its rasterizer's work; only the first object is in the atlas (the ids
-/// need no charts).
-fn counting_renderer(ctx: &GpuContext, scene: &Scene, size: (u32, u32)) -> Renderer {
-    let mut texture_sizes = vec![None; scene.objects.len()];
-    texture_sizes[0] = Some(64);
-    let objectspace = ObjectSpaceConfig {
-        texture_sizes,
-        visibility: VisibilityMethod::Compute,
-        count_visibility: true,
-        ..Default::default()
-    };
-    let options = RenderOptions::new(size.0, size.1, PipelineConfig::ObjectSpace(objectspace));
-    Renderer::new(ctx, scene, &options).unwrap()
-}
-
 /// Renders frame number `frame` of `camera`'s view; its ids and counters.
 fn ids_and_counts_of(
     ctx: &GpuContext,
@@ -371,7 +346,7 @@ fn ids_and_counts(
     size: (u32, u32),
     culling: Culling,
 ) -> Vec<(Vec<[u32; 2]>, shadespace::render::Counters)> {
-    let mut renderer = counting_renderer(ctx, scene, size);
+    let mut renderer = common::counting_renderer(ctx, scene, size);
     renderer.culling = culling;
     let mut out = Vec::new();
     for (frame, depth_test) in [true, false].into_iter().enumerate() {
@@ -430,7 +405,7 @@ fn ids_drawn_with(
     size: (u32, u32),
     (small_area, workgroups): (u32, u32),
 ) -> (Vec<[u32; 2]>, shadespace::render::Counters) {
-    let mut renderer = counting_renderer(ctx, scene, size);
+    let mut renderer = common::counting_renderer(ctx, scene, size);
     renderer.vis_small_area = small_area;
     renderer.vis_big_workgroups = workgroups;
     ids_and_counts_of(ctx, &mut renderer, camera, 0)

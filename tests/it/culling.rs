@@ -10,9 +10,7 @@ use std::path::Path;
 
 use shadespace::gpu::GpuContext;
 use shadespace::render::objectspace::ObjectSpace;
-use shadespace::render::{
-    Counters, Culling, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
-};
+use shadespace::render::{Counters, Culling};
 use shadespace::scene::{BackFaces, Camera, Scene, path};
 
 const SPONZA: &str = "../shared/scenes/sponza-thesis";
@@ -29,16 +27,7 @@ struct View {
 /// no atlas: every object but the first is shaded forward). Occlusion keeps
 /// its history across the occlusion frames, as along a path.
 fn views(ctx: &GpuContext, scene: &Scene, cameras: &[Camera], size: (u32, u32)) -> Vec<View> {
-    let mut texture_sizes = vec![None; scene.objects.len()];
-    texture_sizes[0] = Some(64);
-    let config = ObjectSpaceConfig {
-        texture_sizes,
-        visibility: VisibilityMethod::Compute,
-        count_visibility: true,
-        ..Default::default()
-    };
-    let options = RenderOptions::new(size.0, size.1, PipelineConfig::ObjectSpace(config));
-    let mut renderer = Renderer::new(ctx, scene, &options).unwrap();
+    let mut renderer = common::counting_renderer(ctx, scene, size);
     let mut out = Vec::new();
     for (i, camera) in cameras.iter().enumerate() {
         let mut ids = Vec::new();

@@ -102,6 +102,19 @@ fn sample_pixel_at(pixel: vec2u, at: vec2f, ids: vec2u) -> PixelSample {
     return sample_setup_at(triangle_setup(ids), pixel, at);
 }
 
+// The triangle `sample_pixel_again` last set up (ids 0: none yet).
+var<private> last_setup: TriangleSetup;
+
+// `sample_pixel` for an invocation that rebuilds several pixels (a quad),
+// which mostly lie on one triangle: loaded and transformed again only when
+// `ids` is not the last pixel's triangle. The same values.
+fn sample_pixel_again(pixel: vec2u, ids: vec2u) -> PixelSample {
+    if any(ids != last_setup.ids) {
+        last_setup = triangle_setup(ids);
+    }
+    return sample_setup_at(last_setup, pixel, vec2f(0.5));
+}
+
 // `sample_pixel_at` of a pixel of triangle `t`: the same values.
 fn sample_setup_at(t: TriangleSetup, pixel: vec2u, at: vec2f) -> PixelSample {
     var p: PixelSample;

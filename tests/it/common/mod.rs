@@ -242,3 +242,21 @@ pub fn every_pipeline(texture_sizes: Vec<Option<u32>>) -> Vec<shadespace::render
         PipelineConfig::ObjectSpace(ObjectSpaceConfig { texture_sizes, ..Default::default() }),
     ]
 }
+
+/// An object-space renderer of `scene` at `size` with compute visibility
+/// that counts its rasterizer's work; only the first object is in the atlas
+/// (the ids need no charts: the others are shaded forward).
+pub fn counting_renderer(ctx: &GpuContext, scene: &Scene, size: (u32, u32)) -> shadespace::render::Renderer {
+    use shadespace::render::passes::visibility::VisibilityMethod;
+    use shadespace::render::{ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+    let mut texture_sizes = vec![None; scene.objects.len()];
+    texture_sizes[0] = Some(64);
+    let config = ObjectSpaceConfig {
+        texture_sizes,
+        visibility: VisibilityMethod::Compute,
+        count_visibility: true,
+        ..Default::default()
+    };
+    let options = RenderOptions::new(size.0, size.1, PipelineConfig::ObjectSpace(config));
+    Renderer::new(ctx, scene, &options).unwrap()
+}

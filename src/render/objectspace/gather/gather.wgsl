@@ -23,8 +23,7 @@
 // place of the object, indices, vertices and footprint.
 #import shadespace::contract::{VIEW_CHART_UV, VIEW_MIP_LEVEL, VIEW_TILE_MASK, VIEW_CACHE_AGE}
 #import shadespace::scene_bindings::objects
-#import shadespace::pixel_surface::{sample_pixel, pixel_surface, PixelSample, TriangleSetup, triangle_setup,
-    sample_setup_at}
+#import shadespace::pixel_surface::{sample_pixel, sample_pixel_again, pixel_surface, PixelSample}
 #ifdef MSAA
 #import shadespace::pixel_surface::sample_pixel_at
 #import shadespace::objectspace::{sample_group, visibility_samples}
@@ -265,9 +264,6 @@ fn page_of(page: u32) -> u32 {
 }
 
 #ifndef MSAA
-// The triangle of the quad's last pixel on a surface (ids 0: none yet).
-var<private> setup: TriangleSetup;
-
 // Pixels along a side of the square an invocation gathers
 // (`mark::quad_side`): a 2x2 quad, whose pixels mostly share a triangle
 // and a page, loaded and looked up once for them.
@@ -283,10 +279,7 @@ fn gather_pixel(pixel: vec2u, size: vec2u) {
 #ifdef PIXEL_RECORD
     textureStore(hdr, pixel, gather_recorded(pixel, ids, size));
 #else
-    if any(ids != setup.ids) {
-        setup = triangle_setup(ids);
-    }
-    textureStore(hdr, pixel, gather_surface(sample_setup_at(setup, pixel, vec2f(0.5))));
+    textureStore(hdr, pixel, gather_surface(sample_pixel_again(pixel, ids)));
 #endif
 }
 #endif

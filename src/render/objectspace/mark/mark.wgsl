@@ -30,7 +30,7 @@
 #ifdef COUNT_MARK_ATOMICS
 #import shadespace::contract::{COUNT_MARK_TILES, COUNT_MARK_ATOMICS, COUNT_MARK_CLAIMS}
 #endif
-#import shadespace::pixel_surface::{sample_pixel, PixelSample, TriangleSetup, triangle_setup, sample_setup_at}
+#import shadespace::pixel_surface::{sample_pixel, sample_pixel_again, PixelSample}
 #ifdef MSAA
 #import shadespace::pixel_surface::sample_pixel_at
 #import shadespace::contract::{COUNT_MSAA_EDGE_PIXELS, COUNT_MSAA_POINTS}
@@ -301,7 +301,7 @@ var<private> pixel_points: u32;
 
 // Pixels along a side of the square an invocation marks (`mark::quad_side`):
 // without MSAA a 2x2 quad, whose pixels mostly lie on one triangle, loaded
-// and transformed once for them (`setup`); under MSAA one pixel, its
+// and transformed once for them (`sample_pixel_again`); under MSAA one pixel, its
 // sample groups the loop.
 #ifdef MSAA
 const QUAD: u32 = 1u;
@@ -447,17 +447,9 @@ fn mark_pixel(pixel: vec2u) -> u32 {
 #ifdef PIXEL_RECORD
     record_index = pixel.y * size.x + pixel.x;
 #endif
-    if any(ids != setup.ids) {
-        setup = triangle_setup(ids);
-    }
-    return mark_surface(sample_setup_at(setup, pixel, vec2f(0.5)));
+    return mark_surface(sample_pixel_again(pixel, ids));
 #endif
 }
-
-#ifndef MSAA
-// The triangle of the quad's last pixel on a surface (ids 0: none yet).
-var<private> setup: TriangleSetup;
-#endif
 
 // Marks the tiles of one surface point's footprint; returns what kind of
 // pixel it makes.
