@@ -46,6 +46,29 @@ pub enum GpuError {
     Readback(String),
 }
 
+/// The instance every context opens its adapter from: wgpu's defaults and
+/// its environment variables (`WGPU_BACKEND`, `WGPU_VALIDATION`, ...), but
+/// without wgpu's check of indirect call arguments, except on Windows.
+///
+/// That check runs a dispatch of its own, with two barriers and every bind
+/// group set again, before each indirect dispatch: along Sponza's path on
+/// the H100 it cost object space, which dispatches five passes indirectly,
+/// 0.030 ms a frame at both 1920x1080 and 3840x2160 (BENCHMARKS.md, "Indirect
+/// dispatches without wgpu's check"); `deferred-compute` dispatches none
+/// there. The project's indirect arguments are written by its own shaders,
+/// which bound them (`write_dispatch` in `objectspace/dispatch.wgsl`,
+/// `finish` in `visibility/cull.wgsl`; draw arguments count lists
+/// of the buffers they index). On D3D12 the check also supplies
+/// `num_workgroups`, which indirectly dispatched passes read, so it stays on there.
+/// `WGPU_VALIDATION_INDIRECT_CALL=1` turns it back on anywhere.
+pub fn instance_descriptor() -> wgpu::InstanceDescriptor {
+    let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle();
+    if !cfg!(windows) {
+        descriptor.flags.remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
+    }
+    descriptor.with_env()
+}
+
 /// Which adapter to open.
 #[derive(Clone, Debug, Default)]
 pub struct GpuOptions {
@@ -72,8 +95,7 @@ pub struct GpuContext {
 
 impl GpuContext {
     pub fn new(options: &GpuOptions) -> Result<Self, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        Self::with_instance(instance, options, None)
+        Self::with_instance(wgpu::Instance::new(instance_descriptor()), options, None)
     }
 
     /// Opens a device on an adapter of `instance`; with `surface`, only on
@@ -212,4 +234,20 @@ fn choose_adapter(adapters: Vec<wgpu::Adapter>, wanted: Option<&str>) -> Result<
         (ty, if i.backend == wgpu::Backend::Vulkan { 0 } else { 1 })
     };
     adapters.into_iter().min_by_key(rank).ok_or(GpuError::NoAdapter)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn indirect_calls_go_unchecked_but_validation_stays() {
+        if std::env::var_os("WGPU_VALIDATION_INDIRECT_CALL").is_some() || std::env::var_os("WGPU_VALIDATION").is_some()
+        {
+            return; // the environment decides
+        }
+        let flags = instance_descriptor().flags;
+        assert_eq!(flags.contains(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL), cfg!(windows));
+        assert_eq!(flags.contains(wgpu::InstanceFlags::VALIDATION), cfg!(debug_assertions));
+    }
 }

@@ -283,7 +283,7 @@ impl Viewer {
         mut session: Box<dyn Session>,
         o: ViewerOptions,
     ) -> anyhow::Result<Self> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance = wgpu::Instance::new(crate::gpu::instance_descriptor());
         let egui = egui::Context::default();
         let (window, ctx, presenter) = match event_loop {
             Some(event_loop) => {

@@ -22,43 +22,77 @@ fn evictable(page: u32) -> bool {
     return page < params.physical_pages && atomicLoad(&page_used[page]) != params.stamp;
 }
 
-fn age(page: u32) {
-    if evictable(page) {
-        atomicAdd(&counters[AGE_BUCKET_BASE + age_bucket(page)], 1u);
+// A workgroup's pages per age bucket, then where its first in each bucket
+// goes: one global atomic per bucket and workgroup, not one per page on
+// nine words (thousands of evictable pages a frame).
+var<workgroup> bucket_pages: array<atomic<u32>, AGE_BUCKETS>;
+var<workgroup> bucket_base: array<u32, AGE_BUCKETS>;
+
+// Counts the evictable pages of this workgroup per age bucket (when `ranked`).
+fn age(page: u32, lid: u32, ranked: bool) {
+    if lid < AGE_BUCKETS {
+        atomicStore(&bucket_pages[lid], 0u);
+    }
+    workgroupBarrier();
+    if ranked && evictable(page) {
+        atomicAdd(&bucket_pages[age_bucket(page)], 1u);
+    }
+    workgroupBarrier();
+    if lid < AGE_BUCKETS {
+        let n = atomicLoad(&bucket_pages[lid]);
+        if n > 0u {
+            atomicAdd(&counters[AGE_BUCKET_BASE + lid], n);
+        }
     }
 }
 
-fn list(page: u32) {
-    if evictable(page) {
-        candidates[atomicAdd(&counters[AGE_BUCKET_BASE + age_bucket(page)], 1u)] = page;
+// Lists the evictable pages of this workgroup at their buckets' offsets.
+fn list(page: u32, lid: u32, ranked: bool) {
+    if lid < AGE_BUCKETS {
+        atomicStore(&bucket_pages[lid], 0u);
+    }
+    workgroupBarrier();
+    var bucket = AGE_BUCKETS;
+    var slot = 0u;
+    if ranked && evictable(page) {
+        bucket = age_bucket(page);
+        slot = atomicAdd(&bucket_pages[bucket], 1u);
+    }
+    workgroupBarrier();
+    if lid < AGE_BUCKETS {
+        let n = atomicLoad(&bucket_pages[lid]);
+        if n > 0u {
+            bucket_base[lid] = atomicAdd(&counters[AGE_BUCKET_BASE + lid], n);
+        }
+    }
+    workgroupBarrier();
+    if bucket < AGE_BUCKETS {
+        candidates[bucket_base[bucket] + slot] = page;
     }
 }
 
 // Ranking for a resize (`resize.wgsl` moves pages onto the candidates).
 @compute @workgroup_size(64)
-fn age_pages(@builtin(global_invocation_id) id: vec3u) {
-    age(id.x);
+fn age_pages(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
+    age(id.x, lid, true);
 }
 
 @compute @workgroup_size(64)
-fn list_candidates(@builtin(global_invocation_id) id: vec3u) {
-    list(id.x);
+fn list_candidates(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
+    list(id.x, lid, true);
 }
 
 // Ranking for paging: nothing to rank in a frame that requested no page
 // (the allocation then dispatches no workgroup).
 @compute @workgroup_size(64)
-fn age_pages_if_requested(@builtin(global_invocation_id) id: vec3u) {
-    if requests() > 0u {
-        age(id.x);
-    }
+fn age_pages_if_requested(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
+    age(id.x, lid, requests() > 0u);
 }
 
 @compute @workgroup_size(64)
-fn list_candidates_if_requested(@builtin(global_invocation_id) id: vec3u) {
-    if requests() > 0u {
-        list(id.x);
-    }
+fn list_candidates_if_requested(@builtin(global_invocation_id) id: vec3u,
+                                @builtin(local_invocation_index) lid: u32) {
+    list(id.x, lid, requests() > 0u);
 }
 
 // This frame's listed requests.
