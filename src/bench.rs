@@ -8,12 +8,12 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::gpu::GpuContext;
-use crate::gpu::timing::FrameTimings;
+use crate::gpu::timing::{FrameTimings, GpuTiming};
 use crate::render::{Counters, FrameStats, PipelineReport, RenderError, Renderer};
 use crate::scene::{CameraPath, Light};
 
 /// Version of the [`RunReport`] schema (bump on any change of its fields).
-pub const SCHEMA_VERSION: u32 = 3;
+pub const SCHEMA_VERSION: u32 = 4;
 
 /// Median, 95th percentile and mean of a series (in the series' unit: the
 /// key it is stored under says which, e.g. `_ms`).
@@ -160,6 +160,10 @@ pub struct RunReport {
     /// Path frame of the first rendered frame, and the step between frames.
     pub first_path_frame: u32,
     pub frame_step: u32,
+    /// What the GPU timestamps timed: every pass (`passes`: the breakdown,
+    /// and a floor) or only the whole frame (`frame`: no breakdown and no
+    /// floor, and none of the per-pass timestamps' own cost).
+    pub timing: GpuTiming,
     pub summary: RunSummary,
     /// Every measured frame.
     pub per_frame: Vec<FrameReport>,
@@ -251,6 +255,7 @@ pub fn run(
         .collect();
     Ok(RunReport {
         schema: SCHEMA_VERSION,
+        timing: renderer.timing,
         adapter: AdapterReport::of(ctx),
         scene: setup.scene_name.to_string(),
         objects: setup.objects,

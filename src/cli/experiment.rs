@@ -11,6 +11,7 @@ use shadespace::experiments::quality::{self, Shard};
 use shadespace::experiments::scenarios::Scenario;
 use shadespace::experiments::timing::{Sweep, TimingGrid};
 use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid};
+use shadespace::gpu::timing::GpuTiming;
 use shadespace::render::objectspace::MAX_ATLAS_BUDGET_MI;
 
 use super::options::GpuArgs;
@@ -192,6 +193,11 @@ pub struct TimingArgs {
     /// atlas the budget biases their levels coarser.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=MAX_ATLAS_BUDGET_MI))]
     pub atlas_budget: Option<u64>,
+    /// What the GPU timestamps time (as `bench --timing`; default `frame`:
+    /// two a frame, so that a pipeline of more passes pays nothing more
+    /// for being timed).
+    #[arg(long, value_enum)]
+    pub timing: Option<GpuTiming>,
 }
 
 /// Runs the experiment and prints its headline and report path.
@@ -315,6 +321,7 @@ fn timing_grid(mut grid: TimingGrid, a: &TimingArgs) -> TimingGrid {
     grid.frames = a.frames.unwrap_or(grid.frames);
     grid.warmup = a.warmup.unwrap_or(grid.warmup);
     grid.cap_ms = a.cap_ms.unwrap_or(grid.cap_ms);
+    grid.timing = a.timing.unwrap_or(grid.timing);
     if !a.scenarios.is_empty() {
         // Keep each listed scenario's own counts where the grid has it (speedup's sweeps differ).
         let counts = |s: Scenario| {

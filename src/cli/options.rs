@@ -377,9 +377,9 @@ pub struct ObjectSpaceArgs {
     pub count_marks: bool,
     /// How the passes that back requested pages are recorded: `fused`
     /// (default: the triangle-map pass marks the backed pages, and the
-    /// dispatch arguments are written with paging's) or `split` (paging,
-    /// backed args, triangle maps, mark backed and queue each a pass: three
-    /// passes more a frame). Both give the same pages, tiles and image.
+    /// dispatch arguments are written with paging's) or `split` (backed
+    /// args and mark backed each a dispatch of their own: two dispatches
+    /// more a frame). Both give the same pages, tiles and image.
     #[arg(long, value_enum, default_value = "fused")]
     pub os_paging: PagingChain,
     /// Invocations weighing each texel's triangles in the triangle-map pass

@@ -198,6 +198,7 @@ pub(super) fn study(
                     let render_options =
                         RenderOptions::new(grid.width, grid.height, config.pipeline(&scene.density_sizes, visibility));
                     let mut renderer = Renderer::new(ctx, shaded, &render_options)?;
+                    renderer.timing = grid.timing;
                     for i in 0..grid.warmup + grid.frames {
                         renderer.render(ctx, &path.camera_at(grid.first_frame + i), &lights, u64::from(i))?;
                         progress.inc(1);
@@ -219,6 +220,11 @@ pub(super) fn study(
                     if median_ms.is_some_and(|ms| ms > grid.cap_ms) {
                         capped.insert(key, k);
                     }
+                    tracing::info!(
+                        "layers: {} layered:{k} {spec}: median {median_ms:?} ms, FLIP {:.4} against the reference",
+                        config.label(),
+                        to_reference.flip_mean
+                    );
                     rows.push(Row {
                         layers: k,
                         lights_spec: spec.to_string(),
@@ -233,6 +239,8 @@ pub(super) fn study(
                         psnr_forward_db: to_forward.as_ref().map(|e| e.psnr_db),
                     });
                 }
+                // The rows so far, so that a run cut short keeps them.
+                output.write_rows(&rows)?;
             }
         }
     }

@@ -391,6 +391,7 @@ pub fn measure(
         let conventional = cell.config.shading.is_conventional();
         let shaded = if conventional { &variant.render } else { &variant.charted };
         let mut renderer = Renderer::new(ctx, shaded, &render_options(&cell.config))?;
+        renderer.timing = grid.timing;
         if conventional {
             renderer.texture_anisotropy = cell.config.aniso as u16;
         }

@@ -18,6 +18,7 @@ use super::report::{Section, f3};
 use super::scenarios::Scenario;
 use crate::bench::{self, BenchPlan, BenchSetup};
 use crate::gpu::GpuContext;
+use crate::gpu::timing::GpuTiming;
 use crate::render::{
     ClusteredConfig, DeferredComputeConfig, DeferredConfig, ForwardConfig, ForwardMultipassConfig, ObjectSpaceConfig,
     PipelineConfig, RenderOptions, Renderer, VisibilityMethod,
@@ -132,6 +133,9 @@ pub struct TimingGrid {
     pub cap_ms: f64,
     /// Seed of the light placement (as `bench --seed`).
     pub seed: u64,
+    /// What the GPU timestamps time (default: the whole frame, so that
+    /// pipelines of more passes pay no more for being timed).
+    pub timing: GpuTiming,
     pub shadings: Vec<Shading>,
     pub sweeps: Vec<Sweep>,
     /// MSAA samples per pixel, an axis of the quality experiment's grid
@@ -172,6 +176,7 @@ impl TimingGrid {
             first_frame: 0,
             cap_ms,
             seed: 1,
+            timing: GpuTiming::Frame,
             shadings,
             sweeps,
             msaa: vec![1],
@@ -329,7 +334,8 @@ impl<'a> Bench<'a> {
         let g = self.grid;
         let scene = if shading.is_conventional() { &self.scene.render } else { self.scene.charted() };
         let options = RenderOptions::new(g.width, g.height, shading.config(&self.scene.density_sizes, self.visibility));
-        let renderer = Renderer::new(self.ctx, scene, &options)?;
+        let mut renderer = Renderer::new(self.ctx, scene, &options)?;
+        renderer.timing = g.timing;
         if !renderer.timing_enabled() {
             return Err(ExperimentError::NoTimestamps(self.ctx.info.name.clone()));
         }

@@ -111,6 +111,7 @@ impl VisibilityRenderer {
                 lights_changed: false,
                 encoder: &mut encoder,
                 profiler: &self.profiler,
+                time_passes: true,
             };
             match pass {
                 Pass::Raster(pass) => visibility(&mut frame, pass, buffer, None),

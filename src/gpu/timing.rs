@@ -8,6 +8,25 @@ use std::path::Path;
 
 use wgpu_profiler::{GpuProfiler, GpuProfilerSettings, GpuTimerQueryResult};
 
+/// What a frame's GPU timestamps time (`--timing`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum GpuTiming {
+    /// Every pass (and the stages of object space's chain pass) between its
+    /// own two timestamps: the per-pass breakdown, and the frame from the
+    /// first pass's start to the last pass's end. The timestamps cost time
+    /// of their own, so a pipeline of more passes pays more: on the H100
+    /// about 0.014 ms of `deferred-compute`'s frame (6 passes) and 0.038 of
+    /// object space's at 1920x1080 (BENCHMARKS.md, "Object space in one
+    /// pass").
+    #[default]
+    Passes,
+    /// Two timestamps a frame, around all of its work, timed as `frame`:
+    /// the frame's time without the per-pass timestamps' own cost; no
+    /// breakdown. For comparing pipelines' frame times.
+    Frame,
+}
+
 /// Timings of one frame, in milliseconds.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct FrameTimings {

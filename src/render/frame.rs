@@ -40,6 +40,9 @@ pub struct Frame<'a> {
     pub lights_changed: bool,
     pub encoder: &'a mut wgpu::CommandEncoder,
     pub profiler: &'a GpuProfiler,
+    /// Passes get timing scopes of their own ([`GpuTiming::Passes`]); with
+    /// [`GpuTiming::Frame`] the renderer times the whole frame instead.
+    pub time_passes: bool,
 }
 
 impl Frame<'_> {
@@ -61,11 +64,17 @@ impl Frame<'_> {
             lights_changed: self.lights_changed,
             encoder: &mut *self.encoder,
             profiler: self.profiler,
+            time_passes: self.time_passes,
         }
     }
 
     /// A compute pass timed as `label`.
     pub fn compute_pass(&mut self, label: &str) -> OwningScope<'_, wgpu::ComputePass<'_>> {
+        if !self.time_passes {
+            let descriptor = wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes: None };
+            let pass = self.encoder.begin_compute_pass(&descriptor);
+            return OwningScope { profiler: self.profiler, recorder: pass, scope: None };
+        }
         let query = self.profiler.begin_pass_query(label, self.encoder);
         let pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(label),
@@ -78,6 +87,9 @@ impl Frame<'_> {
     /// with `scoped_render_pass` / `scoped_compute_pass` and timed as
     /// `label/name` (for example one pass per shadow-map face).
     pub fn scope(&mut self, label: &str) -> Scope<'_, wgpu::CommandEncoder> {
+        if !self.time_passes {
+            return Scope { profiler: self.profiler, recorder: self.encoder, scope: None };
+        }
         self.profiler.scope(label, self.encoder)
     }
 
@@ -88,6 +100,15 @@ impl Frame<'_> {
         color: &[Option<wgpu::RenderPassColorAttachment<'_>>],
         depth: Option<wgpu::RenderPassDepthStencilAttachment<'_>>,
     ) -> OwningScope<'_, wgpu::RenderPass<'_>> {
+        if !self.time_passes {
+            let pass = self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(label),
+                color_attachments: color,
+                depth_stencil_attachment: depth,
+                ..Default::default()
+            });
+            return OwningScope { profiler: self.profiler, recorder: pass, scope: None };
+        }
         let query = self.profiler.begin_pass_query(label, self.encoder);
         let pass = self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
@@ -97,5 +118,20 @@ impl Frame<'_> {
             ..Default::default()
         });
         OwningScope { profiler: self.profiler, recorder: pass, scope: Some(query) }
+    }
+}
+
+/// A compute pass opened by [`Frame::compute_pass`], with its timing scope.
+pub type TimedComputePass<'a, 'p> = OwningScope<'a, wgpu::ComputePass<'p>>;
+
+/// Stage `label` of `pass`, a pass of several dispatches that depend on
+/// each other (one pass rather than one each: fewer pass boundaries), timed
+/// as `pass/label` when the pass is timed (with timestamps inside the pass,
+/// where the adapter has them).
+pub fn stage<'a, 'p>(pass: &'a mut TimedComputePass<'_, 'p>, label: &str) -> Scope<'a, wgpu::ComputePass<'p>> {
+    if pass.scope.is_some() {
+        pass.scope(label)
+    } else {
+        Scope { profiler: pass.profiler, recorder: &mut pass.recorder, scope: None }
     }
 }

@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::gpu::timing::{FrameTimings, GpuTimer};
+use crate::gpu::timing::{FrameTimings, GpuTimer, GpuTiming};
 use crate::gpu::{GpuContext, GpuError, readback};
 use crate::hash::fnv1a;
 use crate::scene::{Aabb, Camera, Light, LightKind, Scene};
@@ -312,6 +312,8 @@ pub struct Renderer {
     /// None where the adapter cannot run it ([`Bloom::supported`]).
     bloom_pass: Option<Bloom>,
     timer: GpuTimer,
+    /// What the GPU timestamps time (default: every pass).
+    pub timing: GpuTiming,
     /// How the HDR frame is scaled before tone mapping (default: fixed 1).
     pub exposure: Exposure,
     /// Bloom strength, 0..=1: the fraction of the light spread into the glow
@@ -485,6 +487,7 @@ impl Renderer {
             auto_exposure,
             bloom_pass,
             timer,
+            timing: GpuTiming::default(),
             exposure: Exposure::default(),
             bloom: 0.0,
             shadow_refresh: ShadowRefresh::default(),
@@ -651,6 +654,8 @@ impl Renderer {
             self.cluster_culling_built = true;
         }
         let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        let time_passes = self.timing == GpuTiming::Passes;
+        let frame_query = (!time_passes).then(|| self.timer.profiler().begin_query("frame", &mut encoder));
         {
             let mut f = Frame {
                 device: &ctx.device,
@@ -666,6 +671,7 @@ impl Renderer {
                 lights_changed,
                 encoder: &mut encoder,
                 profiler: self.timer.profiler(),
+                time_passes,
             };
             shadow_maps(&mut f, &mut self.shadows, self.shadow_refresh == ShadowRefresh::EveryFrame);
             self.pipeline.encode(&mut f);
@@ -679,6 +685,9 @@ impl Renderer {
                     tonemap(&mut f, &self.tonemap, None);
                 }
             }
+        }
+        if let Some(query) = frame_query {
+            self.timer.profiler().end_query(&mut encoder, query);
         }
         self.timer.resolve(&mut encoder);
         self.in_flight.push_back(ctx.queue.submit([encoder.finish()]));

@@ -456,18 +456,18 @@ pub enum Marking {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum PagingChain {
-    /// Five passes, ten dispatches: paging (age, offsets, list), allocate
-    /// (allocate, release chunks, claim blocks, bind pages), backed args,
-    /// triangle maps, mark backed (then, in either chain, the queue pass
-    /// that packs the shade queue).
+    /// Ten dispatches (stages of object space's one pass): paging (age,
+    /// offsets, list, allocate, release chunks, claim blocks, bind pages,
+    /// backed args), triangle maps, mark backed (then, in either chain, the
+    /// queue stage that packs the shade queue).
     Split,
-    /// Three passes, eight dispatches: the offsets write the backed pages'
-    /// dispatch arguments as a bound (known once marking is done; extra
-    /// workgroups return), and the triangle-map workgroup of a page also
-    /// marks its requested tiles: no backed args or mark backed pass, each
-    /// a launch and a barrier. The default: 0.04 ms less
-    /// a frame along Sponza's path at 1920x1080 on the H200 (BENCHMARKS.md,
-    /// "Object space's variants").
+    /// Eight dispatches: the offsets write the backed pages' dispatch
+    /// arguments as a bound (known once marking is done; extra workgroups
+    /// return), and the triangle-map workgroup of a page also marks its
+    /// requested tiles: no backed args or mark backed dispatch, each a
+    /// launch and a barrier. The default: 0.04 ms less a frame along
+    /// Sponza's path at 1920x1080 on the H200 when each was a pass of its
+    /// own (BENCHMARKS.md, "Object space's variants").
     #[default]
     Fused,
 }
@@ -1079,7 +1079,7 @@ impl ObjectSpace {
 
     /// Renders the extra views' visibility and marks their tiles; returns
     /// each view's scene group for its gather.
-    fn mark_extra_views(&mut self, frame: &mut Frame) -> Vec<wgpu::BindGroup> {
+    fn mark_extra_views(&mut self, frame: &mut Frame, pixel_groups: [u32; 2]) -> Vec<wgpu::BindGroup> {
         let (w, h) = (frame.targets.width, frame.targets.height);
         let mut groups = Vec::new();
         for (k, extra) in self.extra_views.iter_mut().enumerate() {
@@ -1094,7 +1094,9 @@ impl ObjectSpace {
             let mut sub = frame.with_scene_group(&group);
             sub.visible = &visible;
             compute_visibility(&mut sub, &mut extra.visibility);
-            mark_tiles(&mut sub, &self.mark, &self.res, k + 1);
+            let mut cp = sub.compute_pass("mark: other views");
+            mark_tiles(&mut cp, &self.mark, &self.res, &group, k + 1, pixel_groups);
+            drop(cp);
             groups.push(group);
         }
         groups
@@ -1267,27 +1269,46 @@ impl Pipeline for ObjectSpace {
             }
             Visibility::Compute(pass) => compute_visibility(frame, pass),
         }
-        mark_tiles(frame, &self.mark, &self.res, 0);
-        if let Some(blended) = &self.blended {
-            mark_blended(frame, blended, &self.res);
-        }
-        let views = self.mark_extra_views(frame);
-        if !quiet {
-            back_pages(frame, &self.paging, &self.res);
-            build_triangle_maps(frame, &self.trimap, &self.res);
-            if self.config.paging_chain == PagingChain::Split {
-                mark_backed_pages(frame, &self.mark, &self.res);
-            }
-            compact_shade_queue(frame, &self.mark, &self.res);
-        }
+        // The world grid reads only the lights: built before the chain.
         build_world_grid(frame, &mut self.grid);
-        if !quiet {
-            shade_tiles(frame, &self.shade, &self.res, &self.grid.grid);
+        let groups = mark::pixel_groups(frame.targets, &self.res);
+        // Blended surfaces and the extra views are marked by passes of
+        // their own (a raster pass; the views' visibility) before paging.
+        let mark_apart = self.blended.is_some() || !self.extra_views.is_empty();
+        let views = if mark_apart {
+            let scene = frame.scene_group;
+            mark_tiles(&mut frame.compute_pass("mark"), &self.mark, &self.res, scene, 0, groups);
+            if let Some(blended) = &self.blended {
+                mark_blended(frame, blended, &self.res);
+            }
+            self.mark_extra_views(frame, groups)
+        } else {
+            Vec::new()
+        };
+        // Marking, paging, triangle maps, the queue, shading and the gather
+        // in one compute pass, each stage a dispatch or a few reading what
+        // the one before wrote: as passes of their own they cost 0.040 ms
+        // more a frame on the H100 (BENCHMARKS.md, "Object space in one pass").
+        let scene = frame.scene_group;
+        let grid = &self.grid.grid;
+        let mut cp = frame.compute_pass("object space");
+        if !mark_apart {
+            mark_tiles(&mut cp, &self.mark, &self.res, scene, 0, groups);
         }
-        gather(frame, &self.gather, &self.res, &self.grid.grid, 0);
+        if !quiet {
+            back_pages(&mut cp, &self.paging, &self.res, scene);
+            build_triangle_maps(&mut cp, &self.trimap, &self.res, scene);
+            if self.config.paging_chain == PagingChain::Split {
+                mark_backed_pages(&mut cp, &self.mark, &self.res, scene);
+            }
+            compact_shade_queue(&mut cp, &self.mark, &self.res, scene);
+            shade_tiles(&mut cp, &self.shade, &self.res, scene, grid);
+        }
+        gather(&mut cp, &self.gather, (&self.res, scene, grid), 0, groups);
+        drop(cp);
         for (k, group) in views.iter().enumerate() {
-            let mut view = frame.with_scene_group(group);
-            gather(&mut view, &self.gather, &self.res, &self.grid.grid, k + 1);
+            let mut cp = frame.compute_pass("gather: other views");
+            gather(&mut cp, &self.gather, (&self.res, group, grid), k + 1, groups);
         }
         if let Some(pass) = &self.background {
             background(frame, pass);

@@ -3,9 +3,9 @@
 //! the HDR target (objects outside the atlas are shaded here per pixel, with
 //! the world grid's lights).
 
-use super::mark::{PIXEL_RECORD, quad_side};
+use super::mark::PIXEL_RECORD;
 use super::resources::Resources;
-use crate::render::frame::Frame;
+use crate::render::frame::{TimedComputePass, stage};
 use crate::render::passes::light_grid::{LightGrid, READ_GROUP};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
@@ -165,15 +165,19 @@ pub fn classify(
 
 /// Reads: the visibility buffer, the atlas and its table (and the tile
 /// stamps for the debug views; the world grid for forward-only objects).
-/// Writes: view `view`'s HDR target (`targets.hdr` for view 0).
-pub fn gather(frame: &mut Frame, pass: &GatherPass, res: &Resources, grid: &LightGrid, view: usize) {
-    let side = 8 * quad_side(res.visibility.samples());
-    let (w, h) = (frame.targets.width.div_ceil(side), frame.targets.height.div_ceil(side));
-    let scene = frame.scene_group;
-    let mut cp = frame.compute_pass(if view == 0 { "gather" } else { "gather: other views" });
+/// Writes: view `view`'s HDR target (`targets.hdr` for view 0). `scene`:
+/// that view's scene group; `groups`: [`super::mark::pixel_groups`].
+pub fn gather(
+    cp: &mut TimedComputePass,
+    pass: &GatherPass,
+    (res, scene, grid): (&Resources, &wgpu::BindGroup, &LightGrid),
+    view: usize,
+    groups: [u32; 2],
+) {
+    let mut cp = stage(cp, if view == 0 { "gather" } else { "gather: other views" });
     cp.set_pipeline(&pass.pipeline);
     res.bind_view(&mut cp, scene, view);
     cp.set_bind_group(2, &pass.io[view], &[]);
     cp.set_bind_group(READ_GROUP, grid.bind_group(), &[]);
-    cp.dispatch_workgroups(w, h, 1);
+    cp.dispatch_workgroups(groups[0], groups[1], 1);
 }

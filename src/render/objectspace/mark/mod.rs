@@ -10,9 +10,10 @@
 
 use super::Marking;
 use super::resources::{BACKED_ARGS, Resources};
-use crate::render::frame::Frame;
+use crate::render::frame::{TimedComputePass, stage};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
+use crate::render::targets::Targets;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("mark.wgsl", include_str!("mark.wgsl"));
@@ -94,28 +95,39 @@ pub fn quad_side(samples: u32) -> u32 {
     if samples > 1 { 1 } else { 2 }
 }
 
+/// Workgroups of the mark pass (and of the gather, which takes the same
+/// quads) over the frame's pixels.
+pub fn pixel_groups(targets: &Targets, res: &Resources) -> [u32; 2] {
+    let side = 8 * quad_side(res.visibility.samples());
+    [targets.width.div_ceil(side), targets.height.div_ceil(side)]
+}
+
 /// Reads: the visibility buffer, the atlas table, the page table, the tile
 /// stamps. Writes: the tile stamps, page use, page requests, the shade
 /// queue, the counters (and the pixel records, when the gather reads them).
-/// `view`: which view's visibility buffer (0: the main view).
-pub fn mark_tiles(frame: &mut Frame, pass: &MarkPass, res: &Resources, view: usize) {
-    let side = 8 * quad_side(res.visibility.samples());
-    let (w, h) = (frame.targets.width.div_ceil(side), frame.targets.height.div_ceil(side));
-    let scene = frame.scene_group;
-    let mut cp = frame.compute_pass(if view == 0 { "mark" } else { "mark: other views" });
+/// `view`: which view's visibility buffer (0: the main view), whose scene
+/// group is `scene`; `groups`: [`pixel_groups`].
+pub fn mark_tiles(
+    cp: &mut TimedComputePass,
+    pass: &MarkPass,
+    res: &Resources,
+    scene: &wgpu::BindGroup,
+    view: usize,
+    groups: [u32; 2],
+) {
+    let mut cp = stage(cp, if view == 0 { "mark" } else { "mark: other views" });
     cp.set_pipeline(&pass.mark);
     res.bind_view(&mut cp, scene, view);
     if let Some(records) = &pass.records {
         cp.set_bind_group(2, records, &[]);
     }
-    cp.dispatch_workgroups(w, h, 1);
+    cp.dispatch_workgroups(groups[0], groups[1], 1);
 }
 
 /// Reads: the backed-page list, the page requests. Writes: the tile stamps
 /// of the backed pages, the shade queue, the counters.
-pub fn mark_backed_pages(frame: &mut Frame, pass: &MarkPass, res: &Resources) {
-    let scene = frame.scene_group;
-    let mut cp = frame.compute_pass("mark backed");
+pub fn mark_backed_pages(cp: &mut TimedComputePass, pass: &MarkPass, res: &Resources, scene: &wgpu::BindGroup) {
+    let mut cp = stage(cp, "mark backed");
     cp.set_pipeline(&pass.mark_backed);
     res.bind(&mut cp, scene);
     cp.dispatch_workgroups_indirect(&res.dispatch, BACKED_ARGS);
@@ -123,9 +135,8 @@ pub fn mark_backed_pages(frame: &mut Frame, pass: &MarkPass, res: &Resources) {
 
 /// Reads: the tiles' shade stamps. Writes: the packed shade queue and its
 /// count, then the shade pass's dispatch (`compact_queue`, `shade_args`).
-pub fn compact_shade_queue(frame: &mut Frame, pass: &MarkPass, res: &Resources) {
-    let scene = frame.scene_group;
-    let mut cp = frame.compute_pass("queue");
+pub fn compact_shade_queue(cp: &mut TimedComputePass, pass: &MarkPass, res: &Resources, scene: &wgpu::BindGroup) {
+    let mut cp = stage(cp, "queue");
     res.bind(&mut cp, scene);
     cp.set_pipeline(&pass.compact_queue);
     // A workgroup per 64 physical tiles, over x and y (a dimension holds

@@ -13,7 +13,7 @@ use wgpu::util::DeviceExt;
 
 use super::PagingChain;
 use super::resources::{ALLOCATE_ARGS, Resources};
-use crate::render::frame::Frame;
+use crate::render::frame::{Frame, TimedComputePass, stage};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
@@ -99,15 +99,13 @@ impl PagingPass {
 /// directory and table chunks, page owners and use, the backed-page list,
 /// the counters, the dispatches of allocation and of the backed pages' passes
 /// (with [`PagingChain::Fused`], a bound).
-pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
-    let scene = frame.scene_group;
-    let mut cp = frame.compute_pass("paging");
+pub fn back_pages(cp: &mut TimedComputePass, pass: &PagingPass, res: &Resources, scene: &wgpu::BindGroup) {
+    let mut cp = stage(cp, "paging");
     res.bind(&mut cp, scene);
     rank_candidates(&mut cp, pass, res, Ranking::IfRequested);
-    drop(cp);
-    // A pass of its own: it reads the dispatch buffer as INDIRECT.
-    let mut cp = frame.compute_pass("allocate");
-    res.bind(&mut cp, scene);
+    // Group 2 (the dispatch arguments as storage) stays bound, but the
+    // allocation's pipelines do not use it: a dispatch that reads the
+    // arguments as INDIRECT may follow in the same pass.
     cp.set_pipeline(&pass.allocate);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     cp.set_pipeline(&pass.release_chunks);
@@ -116,16 +114,12 @@ pub fn back_pages(frame: &mut Frame, pass: &PagingPass, res: &Resources) {
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     cp.set_pipeline(&pass.bind_pages);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
-    drop(cp);
-    if pass.chain == PagingChain::Fused {
-        // `page_offsets` wrote the backed pages' dispatch.
-        return;
+    if pass.chain == PagingChain::Split {
+        cp.set_bind_group(2, &res.dispatch_group, &[]);
+        cp.set_pipeline(&pass.backed_args);
+        cp.dispatch_workgroups(1, 1, 1);
     }
-    let mut cp = frame.compute_pass("backed args");
-    res.bind(&mut cp, scene);
-    cp.set_bind_group(2, &res.dispatch_group, &[]);
-    cp.set_pipeline(&pass.backed_args);
-    cp.dispatch_workgroups(1, 1, 1);
+    // (With the fused chain `page_offsets` wrote the backed pages' dispatch.)
 }
 
 /// Frees the physical pages backing the virtual pages of `ranges` (first,

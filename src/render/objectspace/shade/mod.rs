@@ -5,7 +5,7 @@
 //! lights of its world-grid cell.
 
 use super::resources::{ATLAS_FORMAT, Resources, SHADE_ARGS};
-use crate::render::frame::Frame;
+use crate::render::frame::{TimedComputePass, stage};
 use crate::render::passes::light_grid::{LightGrid, READ_GROUP};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
 use crate::render::scene_gpu::SceneGpu;
@@ -64,9 +64,14 @@ impl ShadePass {
 /// Reads: the packed shade queue and its count, the triangle-index maps,
 /// the scene, its lights and the world grid. Writes: the queued tiles of
 /// the atlas.
-pub fn shade_tiles(frame: &mut Frame, pass: &ShadePass, res: &Resources, grid: &LightGrid) {
-    let scene = frame.scene_group;
-    let mut cp = frame.compute_pass("shade");
+pub fn shade_tiles(
+    cp: &mut TimedComputePass,
+    pass: &ShadePass,
+    res: &Resources,
+    scene: &wgpu::BindGroup,
+    grid: &LightGrid,
+) {
+    let mut cp = stage(cp, "shade");
     cp.set_pipeline(&pass.pipeline);
     res.bind(&mut cp, scene);
     cp.set_bind_group(2, &pass.outputs, &[]);

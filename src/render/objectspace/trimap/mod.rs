@@ -30,7 +30,7 @@ use super::atlas::AtlasLayout;
 use super::resources::{BACKED_ARGS, Resources, TRIANGLE_MAP_FORMAT};
 use super::{ObjectSpaceConfig, PagingChain, TrimapSearch, trimap_lanes};
 use crate::gpu::GpuContext;
-use crate::render::frame::Frame;
+use crate::render::frame::{TimedComputePass, stage};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
 use crate::scene::Scene;
@@ -259,10 +259,9 @@ impl TrimapPass {
 /// With shared maps, first forgets the keys of those pages, and after the
 /// build copies the maps of the pages that found a source (reads and
 /// writes the table and the keys; writes the backed pages' sources).
-pub fn build_triangle_maps(frame: &mut Frame, pass: &TrimapPass, res: &Resources) {
-    let scene = frame.scene_group;
+pub fn build_triangle_maps(cp: &mut TimedComputePass, pass: &TrimapPass, res: &Resources, scene: &wgpu::BindGroup) {
     let mut record = |name, pipeline| {
-        let mut cp = frame.compute_pass(name);
+        let mut cp = stage(cp, name);
         cp.set_pipeline(pipeline);
         res.bind(&mut cp, scene);
         cp.set_bind_group(2, &pass.group, &[]);
