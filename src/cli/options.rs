@@ -239,9 +239,10 @@ pub struct SceneArgs {
     pub gloss: shadespace::scene::gloss::Gloss,
     /// Layered materials (every pipeline lights each layer and blends them
     /// by mask): `none` (default: the scene's materials), `layered:K` (every
-    /// material with K layers, 1 to 16) or a JSON material file
-    /// (docs/materials.md).
-    #[arg(long, value_name = "none|layered:K|FILE", default_value = "none")]
+    /// material with K layers, 1 to 16), `bands` (the terrain's bands as ten
+    /// shaded layers by height and slope, its precals on top) or a JSON
+    /// material file (docs/materials.md).
+    #[arg(long, value_name = "none|layered:K|bands|FILE", default_value = "none")]
     pub materials: shadespace::materials::MaterialsSpec,
     /// Environment lighting, prefiltered on the GPU at load and added to the
     /// lights as one environment light (diffuse and GGX specular, times the

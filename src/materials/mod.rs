@@ -280,6 +280,9 @@ pub enum MaterialsSpec {
     None,
     /// The preset: every material with `K` layers ([`preset::layered`]).
     Layered(usize),
+    /// The ground's bands as shaded layers by height and slope
+    /// ([`preset::bands`]): what `--scene terrain` bakes into its albedo.
+    Bands,
     /// A material file ([`mod@file`]).
     File(PathBuf),
 }
@@ -290,6 +293,9 @@ impl std::str::FromStr for MaterialsSpec {
     fn from_str(s: &str) -> Result<Self, String> {
         if s == "none" {
             return Ok(Self::None);
+        }
+        if s == "bands" {
+            return Ok(Self::Bands);
         }
         if let Some(k) = s.strip_prefix("layered:") {
             let k: usize =
@@ -308,6 +314,7 @@ impl std::fmt::Display for MaterialsSpec {
         match self {
             Self::None => write!(f, "none"),
             Self::Layered(k) => write!(f, "layered:{k}"),
+            Self::Bands => write!(f, "bands"),
             Self::File(p) => write!(f, "{}", p.display()),
         }
     }
@@ -320,6 +327,10 @@ pub fn apply(scene: &mut Scene, spec: &MaterialsSpec) -> Result<(), file::Materi
         MaterialsSpec::None => Ok(()),
         MaterialsSpec::Layered(k) => {
             preset::layered(scene, *k);
+            Ok(())
+        }
+        MaterialsSpec::Bands => {
+            preset::bands(scene);
             Ok(())
         }
         MaterialsSpec::File(path) => file::apply_file(scene, path),

@@ -7,10 +7,12 @@
 //! soft edge and an opacity below 1, so that most points show several
 //! layers and each of them is lit: the cost grows with K. Scales are in
 //! metres, from the scene's size, so a 5 cm model and Sponza look alike.
+//!
+//! `--materials bands`: the ground's bands as shaded layers ([`bands`]).
 
 use glam::Vec3;
 
-use super::{Layer, LayerKind, Mask};
+use super::{Channel, Layer, LayerKind, Mask, MaskTexture};
 use crate::scene::Scene;
 
 /// Gives every material of `scene` `k` layers (1 to [`super::MAX_LAYERS`]).
@@ -69,6 +71,87 @@ fn layer(i: usize, m: usize, unit: f32) -> Layer {
     Layer { kind, mask, invert: false, opacity: 0.7 }
 }
 
+/// `--materials bands`: every material gets the terrain's seven bands (sand,
+/// grass, forest, dirt, rock, scree, snow; `terrain::band_albedo`) and ice as
+/// layers masked by height and slope (Oxide's terrain: dirt, ice, snow
+/// layers by slope and height, shaded in object space), each with its own
+/// roughness and BRDF (snow and ice as `snow` layers, the others as
+/// grime-varied `dirt`), instead of baked into one albedo. Heights are
+/// shares of the scene's height above its lowest point, as the bands'; the
+/// base layer is the material itself. Where the material has a base colour
+/// texture, a top layer shows it again where its alpha is below one half:
+/// the terrain stamps its precals (roads, scorch marks) there, before
+/// shading, so they stay on top of the bands (alpha 1 elsewhere).
+pub fn bands(scene: &mut Scene) {
+    let bounds = scene.bounds();
+    let (low, high) = (bounds.min.y, bounds.max.y);
+    let (low, h) = if low.is_finite() && high > low { (low, high - low) } else { (0.0, 1.0) };
+    let at = |share: f32| low + share * h;
+    // Noise features a 400th of the scene across (the terrain: 5 m).
+    let size = (bounds.max - bounds.min).max_element();
+    let unit = if size.is_finite() && size > 0.0 { size / 400.0 } else { 1.0 };
+    // Slopes as the cosine of the normal to +y: rise over run s is 1 / sqrt(1 + s^2).
+    let cos = |rise: f32| 1.0 / (1.0 + rise * rise).sqrt();
+    let band = |kind: LayerKind, height: [f32; 2], slope: [f32; 2]| Layer {
+        kind,
+        mask: Mask::SlopeHeight {
+            axis: Vec3::Y,
+            height: [at(height[0]), at(height[1])],
+            height_fade: 0.04 * h,
+            slope,
+            slope_fade: 0.05,
+        },
+        invert: false,
+        opacity: 0.9,
+    };
+    let dirt = |r: f32, g: f32, b: f32, roughness: f32, scale: f32| LayerKind::Dirt {
+        color: Vec3::new(r, g, b),
+        roughness,
+        scale: scale * unit,
+    };
+    let snow = |ice: f32, bend: f32| LayerKind::Snow {
+        snow: Vec3::new(0.9, 0.92, 0.95),
+        snow_roughness: 0.7,
+        ice_color: Vec3::new(0.6, 0.75, 0.85),
+        ice_roughness: 0.1,
+        ice,
+        bend,
+    };
+    let (flat, gentle, steep) = (cos(0.35), cos(0.6), cos(1.2));
+    let below = -1e30;
+    let above = 1e30;
+    let layers = [
+        band(dirt(0.62, 0.55, 0.38, 0.85, 0.5), [below, 0.06], [gentle, 1.0]),
+        band(dirt(0.22, 0.38, 0.12, 0.8, 1.0), [0.06, 0.3], [gentle, 1.0]),
+        band(dirt(0.08, 0.2, 0.07, 0.9, 2.0), [0.3, 0.5], [gentle, 1.0]),
+        band(dirt(0.36, 0.26, 0.16, 0.9, 0.5), [below, above], [steep, gentle]),
+        band(dirt(0.33, 0.31, 0.3, 0.6, 1.0), [below, above], [-1.0, steep]),
+        band(dirt(0.5, 0.48, 0.45, 0.75, 0.3), [0.5, 0.72], [steep, 1.0]),
+        band(snow(0.1, 0.15), [0.72, above], [flat, 1.0]),
+        band(snow(1.0, 0.0), [0.86, above], [cos(0.15), 1.0]),
+    ];
+    for material in &mut scene.materials {
+        let base = Layer::full(LayerKind::Base { tint: Vec3::ONE, metallic: None, roughness: None });
+        let mut all = vec![base];
+        all.extend(layers.iter().cloned());
+        if material.base_color_texture.is_some() {
+            all.push(Layer {
+                kind: LayerKind::Base { tint: Vec3::ONE, metallic: None, roughness: None },
+                mask: Mask::Texture {
+                    texture: MaskTexture::BaseColor,
+                    channel: Channel::A,
+                    scale: 1.0,
+                    threshold: 0.5,
+                    softness: 0.1,
+                },
+                invert: true,
+                opacity: 1.0,
+            });
+        }
+        material.layers = all;
+    }
+}
+
 /// A saturated colour of hue `h` (0 to 1).
 fn hue_rgb(h: f32) -> Vec3 {
     let c = |o: f32| (((h + o).fract() * 6.0 - 3.0).abs() - 1.0).clamp(0.0, 1.0);
@@ -90,5 +173,27 @@ mod tests {
             assert!(m.layers[1..].iter().all(|l| l.opacity < 1.0), "layers above the base let it show");
         }
         assert_ne!(s.materials[0].layers[1], s.materials[1].layers[1], "materials differ");
+    }
+
+    /// Eight bands by height and slope over the material, and the precal
+    /// layer only over a material with a base colour texture.
+    #[test]
+    fn bands_layer_the_ground_by_height_and_slope() {
+        let textured = Material { base_color_texture: Some(0), ..Material::default() };
+        let mut s = Scene { materials: vec![Material::default(), textured], ..Scene::default() };
+        bands(&mut s);
+        let [plain, textured] = [&s.materials[0].layers, &s.materials[1].layers];
+        assert!(matches!(plain[0].kind, LayerKind::Base { .. }) && plain[0].mask == Mask::Full);
+        let by_rule = plain.iter().filter(|l| matches!(l.mask, Mask::SlopeHeight { .. })).count();
+        assert_eq!((plain.len(), by_rule), (9, 8));
+        assert_eq!(textured.len(), 10);
+        assert!(matches!(textured[9].mask, Mask::Texture { channel: Channel::A, .. }) && textured[9].invert);
+        // The snow is above the grass, the rock steeper than the dirt.
+        let rule = |l: &Layer| match l.mask {
+            Mask::SlopeHeight { height, slope, .. } => (height, slope),
+            _ => unreachable!(),
+        };
+        assert!(rule(&plain[7]).0[0] > rule(&plain[2]).0[1]);
+        assert!(rule(&plain[5]).1[1] <= rule(&plain[4]).1[0]);
     }
 }

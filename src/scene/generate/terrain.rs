@@ -317,7 +317,14 @@ impl Albedo {
                 let (c, r) = (i * self.inner + s, j * self.inner + t);
                 let (x, z) = Self::centre_of(self.spacing, c, r);
                 let colour = self.colour(c, r, x, z);
-                rgba8.extend([linear_to_srgb8(colour.x), linear_to_srgb8(colour.y), linear_to_srgb8(colour.z), 255]);
+                // Alpha: 1 less the precals' cover (the terrain is opaque;
+                // `--materials bands` keeps the precals over its layers by it).
+                let cover = match (self.spec.precals, self.precals.cover(x, z)) {
+                    (Precals::On, Some((_, alpha))) => alpha,
+                    _ => 0.0,
+                };
+                let alpha = ((1.0 - cover) * 255.0).round() as u8;
+                rgba8.extend([linear_to_srgb8(colour.x), linear_to_srgb8(colour.y), linear_to_srgb8(colour.z), alpha]);
             }
         }
         Texture { name: name.to_string(), width: n, height: n, rgba8 }
