@@ -1,7 +1,8 @@
-// The object-space passes' indirect dispatch arguments: one buffer, three
-// dispatches, bound as storage (group 2) by the small passes that write
-// them; the passes they launch read it as INDIRECT, which excludes storage
-// use in the same pass.
+// The object-space stages' indirect dispatch arguments: one buffer, three
+// dispatches, bound as storage (group 2) by the small dispatches that write
+// them; the dispatches they launch, later in the same pass, read it as
+// INDIRECT, which excludes storage use by the launched pipeline itself (a
+// dispatch's usage is its pipeline's bind groups and its arguments).
 #define_import_path shadespace::objectspace_dispatch
 
 // Word offsets of the three dispatches.

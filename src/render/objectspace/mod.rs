@@ -16,9 +16,11 @@
 //! the pages backed this frame -> *mark backed* (their requested tiles) ->
 //! *queue* (the queued tiles packed) -> *shade* (one workgroup per queued
 //! tile, indirect) -> *gather* (compute per 2x2 pixels: bilinear from the
-//! atlas, at the chart point and levels marking recorded). Texels are lit by
+//! atlas, at the chart point and levels marking recorded). Mark through
+//! gather are stages of one compute pass (fewer pass boundaries; wgpu puts
+//! the barriers between its dispatches). Texels are lit by
 //! the global lights and the lights of their cell of the world grid (Oxide's
-//! light matrix), built on the GPU before shading; no CPU light culling. No
+//! light matrix), built on the GPU when the lights change; no CPU light culling. No
 //! CPU read-back inside the frame: the counters are copied out and read a few
 //! frames later. Alpha-blended objects, which are not in the visibility
 //! buffer, are marked and gathered by raster passes over them ([`blended`]).
