@@ -40,8 +40,8 @@ pub struct Frame<'a> {
     pub lights_changed: bool,
     pub encoder: &'a mut wgpu::CommandEncoder,
     pub profiler: &'a GpuProfiler,
-    /// Passes get timing scopes of their own ([`GpuTiming::Passes`]); with
-    /// [`GpuTiming::Frame`] the renderer times the whole frame instead.
+    /// Passes get timing scopes of their own ([`crate::gpu::timing::GpuTiming::Passes`]); with
+    /// [`crate::gpu::timing::GpuTiming::Frame`] the renderer times the whole frame instead.
     pub time_passes: bool,
 }
 
