@@ -172,8 +172,9 @@ pub struct TimingArgs {
     /// default 1,4,8; quick: 1,4). Pipelines without MSAA are measured at 1 only.
     #[arg(long, value_delimiter = ',', value_parser = parse::msaa)]
     pub msaa: Vec<u32>,
-    /// `quality`: only these configurations, comma-separated labels as the
-    /// report names them (e.g. deferred-compute,objectspace,objectspace-hz30).
+    /// `quality` and `layers`: only these configurations, comma-separated
+    /// labels as the report names them (e.g.
+    /// deferred-compute,objectspace,objectspace-hz30).
     #[arg(long, value_delimiter = ',')]
     pub configs: Vec<String>,
     /// `quality`: only these texture settings, comma-separated (file, detailed).
@@ -236,9 +237,11 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
     if !a.timing.msaa.is_empty() && name != ExperimentName::Quality {
         return input(Err(anyhow::anyhow!("--msaa: only the quality experiment has an MSAA axis")));
     }
+    if !matches!(name, ExperimentName::Quality | ExperimentName::Layers) && !a.timing.configs.is_empty() {
+        return input(Err(anyhow::anyhow!("--configs: only the quality and layers experiments take it")));
+    }
     if name != ExperimentName::Quality {
         let quality_only = [
-            ("--configs", !a.timing.configs.is_empty()),
             ("--textures", !a.timing.textures.is_empty()),
             ("--breakdown", a.timing.breakdown),
             ("--atlas-budget", a.timing.atlas_budget.is_some()),
@@ -250,6 +253,13 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
     let timing = name.timing_grid(a.quick).map(|g| timing_grid(g, &a.timing));
     if let (ExperimentName::Quality, Some(grid)) = (name, &timing) {
         input(check_quality_choice(grid, a.quick))?;
+    }
+    if let (ExperimentName::Layers, Some(grid)) = (name, &timing) {
+        let labels: Vec<String> = experiments::layers::configs(grid).iter().map(|c| c.label()).collect();
+        if let Some(bad) = grid.configs.iter().find(|c| !labels.contains(c)) {
+            let message = format!("--configs: '{bad}' is not a configuration of this grid ({})", labels.join(", "));
+            return input(Err(anyhow::anyhow!(message)));
+        }
     }
     let options = ExperimentOptions {
         name,

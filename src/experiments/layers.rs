@@ -98,6 +98,14 @@ pub fn configs(grid: &TimingGrid) -> Vec<Config> {
     all
 }
 
+/// The configurations a run measures: [`configs`], only those the grid's
+/// `configs` names where it names any (`--configs`: a run that fits a device
+/// budget, say without the slowest pipelines; without forward the rows have
+/// no error against forward).
+pub fn chosen_configs(grid: &TimingGrid) -> Vec<Config> {
+    configs(grid).into_iter().filter(|c| grid.configs.is_empty() || grid.configs.contains(&c.label())).collect()
+}
+
 /// A row of `data.csv`: one configuration at one layer count and light set.
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {
@@ -151,7 +159,7 @@ pub(super) fn study(
 ) -> Result<Outcome, ExperimentError> {
     let grid = options.timing.as_ref().ok_or(ExperimentError::NoTimingGrid("layers"))?;
     let ks = layer_counts(options.quick);
-    let configs = configs(grid);
+    let configs = chosen_configs(grid);
     let frames_per_point = u64::from(grid.warmup + grid.frames);
     progress.set_length((ks.len() * grid.points() * configs.len()) as u64 * frames_per_point);
     let aspect = grid.width as f32 / grid.height as f32;

@@ -141,8 +141,8 @@ pub struct TimingGrid {
     /// MSAA samples per pixel, an axis of the quality experiment's grid
     /// (the other timing studies render one sample per pixel).
     pub msaa: Vec<u32>,
-    /// The quality experiment: only these configurations (labels, e.g.
-    /// `objectspace`; empty: all of its grid's).
+    /// The quality and layers experiments: only these configurations
+    /// (labels, e.g. `objectspace`; empty: all of its grid's).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub configs: Vec<String>,
     /// The quality experiment: only these texture settings (`file`,

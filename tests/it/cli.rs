@@ -72,6 +72,12 @@ fn bad_options_say_what_is_wrong() {
     let (code, err) = run(&["experiment", "lights", "--quick", "--msaa", "4"]);
     assert_eq!(code, 2);
     assert!(err.contains("only the quality experiment has an MSAA axis"), "{err}");
+    let (code, err) = run(&["experiment", "layers", "--quick", "--configs", "deferred-compute,fast"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("'fast' is not a configuration") && err.contains("objectspace-hz30"), "{err}");
+    let (code, err) = run(&["experiment", "lights", "--quick", "--configs", "forward"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("only the quality and layers experiments take it"), "{err}");
     let (code, err) = run(&["experiment", "lights", "--quick", "--atlas-budget", "8"]);
     assert_eq!(code, 2);
     assert!(err.contains("--atlas-budget: only the quality experiment takes it"), "{err}");
