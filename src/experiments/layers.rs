@@ -14,6 +14,7 @@
 //! the larger K with that light set.
 
 use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
 
 use image::RgbaImage;
 use serde::Serialize;
@@ -31,7 +32,7 @@ use crate::reference::{ReferenceCache, ReferenceSettings, ReferenceView, Referen
 use crate::render::{Exposure, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
 use crate::scene::lights::build_lights;
 use crate::scene::path::cameras_for_scene;
-use crate::scene::{Light, Scene};
+use crate::scene::{Camera, Light, Scene};
 
 /// Samples per axis of the references.
 pub const REFERENCE_SAMPLES: u32 = 4;
@@ -126,6 +127,36 @@ pub struct Row {
     pub psnr_forward_db: Option<f64>,
 }
 
+/// How long each configuration renders its first path frame before its
+/// warm-up frames (not in quick runs). A new renderer's first frames are
+/// slow: object space backs and grows its atlas from nothing, and the GPU
+/// may have idled while the renderer was built. Cut to 3 warm-up frames,
+/// those frames set the medians of the configurations that take a few
+/// milliseconds on the H100 (BENCHMARKS.md, "Object space in one pass");
+/// a fixed time covers them whatever a frame costs, and the measured frames
+/// stay the same path frames in every configuration. (Not yet measured on
+/// the GPU.)
+const SETTLE: Duration = Duration::from_millis(400);
+
+/// Renders `camera` with `renderer` until [`SETTLE`] has passed, waiting
+/// for each frame; returns the frames rendered (the measured frames'
+/// numbers follow them).
+fn settle(
+    ctx: &GpuContext,
+    renderer: &mut Renderer,
+    camera: &Camera,
+    lights: &[Light],
+) -> Result<u64, ExperimentError> {
+    let start = Instant::now();
+    let mut frames = 0;
+    while start.elapsed() < SETTLE {
+        renderer.render(ctx, camera, lights, frames)?;
+        renderer.collect_timings(ctx, true);
+        frames += 1;
+    }
+    Ok(frames)
+}
+
 /// The scene drawn and charted, every material with `k` layers.
 struct Layered {
     render: Scene,
@@ -207,15 +238,18 @@ pub(super) fn study(
                         RenderOptions::new(grid.width, grid.height, config.pipeline(&scene.density_sizes, visibility));
                     let mut renderer = Renderer::new(ctx, shaded, &render_options)?;
                     renderer.timing = grid.timing;
+                    let first = path.camera_at(grid.first_frame);
+                    let settled = if options.quick { 0 } else { settle(ctx, &mut renderer, &first, &lights)? };
                     for i in 0..grid.warmup + grid.frames {
-                        renderer.render(ctx, &path.camera_at(grid.first_frame + i), &lights, u64::from(i))?;
+                        let camera = path.camera_at(grid.first_frame + i);
+                        renderer.render(ctx, &camera, &lights, settled + u64::from(i))?;
                         progress.inc(1);
                     }
                     let image = renderer.read_image(ctx)?;
                     let mut times: Vec<f64> = renderer
                         .collect_timings(ctx, true)
                         .into_iter()
-                        .filter(|t| t.frame >= u64::from(grid.warmup))
+                        .filter(|t| t.frame >= settled + u64::from(grid.warmup))
                         .map(|t| t.total_ms)
                         .collect();
                     times.sort_by(f64::total_cmp);
@@ -255,7 +289,7 @@ pub(super) fn study(
     output.write_rows(&rows)?;
     let findings = summarize(grid, &ks, &configs, &rows, output)?;
     let text = format!(
-        "Scene `{}`, {}x{}, {}; path frames {} to {last_frame} ({} warm-up), median GPU frame time of the \
+        "Scene `{}`, {}x{}, {}; path frames {} to {last_frame} ({} warm-up{}), median GPU frame time of the \
          measured frames; lights: {} (seed {}); layers: `--materials layered:K` for K in {ks:?}; \
          configurations: {}; a configuration whose median passes {} ms at K layers with a light set is not \
          measured at larger K with it (`-` in the tables{}). Errors: the last frame against forward's 4x4 supersampled reference of the same \
@@ -267,6 +301,11 @@ pub(super) fn study(
         if options.quick { "quick mode (a reduced grid)" } else { "the full grid" },
         grid.first_frame,
         grid.warmup,
+        if options.quick {
+            String::new()
+        } else {
+            format!(", after {} ms of path frame {} in each configuration", SETTLE.as_millis(), grid.first_frame)
+        },
         grid.sweeps
             .iter()
             .flat_map(|s| s.counts.iter().map(|&n| s.scenario.spec(n).to_string()))
