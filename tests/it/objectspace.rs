@@ -4,6 +4,7 @@ use crate::common;
 use std::collections::HashSet;
 
 use shadespace::color::reinhard_srgb8;
+use shadespace::gpu::timing::GpuTiming;
 use shadespace::metrics;
 use shadespace::render::objectspace::atlas_view::{AtlasPages, AtlasPagesError};
 use shadespace::render::objectspace::{DebugView, ExtraViews, ObjectSpace};
@@ -601,4 +602,39 @@ fn a_second_renderer_builds_no_compute_pipeline() {
     assert!(built > 10, "object space built {built} compute pipelines");
     assert_eq!(after, built, "the second renderer built compute pipelines");
     assert!(first.as_raw() == second.as_raw(), "the second renderer's image differs");
+}
+
+/// `--timing passes` times each pass and the stages of object space's one
+/// pass (`object space/mark` ... `object space/gather`); `--timing frame`
+/// writes two timestamps a frame, around all of it, and nothing else (the
+/// frame's time without the per-pass timestamps' own cost).
+#[test]
+fn frame_timing_times_the_frame_alone_and_passes_time_the_stages() {
+    let ctx = common::gpu();
+    let (scene, camera, lights) = common::floor_scene();
+    let mut os = Renderer::new(&ctx, &scene, &objectspace(1)).unwrap();
+    if !os.timing_enabled() {
+        eprintln!("SKIPPED: {} has no timestamp queries", ctx.info.name);
+        return;
+    }
+    for (frame, timing) in [GpuTiming::Passes, GpuTiming::Frame].into_iter().enumerate() {
+        os.timing = timing;
+        os.render(&ctx, &camera, &lights, frame as u64).unwrap();
+        let timings = os.collect_timings(&ctx, true);
+        ctx.check_errors().unwrap();
+        let timed = timings.iter().find(|t| t.frame == frame as u64).expect("the frame's timings came back");
+        let names: Vec<&str> = timed.passes.iter().map(|(name, _)| name.as_str()).collect();
+        match timing {
+            GpuTiming::Passes => {
+                for stage in ["mark", "paging", "triangle maps", "queue", "shade", "gather"] {
+                    assert!(names.contains(&format!("object space/{stage}").as_str()), "{stage}: {names:?}");
+                }
+                assert!(names.contains(&"object space") && names.contains(&"tonemap"), "{names:?}");
+            }
+            GpuTiming::Frame => {
+                assert_eq!(names, ["frame"]);
+                assert!(timed.total_ms > 0.0 && timed.total_ms == timed.passes[0].1, "{timed:?}");
+            }
+        }
+    }
 }
