@@ -135,3 +135,18 @@ pub fn stage<'a, 'p>(pass: &'a mut TimedComputePass<'_, 'p>, label: &str) -> Sco
         Scope { profiler: pass.profiler, recorder: &mut pass.recorder, scope: None }
     }
 }
+
+/// A render pass `label` inside `scope` (one of [`Frame::scope`]), timed as
+/// `scope/label` when the frame times its passes.
+pub fn scoped_render_pass<'a>(
+    scope: &'a mut Scope<'_, wgpu::CommandEncoder>,
+    label: String,
+    descriptor: wgpu::RenderPassDescriptor<'_>,
+) -> OwningScope<'a, wgpu::RenderPass<'a>> {
+    if scope.scope.is_some() {
+        return scope.scoped_render_pass(label, descriptor);
+    }
+    let descriptor = wgpu::RenderPassDescriptor { label: Some(&label), ..descriptor };
+    let pass = scope.recorder.begin_render_pass(&descriptor);
+    OwningScope { profiler: scope.profiler, recorder: pass, scope: None }
+}

@@ -10,6 +10,7 @@ use shadespace::render::objectspace::atlas_view::{AtlasPages, AtlasPagesError};
 use shadespace::render::objectspace::{DebugView, ExtraViews, ObjectSpace};
 use shadespace::render::passes::visibility::VisibilityMethod;
 use shadespace::render::{ForwardConfig, ObjectSpaceConfig, PipelineConfig, RenderOptions, Renderer};
+use shadespace::scene::LightKind;
 
 fn forward() -> RenderOptions {
     RenderOptions { width: 160, height: 120, pipeline: PipelineConfig::Forward(ForwardConfig::default()), samples: 1 }
@@ -617,19 +618,33 @@ fn frame_timing_times_the_frame_alone_and_passes_time_the_stages() {
         eprintln!("SKIPPED: {} has no timestamp queries", ctx.info.name);
         return;
     }
-    for (frame, timing) in [GpuTiming::Passes, GpuTiming::Frame].into_iter().enumerate() {
+    // Then with shadowed lights: the shadow maps' passes (a scope of render
+    // passes) are timed or not with the rest.
+    let mut shadowed = lights.clone();
+    shadowed.iter_mut().for_each(|l| l.casts_shadows = l.kind == LightKind::Point);
+    let runs = [(GpuTiming::Passes, &lights), (GpuTiming::Frame, &lights)];
+    let runs = runs.into_iter().chain([
+        (GpuTiming::Frame, &shadowed),
+        (GpuTiming::Passes, &lights),
+        (GpuTiming::Passes, &shadowed),
+    ]);
+    for (frame, (timing, lights)) in runs.enumerate() {
         os.timing = timing;
-        os.render(&ctx, &camera, &lights, frame as u64).unwrap();
+        os.render(&ctx, &camera, lights, frame as u64).unwrap();
         let timings = os.collect_timings(&ctx, true);
         ctx.check_errors().unwrap();
         let timed = timings.iter().find(|t| t.frame == frame as u64).expect("the frame's timings came back");
         let names: Vec<&str> = timed.passes.iter().map(|(name, _)| name.as_str()).collect();
         match timing {
             GpuTiming::Passes => {
+                // Frames 3 and 4 change the lights: the atlas is shaded
+                // again, and frame 4 renders shadow maps.
                 for stage in ["mark", "paging", "triangle maps", "queue", "shade", "gather"] {
                     assert!(names.contains(&format!("object space/{stage}").as_str()), "{stage}: {names:?}");
                 }
                 assert!(names.contains(&"object space") && names.contains(&"tonemap"), "{names:?}");
+                let shadow_maps = names.iter().any(|n| n.starts_with("shadow maps/"));
+                assert_eq!(shadow_maps, frame == 4, "frame {frame}: {names:?}");
             }
             GpuTiming::Frame => {
                 assert_eq!(names, ["frame"]);

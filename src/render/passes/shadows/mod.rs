@@ -21,7 +21,7 @@ pub mod cull;
 
 use glam::{Mat4, Vec3};
 
-use crate::render::frame::Frame;
+use crate::render::frame::{Frame, scoped_render_pass};
 use crate::render::scene_gpu::{GrowableBuffer, SceneGpu};
 use crate::scene::{Aabb, Camera, Light, LightKind};
 use crate::shaders::{ALPHA_MASK, ShaderError, ShaderLibrary, ShaderSource};
@@ -602,7 +602,7 @@ pub fn shadow_maps(frame: &mut Frame, maps: &mut ShadowMaps, every_frame: bool) 
             FaceTarget::Atlas(_) => format!("face {i}"),
             FaceTarget::Cascade(k) => format!("cascade {k}"),
         };
-        let mut rp = scope.scoped_render_pass(label, descriptor);
+        let mut rp = scoped_render_pass(&mut scope, label, descriptor);
         rp.set_bind_group(0, &maps.group, &[(i as u64 * FACE_UNIFORM_STRIDE) as u32]);
         if let (Some(draws), Some(c)) = (&culled, &maps.cull) {
             let (cull, opaque, masked) = &**c;
