@@ -503,4 +503,13 @@ mod tests {
         assert!(os.reuse == 2 && os.spread_reshading);
         assert_eq!(c.len(), 8, "five conventional pipelines, object space at reuse 1, variable rate 1 and 30 Hz");
     }
+
+    #[test]
+    fn configs_named_are_the_only_ones_measured() {
+        let mut grid = grid(false);
+        assert_eq!(chosen_configs(&grid).len(), 8, "none named: all");
+        grid.configs = vec!["objectspace-hz30".into(), "deferred-compute".into()];
+        let chosen: Vec<String> = chosen_configs(&grid).iter().map(Config::label).collect();
+        assert_eq!(chosen, ["deferred-compute", "objectspace-hz30"], "in the grid's order");
+    }
 }
