@@ -56,6 +56,11 @@ pub enum LayerKind {
     Decal { color: Vec3, roughness: f32, metallic: f32 },
 }
 
+impl LayerKind {
+    /// The material's own surface, unchanged.
+    pub const OWN: LayerKind = LayerKind::Base { tint: Vec3::ONE, metallic: None, roughness: None };
+}
+
 /// A texture channel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Channel {

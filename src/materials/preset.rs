@@ -14,6 +14,7 @@ use glam::Vec3;
 
 use super::{Channel, Layer, LayerKind, Mask, MaskTexture};
 use crate::scene::Scene;
+use crate::scene::generate::terrain::bands::*;
 
 /// Gives every material of `scene` `k` layers (1 to [`super::MAX_LAYERS`]).
 pub fn layered(scene: &mut Scene, k: usize) {
@@ -29,7 +30,7 @@ pub fn layered(scene: &mut Scene, k: usize) {
 /// Layer `i` of material `m`, features `unit` metres across.
 fn layer(i: usize, m: usize, unit: f32) -> Layer {
     if i == 0 {
-        return Layer::full(LayerKind::Base { tint: Vec3::ONE, metallic: None, roughness: None });
+        return Layer::full(LayerKind::OWN);
     }
     // A hue per material and layer, so that layers are told apart.
     let hue = ((m * 7 + i * 3) % 12) as f32 / 12.0;
@@ -72,7 +73,8 @@ fn layer(i: usize, m: usize, unit: f32) -> Layer {
 }
 
 /// `--materials bands`: every material gets the terrain's seven bands (sand,
-/// grass, forest, dirt, rock, scree, snow; `terrain::band_albedo`) and ice as
+/// grass, forest, dirt, rock, scree, snow: the colours and limits of
+/// `terrain::bands`, which `terrain::band_albedo` bakes) and ice as
 /// layers masked by height and slope (Oxide's terrain: dirt, ice, snow
 /// layers by slope and height, shaded in object space), each with its own
 /// roughness and BRDF (snow and ice as `snow` layers, the others as
@@ -104,39 +106,35 @@ pub fn bands(scene: &mut Scene) {
         invert: false,
         opacity: 0.9,
     };
-    let dirt = |r: f32, g: f32, b: f32, roughness: f32, scale: f32| LayerKind::Dirt {
-        color: Vec3::new(r, g, b),
-        roughness,
-        scale: scale * unit,
-    };
+    let dirt = |color: Vec3, roughness: f32, scale: f32| LayerKind::Dirt { color, roughness, scale: scale * unit };
     let snow = |ice: f32, bend: f32| LayerKind::Snow {
-        snow: Vec3::new(0.9, 0.92, 0.95),
+        snow: SNOW,
         snow_roughness: 0.7,
         ice_color: Vec3::new(0.6, 0.75, 0.85),
         ice_roughness: 0.1,
         ice,
         bend,
     };
-    let (flat, gentle, steep) = (cos(0.35), cos(0.6), cos(1.2));
+    let (snow_flat, gentle, steep) = (cos(SNOW_SCREE_SLOPE), cos(DIRT_SLOPE), cos(ROCK_SLOPE));
     let below = -1e30;
     let above = 1e30;
     let layers = [
-        band(dirt(0.62, 0.55, 0.38, 0.85, 0.5), [below, 0.06], [gentle, 1.0]),
-        band(dirt(0.22, 0.38, 0.12, 0.8, 1.0), [0.06, 0.3], [gentle, 1.0]),
-        band(dirt(0.08, 0.2, 0.07, 0.9, 2.0), [0.3, 0.5], [gentle, 1.0]),
-        band(dirt(0.36, 0.26, 0.16, 0.9, 0.5), [below, above], [steep, gentle]),
-        band(dirt(0.33, 0.31, 0.3, 0.6, 1.0), [below, above], [-1.0, steep]),
-        band(dirt(0.5, 0.48, 0.45, 0.75, 0.3), [0.5, 0.72], [steep, 1.0]),
-        band(snow(0.1, 0.15), [0.72, above], [flat, 1.0]),
+        band(dirt(SAND, 0.85, 0.5), [below, SAND_TOP], [gentle, 1.0]),
+        band(dirt(GRASS, 0.8, 1.0), [SAND_TOP, GRASS_TOP], [gentle, 1.0]),
+        band(dirt(FOREST, 0.9, 2.0), [GRASS_TOP, FOREST_TOP], [gentle, 1.0]),
+        band(dirt(DIRT, 0.9, 0.5), [below, above], [steep, gentle]),
+        band(dirt(ROCK, 0.6, 1.0), [below, above], [-1.0, steep]),
+        band(dirt(SCREE, 0.75, 0.3), [FOREST_TOP, SCREE_TOP], [steep, 1.0]),
+        band(snow(0.1, 0.15), [SCREE_TOP, above], [snow_flat, 1.0]),
+        // Ice on the highest, flattest ground (no baked band of its own).
         band(snow(1.0, 0.0), [0.86, above], [cos(0.15), 1.0]),
     ];
     for material in &mut scene.materials {
-        let base = Layer::full(LayerKind::Base { tint: Vec3::ONE, metallic: None, roughness: None });
-        let mut all = vec![base];
+        let mut all = vec![Layer::full(LayerKind::OWN)];
         all.extend(layers.iter().cloned());
         if material.base_color_texture.is_some() {
             all.push(Layer {
-                kind: LayerKind::Base { tint: Vec3::ONE, metallic: None, roughness: None },
+                kind: LayerKind::OWN,
                 mask: Mask::Texture {
                     texture: MaskTexture::BaseColor,
                     channel: Channel::A,

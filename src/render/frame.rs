@@ -68,24 +68,19 @@ impl Frame<'_> {
         }
     }
 
-    /// A compute pass timed as `label`.
+    /// A compute pass timed as `label` (when the frame times its passes).
     pub fn compute_pass(&mut self, label: &str) -> OwningScope<'_, wgpu::ComputePass<'_>> {
-        if !self.time_passes {
-            let descriptor = wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes: None };
-            let pass = self.encoder.begin_compute_pass(&descriptor);
-            return OwningScope { profiler: self.profiler, recorder: pass, scope: None };
-        }
-        let query = self.profiler.begin_pass_query(label, self.encoder);
+        let query = self.pass_query(label);
         let pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(label),
-            timestamp_writes: query.compute_pass_timestamp_writes(),
+            timestamp_writes: query.as_ref().and_then(|q| q.compute_pass_timestamp_writes()),
         });
-        OwningScope { profiler: self.profiler, recorder: pass, scope: Some(query) }
+        OwningScope { profiler: self.profiler, recorder: pass, scope: query }
     }
 
     /// A timing scope `label` over several passes, each opened inside it
-    /// with `scoped_render_pass` / `scoped_compute_pass` and timed as
-    /// `label/name` (for example one pass per shadow-map face).
+    /// with [`scoped_render_pass`] and timed as `label/name` (for example
+    /// one pass per shadow-map face), when the frame times its passes.
     pub fn scope(&mut self, label: &str) -> Scope<'_, wgpu::CommandEncoder> {
         if !self.time_passes {
             return Scope { profiler: self.profiler, recorder: self.encoder, scope: None };
@@ -93,31 +88,28 @@ impl Frame<'_> {
         self.profiler.scope(label, self.encoder)
     }
 
-    /// A render pass timed as `label`, over `color` and `depth` attachments.
+    /// A render pass timed as `label` (when the frame times its passes),
+    /// over `color` and `depth` attachments.
     pub fn render_pass(
         &mut self,
         label: &str,
         color: &[Option<wgpu::RenderPassColorAttachment<'_>>],
         depth: Option<wgpu::RenderPassDepthStencilAttachment<'_>>,
     ) -> OwningScope<'_, wgpu::RenderPass<'_>> {
-        if !self.time_passes {
-            let pass = self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(label),
-                color_attachments: color,
-                depth_stencil_attachment: depth,
-                ..Default::default()
-            });
-            return OwningScope { profiler: self.profiler, recorder: pass, scope: None };
-        }
-        let query = self.profiler.begin_pass_query(label, self.encoder);
+        let query = self.pass_query(label);
         let pass = self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
             color_attachments: color,
             depth_stencil_attachment: depth,
-            timestamp_writes: query.render_pass_timestamp_writes(),
+            timestamp_writes: query.as_ref().and_then(|q| q.render_pass_timestamp_writes()),
             ..Default::default()
         });
-        OwningScope { profiler: self.profiler, recorder: pass, scope: Some(query) }
+        OwningScope { profiler: self.profiler, recorder: pass, scope: query }
+    }
+
+    /// The timing query of a pass `label`, when the frame times its passes.
+    fn pass_query(&mut self, label: &str) -> Option<wgpu_profiler::GpuProfilerQuery> {
+        self.time_passes.then(|| self.profiler.begin_pass_query(label, self.encoder))
     }
 }
 

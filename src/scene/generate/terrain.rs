@@ -316,14 +316,15 @@ impl Albedo {
                 // Grid texel: the patch's first inner texel is i * inner (+ MARGIN in the grid).
                 let (c, r) = (i * self.inner + s, j * self.inner + t);
                 let (x, z) = Self::centre_of(self.spacing, c, r);
-                let colour = self.colour(c, r, x, z);
+                let cover = self.precals.cover(x, z);
+                let colour = self.colour(c, r, x, z, cover);
                 // Alpha: 1 less the precals' cover (the terrain is opaque;
                 // `--materials bands` keeps the precals over its layers by it).
-                let cover = match (self.spec.precals, self.precals.cover(x, z)) {
+                let covered = match (self.spec.precals, cover) {
                     (Precals::On, Some((_, alpha))) => alpha,
                     _ => 0.0,
                 };
-                let alpha = ((1.0 - cover) * 255.0).round() as u8;
+                let alpha = ((1.0 - covered) * 255.0).round() as u8;
                 rgba8.extend([linear_to_srgb8(colour.x), linear_to_srgb8(colour.y), linear_to_srgb8(colour.z), alpha]);
             }
         }
@@ -331,9 +332,8 @@ impl Albedo {
     }
 
     /// Linear albedo of grid texel (c, r) at world (x, z): the bands, then
-    /// the precals over them.
-    fn colour(&self, c: u32, r: u32, x: f32, z: f32) -> Vec3 {
-        let cover = self.precals.cover(x, z);
+    /// the precals over them (`cover`: [`PrecalSet::cover`] there).
+    fn colour(&self, c: u32, r: u32, x: f32, z: f32, cover: Option<(Vec3, f32)>) -> Vec3 {
         match self.spec.precals {
             Precals::Footprint => return if cover.is_some() { Vec3::ONE } else { Vec3::ZERO },
             Precals::Off => {}
@@ -352,6 +352,32 @@ impl Albedo {
     }
 }
 
+/// The bands' colours (linear albedo) and limits: what [`band_albedo`]
+/// bakes, and what `--materials bands` (`materials::preset::bands`) shades
+/// as layers.
+pub mod bands {
+    use glam::Vec3;
+
+    pub const SAND: Vec3 = Vec3::new(0.62, 0.55, 0.38);
+    pub const GRASS: Vec3 = Vec3::new(0.22, 0.38, 0.12);
+    pub const FOREST: Vec3 = Vec3::new(0.08, 0.2, 0.07);
+    pub const DIRT: Vec3 = Vec3::new(0.36, 0.26, 0.16);
+    pub const ROCK: Vec3 = Vec3::new(0.33, 0.31, 0.3);
+    pub const SCREE: Vec3 = Vec3::new(0.5, 0.48, 0.45);
+    pub const SNOW: Vec3 = Vec3::new(0.9, 0.92, 0.95);
+    /// Relative heights (0 at sea level, 1 at the highest ground): the top
+    /// of the sand, the grass, the forest and the scree (snow above).
+    pub const SAND_TOP: f32 = 0.06;
+    pub const GRASS_TOP: f32 = 0.3;
+    pub const FOREST_TOP: f32 = 0.5;
+    pub const SCREE_TOP: f32 = 0.72;
+    /// Slopes (rise over run): dirt from, bare rock from, and scree on the
+    /// snow's slopes from.
+    pub const DIRT_SLOPE: f32 = 0.6;
+    pub const ROCK_SLOPE: f32 = 1.2;
+    pub const SNOW_SCREE_SLOPE: f32 = 0.35;
+}
+
 /// The terrain's bands: linear albedo at relative height `height` (0 at
 /// sea level, 1 at the highest ground) and `slope` (rise over run), with
 /// detail noise `fine` and `coarse` in [0, 1] jittering the borders and
@@ -362,31 +388,25 @@ impl Albedo {
 /// height and slope rule, lit with its own BRDF instead of baked into one
 /// albedo.
 pub fn band_albedo(height: f32, slope: f32, fine: f32, coarse: f32) -> Vec3 {
-    const SAND: Vec3 = Vec3::new(0.62, 0.55, 0.38);
-    const GRASS: Vec3 = Vec3::new(0.22, 0.38, 0.12);
-    const FOREST: Vec3 = Vec3::new(0.08, 0.2, 0.07);
-    const DIRT: Vec3 = Vec3::new(0.36, 0.26, 0.16);
-    const ROCK: Vec3 = Vec3::new(0.33, 0.31, 0.3);
-    const SCREE: Vec3 = Vec3::new(0.5, 0.48, 0.45);
-    const SNOW: Vec3 = Vec3::new(0.9, 0.92, 0.95);
+    use bands::*;
     let h = height + 0.08 * (coarse - 0.5);
     let s = slope * (0.8 + 0.4 * fine);
-    let by_height = if h < 0.06 {
+    let by_height = if h < SAND_TOP {
         SAND
-    } else if h < 0.3 {
+    } else if h < GRASS_TOP {
         GRASS.lerp(FOREST, smooth(0.5, 0.7, coarse))
-    } else if h < 0.5 {
-        FOREST.lerp(GRASS, smooth(0.35, 0.5, h))
-    } else if h < 0.72 {
+    } else if h < FOREST_TOP {
+        FOREST.lerp(GRASS, smooth(0.35, FOREST_TOP, h))
+    } else if h < SCREE_TOP {
         SCREE
     } else {
         SNOW
     };
-    let colour = if s > 1.2 {
+    let colour = if s > ROCK_SLOPE {
         ROCK
-    } else if s > 0.6 {
-        DIRT.lerp(ROCK, smooth(0.6, 1.2, s))
-    } else if h >= 0.72 && s > 0.35 {
+    } else if s > DIRT_SLOPE {
+        DIRT.lerp(ROCK, smooth(DIRT_SLOPE, ROCK_SLOPE, s))
+    } else if h >= SCREE_TOP && s > SNOW_SCREE_SLOPE {
         SCREE
     } else {
         by_height

@@ -28,26 +28,10 @@ fn evictable(page: u32) -> bool {
 var<workgroup> bucket_pages: array<atomic<u32>, AGE_BUCKETS>;
 var<workgroup> bucket_base: array<u32, AGE_BUCKETS>;
 
-// Counts the evictable pages of this workgroup per age bucket (when `ranked`).
-fn age(page: u32, lid: u32, ranked: bool) {
-    if lid < AGE_BUCKETS {
-        atomicStore(&bucket_pages[lid], 0u);
-    }
-    workgroupBarrier();
-    if ranked && evictable(page) {
-        atomicAdd(&bucket_pages[age_bucket(page)], 1u);
-    }
-    workgroupBarrier();
-    if lid < AGE_BUCKETS {
-        let n = atomicLoad(&bucket_pages[lid]);
-        if n > 0u {
-            atomicAdd(&counters[AGE_BUCKET_BASE + lid], n);
-        }
-    }
-}
-
-// Lists the evictable pages of this workgroup at their buckets' offsets.
-fn list(page: u32, lid: u32, ranked: bool) {
+// This invocation's page's age bucket (AGE_BUCKETS where it is not ranked
+// or not evictable) and its slot among the workgroup's pages of that
+// bucket; `bucket_pages` then holds the workgroup's count per bucket.
+fn bucket_slot(page: u32, lid: u32, ranked: bool) -> vec2u {
     if lid < AGE_BUCKETS {
         atomicStore(&bucket_pages[lid], 0u);
     }
@@ -59,15 +43,34 @@ fn list(page: u32, lid: u32, ranked: bool) {
         slot = atomicAdd(&bucket_pages[bucket], 1u);
     }
     workgroupBarrier();
+    return vec2u(bucket, slot);
+}
+
+// Adds this workgroup's count of each bucket to the bucket's global count,
+// keeping where its pages of the bucket start (after `page_offsets` the
+// global counts are offsets: what `list` places its pages by).
+fn add_bucket_counts(lid: u32) {
     if lid < AGE_BUCKETS {
         let n = atomicLoad(&bucket_pages[lid]);
         if n > 0u {
             bucket_base[lid] = atomicAdd(&counters[AGE_BUCKET_BASE + lid], n);
         }
     }
+}
+
+// Counts the evictable pages per age bucket (when `ranked`).
+fn age(page: u32, lid: u32, ranked: bool) {
+    _ = bucket_slot(page, lid, ranked);
+    add_bucket_counts(lid);
+}
+
+// Lists the evictable pages at their buckets' offsets (when `ranked`).
+fn list(page: u32, lid: u32, ranked: bool) {
+    let at = bucket_slot(page, lid, ranked);
+    add_bucket_counts(lid);
     workgroupBarrier();
-    if bucket < AGE_BUCKETS {
-        candidates[bucket_base[bucket] + slot] = page;
+    if at.x < AGE_BUCKETS {
+        candidates[bucket_base[at.x] + at.y] = page;
     }
 }
 
