@@ -140,13 +140,13 @@ const SETTLE: Duration = Duration::from_millis(400);
 
 /// Renders `camera` with `renderer` until [`SETTLE`] has passed, waiting
 /// for each frame; returns the frames rendered (the measured frames'
-/// numbers follow them).
+/// numbers follow them) and the wall-clock time a frame took.
 fn settle(
     ctx: &GpuContext,
     renderer: &mut Renderer,
     camera: &Camera,
     lights: &[Light],
-) -> Result<u64, ExperimentError> {
+) -> Result<(u64, Duration), ExperimentError> {
     let start = Instant::now();
     let mut frames = 0;
     while start.elapsed() < SETTLE {
@@ -154,7 +154,62 @@ fn settle(
         renderer.collect_timings(ctx, true);
         frames += 1;
     }
-    Ok(frames)
+    Ok((frames, start.elapsed() / frames as u32))
+}
+
+/// Wall-clock time a configuration's warm-up and measured frames may take
+/// at one point. Without it a run's time is set by its slowest
+/// configurations (multi-pass forward at 1,000 lights takes seconds a
+/// frame), which the cap then drops at larger K anyway.
+const FRAME_BUDGET: Duration = Duration::from_secs(8);
+
+/// The warm-up and measured frames of a configuration whose frames take
+/// `per_frame`: the grid's, or as many as fit [`FRAME_BUDGET`] (a quarter of
+/// them warm-up, at least one; at least 3 measured).
+fn frame_counts(warmup: u32, frames: u32, per_frame: Duration) -> (u32, u32) {
+    let fit = (FRAME_BUDGET.as_secs_f64() / per_frame.as_secs_f64().max(1e-9)).min(f64::from(u32::MAX)) as u32;
+    if fit >= warmup + frames {
+        return (warmup, frames);
+    }
+    let w = warmup.min((fit / 4).max(1));
+    (w, frames.min(fit.saturating_sub(w).max(3)))
+}
+
+/// The rows of `measured` (each with its configuration's last frame) with
+/// their images' errors against `reference` and forward's image (the row
+/// of forward, where measured), compared in parallel: FLIP takes seconds
+/// a 3840x2160 image on one core, longer than the GPU's work at a point.
+fn compare_all(reference: &RgbaImage, measured: Vec<(Row, RgbaImage)>) -> Vec<Row> {
+    use rayon::prelude::*;
+    let is_forward = |row: &Row| row.config == Shading::Forward.label();
+    let forward = measured.iter().find(|(row, _)| is_forward(row)).map(|(_, image)| image);
+    let errors: Vec<_> = measured
+        .par_iter()
+        .map(|(row, image)| {
+            rayon::join(
+                || metrics::compare_values(reference, image).0,
+                || forward.filter(|_| !is_forward(row)).map(|f| metrics::compare_values(f, image).0),
+            )
+        })
+        .collect();
+    measured
+        .into_iter()
+        .zip(errors)
+        .map(|((mut row, _), (to_reference, to_forward))| {
+            row.flip_reference = f64::from(to_reference.flip_mean);
+            row.psnr_reference_db = to_reference.psnr_db;
+            row.flip_forward = to_forward.as_ref().map(|e| f64::from(e.flip_mean));
+            row.psnr_forward_db = to_forward.as_ref().map(|e| e.psnr_db);
+            tracing::info!(
+                "layers: {} layered:{} {}: FLIP {:.4} against the reference",
+                row.config,
+                row.layers,
+                row.lights_spec,
+                row.flip_reference
+            );
+            row
+        })
+        .collect()
 }
 
 /// The scene drawn and charted, every material with `k` layers.
@@ -224,11 +279,12 @@ pub(super) fn study(
                 let mut references = References::new(ctx, &layered.render, settings, cache.clone());
                 let view = ReferenceView { camera: &last_camera, lights: &lights, samples: REFERENCE_SAMPLES };
                 let reference = references.get(&view).map_err(reference_error)?.0.image();
-                let mut forward: Option<RgbaImage> = None;
+                // Each configuration's last frame, compared once all are rendered.
+                let mut measured: Vec<(Row, RgbaImage)> = Vec::new();
                 for config in &configs {
                     let key = (config.label(), spec.to_string());
                     if capped.contains_key(&key) {
-                        progress.inc(u64::from(grid.warmup + grid.frames));
+                        progress.inc(frames_per_point);
                         continue;
                     }
                     progress.set_message(format!("{} layered:{k} {spec}", config.label()));
@@ -236,51 +292,59 @@ pub(super) fn study(
                     let shaded = if conventional { &layered.render } else { &layered.charted };
                     let render_options =
                         RenderOptions::new(grid.width, grid.height, config.pipeline(&scene.density_sizes, visibility));
+                    let built = Instant::now();
                     let mut renderer = Renderer::new(ctx, shaded, &render_options)?;
                     renderer.timing = grid.timing;
-                    let first = path.camera_at(grid.first_frame);
-                    let settled = if options.quick { 0 } else { settle(ctx, &mut renderer, &first, &lights)? };
-                    for i in 0..grid.warmup + grid.frames {
-                        let camera = path.camera_at(grid.first_frame + i);
-                        renderer.render(ctx, &camera, &lights, settled + u64::from(i))?;
-                        progress.inc(1);
+                    let build_s = built.elapsed().as_secs_f64();
+                    let rendered = Instant::now();
+                    let (warmup, frames, settled) = if options.quick {
+                        (grid.warmup, grid.frames, 0)
+                    } else {
+                        let (settled, per_frame) =
+                            settle(ctx, &mut renderer, &path.camera_at(grid.first_frame), &lights)?;
+                        let (warmup, frames) = frame_counts(grid.warmup, grid.frames, per_frame);
+                        (warmup, frames, settled)
+                    };
+                    // The same last path frame in every configuration, whose image is compared.
+                    let first = last_frame + 1 - (warmup + frames);
+                    for i in 0..warmup + frames {
+                        renderer.render(ctx, &path.camera_at(first + i), &lights, settled + u64::from(i))?;
                     }
+                    progress.inc(frames_per_point);
                     let image = renderer.read_image(ctx)?;
                     let mut times: Vec<f64> = renderer
                         .collect_timings(ctx, true)
                         .into_iter()
-                        .filter(|t| t.frame >= settled + u64::from(grid.warmup))
+                        .filter(|t| t.frame >= settled + u64::from(warmup))
                         .map(|t| t.total_ms)
                         .collect();
                     times.sort_by(f64::total_cmp);
-                    let (to_reference, _) = metrics::compare(&reference, &image);
-                    let to_forward = forward.as_ref().map(|f| metrics::compare(f, &image).0);
-                    if config.shading == Shading::Forward {
-                        forward = Some(image);
-                    }
                     let median_ms = quantile(&times, 0.5);
                     if median_ms.is_some_and(|ms| ms > grid.cap_ms) {
                         capped.insert(key, k);
                     }
                     tracing::info!(
-                        "layers: {} layered:{k} {spec}: median {median_ms:?} ms, FLIP {:.4} against the reference",
+                        "layers: {} layered:{k} {spec}: median {median_ms:?} ms over {frames} frames; built in \
+                         {build_s:.1} s, rendered in {:.1} s",
                         config.label(),
-                        to_reference.flip_mean
+                        rendered.elapsed().as_secs_f64()
                     );
-                    rows.push(Row {
+                    let row = Row {
                         layers: k,
                         lights_spec: spec.to_string(),
                         config: config.label(),
                         conventional,
-                        frames: grid.frames,
+                        frames,
                         median_ms,
                         p95_ms: quantile(&times, 0.95),
-                        flip_reference: f64::from(to_reference.flip_mean),
-                        psnr_reference_db: to_reference.psnr_db,
-                        flip_forward: to_forward.as_ref().map(|e| f64::from(e.flip_mean)),
-                        psnr_forward_db: to_forward.as_ref().map(|e| e.psnr_db),
-                    });
+                        flip_reference: f64::NAN,
+                        psnr_reference_db: f64::NAN,
+                        flip_forward: None,
+                        psnr_forward_db: None,
+                    };
+                    measured.push((row, image));
                 }
+                rows.extend(compare_all(&reference, measured));
                 // The rows so far, so that a run cut short keeps them.
                 output.write_rows(&rows)?;
             }
@@ -304,7 +368,13 @@ pub(super) fn study(
         if options.quick {
             String::new()
         } else {
-            format!(", after {} ms of path frame {} in each configuration", SETTLE.as_millis(), grid.first_frame)
+            format!(
+                ", after {} ms of path frame {} in each configuration; one whose frames would take over {} s \
+                 renders fewer, ending at the same frame: `frames` in data.csv",
+                SETTLE.as_millis(),
+                grid.first_frame,
+                FRAME_BUDGET.as_secs()
+            )
         },
         grid.sweeps
             .iter()
@@ -502,6 +572,16 @@ mod tests {
         };
         assert!(os.reuse == 2 && os.spread_reshading);
         assert_eq!(c.len(), 8, "five conventional pipelines, object space at reuse 1, variable rate 1 and 30 Hz");
+    }
+
+    #[test]
+    fn slow_configurations_render_what_fits_their_budget() {
+        let ms = Duration::from_millis;
+        assert_eq!(frame_counts(10, 60, ms(2)), (10, 60), "fast: the grid's frames");
+        assert_eq!(frame_counts(10, 60, ms(100)), (10, 60), "70 frames fit 8 s");
+        assert_eq!(frame_counts(10, 60, ms(1000)), (2, 6), "8 frames fit: a quarter warm-up");
+        assert_eq!(frame_counts(10, 60, ms(5000)), (1, 3), "at least one warm-up and 3 measured");
+        assert_eq!(frame_counts(3, 2, ms(5000)), (1, 2), "never more than the grid's");
     }
 
     #[test]

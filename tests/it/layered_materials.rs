@@ -3,8 +3,9 @@
 //! half; texture-channel and decal masks agree with forward in every
 //! pipeline; the preset `layered:4` on the atrium agrees with forward within
 //! FLIP 0.02 in every pipeline (and visibly changes the image, while
-//! `layered:1` leaves it as it was); a bad material file exits 2 naming the
-//! file and the field.
+//! `layered:1` leaves it as it was, with shadowed lights too: the layers
+//! share each light's shadow lookup); a bad material file exits 2 naming
+//! the file and the field.
 
 use std::process::Command;
 
@@ -195,6 +196,37 @@ fn layered_4_agrees_with_forward_in_every_pipeline() {
             reference.save(out.join("layered4-forward.png")).unwrap();
             panic!("layered:4 {name}: FLIP {} > {AGREEMENT_FLIP}; images in {}", e.flip_mean, out.display());
         }
+    }
+}
+
+/// Every layer of a point shares its lights' shadow lookups
+/// (`lighting::light_shadow`, kept in `LightShadows` by each pipeline's
+/// layer walk): with shadowed lights, `layered:1` (the material as its only
+/// layer, lit through that walk) renders the plain image (each light's
+/// shadow looked up as it is lit) in every pipeline, and the shadows show
+/// (the same lights casting none give another image). A shadow kept for the
+/// wrong light, or none kept, breaks the first.
+#[test]
+fn layers_share_their_lights_shadows_in_every_pipeline() {
+    let ctx = common::gpu();
+    let (w, h) = (128, 72);
+    let frame = common::path_frame("atrium", "shadowed:3+small:4", w, h);
+    let mut one = frame.scene.clone();
+    materials::apply(&mut one, &MaterialsSpec::Layered(1)).unwrap();
+    let unshadowed: Vec<Light> = frame.lights.iter().map(|l| Light { casts_shadows: false, ..*l }).collect();
+    let (plain_charted, sizes) = common::charted(&frame.scene);
+    let (one_charted, _) = common::charted(&one);
+    for pipeline in common::every_pipeline(sizes) {
+        let name = pipeline.name();
+        let os = matches!(pipeline, PipelineConfig::ObjectSpace(_));
+        let (plain, one) = if os { (&plain_charted, &one_charted) } else { (&frame.scene, &one) };
+        let plain_image = render(&ctx, plain, &frame.camera, &frame.lights, (w, h), pipeline.clone());
+        let one_image = render(&ctx, one, &frame.camera, &frame.lights, (w, h), pipeline.clone());
+        let (e, _) = metrics::compare(&plain_image, &one_image);
+        assert!(e.max_abs <= 1, "{name}: layered:1 with shadowed lights changes the plain image: {e:?}");
+        let lit = render(&ctx, one, &frame.camera, &unshadowed, (w, h), pipeline);
+        let (e, _) = metrics::compare(&one_image, &lit);
+        assert!(e.flip_mean > 0.01, "{name}: the shadows hardly show: {e:?}");
     }
 }
 
