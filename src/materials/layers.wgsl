@@ -11,9 +11,7 @@
 // (`layer_count`, `layer_at`, `layer_mask`), keeping the weight not yet
 // given out: a layer of weight 0 is not lit, and an opaque one ends the walk
 // (nothing below it shows). The cost is one lighting evaluation per layer
-// that shows, so it grows with the layer count; the lights' shadow maps are
-// looked up once a point for all layers (`lighting::light_shadow`, with the
-// material's normal: the layers that bend it, snow, keep its shadows).
+// that shows, so it grows with the layer count.
 //
 // A Surface carries its material's layer range (`layer_first`,
 // `layer_count`, 0 for an unlayered material) and its UV0 and texture mip
@@ -23,8 +21,7 @@
 #define_import_path shadespace::layers
 #import shadespace::contract::{LAYER_BASE, LAYER_PAINTED_METAL, LAYER_BARE_METAL, LAYER_DIRT,
     LAYER_SNOW, LAYER_EMISSIVE, MASK_TEXTURE, MASK_NOISE, MASK_SLOPE_HEIGHT, MASK_DECAL}
-#import shadespace::lighting::{Light, Surface, light_radiance, light_radiance_shadowed, light_shadow,
-    shininess_from_roughness}
+#import shadespace::lighting::{Light, Surface, light_radiance, shininess_from_roughness}
 #import shadespace::scene_bindings::{albedo, texel_sampler, linear_maps}
 
 // 112 bytes; mirrors `materials::GpuLayer` (field meanings per kind there).
@@ -296,8 +293,6 @@ fn layer_at(s: Surface, i: u32) -> Layer {
 // for passes that see one light at a time (multi-pass forward, light volumes).
 fn layered_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
 #ifdef LAYERS
-    // The light's shadow at the point, looked up once for every layer.
-    let shadow = light_shadow(light, s);
     var color = vec3f(0.0);
     var remaining = 1.0;
     for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
@@ -305,11 +300,11 @@ fn layered_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
         let w = layer_mask(l, s) * remaining;
         remaining -= w;
         if w > 0.0 {
-            color += w * light_radiance_shadowed(light, layer_surface(l, s), to_eye, shadow);
+            color += w * light_radiance(light, layer_surface(l, s), to_eye);
         }
     }
     if remaining > 0.0 {
-        color += remaining * light_radiance_shadowed(light, s, to_eye, shadow);
+        color += remaining * light_radiance(light, s, to_eye);
     }
     return color;
 #else

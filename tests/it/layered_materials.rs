@@ -3,9 +3,8 @@
 //! half; texture-channel and decal masks agree with forward in every
 //! pipeline; the preset `layered:4` on the atrium agrees with forward within
 //! FLIP 0.02 in every pipeline (and visibly changes the image, while
-//! `layered:1` leaves it as it was, with shadowed lights too: the layers
-//! share each light's shadow lookup); a bad material file exits 2 naming
-//! the file and the field.
+//! `layered:1` leaves it as it was, with shadowed lights too); a bad
+//! material file exits 2 naming the file and the field.
 
 use std::process::Command;
 
@@ -199,15 +198,14 @@ fn layered_4_agrees_with_forward_in_every_pipeline() {
     }
 }
 
-/// Every layer of a point shares its lights' shadow lookups
-/// (`lighting::light_shadow`, kept in `LightShadows` by each pipeline's
-/// layer walk): with shadowed lights, `layered:1` (the material as its only
-/// layer, lit through that walk) renders the plain image (each light's
-/// shadow looked up as it is lit) in every pipeline, and the shadows show
-/// (the same lights casting none give another image). A shadow kept for the
-/// wrong light, or none kept, breaks the first.
+/// Shadows through the layer walk (`shadespace::layers`): with shadowed
+/// lights, `layered:1` (the material as its only layer, lit through each
+/// pipeline's walk) renders the plain image in every pipeline, and the
+/// shadows show (the same lights casting none give another image). A walk
+/// that kept each light's shadow for all layers but read them for the
+/// wrong lights fails it (docs/testing.md, fault 44).
 #[test]
-fn layers_share_their_lights_shadows_in_every_pipeline() {
+fn layered_1_keeps_the_plain_images_shadows_in_every_pipeline() {
     let ctx = common::gpu();
     let (w, h) = (128, 72);
     let frame = common::path_frame("atrium", "shadowed:3+small:4", w, h);

@@ -23,9 +23,6 @@
 // edge pixels are counted.
 #import shadespace::contract::{TILED_TILE_SIZE, TILED_CHUNK, TILED_LIST_CAPACITY}
 #import shadespace::lighting::{Surface, light_radiance}
-#ifdef LAYERS
-#import shadespace::lighting::{LightShadows, LIGHT_SHADOWS, light_radiance_shadowed, light_shadow, shadow_at}
-#endif
 #import shadespace::light_bounds::{light_bounds, sphere_touches}
 #import shadespace::scene_bindings::{view, lights}
 #import shadespace::surface::emission_and_globals
@@ -99,16 +96,10 @@ fn tile_frustum(lo: vec2f, hi: vec2f, range: vec2f) -> array<vec4f, 6> {
 }
 
 // Shades `texel` with the first `count` listed lights; a layered material
-// each of its layers (`shadespace::layers`), layer by layer, the lights'
-// shadows looked up once for all of them.
+// each of its layers (`shadespace::layers`), layer by layer.
 fn shade_listed(texel: GbufferTexel, count: u32) -> vec3f {
 #ifdef LAYERS
     let s = texel.surface;
-    var shadows: LightShadows;
-    shadows.count = min(count, LIGHT_SHADOWS);
-    for (var i = 0u; i < shadows.count; i++) {
-        shadows.factor[i] = light_shadow(lights[list[i]], s);
-    }
     var color = vec3f(0.0);
     var remaining = 1.0;
     for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
@@ -116,32 +107,26 @@ fn shade_listed(texel: GbufferTexel, count: u32) -> vec3f {
         let w = layer_mask(l, s) * remaining;
         remaining -= w;
         if w > 0.0 {
-            color += w * shade_listed_layer(layer_surface(l, s), texel.to_eye, count, &shadows);
+            color += w * shade_listed_one(layer_surface(l, s), texel.to_eye, count);
         }
     }
     if remaining > 0.0 {
-        color += remaining * shade_listed_layer(s, texel.to_eye, count, &shadows);
+        color += remaining * shade_listed_one(s, texel.to_eye, count);
     }
     return color;
 #else
-    var color = vec3f(0.0);
-    for (var i = 0u; i < count; i++) {
-        color += light_radiance(lights[list[i]], texel.surface, texel.to_eye);
-    }
-    return color;
+    return shade_listed_one(texel.surface, texel.to_eye, count);
 #endif
 }
 
-#ifdef LAYERS
-// `shade_listed` of one layer's surface, with the shadow factors in `shadows`.
-fn shade_listed_layer(s: Surface, to_eye: vec3f, count: u32, shadows: ptr<function, LightShadows>) -> vec3f {
+// `shade_listed` of one surface (a material or one of its layers).
+fn shade_listed_one(s: Surface, to_eye: vec3f, count: u32) -> vec3f {
     var color = vec3f(0.0);
     for (var i = 0u; i < count; i++) {
-        color += light_radiance_shadowed(lights[list[i]], s, to_eye, shadow_at(shadows, i));
+        color += light_radiance(lights[list[i]], s, to_eye);
     }
     return color;
 }
-#endif
 
 #ifdef MSAA
 // A texel's shade: with `globals` its emission and the ambient and

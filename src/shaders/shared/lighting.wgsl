@@ -146,38 +146,8 @@ fn attenuation(d: f32, radius: f32) -> f32 {
     return fade / (1.0 + d * d);
 }
 
-// Where a light arrives at `position` from: the unit direction to it (xyz)
-// and its falloff (w: attenuation times a spot's cone, 0 beyond its reach);
-// the sun's direction at falloff 1.
-fn light_arrival(light: Light, position: vec3f) -> vec4f {
-    if light.kind == LIGHT_DIRECTIONAL {
-        return vec4f(-light.direction, 1.0);
-    }
-    let d = light.position - position;
-    let dist = length(d);
-    if dist >= light.radius {
-        return vec4f(0.0);
-    }
-    let to_light = d / max(dist, 1e-6);
-    var falloff = attenuation(dist, light.radius);
-    if light.kind == LIGHT_SPOT {
-        let cos_theta = dot(-to_light, light.direction);
-        falloff *= clamp((cos_theta - light.cos_outer) / max(light.cos_inner - light.cos_outer, 1e-4), 0.0, 1.0);
-    }
-    return vec4f(to_light, falloff);
-}
-
-// A shadow factor not looked up yet (`light_radiance_shadowed`).
-const SHADOW_UNKNOWN: f32 = -1.0;
-
 // Radiance reflected towards `to_eye` (unit vector from the point to the eye).
 fn light_radiance(light: Light, s: Surface, to_eye: vec3f) -> vec3f {
-    return light_radiance_shadowed(light, s, to_eye, SHADOW_UNKNOWN);
-}
-
-// `light_radiance` with the light's shadow factor at the point given
-// (`light_shadow`'s), or looked up here where it is SHADOW_UNKNOWN.
-fn light_radiance_shadowed(light: Light, s: Surface, to_eye: vec3f, shadow: f32) -> vec3f {
     if light.kind == LIGHT_AMBIENT {
         return light.radiance * ambient_reflectance(s) * s.occlusion;
     }
@@ -186,19 +156,29 @@ fn light_radiance_shadowed(light: Light, s: Surface, to_eye: vec3f, shadow: f32)
         return light.radiance * environment_reflectance(s, to_eye) * s.occlusion;
     }
 #endif
-    let arrival = light_arrival(light, s.position);
-    let to_light = arrival.xyz;
-    var falloff = arrival.w;
+    var to_light: vec3f;
+    var falloff = 1.0;
+    if light.kind == LIGHT_DIRECTIONAL {
+        to_light = -light.direction;
+    } else {
+        let d = light.position - s.position;
+        let dist = length(d);
+        if dist >= light.radius {
+            return vec3f(0.0);
+        }
+        to_light = d / max(dist, 1e-6);
+        falloff = attenuation(dist, light.radius);
+        if light.kind == LIGHT_SPOT {
+            let cos_theta = dot(-to_light, light.direction);
+            falloff *= clamp((cos_theta - light.cos_outer) / max(light.cos_inner - light.cos_outer, 1e-4), 0.0, 1.0);
+        }
+    }
     let n_dot_l = dot(s.normal, to_light);
     if n_dot_l <= 0.0 || falloff <= 0.0 {
         return vec3f(0.0);
     }
     if light.shadow_faces != 0u {
-        if shadow < 0.0 {
-            falloff *= shadow_factor(light.kind, light.shadow_face, light.shadow_faces, light.position, s.position, s.normal, to_light, n_dot_l);
-        } else {
-            falloff *= shadow;
-        }
+        falloff *= shadow_factor(light.kind, light.shadow_face, light.shadow_faces, light.position, s.position, s.normal, to_light, n_dot_l);
     }
     if s.model == SHADING_PBR {
         return light.radiance * falloff * ggx(s, to_light, to_eye, n_dot_l);
@@ -206,44 +186,4 @@ fn light_radiance_shadowed(light: Light, s: Surface, to_eye: vec3f, shadow: f32)
     let r = reflect(-to_light, s.normal);
     let spec = s.specular * pow(max(dot(r, to_eye), 0.0), s.shininess);
     return light.radiance * falloff * (s.albedo * n_dot_l + vec3f(spec));
-}
-
-// The shadow factor of `light` at the surface point `s`, which every layer
-// of a layered material there shares (`shadespace::layers`): looked up once
-// a point, not once a layer. 1 where nothing is looked up (a light that casts
-// no shadow, or does not reach the point); 0 where `s` faces away from the
-// light, whose own surface then hides it (a layer whose normal turns towards
-// the light, as snow's, stays dark there).
-fn light_shadow(light: Light, s: Surface) -> f32 {
-    if light.shadow_faces == 0u || light.kind == LIGHT_AMBIENT || light.kind == LIGHT_ENVIRONMENT {
-        return 1.0;
-    }
-    let arrival = light_arrival(light, s.position);
-    let n_dot_l = dot(s.normal, arrival.xyz);
-    if arrival.w <= 0.0 {
-        return 1.0;
-    }
-    if n_dot_l <= 0.0 {
-        return 0.0;
-    }
-    return shadow_factor(light.kind, light.shadow_face, light.shadow_faces, light.position, s.position, s.normal, arrival.xyz, n_dot_l);
-}
-
-// How many lights' shadow factors `LightShadows` keeps.
-const LIGHT_SHADOWS: u32 = 32u;
-
-// The shadow factors (`light_shadow`) of the first `count` lights of a list
-// at one point, for the layers of a layered material there; the lights after
-// them look their shadows up per layer.
-struct LightShadows {
-    factor: array<f32, LIGHT_SHADOWS>,
-    count: u32,
-}
-
-// Light `i` of the list's shadow factor in `shadows`, or SHADOW_UNKNOWN.
-fn shadow_at(shadows: ptr<function, LightShadows>, i: u32) -> f32 {
-    if i < (*shadows).count {
-        return (*shadows).factor[i];
-    }
-    return SHADOW_UNKNOWN;
 }

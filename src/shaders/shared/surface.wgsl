@@ -7,9 +7,6 @@
 #import shadespace::contract::NO_TEXTURE
 #import shadespace::lighting::{Surface, light_radiance, shininess_from_roughness}
 #ifdef LAYERS
-#import shadespace::lighting::{LightShadows, LIGHT_SHADOWS, light_radiance_shadowed, light_shadow, shadow_at}
-#endif
-#ifdef LAYERS
 #import shadespace::layers::{layer_at, layer_mask, layer_surface}
 #endif
 #import shadespace::scene::{Object, vertex_uv0}
@@ -178,14 +175,9 @@ fn surface_point_grad(o: Object, tri: vec3u, b: vec3f, pixel_ddx: vec2f, pixel_d
 
 // Emission plus every light the object's list holds, seen from the camera;
 // for a layered material, each layer's with its weight
-// (`shadespace::layers`), the lights' shadows looked up once for all of them.
+// (`shadespace::layers`).
 fn light_surface(o: Object, s: Surface) -> vec3f {
 #ifdef LAYERS
-    var shadows: LightShadows;
-    shadows.count = min(o.light_count, LIGHT_SHADOWS);
-    for (var i = 0u; i < shadows.count; i++) {
-        shadows.factor[i] = light_shadow(lights[light_indices[o.light_offset + i]], s);
-    }
     var color = vec3f(0.0);
     var remaining = 1.0;
     for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
@@ -193,34 +185,27 @@ fn light_surface(o: Object, s: Surface) -> vec3f {
         let w = layer_mask(l, s) * remaining;
         remaining -= w;
         if w > 0.0 {
-            color += w * light_surface_layer(o, layer_surface(l, s), &shadows);
+            color += w * light_surface_one(o, layer_surface(l, s));
         }
     }
     if remaining > 0.0 {
-        color += remaining * light_surface_layer(o, s, &shadows);
+        color += remaining * light_surface_one(o, s);
     }
     return color;
 #else
+    return light_surface_one(o, s);
+#endif
+}
+
+// `light_surface` of one surface (a material or one of its layers).
+fn light_surface_one(o: Object, s: Surface) -> vec3f {
     let to_eye = normalize(view.camera_position.xyz - s.position);
     var color = s.emission;
     for (var i = 0u; i < o.light_count; i++) {
         color += light_radiance(lights[light_indices[o.light_offset + i]], s, to_eye);
     }
     return color;
-#endif
 }
-
-#ifdef LAYERS
-// `light_surface` of one layer's surface, with the shadow factors in `shadows`.
-fn light_surface_layer(o: Object, s: Surface, shadows: ptr<function, LightShadows>) -> vec3f {
-    let to_eye = normalize(view.camera_position.xyz - s.position);
-    var color = s.emission;
-    for (var i = 0u; i < o.light_count; i++) {
-        color += light_radiance_shadowed(lights[light_indices[o.light_offset + i]], s, to_eye, shadow_at(shadows, i));
-    }
-    return color;
-}
-#endif
 
 // The ambient and directional lights: the first `view.global_light_count`
 // lights, which reach every point (light grids list only the others).

@@ -7,9 +7,6 @@
 // with their own groups 1 and 2 (object space) can bind it too.
 #define_import_path shadespace::light_grid
 #import shadespace::lighting::{Surface, light_radiance}
-#ifdef LAYERS
-#import shadespace::lighting::{LightShadows, LIGHT_SHADOWS, light_radiance_shadowed, light_shadow, shadow_at}
-#endif
 #import shadespace::scene::Object
 #import shadespace::scene_bindings::{view, lights}
 #import shadespace::surface::light_globals
@@ -88,11 +85,9 @@ fn cell_radiance(cell: u32, s: Surface, to_eye: vec3f) -> vec3f {
 
 // Emission, the global lights and the lights of `cell`, seen from the camera
 // (what `surface::light_surface` computes from an object's CPU list); for
-// a layered material, each layer's with its weight (`shadespace::layers`),
-// the lights' shadows looked up once for all of them.
+// a layered material, each layer's with its weight (`shadespace::layers`).
 fn light_surface_in_cell(o: Object, s: Surface, cell: u32) -> vec3f {
 #ifdef LAYERS
-    var shadows = cell_shadows(cell, s);
     var color = vec3f(0.0);
     var remaining = 1.0;
     for (var i = s.layer_count; i > 0u && remaining > 0.0; i--) {
@@ -100,59 +95,20 @@ fn light_surface_in_cell(o: Object, s: Surface, cell: u32) -> vec3f {
         let w = layer_mask(l, s) * remaining;
         remaining -= w;
         if w > 0.0 {
-            color += w * light_layer_in_cell(layer_surface(l, s), cell, &shadows);
+            color += w * light_surface_in_cell_one(layer_surface(l, s), cell);
         }
     }
     if remaining > 0.0 {
-        color += remaining * light_layer_in_cell(s, cell, &shadows);
+        color += remaining * light_surface_in_cell_one(s, cell);
     }
     return color;
 #else
+    return light_surface_in_cell_one(s, cell);
+#endif
+}
+
+// `light_surface_in_cell` of one surface (a material or one of its layers).
+fn light_surface_in_cell_one(s: Surface, cell: u32) -> vec3f {
     let to_eye = normalize(view.camera_position.xyz - s.position);
     return s.emission + light_globals(s, to_eye) + cell_radiance(cell, s, to_eye);
-#endif
 }
-
-#ifdef LAYERS
-// Whether `cell_radiance` visits the cell's list (else every local light:
-// the list did not fit).
-fn cell_listed(range: vec2u) -> bool {
-    return range.x <= grid.capacity && range.y <= grid.capacity - range.x;
-}
-
-// How many lights `cell_radiance` visits in the cell of `range`.
-fn cell_light_count(range: vec2u) -> u32 {
-    return select(view.light_count - view.global_light_count, range.y, cell_listed(range));
-}
-
-// The `i`th light `cell_radiance` visits in the cell of `range`.
-fn cell_light(range: vec2u, i: u32) -> u32 {
-    if cell_listed(range) {
-        return grid_lights[range.x + i];
-    }
-    return view.global_light_count + i;
-}
-
-// The shadow factors of the first lights of `cell` at the material's surface `s`.
-fn cell_shadows(cell: u32, s: Surface) -> LightShadows {
-    let range = grid_cells[cell];
-    var shadows: LightShadows;
-    shadows.count = min(cell_light_count(range), LIGHT_SHADOWS);
-    for (var i = 0u; i < shadows.count; i++) {
-        shadows.factor[i] = light_shadow(lights[cell_light(range, i)], s);
-    }
-    return shadows;
-}
-
-// Emission, the global lights and the lights of `cell` on one layer's
-// surface `s`, with the shadow factors in `shadows`.
-fn light_layer_in_cell(s: Surface, cell: u32, shadows: ptr<function, LightShadows>) -> vec3f {
-    let to_eye = normalize(view.camera_position.xyz - s.position);
-    let range = grid_cells[cell];
-    var color = s.emission + light_globals(s, to_eye);
-    for (var i = 0u; i < cell_light_count(range); i++) {
-        color += light_radiance_shadowed(lights[cell_light(range, i)], s, to_eye, shadow_at(shadows, i));
-    }
-    return color;
-}
-#endif
