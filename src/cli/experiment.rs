@@ -134,6 +134,12 @@ pub struct ExperimentArgs {
     /// K times less work, the same distribution sampled more thinly.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=600))]
     pub frame_step: Option<u32>,
+    /// Layered materials for every scene rendered, as `render --materials`:
+    /// `none` (default), `layered:K`, `bands` or a material file; e.g. the
+    /// quality experiment's cost against error with 8 layers a material.
+    /// Not for `layers`, which gives every material its K layers itself.
+    #[arg(long, value_name = "none|layered:K|bands|FILE", default_value = "none")]
+    pub materials: shadespace::materials::MaterialsSpec,
     #[command(flatten)]
     pub timing: TimingArgs,
     /// No progress bar.
@@ -274,6 +280,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
         command: command_line(),
         chart_cache: None,
         shard: a.shard,
+        materials: a.materials.clone(),
     };
     let ctx = open_gpu(&a.gpu)?;
     let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };

@@ -10,6 +10,7 @@ use super::marking::{Texture, TileSpace, Variant};
 use super::tile_set::{ConcurrentTileSet, TileSet};
 use super::visibility::IdImage;
 use crate::charts::{self, ChartCache, ChartError, ChartSource, TextureSizing};
+use crate::materials::{self, MaterialsSpec};
 use crate::render::objectspace::MAX_DENSITY_SIZE;
 use crate::render::objectspace::atlas::AtlasError;
 use crate::render::objectspace::cpu::{chart_footprint, sample_pixel};
@@ -26,6 +27,8 @@ pub enum StudySceneError {
     UnknownObject { name: String, known: String },
     #[error("--exclude leaves no object")]
     NothingLeft,
+    #[error(transparent)]
+    Materials(#[from] materials::file::MaterialsError),
 }
 
 /// How one object is counted.
@@ -126,6 +129,17 @@ impl StudyScene {
     /// The scene with our charts in `uv1`, as `--pipeline objectspace` shades it.
     pub fn charted(&self) -> &Scene {
         &self.charted
+    }
+
+    /// Gives every variant of the scene (drawn, the study's and ours
+    /// charted) the materials `spec` makes (`experiment --materials`, as
+    /// `render --materials`): layers change materials, not geometry, so the
+    /// charts and tile spaces hold.
+    pub fn apply_materials(&mut self, spec: &MaterialsSpec) -> Result<(), StudySceneError> {
+        for scene in [&mut self.render, &mut self.study, &mut self.charted] {
+            materials::apply(scene, spec)?;
+        }
+        Ok(())
     }
 }
 

@@ -37,6 +37,7 @@ use serde::Serialize;
 
 use crate::charts::ChartCache;
 use crate::gpu::GpuContext;
+use crate::materials::MaterialsSpec;
 use crate::render::RenderError;
 use crate::render::objectspace::atlas::AtlasError;
 use crate::scene::Camera;
@@ -179,6 +180,10 @@ pub struct ExperimentOptions {
     pub chart_cache: Option<PathBuf>,
     /// Measure only this part of the grid (`--shard K/N`; `quality` only).
     pub shard: Option<quality::Shard>,
+    /// Layered materials for every scene the experiment renders
+    /// (`--materials`, as `render --materials`; not `layers`, which sets
+    /// its own).
+    pub materials: MaterialsSpec,
 }
 
 /// Why an experiment failed.
@@ -206,6 +211,8 @@ pub enum ExperimentError {
     NotSharded(&'static str),
     #[error("--frames {0}: quality needs at least 2 measured frames (flicker compares consecutive frames)")]
     TooFewFrames(u32),
+    #[error("--materials: the {0} experiment sets every material's layers itself (layered:K)")]
+    OwnMaterials(&'static str),
 }
 
 impl ExperimentError {
@@ -219,7 +226,8 @@ impl ExperimentError {
             | Self::Output { .. }
             | Self::Lights(_)
             | Self::NotSharded(_)
-            | Self::TooFewFrames(_) => true,
+            | Self::TooFewFrames(_)
+            | Self::OwnMaterials(_) => true,
             Self::Render(e) => e.is_bad_option(),
             Self::Atlas(_) | Self::Plot(_) | Self::NoTimestamps(_) | Self::NoTimingGrid(_) => false,
         }
@@ -319,7 +327,11 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
     let provenance = Provenance::new(ctx, &options.command);
     progress.set_message(format!("{}: preparing {}", options.name.name(), options.scene));
     let cache = options.chart_cache.as_ref().map_or_else(ChartCache::from_env, ChartCache::in_dir);
-    let scene = StudyScene::load(&options.scene, &options.exclude, options.texel_density, &cache)?;
+    if options.name == ExperimentName::Layers && options.materials != MaterialsSpec::None {
+        return Err(ExperimentError::OwnMaterials(options.name.name()));
+    }
+    let mut scene = StudyScene::load(&options.scene, &options.exclude, options.texel_density, &cache)?;
+    scene.apply_materials(&options.materials)?;
     let output = Output { dir: out };
     let outcome = match options.name {
         ExperimentName::Overshading => tile_study(ctx, options, &scene, output, progress, overshading::run)?,
@@ -341,6 +353,7 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
         "experiment": options.name,
         "scene": scene.name,
         "scene_spec": options.scene,
+        "materials": options.materials.to_string(),
         "quick": options.quick,
         "provenance": provenance,
         "setup": {
@@ -358,6 +371,14 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
     std::fs::write(&summary_path, text).map_err(|e| ExperimentError::output(&summary_path, e))?;
 
     let mut sections = outcome.sections;
+    if options.materials != MaterialsSpec::None {
+        let text = format!(
+            "Every scene rendered, references included, with `--materials {}`: each material's layers lit \
+             one by one with every light in every pipeline (`shadespace::layers`).\n",
+            options.materials
+        );
+        sections.insert(0, Section { heading: "Materials".into(), text, tables: Vec::new(), figures: Vec::new() });
+    }
     sections.extend(findings.sections);
     let title = format!("Experiment `{}`: {}", options.name.name(), scene.name);
     let report_path = out.join("report.md");

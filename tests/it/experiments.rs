@@ -18,6 +18,7 @@ use shadespace::experiments::study_path::StudyCameras;
 use shadespace::experiments::timing::Shading;
 use shadespace::experiments::visibility::VisibilityRenderer;
 use shadespace::experiments::{self, ExperimentName, ExperimentOptions, Grid, overlap, reuse};
+use shadespace::materials::MaterialsSpec;
 
 const SPONZA: &str = "../shared/scenes/sponza-thesis";
 
@@ -40,6 +41,7 @@ fn quick_options(name: ExperimentName, scene: &str, out: &Path) -> ExperimentOpt
         command: format!("shadespace experiment {} --quick --scene {scene}", name.name()),
         chart_cache: Some(chart_cache()),
         shard: None,
+        materials: MaterialsSpec::None,
     }
 }
 
@@ -447,6 +449,12 @@ fn bad_experiment_input_names_the_flag_or_file() {
     let (code, err) = run_cli(&["experiment", "quality", "--quick", "--configs", "objectspace,deferred", "--out", out]);
     assert_eq!(code, 2);
     assert!(err.contains("--configs") && err.contains("'deferred'") && err.contains("objectspace-hz30"), "{err}");
+    let (code, err) = run_cli(&["experiment", "layers", "--quick", "--materials", "layered:2", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--materials") && err.contains("layers"), "{err}");
+    let (code, err) = run_cli(&["experiment", "lights", "--quick", "--materials", "no/such.json", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("no/such.json"), "{err}");
     let (code, err) = run_cli(&["experiment", "quality", "--quick", "--textures", "file", "--out", out]);
     assert_eq!(code, 2);
     assert!(err.contains("--textures") && err.contains("'file'") && err.contains("detailed"), "{err}");
@@ -542,6 +550,23 @@ fn quality_quick() {
     experiments::run(&ctx, &options, &ProgressBar::hidden()).unwrap();
     let alone = read_csv(&alone, &QUALITY_COLUMNS);
     assert_eq!(alone.len(), 1);
+    // The same cell with 4 layers a material (`--materials layered:4`): its
+    // scene and reference are the layered ones, so its errors are others.
+    let layered_dir = parts.path().join("layered");
+    let options = ExperimentOptions {
+        shard: Some(experiments::quality::Shard { index: count, count }),
+        materials: MaterialsSpec::Layered(4),
+        ..quick_options(ExperimentName::Quality, "atrium", &layered_dir)
+    };
+    experiments::run(&ctx, &options, &ProgressBar::hidden()).unwrap();
+    let layered = read_csv(&layered_dir, &QUALITY_COLUMNS);
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(layered_dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["materials"], "layered:4");
+    let report = std::fs::read_to_string(layered_dir.join("report.md")).unwrap();
+    assert!(report.contains("`--materials layered:4`"), "the report does not say the materials");
+    assert_eq!(layered[0]["config"], alone[0]["config"]);
+    assert_ne!(layered[0]["flip_mean"], alone[0]["flip_mean"], "--materials layered:4 left the cell as it was");
     let dir = parts.path().join("merged");
     assert!(experiments::quality::merge(&shards[..1], &dir, "merge").is_err(), "one shard of two is not a run");
     let command = "shadespace experiment merge";
