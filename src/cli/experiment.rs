@@ -186,6 +186,10 @@ pub struct TimingArgs {
     /// `quality`: only these texture settings, comma-separated (file, detailed).
     #[arg(long, value_delimiter = ',')]
     pub textures: Vec<String>,
+    /// `layers`: only these layer counts, comma-separated (1 to 16; default
+    /// 1,2,4,8,12,16): a run that finishes a grid another run left short.
+    #[arg(long, value_delimiter = ',', value_parser = parse::layer_count)]
+    pub layers: Vec<usize>,
     /// `quality`: split each cell's error and flicker by pixel class (MSAA
     /// edge, object space's level, texels per pixel, chart-border taps,
     /// shade age, the reference's gradient) into breakdown.csv and the
@@ -242,6 +246,9 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
     }
     if !a.timing.msaa.is_empty() && name != ExperimentName::Quality {
         return input(Err(anyhow::anyhow!("--msaa: only the quality experiment has an MSAA axis")));
+    }
+    if name != ExperimentName::Layers && !a.timing.layers.is_empty() {
+        return input(Err(anyhow::anyhow!("--layers: only the layers experiment takes it")));
     }
     if !matches!(name, ExperimentName::Quality | ExperimentName::Layers) && !a.timing.configs.is_empty() {
         return input(Err(anyhow::anyhow!("--configs: only the quality and layers experiments take it")));
@@ -355,6 +362,10 @@ fn timing_grid(mut grid: TimingGrid, a: &TimingArgs) -> TimingGrid {
     }
     grid.configs = a.configs.clone();
     grid.textures = a.textures.clone();
+    let mut layers = a.layers.clone();
+    layers.sort_unstable();
+    layers.dedup();
+    grid.layers = layers;
     grid.breakdown = a.breakdown;
     grid.atlas_budget_mi = a.atlas_budget;
     if !a.counts.is_empty() {

@@ -207,6 +207,15 @@ pub fn cap_ms(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `experiment layers --layers`: a layer count from 1 to 16.
+pub fn layer_count(s: &str) -> Result<usize, String> {
+    let max = shadespace::materials::MAX_LAYERS;
+    match s.trim().parse::<usize>() {
+        Ok(k) if (1..=max).contains(&k) => Ok(k),
+        _ => Err(format!("'{s}' is not a layer count from 1 to {max}")),
+    }
+}
+
 /// `--tile-size(s)`: 8, 16, 32 or 64.
 pub fn tile_size(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {

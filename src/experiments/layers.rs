@@ -42,6 +42,12 @@ pub fn layer_counts(quick: bool) -> Vec<usize> {
     if quick { vec![1, 4] } else { vec![1, 2, 4, 8, 12, 16] }
 }
 
+/// The layer counts a run measures: the grid's (`--layers`) where it names
+/// any, else [`layer_counts`].
+pub fn chosen_layer_counts(grid: &TimingGrid, quick: bool) -> Vec<usize> {
+    if grid.layers.is_empty() { layer_counts(quick) } else { grid.layers.clone() }
+}
+
 /// The timing side of the grid: every pipeline and object space's variants
 /// ([`configs`]) at 1920x1080, 5 warm-up and 20 measured path frames, with
 /// 1 and 1,000 small lights and 30 shadowed ones. Quick: forward,
@@ -244,7 +250,7 @@ pub(super) fn study(
     progress: &indicatif::ProgressBar,
 ) -> Result<Outcome, ExperimentError> {
     let grid = options.timing.as_ref().ok_or(ExperimentError::NoTimingGrid("layers"))?;
-    let ks = layer_counts(options.quick);
+    let ks = chosen_layer_counts(grid, options.quick);
     let configs = chosen_configs(grid);
     let frames_per_point = u64::from(grid.warmup + grid.frames);
     progress.set_length((ks.len() * grid.points() * configs.len()) as u64 * frames_per_point);
@@ -582,6 +588,15 @@ mod tests {
         assert_eq!(frame_counts(10, 60, ms(1000)), (2, 6), "8 frames fit: a quarter warm-up");
         assert_eq!(frame_counts(10, 60, ms(5000)), (1, 3), "at least one warm-up and 3 measured");
         assert_eq!(frame_counts(3, 2, ms(5000)), (1, 2), "never more than the grid's");
+    }
+
+    #[test]
+    fn layer_counts_named_are_the_only_ones_measured() {
+        let mut grid = grid(false);
+        assert_eq!(chosen_layer_counts(&grid, false), [1, 2, 4, 8, 12, 16]);
+        assert_eq!(chosen_layer_counts(&grid, true), [1, 4]);
+        grid.layers = vec![16];
+        assert_eq!(chosen_layer_counts(&grid, false), [16]);
     }
 
     #[test]

@@ -373,7 +373,7 @@ pub fn run(ctx: &GpuContext, options: &ExperimentOptions, progress: &ProgressBar
     let mut sections = outcome.sections;
     if options.materials != MaterialsSpec::None {
         let text = format!(
-            "Every scene rendered, references included, with `--materials {}`: each material's layers lit \
+            "Every scene rendered (references too, where the experiment has them) with `--materials {}`: each material's layers lit \
              one by one with every light in every pipeline (`shadespace::layers`).\n",
             options.materials
         );

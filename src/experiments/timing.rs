@@ -149,6 +149,10 @@ pub struct TimingGrid {
     /// `detailed`; empty: all of its grid's).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub textures: Vec<String>,
+    /// The layers experiment: only these layer counts (empty: its own,
+    /// `layers::layer_counts`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub layers: Vec<usize>,
     /// The quality experiment: split each cell's error and flicker by pixel
     /// class (`experiments::breakdown`).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
@@ -182,6 +186,7 @@ impl TimingGrid {
             msaa: vec![1],
             configs: Vec::new(),
             textures: Vec::new(),
+            layers: Vec::new(),
             breakdown: false,
             atlas_budget_mi: None,
         }

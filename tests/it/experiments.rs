@@ -449,6 +449,12 @@ fn bad_experiment_input_names_the_flag_or_file() {
     let (code, err) = run_cli(&["experiment", "quality", "--quick", "--configs", "objectspace,deferred", "--out", out]);
     assert_eq!(code, 2);
     assert!(err.contains("--configs") && err.contains("'deferred'") && err.contains("objectspace-hz30"), "{err}");
+    let (code, err) = run_cli(&["experiment", "layers", "--layers", "17"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--layers") && err.contains("'17'"), "{err}");
+    let (code, err) = run_cli(&["experiment", "lights", "--quick", "--layers", "2", "--out", out]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--layers") && err.contains("only the layers experiment"), "{err}");
     let (code, err) = run_cli(&["experiment", "layers", "--quick", "--materials", "layered:2", "--out", out]);
     assert_eq!(code, 2);
     assert!(err.contains("--materials") && err.contains("layers"), "{err}");
