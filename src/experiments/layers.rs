@@ -315,8 +315,10 @@ pub(super) fn study(
                     let first = last_frame + 1 - (warmup + frames);
                     for i in 0..warmup + frames {
                         renderer.render(ctx, &path.camera_at(first + i), &lights, settled + u64::from(i))?;
+                        progress.inc(1);
                     }
-                    progress.inc(frames_per_point);
+                    // The frames a slow configuration did not render.
+                    progress.inc(frames_per_point - u64::from(warmup + frames));
                     let image = renderer.read_image(ctx)?;
                     let mut times: Vec<f64> = renderer
                         .collect_timings(ctx, true)
