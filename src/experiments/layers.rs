@@ -551,6 +551,25 @@ fn summarize(
             .collect::<Vec<_>>()
             .join("; ")
     };
+    // The frame-time plots are scaled by the slowest pipelines; this one
+    // shows the contest itself.
+    let plot = LinePlot {
+        title: format!("{}x{}: object space's speed-up against layers", grid.width, grid.height),
+        x_label: "layers per material".into(),
+        y_label: "fastest conventional / fastest object space".into(),
+        series: specs
+            .iter()
+            .map(|spec| Series {
+                label: spec.clone(),
+                points: speedups
+                    .iter()
+                    .filter(|s| &s.lights_spec == spec)
+                    .map(|s| (s.layers as f64, s.speedup))
+                    .collect(),
+            })
+            .collect(),
+    };
+    let figure = output.figure("speedup", &plot)?;
     sections.push(Section {
         heading: "Where object space wins".into(),
         text: format!(
@@ -558,7 +577,7 @@ fn summarize(
              fastest object-space configuration; speed-up = conventional / object space. {headline}."
         ),
         tables: vec![(String::new(), table)],
-        figures: Vec::new(),
+        figures: vec![("object space's speed-up against layers, per light set".into(), figure)],
     });
     Ok(Findings {
         results: serde_json::json!({ "headline": headline, "speedups": speedups, "rows": rows.len() }),

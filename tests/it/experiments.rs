@@ -499,6 +499,7 @@ fn layers_quick() {
     let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(report.contains("Where object space wins"), "{report}");
     assert!(dir.path().join("layers-small-1.png").exists());
+    assert!(dir.path().join("speedup.png").exists(), "the speed-up plot");
 }
 
 /// The columns of `quality`'s `data.csv`.

@@ -207,9 +207,10 @@ fn layered_4_agrees_with_forward_in_every_pipeline() {
 /// forward (the object's lights), multi-pass (one light a pass: deferred's
 /// light volumes share it), clustered (a cell's lights: object space shares
 /// it) and deferred-compute (the tile's lights); and the shadows show (the
-/// same lights casting none give another image). A walk that kept each
-/// light's shadow for all layers but read them for the wrong lights fails
-/// it (docs/testing.md, fault 44).
+/// same lights casting none give another image). Layered surfaces that
+/// lose their shadows fail it, and so did a walk that kept each light's
+/// shadow for all layers but read them for the wrong lights
+/// (docs/testing.md, faults 45 and 44).
 #[test]
 fn layered_1_keeps_the_plain_images_shadows_in_every_walk() {
     let ctx = common::gpu();
