@@ -180,7 +180,12 @@ pub struct TimingArgs {
     pub msaa: Vec<u32>,
     /// `quality` and `layers`: only these configurations, comma-separated
     /// labels as the report names them (e.g.
-    /// deferred-compute,objectspace,objectspace-hz30).
+    /// deferred-compute,objectspace,objectspace-hz30). `layers` also takes
+    /// object space's trade-offs, measured only when named:
+    /// objectspace-hz30-vr1, objectspace-hz30-bias0.5,
+    /// objectspace-hz30-vr1-bias0.5, objectspace-hz30-bias1 (30 Hz shading
+    /// with variable rate and coarser levels; the report sets them against
+    /// the fastest conventional pipeline's image and the reference).
     #[arg(long, value_delimiter = ',')]
     pub configs: Vec<String>,
     /// `quality`: only these texture settings, comma-separated (file, detailed).
@@ -268,7 +273,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), Failure> {
         input(check_quality_choice(grid, a.quick))?;
     }
     if let (ExperimentName::Layers, Some(grid)) = (name, &timing) {
-        let labels: Vec<String> = experiments::layers::configs(grid).iter().map(|c| c.label()).collect();
+        let labels: Vec<String> = experiments::layers::nameable_configs(grid).iter().map(|c| c.label()).collect();
         if let Some(bad) = grid.configs.iter().find(|c| !labels.contains(c)) {
             let message = format!("--configs: '{bad}' is not a configuration of this grid ({})", labels.join(", "));
             return input(Err(anyhow::anyhow!(message)));

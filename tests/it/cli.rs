@@ -75,6 +75,7 @@ fn bad_options_say_what_is_wrong() {
     let (code, err) = run(&["experiment", "layers", "--quick", "--configs", "deferred-compute,fast"]);
     assert_eq!(code, 2);
     assert!(err.contains("'fast' is not a configuration") && err.contains("objectspace-hz30"), "{err}");
+    assert!(err.contains("objectspace-hz30-vr1-bias0.5"), "the error lists the trade-offs too: {err}");
     let (code, err) = run(&["experiment", "lights", "--quick", "--configs", "forward"]);
     assert_eq!(code, 2);
     assert!(err.contains("only the quality and layers experiments take it"), "{err}");

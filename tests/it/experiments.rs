@@ -478,28 +478,53 @@ fn bad_experiment_input_names_the_flag_or_file() {
     assert!(err.contains("summary.json"), "{err}");
 }
 
-/// `layers` quick: every configuration at each layer count, errors against
-/// the reference and forward, and the speed-up table.
+/// `layers` quick: every configuration at each layer count and one of
+/// object space's trade-offs (named as `--configs` names it), errors
+/// against the reference, forward and the fastest conventional pipeline,
+/// the speed-up table (without the trade-off) and the trade-off sections.
 #[test]
 fn layers_quick() {
     let start = std::time::Instant::now();
-    let (dir, summary) = run_quick(ExperimentName::Layers, "atrium", &[]);
-    eprintln!("layers quick: {:.1} s", start.elapsed().as_secs_f64());
-    let grid = ExperimentName::Layers.timing_grid(true).unwrap();
+    let ctx = common::gpu();
+    let dir = tempfile::tempdir().unwrap();
+    let mut grid = ExperimentName::Layers.timing_grid(true).unwrap();
     let configs = experiments::layers::configs(&grid);
+    let mut labels: Vec<String> = configs.iter().map(|c| c.label()).collect();
+    labels.push("objectspace-hz30-bias1".into());
+    grid.configs = labels.clone();
+    let options =
+        ExperimentOptions { timing: Some(grid), ..quick_options(ExperimentName::Layers, "atrium", dir.path()) };
+    experiments::run(&ctx, &options, &ProgressBar::hidden()).unwrap();
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap()).unwrap();
+    check_common(dir.path(), &options, &summary);
+    eprintln!("layers quick: {:.1} s", start.elapsed().as_secs_f64());
     let ks = experiments::layers::layer_counts(true);
     let csv = std::fs::read_to_string(dir.path().join("data.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 1 + ks.len() * configs.len(), "{csv}");
+    assert_eq!(csv.lines().count(), 1 + ks.len() * labels.len(), "{csv}");
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
     for line in csv.lines().skip(1) {
-        let flip_reference: f64 = line.split(',').nth(7).unwrap().parse().unwrap();
+        let cells: Vec<&str> = line.split(',').collect();
+        let flip_reference: f64 = cells[column("flip_reference")].parse().unwrap();
         assert!(flip_reference > 0.0 && flip_reference < 0.2, "{line}");
+        // Every row but the fastest conventional one's is judged against it.
+        let against_fastest = cells[column("flip_fastest_conventional")];
+        assert!(against_fastest.is_empty() == (cells[column("config")] == "deferred-compute"), "{line}");
     }
     assert_eq!(summary["layers"], serde_json::json!(ks));
-    assert_eq!(summary["results"]["speedups"].as_array().unwrap().len(), ks.len());
+    let speedups = summary["results"]["speedups"].as_array().unwrap();
+    assert_eq!(speedups.len(), ks.len());
+    assert!(speedups.iter().all(|s| s["object_space"] != "objectspace-hz30-bias1"), "the grid's own configurations");
+    let trade = summary["results"]["trade_offs"].as_array().unwrap();
+    assert_eq!(trade.len(), ks.len(), "a trade-off section per layer count");
+    assert!(trade.iter().all(|t| t["fastest_conventional"] == "deferred-compute"), "{trade:?}");
     let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(report.contains("Where object space wins"), "{report}");
+    assert!(report.contains("Object space's options at 4 layers: small:1"), "{report}");
     assert!(dir.path().join("layers-small-1.png").exists());
     assert!(dir.path().join("speedup.png").exists(), "the speed-up plot");
+    assert!(dir.path().join("trade-offs-small-1-k4.png").exists(), "the cost-error plot");
 }
 
 /// The columns of `quality`'s `data.csv`.
