@@ -182,8 +182,9 @@ pub struct TimingArgs {
     /// labels as the report names them (e.g.
     /// deferred-compute,objectspace,objectspace-hz30). `layers` also takes
     /// object space's trade-offs, measured only when named:
-    /// objectspace-hz30-vr1, objectspace-hz30-bias0.5,
-    /// objectspace-hz30-vr1-bias0.5, objectspace-hz30-bias1 (30 Hz shading
+    /// objectspace-hz30-vr1, objectspace-hz30-vr2, objectspace-hz30-bias0.5,
+    /// objectspace-hz30-vr1-bias0.5, objectspace-hz30-bias1,
+    /// objectspace-hz30-vr1-bias1 (30 Hz shading
     /// with variable rate and coarser levels; the report sets them against
     /// the fastest conventional pipeline's image and the reference).
     #[arg(long, value_delimiter = ',')]
