@@ -331,8 +331,7 @@ fn merge_shards(a: &ExperimentArgs) -> Result<(), Failure> {
 
 /// `--configs` and `--textures` name what the quality grid has.
 fn check_quality_choice(grid: &TimingGrid, quick: bool) -> anyhow::Result<()> {
-    let labels: Vec<String> =
-        quality::configs(grid, quick && grid.configs.is_empty()).iter().map(|c| c.label()).collect();
+    let labels: Vec<String> = quality::nameable_configs(grid).iter().map(|c| c.label()).collect();
     if let Some(bad) = grid.configs.iter().find(|c| !labels.contains(c)) {
         anyhow::bail!("--configs: '{bad}' is not a configuration of this grid ({})", labels.join(", "));
     }

@@ -865,6 +865,8 @@ mod tests {
                 "objectspace-hz30-vr1-bias1"
             ]
         );
+        let quality: Vec<String> = super::super::quality::trade_offs().iter().map(|c| c.label()).collect();
+        assert_eq!(labels, quality, "the quality experiment measures the same trade-offs, for their flicker");
         let PipelineConfig::ObjectSpace(os) = trade_offs()[3].pipeline(&[], VisibilityMethod::Raster) else {
             panic!("object space")
         };

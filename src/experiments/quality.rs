@@ -204,12 +204,37 @@ pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
 /// (`--aniso 16`, the most hardware offers).
 pub const CONVENTIONAL_ANISO: u32 = 16;
 
-/// The configurations a run measures: [`configs`], only those named in
-/// the grid's `configs` where it names any (then from every configuration
-/// of its shadings, quick or not).
+/// Object space at 30 Hz with coarser shading, measured only where
+/// `--configs` names them: the layers experiment's trade-offs
+/// (`layers::trade_offs`, the same labels), for their flicker.
+pub fn trade_offs() -> Vec<Config> {
+    [(1.0, 0.0), (2.0, 0.0), (0.0, 0.5), (1.0, 0.5), (0.0, 1.0), (1.0, 1.0)]
+        .into_iter()
+        .map(|(variable_rate, mip_bias)| Config {
+            spread: true,
+            mip_bias,
+            ..Config::plain(Shading::ObjectSpace { reuse: 2, variable_rate })
+        })
+        .collect()
+}
+
+/// Every configuration `--configs` may name: [`configs`] (in quick mode the
+/// full grid's), then the [`trade_offs`] where the grid measures object space.
+pub fn nameable_configs(grid: &TimingGrid) -> Vec<Config> {
+    let mut all = configs(grid, false);
+    if grid.shadings.iter().any(|s| !s.is_conventional()) {
+        all.extend(trade_offs());
+    }
+    all
+}
+
+/// The configurations a run measures: [`configs`], or those the grid's
+/// `configs` names where it names any ([`nameable_configs`]).
 pub fn chosen_configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
-    let all = configs(grid, quick && grid.configs.is_empty());
-    all.into_iter().filter(|c| grid.configs.is_empty() || grid.configs.contains(&c.label())).collect()
+    if grid.configs.is_empty() {
+        return configs(grid, quick);
+    }
+    nameable_configs(grid).into_iter().filter(|c| grid.configs.contains(&c.label())).collect()
 }
 
 /// The texture settings of a grid (quick: the textured scene only), before `grid.textures` chooses.
@@ -1015,6 +1040,15 @@ mod tests {
         let chosen = chosen_configs(&named, true);
         assert_eq!(chosen.len(), 1);
         assert_eq!((chosen[0].pipeline(), chosen[0].aniso), ("deferred-compute", CONVENTIONAL_ANISO));
+        // The trade-offs only when named, as 30 Hz shading with coarser levels.
+        assert!(!configs(&full, false).iter().any(|c| trade_offs().contains(c)));
+        let named = TimingGrid { configs: vec!["objectspace-hz30-vr1-bias0.5".into()], ..grid(false) };
+        let chosen = chosen_configs(&named, false);
+        assert_eq!(chosen.len(), 1);
+        let PipelineConfig::ObjectSpace(os) = chosen[0].render_config(&[], VisibilityMethod::Raster) else {
+            panic!("object space")
+        };
+        assert!(os.reuse == 2 && os.spread_reshading && os.variable_rate == 1.0 && os.mip_bias == 0.5);
     }
 
     /// Every file of `dir` by name, for comparing two runs' outputs.
