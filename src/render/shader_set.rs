@@ -83,6 +83,12 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         objectspace::mark::SHADER.with_defs(&[crate::shaders::MSAA, crate::shaders::VISIBILITY_LAYERS]),
         objectspace::gather::SHADER.with_defs(&[crate::shaders::MSAA, crate::shaders::VISIBILITY_LAYERS]),
         objectspace::gather::SHADER.with_defs(&[objectspace::mark::PIXEL_RECORD]),
+        objectspace::gather::SHADER.with_defs(&[objectspace::mark::PIXEL_RECORD, objectspace::gather::FORWARD_LIST]),
+        objectspace::gather::SHADER.with_defs(&[
+            objectspace::mark::PIXEL_RECORD,
+            objectspace::gather::FORWARD_LIST,
+            objectspace::gather::BILINEAR_ONLY,
+        ]),
         objectspace::gather::SHADER.with_defs(&[objectspace::gather::PIXEL_CLASSES]),
         objectspace::gather::SHADER.with_defs(&[objectspace::gather::PIXEL_CLASSES, crate::shaders::MSAA]),
         objectspace::gather::SHADER.with_defs(&[

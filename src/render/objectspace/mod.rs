@@ -1001,7 +1001,8 @@ impl ObjectSpace {
             }
         };
         let grid = WorldGrid::new(device, shaders, scene)?;
-        let mut gather = GatherPass::new(device, shaders, scene, &res, targets, &grid.grid, records.as_ref())?;
+        let reads = (records.as_ref(), config.view, config.gather_filter);
+        let mut gather = GatherPass::new(device, shaders, scene, &res, targets, &grid.grid, reads)?;
         let mut extra_views = Vec::new();
         for _ in 1..view_count {
             let ids = VisibilityBuffer::new(device, targets, VisibilityMethod::Compute);
@@ -1259,6 +1260,7 @@ impl Pipeline for ObjectSpace {
         self.in_flight
             .insert(frame.number, InFlight { bias: added, pages, stamp, quiet, slots, slot_pages, unslotted });
         self.res.begin_frame(frame.queue, frame.encoder, self.frames, stale, self.view_since, &self.config);
+        self.gather.begin_frame(frame.queue);
         if !self.released.is_empty() {
             release_slots(frame, &self.paging, &self.res, &std::mem::take(&mut self.released));
         }
