@@ -89,6 +89,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
             objectspace::gather::FORWARD_LIST,
             objectspace::gather::BILINEAR_ONLY,
         ]),
+        objectspace::shade::SHADER.with_defs(&[objectspace::shade::TILE_LIGHTS]),
         objectspace::gather::SHADER.with_defs(&[objectspace::gather::PIXEL_CLASSES]),
         objectspace::gather::SHADER.with_defs(&[objectspace::gather::PIXEL_CLASSES, crate::shaders::MSAA]),
         objectspace::gather::SHADER.with_defs(&[

@@ -1040,7 +1040,14 @@ impl ObjectSpace {
             paging: PagingPass::new(device, shaders, scene, &res, config.paging_chain)?,
             resize: ResizePass::new(device, shaders, scene, &res)?,
             trimap: TrimapPass::new(ctx, shaders, scene_cpu, scene, &res, &layout, &config)?,
-            shade: ShadePass::new(device, shaders, scene, &res, &grid.grid)?,
+            shade: ShadePass::new(
+                device,
+                shaders,
+                scene,
+                &res,
+                &grid.grid,
+                config.tile_size == 8 && config.texel_sample_side() == 1,
+            )?,
             gather,
             classify: None,
             atlas_view: (config.view == DebugView::AtlasPages)

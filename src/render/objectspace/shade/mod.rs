@@ -7,11 +7,15 @@
 use super::resources::{ATLAS_FORMAT, Resources, SHADE_ARGS};
 use crate::render::frame::{TimedComputePass, stage};
 use crate::render::passes::light_grid::{LightGrid, READ_GROUP};
-use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline};
+use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline_with};
 use crate::render::scene_gpu::SceneGpu;
 use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("shade.wgsl", include_str!("shade.wgsl"));
+/// Defined for tiles of 8x8 texels with one point a texel (the default):
+/// each workgroup lists the lights that reach its tile and its texels loop
+/// over that list (`shade.wgsl`).
+pub const TILE_LIGHTS: &str = "TILE_LIGHTS";
 
 pub struct ShadePass {
     pipeline: wgpu::ComputePipeline,
@@ -27,6 +31,7 @@ impl ShadePass {
         scene: &SceneGpu,
         res: &Resources,
         grid: &LightGrid,
+        tile_lights: bool,
     ) -> Result<Self, ShaderError> {
         let dimension = wgpu::TextureViewDimension::D2Array;
         let layout = bind_group_layout(
@@ -38,7 +43,8 @@ impl ShadePass {
             ],
         );
         let groups = [&scene.layout, &res.layout, &layout, &grid.layout];
-        let pipeline = compute_pipeline(device, shaders, SHADER, "shade", &groups)?;
+        let defs: &[&str] = if tile_lights { &[TILE_LIGHTS] } else { &[] };
+        let pipeline = compute_pipeline_with(device, shaders, SHADER, defs, "shade", &groups)?;
         let outputs = Self::outputs(device, &layout, res);
         Ok(Self { pipeline, io_layout: layout, outputs })
     }
