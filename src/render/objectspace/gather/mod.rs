@@ -1,7 +1,9 @@
 //! Shade gathering (`gather.wgsl`): per pixel of the visibility buffer, the
 //! same mip level as marking chose, filtered bilinearly from the atlas into
-//! the HDR target (objects outside the atlas are shaded here per pixel, with
-//! the world grid's lights).
+//! the HDR target (objects outside the atlas, and taps on pages the atlas
+//! could not back, are shaded per pixel with the world grid's lights: by a
+//! dispatch of their own after the record gather, [`FORWARD_LIST`], else in
+//! the gather).
 
 use super::mark::PIXEL_RECORD;
 use super::resources::Resources;
