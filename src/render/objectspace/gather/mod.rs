@@ -21,7 +21,7 @@ pub const SHADER: ShaderSource = ShaderSource::new("gather.wgsl", include_str!("
 pub const PIXEL_CLASSES: &str = "PIXEL_CLASSES";
 /// Defined with [`PIXEL_RECORD`] for the shaded image: the gather lists the
 /// pixels to shade forward and `shade_forward_pixels` shades them
-/// ([`ForwardList`]), so that the lighting model is not compiled into it.
+/// (a forward list), so that the lighting model is not compiled into it.
 pub const FORWARD_LIST: &str = "FORWARD_LIST";
 /// Defined with [`FORWARD_LIST`] where the gather filters bilinearly: the
 /// cubic filters are not compiled into it either.
