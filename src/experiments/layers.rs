@@ -24,7 +24,7 @@ use serde::Serialize;
 
 use super::census::StudyScene;
 use super::plot::{LinePlot, Series};
-use super::quality::{Point, pareto_front};
+use super::quality::{self, Config, Point, pareto_front};
 use super::report::{Section, Table, f3};
 use super::scenarios::Scenario;
 use super::timing::{Shading, Sweep, TimingGrid};
@@ -33,7 +33,7 @@ use crate::gpu::GpuContext;
 use crate::materials::{self, MaterialsSpec};
 use crate::metrics;
 use crate::reference::{ReferenceCache, ReferenceSettings, ReferenceView, References};
-use crate::render::{Exposure, PipelineConfig, RenderOptions, Renderer, VisibilityMethod};
+use crate::render::{Exposure, RenderOptions, Renderer, VisibilityMethod};
 use crate::scene::lights::build_lights;
 use crate::scene::path::cameras_for_scene;
 use crate::scene::{Camera, Light, Scene};
@@ -71,84 +71,28 @@ pub fn grid(quick: bool) -> TimingGrid {
     TimingGrid::new(false, shadings, sweeps)
 }
 
-/// A measured configuration: a shading and, for object space, whether it
-/// re-shades each tile every other frame on its own phase (`--shade-hz 30`
-/// at 60 frames a second) and its mip bias (`--mip-bias`: coarser shading,
-/// fewer texels a frame for more error).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Config {
-    pub shading: Shading,
-    pub hz30: bool,
-    pub mip_bias: f32,
-}
-
-impl Config {
-    fn plain(shading: Shading) -> Self {
-        Self { shading, hz30: false, mip_bias: 0.0 }
-    }
-
-    /// Object space at 30 Hz of 60, with variable rate `variable_rate` and
-    /// mip bias `mip_bias`.
-    fn hz30(variable_rate: f32, mip_bias: f32) -> Self {
-        Self { shading: Shading::ObjectSpace { reuse: 1, variable_rate }, hz30: true, mip_bias }
-    }
-
-    /// `objectspace-hz30` for the spread 30 Hz variant (`-vr1` with variable
-    /// rate), else the shading's label; `-bias0.5` and so on with a mip bias.
-    pub fn label(&self) -> String {
-        let mut label = match self.shading {
-            Shading::ObjectSpace { variable_rate, .. } if self.hz30 => {
-                let vr = if variable_rate != 0.0 { format!("-vr{variable_rate}") } else { String::new() };
-                format!("objectspace-hz30{vr}")
-            }
-            s => s.label(),
-        };
-        if self.mip_bias != 0.0 {
-            label += &format!("-bias{}", self.mip_bias);
-        }
-        label
-    }
-
-    fn pipeline(&self, texture_sizes: &[Option<u32>], visibility: VisibilityMethod) -> PipelineConfig {
-        let mut config = self.shading.config(texture_sizes, visibility);
-        if let PipelineConfig::ObjectSpace(os) = &mut config {
-            if self.hz30 {
-                os.reuse = 2;
-                os.spread_reshading = true;
-            }
-            os.mip_bias = self.mip_bias;
-        }
-        config
-    }
-}
-
 /// The grid's shadings, forward first (the others' images are compared
-/// with its), then object space at 30 Hz where object space is measured.
+/// with its), then object space at 30 Hz (`objectspace-hz30`: reuse 2,
+/// each tile on its own phase) where object space is measured. A
+/// configuration is the quality experiment's ([`Config`]: the same labels
+/// and pipeline settings).
 pub fn configs(grid: &TimingGrid) -> Vec<Config> {
     let mut all: Vec<Config> = grid.shadings.iter().map(|&shading| Config::plain(shading)).collect();
     all.sort_by_key(|c| c.shading != Shading::Forward);
     if grid.shadings.contains(&Shading::OBJECT_SPACE) {
-        all.push(Config::hz30(0.0, 0.0));
+        all.push(Config { spread: true, ..Config::plain(Shading::ObjectSpace { reuse: 2, variable_rate: 0.0 }) });
     }
     all
 }
 
-/// Object space's options that trade error for time, on top of 30 Hz
-/// shading: variable rate 1 and 2, mip bias 0.5 and 1 (about half and a
-/// quarter of the texels), variable rate 1 with bias 0.5 and 1. Measured
-/// only where `--configs` names them; the report sets them against the
-/// fastest conventional pipeline's time and image (issue 26's aim asks 2x
-/// at FLIP 0.01 against it) and against the reference, apart from the
-/// speed-up table, which compares the grid's own configurations.
+/// Object space's options that trade error for time on top of 30 Hz
+/// shading ([`quality::trade_offs`]). Measured only where `--configs` names
+/// them; the report sets them against the fastest conventional pipeline's
+/// time and image (issue 26's aim asks 2x at FLIP 0.01 against it) and
+/// against the reference, apart from the speed-up table, which compares the
+/// grid's own configurations.
 pub fn trade_offs() -> Vec<Config> {
-    vec![
-        Config::hz30(1.0, 0.0),
-        Config::hz30(2.0, 0.0),
-        Config::hz30(0.0, 0.5),
-        Config::hz30(1.0, 0.5),
-        Config::hz30(0.0, 1.0),
-        Config::hz30(1.0, 1.0),
-    ]
+    quality::trade_offs()
 }
 
 /// Every configuration `--configs` may name: [`configs`], then the
@@ -377,8 +321,11 @@ pub(super) fn study(
                     progress.set_message(format!("{} layered:{k} {spec}", config.label()));
                     let conventional = config.shading.is_conventional();
                     let shaded = if conventional { &layered.render } else { &layered.charted };
-                    let render_options =
-                        RenderOptions::new(grid.width, grid.height, config.pipeline(&scene.density_sizes, visibility));
+                    let render_options = RenderOptions::new(
+                        grid.width,
+                        grid.height,
+                        config.render_config(&scene.density_sizes, visibility),
+                    );
                     let built = Instant::now();
                     let mut renderer = Renderer::new(ctx, shaded, &render_options)?;
                     renderer.timing = grid.timing;
@@ -821,13 +768,14 @@ fn trade_off_section(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::PipelineConfig;
 
     #[test]
     fn configs_put_forward_first_and_add_object_space_at_30_hz() {
         let c = configs(&grid(false));
         assert_eq!(c[0].shading, Shading::Forward);
         assert_eq!(c.last().unwrap().label(), "objectspace-hz30");
-        let PipelineConfig::ObjectSpace(os) = c.last().unwrap().pipeline(&[], VisibilityMethod::Raster) else {
+        let PipelineConfig::ObjectSpace(os) = c.last().unwrap().render_config(&[], VisibilityMethod::Raster) else {
             panic!("object space")
         };
         assert!(os.reuse == 2 && os.spread_reshading);
@@ -867,14 +815,13 @@ mod tests {
                 "objectspace-hz30-vr1-bias1"
             ]
         );
-        let quality: Vec<String> = super::super::quality::trade_offs().iter().map(|c| c.label()).collect();
-        assert_eq!(labels, quality, "the quality experiment measures the same trade-offs, for their flicker");
-        let PipelineConfig::ObjectSpace(os) = trade_offs()[3].pipeline(&[], VisibilityMethod::Raster) else {
+        let PipelineConfig::ObjectSpace(os) = trade_offs()[3].render_config(&[], VisibilityMethod::Raster) else {
             panic!("object space")
         };
         assert!(os.reuse == 2 && os.spread_reshading, "30 Hz of 60");
         assert_eq!((os.variable_rate, os.mip_bias), (1.0, 0.5));
-        let PipelineConfig::ObjectSpace(os) = configs(&grid(false))[5].pipeline(&[], VisibilityMethod::Raster) else {
+        let PipelineConfig::ObjectSpace(os) = configs(&grid(false))[5].render_config(&[], VisibilityMethod::Raster)
+        else {
             panic!("object space")
         };
         assert_eq!((os.reuse, os.mip_bias), (1, 0.0), "the grid's own object space keeps its levels");

@@ -93,7 +93,7 @@ pub struct Config {
 }
 
 impl Config {
-    fn plain(shading: Shading) -> Self {
+    pub(super) fn plain(shading: Shading) -> Self {
         Self { shading, spread: false, mip_bias: 0.0, level_blend: 0.0, filter: GatherFilter::Bilinear, aniso: 1 }
     }
 
@@ -128,7 +128,7 @@ impl Config {
         self.shading.config(&[], VisibilityMethod::Raster).name()
     }
 
-    fn render_config(&self, texture_sizes: &[Option<u32>], visibility: VisibilityMethod) -> PipelineConfig {
+    pub(super) fn render_config(&self, texture_sizes: &[Option<u32>], visibility: VisibilityMethod) -> PipelineConfig {
         let mut config = self.shading.config(texture_sizes, visibility);
         if let PipelineConfig::ObjectSpace(os) = &mut config {
             os.spread_reshading = self.spread;
@@ -204,9 +204,12 @@ pub fn configs(grid: &TimingGrid, quick: bool) -> Vec<Config> {
 /// (`--aniso 16`, the most hardware offers).
 pub const CONVENTIONAL_ANISO: u32 = 16;
 
-/// Object space at 30 Hz with coarser shading, measured only where
-/// `--configs` names them: the layers experiment's trade-offs
-/// (`layers::trade_offs`, the same labels), for their flicker.
+/// Object space's options that trade error for time on top of 30 Hz
+/// shading: variable rate 1 and 2, mip bias 0.5 and 1 (about half and a
+/// quarter of the texels), variable rate 1 with bias 0.5 and 1. Measured
+/// only where `--configs` names them, here for their flicker and by the
+/// layers experiment against the fastest conventional pipeline
+/// (`layers::trade_offs`).
 pub fn trade_offs() -> Vec<Config> {
     [(1.0, 0.0), (2.0, 0.0), (0.0, 0.5), (1.0, 0.5), (0.0, 1.0), (1.0, 1.0)]
         .into_iter()
