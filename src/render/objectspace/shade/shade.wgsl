@@ -35,7 +35,7 @@
 #import shadespace::scene_bindings::{lights, view}
 #import shadespace::lighting::light_radiance
 #import shadespace::surface::light_globals
-#import shadespace::light_grid::{grid, grid_cells, grid_lights, cell_radiance}
+#import shadespace::light_grid::{grid, grid_cells, grid_lights}
 #ifdef LAYERS
 #import shadespace::layers::{layer_at, layer_mask, layer_surface}
 #endif
@@ -113,24 +113,20 @@ fn list_tile_lights(b: Box, li: u32) -> bool {
     return tested && count <= TILE_LIST;
 }
 
-// `light_surface_in_cell_one` from the tile's list where `listed`.
-fn light_surface_listed_one(s: Surface, listed: bool) -> vec3f {
+// `light_surface_in_cell_one` with the tile's list for the cell's.
+fn light_surface_listed_one(s: Surface) -> vec3f {
     let to_eye = normalize(view.camera_position.xyz - s.position);
     var lit = vec3f(0.0);
-    if listed {
-        let n = atomicLoad(&tile_count);
-        for (var k = 0u; k < n; k++) {
-            lit += light_radiance(lights[tile_lights[k]], s, to_eye);
-        }
-    } else {
-        lit = cell_radiance(world_cell_of(s.position), s, to_eye);
+    let n = atomicLoad(&tile_count);
+    for (var k = 0u; k < n; k++) {
+        lit += light_radiance(lights[tile_lights[k]], s, to_eye);
     }
     return s.emission + light_globals(s, to_eye) + lit;
 }
 
-// `light_surface_in_cell` from the tile's list where `listed`: the same
+// `light_surface_in_cell` with the tile's list for the cell's: the same
 // walk over the layers.
-fn light_surface_listed(s: Surface, listed: bool) -> vec3f {
+fn light_surface_listed(s: Surface) -> vec3f {
 #ifdef LAYERS
     var color = vec3f(0.0);
     var remaining = 1.0;
@@ -139,15 +135,15 @@ fn light_surface_listed(s: Surface, listed: bool) -> vec3f {
         let w = layer_mask(l, s) * remaining;
         remaining -= w;
         if w > 0.0 {
-            color += w * light_surface_listed_one(layer_surface(l, s), listed);
+            color += w * light_surface_listed_one(layer_surface(l, s));
         }
     }
     if remaining > 0.0 {
-        color += remaining * light_surface_listed_one(s, listed);
+        color += remaining * light_surface_listed_one(s);
     }
     return color;
 #else
-    return light_surface_listed_one(s, listed);
+    return light_surface_listed_one(s);
 #endif
 }
 #endif
@@ -224,8 +220,10 @@ fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     }
     let listed = list_tile_lights(workgroupUniformLoad(&tile_box), li);
     var color = vec3f(0.0);
-    if id != 0u {
-        color = light_surface_listed(s, listed);
+    if id != 0u && listed {
+        color = light_surface_listed(s);
+    } else if id != 0u {
+        color = light_surface_in_cell(o, s, world_cell_of(s.position));
     }
     textureStore(atlas, at.xy, at.layer, vec4f(color, 1.0));
 #else
