@@ -10,8 +10,10 @@ use std::collections::HashMap;
 use glam::Vec2;
 
 /// Island of each triangle of `indices` (three per triangle) in the layout
-/// `uv`: the smallest triangle index of its island, so equal numbers mean
-/// one island and the numbering does not depend on the edge order.
+/// `uv`: islands numbered from 0 in the order of their first triangles, so
+/// equal numbers mean one island, the numbering does not depend on the edge
+/// order, and a mesh's numbers stay below its island count (object space
+/// codes them in the atlas's alpha, `gather::ISLAND_CODES`).
 pub fn triangle_islands(indices: &[u32], uv: &[Vec2]) -> Vec<u32> {
     let triangles = indices.len() / 3;
     let mut parent: Vec<u32> = (0..triangles as u32).collect();
@@ -44,7 +46,20 @@ pub fn triangle_islands(indices: &[u32], uv: &[Vec2]) -> Vec<u32> {
             }
         }
     }
-    (0..triangles as u32).map(|t| root(&mut parent, t)).collect()
+    // A root is its island's first triangle: its island is numbered when
+    // the walk reaches it, before any other triangle of the island.
+    let mut number = vec![u32::MAX; triangles];
+    let mut islands = 0;
+    (0..triangles as u32)
+        .map(|t| {
+            let r = root(&mut parent, t) as usize;
+            if number[r] == u32::MAX {
+                number[r] = islands;
+                islands += 1;
+            }
+            number[r]
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -70,6 +85,6 @@ mod tests {
         let split_indices = [0, 1, 2, 0, 2, 3, 6, 4, 5, 6, 5, 7];
         let mut split = joined.to_vec();
         split.extend([Vec2::new(0.6, 0.0), Vec2::new(0.6, 1.0)]);
-        assert_eq!(triangle_islands(&split_indices, &split), [0, 0, 2, 2]);
+        assert_eq!(triangle_islands(&split_indices, &split), [0, 0, 1, 1]);
     }
 }

@@ -100,6 +100,9 @@ pub struct SceneGpu {
     /// Per triangle of the index buffer: its chart island in its mesh's
     /// chart UVs ([`triangle_islands`](crate::charts::islands::triangle_islands); object space filters within it).
     pub triangle_charts: wgpu::Buffer,
+    /// One more than the largest chart island number of any mesh (islands
+    /// are numbered per mesh from 0).
+    pub island_numbers: u32,
     /// Per object: whether its material is single-sided (not
     /// [`crate::scene::Material::double_sided`]): every pipeline culls its
     /// back faces.
@@ -291,6 +294,7 @@ impl SceneGpu {
         if islands.is_empty() {
             islands.push(0);
         }
+        let island_numbers = islands.iter().max().map_or(0, |&i| i.saturating_add(1));
         let triangle_charts = storage("triangle charts", bytemuck::cast_slice(&islands), wgpu::BufferUsages::empty());
         let objects = storage("objects", bytemuck::cast_slice(&object_data), wgpu::BufferUsages::empty());
         let layers_buf = storage("material layers", bytemuck::cast_slice(&layer_table), wgpu::BufferUsages::empty());
@@ -387,6 +391,7 @@ impl SceneGpu {
             layers,
             layers_buffer: layers_buf,
             triangle_charts,
+            island_numbers,
             shadow_atlas,
             environment,
             environment_sampler,

@@ -89,6 +89,13 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
             objectspace::gather::FORWARD_LIST,
             objectspace::gather::BILINEAR_ONLY,
         ]),
+        objectspace::gather::SHADER.with_defs(&[
+            objectspace::mark::PIXEL_RECORD,
+            objectspace::gather::FORWARD_LIST,
+            objectspace::gather::BILINEAR_ONLY,
+            objectspace::gather::ISLAND_IN_ALPHA,
+        ]),
+        objectspace::gather::SHADER.with_defs(&[objectspace::gather::ISLAND_IN_ALPHA, crate::shaders::MSAA]),
         objectspace::shade::SHADER.with_defs(&[objectspace::shade::TILE_LIGHTS]),
         objectspace::gather::SHADER.with_defs(&[objectspace::gather::PIXEL_CLASSES]),
         objectspace::gather::SHADER.with_defs(&[objectspace::gather::PIXEL_CLASSES, crate::shaders::MSAA]),

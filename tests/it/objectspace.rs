@@ -678,7 +678,7 @@ fn frame_timing_times_the_frame_alone_and_passes_time_the_stages() {
             GpuTiming::Passes => {
                 // Frames 3 and 4 change the lights: the atlas is shaded
                 // again, and frame 4 renders shadow maps.
-                for stage in ["mark", "paging", "triangle maps", "queue", "shade", "gather"] {
+                for stage in ["mark", "paging", "triangle maps", "shade", "gather"] {
                     assert!(names.contains(&format!("object space/{stage}").as_str()), "{stage}: {names:?}");
                 }
                 assert!(names.contains(&"object space") && names.contains(&"tonemap"), "{names:?}");

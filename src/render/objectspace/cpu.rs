@@ -121,6 +121,16 @@ pub fn standard_sample_position(count: u32, s: u32) -> Vec2 {
     Vec2::from(table[s as usize])
 }
 
+/// What the shade pass writes in the alpha of a texel whose triangle lies
+/// in chart island `island` (`island_code` in `objectspace.wgsl`): the half
+/// float of bit pattern 1024 + `island`, a normal number for islands below
+/// [`super::gather::ISLAND_CODES`].
+pub fn island_code(island: u32) -> f32 {
+    let bits = 1024 + island;
+    let mantissa = (bits & 1023) as f32 / 1024.0;
+    (1.0 + mantissa) * 2f32.powi((bits >> 10) as i32 - 15)
+}
+
 /// Mirrors `same_chart_surface`: both background, or one object's
 /// triangles in one chart island (`islands[object][triangle]`).
 pub fn same_chart_surface(islands: &[Vec<u32>], a: [u32; 2], b: [u32; 2]) -> bool {
@@ -767,7 +777,21 @@ mod tests {
 
     use super::*;
     use crate::render::objectspace::atlas::AtlasLayout;
+    use crate::render::objectspace::gather::ISLAND_CODES;
     use crate::scene::{Object, Scene};
+
+    /// Island codes run from the least normal half float to the largest
+    /// finite one, each island its own (the gather tells islands apart by
+    /// equality), and none is 0, the code of a texel no triangle covers.
+    #[test]
+    fn island_codes_are_distinct_normal_half_floats() {
+        assert_eq!(island_code(0), 2f32.powi(-14));
+        assert_eq!(island_code(ISLAND_CODES - 1), 65504.0);
+        let codes: Vec<f32> = (0..ISLAND_CODES).map(island_code).collect();
+        assert!(codes.windows(2).all(|w| w[0] < w[1]), "codes increase with the island");
+        // A half float holds 11 significant bits: each code is one.
+        assert!(codes.iter().all(|c| c.to_bits() & 0x1fff == 0), "codes are half floats");
+    }
 
     /// A 2 x 2 quad at depth 0.5 with the chart filling the unit square: seen
     /// through an identity view-projection it covers the whole viewport.

@@ -69,7 +69,7 @@ use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 use atlas::{AtlasError, AtlasLayout, PagePool};
 use atlas_view::{AtlasPages, AtlasPagesError, AtlasViewPass, draw_atlas_pages};
 use gather::{GatherPass, gather};
-use mark::{MarkPass, compact_shade_queue, mark_backed_pages, mark_tiles};
+use mark::{MarkPass, mark_backed_pages, mark_tiles, write_shade_args};
 use paging::resize::{ResizePass, compact_pages, copy_pages};
 use paging::{PagingPass, back_pages, release_slots};
 use residency::Residency;
@@ -453,7 +453,7 @@ pub enum Marking {
 }
 
 /// How the passes between marking and shading that back requested pages are
-/// recorded (`--os-paging`); both back, build and queue the same pages and
+/// recorded (`--os-paging`); all back, build and queue the same pages and
 /// tiles.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
@@ -470,8 +470,24 @@ pub enum PagingChain {
     /// launch and a barrier. The default: 0.04 ms less a frame along
     /// Sponza's path at 1920x1080 on the H200 when each was a pass of its
     /// own (BENCHMARKS.md, "Object space's variants").
-    #[default]
     Fused,
+    /// Four dispatches for paging: ranking releases the chunks left empty
+    /// as it ages the pages (one dispatch), then the offsets and the list,
+    /// and one workgroup allocates, claims blocks and binds pages (hundreds
+    /// of requests a frame), its evictions releasing the chunks they empty,
+    /// and writes the backed pages' exact count; the triangle-map
+    /// workgroups mark the backed tiles as in [`Self::Fused`]. Five
+    /// dispatches in all where the fused chain has eight. The default.
+    #[default]
+    OneGroup,
+}
+
+impl PagingChain {
+    /// Whether the triangle-map workgroup of a backed page also marks its
+    /// requested tiles (no dispatch of their own).
+    pub fn marks_backed_in_trimap(self) -> bool {
+        self != Self::Split
+    }
 }
 
 /// What the gather reads to find a pixel's chart UV and levels
@@ -744,7 +760,7 @@ impl Default for ObjectSpaceConfig {
             shade_budget_texels: None,
             extra_views: ExtraViews::None,
             slot_timeout: DEFAULT_SLOT_TIMEOUT,
-            paging_chain: PagingChain::Fused,
+            paging_chain: PagingChain::OneGroup,
             trimap_lanes: None,
             trimap_search: TrimapSearch::Rings,
             trimap_grid: 1,
@@ -1312,7 +1328,9 @@ impl Pipeline for ObjectSpace {
             if self.config.paging_chain == PagingChain::Split {
                 mark_backed_pages(&mut cp, &self.mark, &self.res, scene);
             }
-            compact_shade_queue(&mut cp, &self.mark, &self.res, scene);
+            if self.config.paging_chain != PagingChain::OneGroup {
+                write_shade_args(&mut cp, &self.mark, &self.res, scene);
+            }
             shade_tiles(&mut cp, &self.shade, &self.res, scene, grid);
         }
         gather(&mut cp, &self.gather, (&self.res, scene, grid), 0, groups);

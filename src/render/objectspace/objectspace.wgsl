@@ -97,11 +97,8 @@ fn filter_margin() -> u32 {
 // Per physical tile: stamp of the last frame it was shaded (the cache age).
 @group(1) @binding(3) var<storage, read_write> tile_shaded: array<u32>;
 // The shade queue, per physical tile: (global virtual tile, object << 8 |
-// level), this frame's where `tile_shaded` holds this frame's stamp. By
-// tile, not appended: an append is an atomic on one word per queued tile
-// (28,000 a frame along Sponza's path at 1920x1080), and those serialize;
-// `compact_queue` packs the queued tiles into `shade_list` with an atomic
-// per 64 tiles.
+// level), this frame's where `tile_shaded` holds this frame's stamp; the
+// shade list names the queued ones.
 @group(1) @binding(4) var<storage, read_write> queue: array<vec2u>;
 // Indexed by the `COUNT_*` constants; then COUNTER_STRIPES copies of them,
 // which `count` spreads counts over (the CPU sums them).
@@ -159,6 +156,15 @@ fn visibility_samples() -> u32 {
 // Per triangle of the scene's index buffer: its chart island (a number
 // shared by the triangles of one island of its mesh's chart UVs).
 @group(1) @binding(7) var<storage, read> triangle_charts: array<u32>;
+
+// What the shade pass writes in a texel's alpha: its triangle's chart
+// island `island` as a half float (0 where no triangle covers it), so the
+// gather's island filter reads it with the shade instead of the triangle
+// map. The half floats' bit patterns from 1024 are normal numbers, each its
+// own value: codes for islands below `gather::ISLAND_CODES`, one each.
+fn island_code(island: u32) -> f32 {
+    return unpack2x16float(1024u + island).x;
+}
 // The page table's second level: chunks of one word per page of a block,
 // its physical page + 1 (0 = not backed); a block's chunk is found in
 // `page_directory`.
@@ -224,8 +230,10 @@ struct TableChunk {
 @group(1) @binding(18) var<storage, read_write> table_chunks: array<TableChunk>;
 // This frame's free chunks (their count in COUNT_FREE_CHUNKS).
 @group(1) @binding(19) var<storage, read_write> free_chunks: array<u32>;
-// This frame's queued physical tiles, packed for the shade pass's
-// dispatch (`compact_queue` in `mark.wgsl`); COUNT_QUEUED of them.
+// This frame's queued physical tiles, COUNT_QUEUED of them, for the shade
+// pass's dispatch: appended by marking, a workgroup's with one atomic (one
+// per tile, 28,000 a frame along Sponza's path at 1920x1080, would
+// serialize on the word), and by the backed pages' marking.
 @group(1) @binding(20) var<storage, read_write> shade_list: array<u32>;
 
 const BLOCK_PAGES: u32 = BLOCK_SIDE * BLOCK_SIDE;

@@ -41,7 +41,7 @@
     bilinear, AtlasTexel, atlas_texel, triangle_charts, physical_page, virtual_page, physical_tile,
     NOT_BACKED, BlendedVertex, blended_vertex, FILTER_BILINEAR, FILTER_MITCHELL, AnisoTaps, aniso_taps, aniso_tap, AtlasEntry}
 #import shadespace::alpha_mask::opacity
-#import shadespace::objectspace::LevelPair
+#import shadespace::objectspace::{LevelPair, island_code}
 #ifdef PIXEL_RECORD
 #import shadespace::contract::VIEW_SHADE
 #endif
@@ -89,24 +89,35 @@ fn level_color(level: u32) -> vec3f {
     return palette[min(level, 7u)];
 }
 
-fn fetch(at: AtlasTexel) -> vec3f {
-    return textureLoad(atlas, at.xy, at.layer, 0).rgb;
-}
-
 // Chart island of triangle `triangle` of `object`.
 fn island(object: u32, triangle: u32) -> u32 {
     return triangle_charts[objects[object].first_index / 3u + triangle];
 }
 
-// The pixel's object and triangle, whose chart island the island filter keeps.
+// The pixel's object and triangle, whose chart island the island filter
+// keeps, and (`ISLAND_IN_ALPHA`) that island's code in the atlas's alpha.
 struct OwnSurface {
     object: u32,
     triangle: u32,
+    code: f32,
 }
 
-// 1 when the texel at `at` belongs to the pixel's chart island (its
-// triangle map names the pixel's triangle or another of that island), else 0.
-fn in_island(own: OwnSurface, at: AtlasTexel) -> f32 {
+fn own_surface(object: u32, triangle: u32) -> OwnSurface {
+#ifdef ISLAND_IN_ALPHA
+    return OwnSurface(object, triangle, island_code(island(object, triangle)));
+#else
+    return OwnSurface(object, triangle, 0.0);
+#endif
+}
+
+// 1 when `texel`, the atlas texel at `at`, belongs to the pixel's chart
+// island, else 0: with `ISLAND_IN_ALPHA` its alpha holds its island's code
+// (the shade pass writes it), else its triangle map names the pixel's
+// triangle or another of that island.
+fn in_island(own: OwnSurface, at: AtlasTexel, texel: vec4f) -> f32 {
+#ifdef ISLAND_IN_ALPHA
+    return select(0.0, 1.0, texel.a == own.code);
+#else
     let id = textureLoad(triangle_map, at.xy, at.layer, 0).x;
     if id == 0u {
         return 0.0;
@@ -116,6 +127,7 @@ fn in_island(own: OwnSurface, at: AtlasTexel) -> f32 {
         return 1.0;
     }
     return select(0.0, 1.0, island(own.object, id - 1u) == island(own.object, own.triangle));
+#endif
 }
 
 // Shades the pixel here, as forward shading would.
@@ -173,17 +185,23 @@ fn filter_level(own: OwnSurface, level_index: u32, uv: vec2f) -> vec4f {
         (1.0 - b.weight.x) * b.weight.y,
         b.weight.x * b.weight.y,
     );
+    let texels = array<vec4f, 4>(
+        textureLoad(atlas, taps[0].xy, taps[0].layer, 0),
+        textureLoad(atlas, taps[1].xy, taps[1].layer, 0),
+        textureLoad(atlas, taps[2].xy, taps[2].layer, 0),
+        textureLoad(atlas, taps[3].xy, taps[3].layer, 0),
+    );
     let keep = vec4f(
-        in_island(own, taps[0]),
-        in_island(own, taps[1]),
-        in_island(own, taps[2]),
-        in_island(own, taps[3]),
+        in_island(own, taps[0], texels[0]),
+        in_island(own, taps[1], texels[1]),
+        in_island(own, taps[2], texels[2]),
+        in_island(own, taps[3], texels[3]),
     );
     let kept = dot(w, keep);
     if kept > 0.0 {
         w = w * keep / kept;
     }
-    return vec4f(fetch(taps[0]) * w.x + fetch(taps[1]) * w.y + fetch(taps[2]) * w.z + fetch(taps[3]) * w.w, 1.0);
+    return vec4f(texels[0].rgb * w.x + texels[1].rgb * w.y + texels[2].rgb * w.z + texels[3].rgb * w.w, 1.0);
 }
 
 // Cubic B-spline weights of the four texels around a point at fraction `f`
@@ -260,8 +278,9 @@ fn filter_level_cubic(own: OwnSurface, level_index: u32, uv: vec2f) -> vec4f {
             let page = select(select(page_00, page_10, second.x), select(page_01, page_11, second.x), second.y);
             let at = atlas_texel(page, texel);
             let w = wx[i] * wy[j];
-            let c = fetch(at) * w;
-            let keep = in_island(own, at);
+            let texel_shade = textureLoad(atlas, at.xy, at.layer, 0);
+            let c = texel_shade.rgb * w;
+            let keep = in_island(own, at, texel_shade);
             all += c;
             sum += c * keep;
             kept += w * keep;
@@ -367,7 +386,7 @@ fn gather_recorded(pixel: vec2u, ids: vec2u, size: vec2u) -> vec4f {
 #endif
     let r = pixel_records[pixel.y * size.x + pixel.x];
     // One tap: `--os-aniso` above 1 is refused with records.
-    let c = gather_levels(OwnSurface(object, ids.y), LevelPair(r.w & 0xffffu, r.w >> 16u, bitcast<f32>(r.z)),
+    let c = gather_levels(own_surface(object, ids.y), LevelPair(r.w & 0xffffu, r.w >> 16u, bitcast<f32>(r.z)),
         AnisoTaps(bitcast<vec2f>(r.xy), vec2f(0.0), 1u));
 #ifndef FORWARD_LIST
     if c.w < 0.0 {
@@ -500,7 +519,7 @@ fn gather_atlas(p: PixelSample, e: AtlasEntry) -> vec4f {
             return display(vec3f(f32(age) / f32(max(params.reuse, 1u))));
         }
         default: {
-            return gather_levels(OwnSurface(p.object, p.triangle), levels, aniso_taps(e, f));
+            return gather_levels(own_surface(p.object, p.triangle), levels, aniso_taps(e, f));
         }
     }
 }
@@ -541,7 +560,8 @@ fn island_taps(own: OwnSurface, level_index: u32, uv: vec2f) -> u32 {
             if page == NOT_BACKED {
                 return NOT_BACKED;
             }
-            kept += i32(in_island(own, atlas_texel(page, texel)));
+            let at = atlas_texel(page, texel);
+            kept += i32(in_island(own, at, textureLoad(atlas, at.xy, at.layer, 0)));
         }
     }
     if kept == count * count {
@@ -565,7 +585,7 @@ fn surface_class(p: PixelSample) -> vec4u {
     let texels = max(length(f.du_dx), length(f.du_dy)) * f32(l.size);
     let minor = min(length(f.du_dx), length(f.du_dy)) * f32(l.size);
     let blended = select(0u, 1u, levels.t > 0.0 && levels.t < 1.0);
-    let taps = island_taps(OwnSurface(p.object, p.triangle), level_index, f.uv);
+    let taps = island_taps(own_surface(p.object, p.triangle), level_index, f.uv);
     let t = vec2u(bilinear(l, f.uv).texel);
     let page = physical_page(virtual_page(l, t));
     if taps == NOT_BACKED || page == NOT_BACKED {

@@ -26,6 +26,14 @@ pub const FORWARD_LIST: &str = "FORWARD_LIST";
 /// Defined with [`FORWARD_LIST`] where the gather filters bilinearly: the
 /// cubic filters are not compiled into it either.
 pub const BILINEAR_ONLY: &str = "BILINEAR_ONLY";
+/// Defined where every chart island has a code of its own in the atlas's
+/// alpha ([`ISLAND_CODES`]): the island filter reads a tap's island with its
+/// shade (one load a tap), not from the triangle map (two, and the
+/// triangle's island where it is not the pixel's triangle).
+pub const ISLAND_IN_ALPHA: &str = "ISLAND_IN_ALPHA";
+/// Chart islands a mesh may number that `island_code` (`objectspace.wgsl`)
+/// tells apart: the normal half floats from bit pattern 1024 up.
+pub const ISLAND_CODES: u32 = 0x7c00 - 1024;
 
 /// The record gather's pixels to shade forward (objects outside the atlas,
 /// taps on pages the atlas could not back): the gather lists them and
@@ -79,6 +87,9 @@ impl GatherPass {
             Binding::Texture { sample: wgpu::TextureSampleType::Uint, dimension: wgpu::TextureViewDimension::D2Array },
         ];
         let mut defs = Vec::new();
+        if scene.island_numbers <= ISLAND_CODES {
+            defs.push(ISLAND_IN_ALPHA);
+        }
         if records.is_some() {
             bindings.push(Binding::Storage { read_only: true });
             defs.push(PIXEL_RECORD);

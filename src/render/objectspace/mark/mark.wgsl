@@ -91,9 +91,32 @@ fn queue_if_due(slot: u32, tile: u32, object: u32, level_index: u32, valid_since
     if due(tile_shaded[slot], valid_since, tile) {
         tile_shaded[slot] = params.stamp;
         queue[slot] = vec2u(tile, (object << 8u) | level_index);
+        enqueue(slot);
         return true;
     }
     return false;
+}
+
+#ifndef MARK_PER_PIXEL
+// The tiles a workgroup queues, appended to `shade_list` at its end with
+// one atomic on COUNT_QUEUED (a workgroup of 16x16 pixels queues a few; past
+// the stash, a tile is appended on its own).
+const QUEUE_STASH: u32 = 64u;
+var<workgroup> stashed: atomic<u32>;
+var<workgroup> stash: array<u32, QUEUE_STASH>;
+var<workgroup> stash_base: u32;
+#endif
+
+// Lists physical tile `slot` in this frame's shade list.
+fn enqueue(slot: u32) {
+#ifndef MARK_PER_PIXEL
+    let at = atomicAdd(&stashed, 1u);
+    if at < QUEUE_STASH {
+        stash[at] = slot;
+        return;
+    }
+#endif
+    shade_list[atomicAdd(&counters[COUNT_QUEUED], 1u)] = slot;
 }
 
 #ifdef COUNT_MARK_ATOMICS
@@ -329,6 +352,9 @@ fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(workgroup_id) wg: vec
     for (var i = local; i < MARK_SLOTS; i += 64u) {
         atomicStore(&marked_tiles[i], EMPTY_SLOT);
     }
+    if local == 0u {
+        atomicStore(&stashed, 0u);
+    }
     workgroupBarrier();
 #endif
     var atlas = 0u;
@@ -379,7 +405,19 @@ fn mark(@builtin(global_invocation_id) id: vec3u, @builtin(workgroup_id) wg: vec
         count(COUNT_MARK_ATOMICS, atomicLoad(&mark_atomics_counted));
         count(COUNT_MARK_CLAIMS, atomicLoad(&mark_claims_counted));
 #endif
+#ifndef MARK_PER_PIXEL
+        let queued = min(atomicLoad(&stashed), QUEUE_STASH);
+        if queued > 0u {
+            stash_base = atomicAdd(&counters[COUNT_QUEUED], queued);
+        }
+#endif
     }
+#ifndef MARK_PER_PIXEL
+    let base = workgroupUniformLoad(&stash_base);
+    for (var i = local; i < min(atomicLoad(&stashed), QUEUE_STASH); i += 64u) {
+        shade_list[base + i] = stash[i];
+    }
+#endif
 }
 
 // Marks the tiles of the gather's footprint of chart point `uv` in level
@@ -511,38 +549,8 @@ fn mark_backed(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups
 }
 
 
-var<workgroup> group_queued: atomic<u32>;
-var<workgroup> group_base: u32;
-
-// Packs this frame's queued physical tiles (those shaded this frame:
-// marking, the backed pages' marking) into `shade_list`, COUNT_QUEUED of
-// them: an atomic per workgroup of 64 tiles, where appending each tile as
-// marking queued it was an atomic on one word per tile. So the shade pass
-// runs a workgroup per queued tile, as many in flight as there are.
-@compute @workgroup_size(64)
-fn compact_queue(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
-                 @builtin(local_invocation_index) lid: u32) {
-    if lid == 0u {
-        atomicStore(&group_queued, 0u);
-    }
-    workgroupBarrier();
-    let slot = (wg.y * groups.x + wg.x) * 64u + lid;
-    let queued = slot < params.max_queue && tile_shaded[slot] == params.stamp;
-    var at = 0u;
-    if queued {
-        at = atomicAdd(&group_queued, 1u);
-    }
-    workgroupBarrier();
-    if lid == 0u {
-        group_base = atomicAdd(&counters[COUNT_QUEUED], atomicLoad(&group_queued));
-    }
-    let base = workgroupUniformLoad(&group_base);
-    if queued {
-        shade_list[base + at] = slot;
-    }
-}
-
-// The shade pass's indirect dispatch: a workgroup per packed tile.
+// The shade pass's indirect dispatch: a workgroup per listed tile (after
+// the backed pages' marking, which lists theirs).
 @compute @workgroup_size(1)
 fn shade_args() {
     write_dispatch(SHADE_ARGS, min(atomicLoad(&counters[COUNT_QUEUED]), params.max_queue));

@@ -2,14 +2,16 @@
 // pass (`mark.wgsl`) runs it, or, with the fused paging chain, the triangle
 // map pass in the same workgroup as the page's map (`trimap.wgsl`).
 #define_import_path shadespace::objectspace_mark_backed
-#import shadespace::contract::{COUNT_VISIBLE, COUNT_NEW, COUNT_BACKED_TILES}
-#import shadespace::objectspace::{params, entry_level, tile_visible, tile_shaded, queue, count, page_requests,
+#import shadespace::contract::{COUNT_VISIBLE, COUNT_NEW, COUNT_BACKED_TILES, COUNT_QUEUED}
+#import shadespace::objectspace::{params, entry_level, tile_visible, tile_shaded, queue, count, page_requests, counters,
+    shade_list,
     backed, virtual_tile, page_origin, page_request_bit, tile_request_bit, page_tile_origin}
 
 // Backed page `index` of this frame's list, by invocation `lid` of its
 // workgroup (at least 16 invocations: one per tile of the page): the page's
 // tiles start over (never visible, never shaded), and those whose request
-// bits are set are marked visible and queued (a tile never shaded is due);
+// bits are set are marked visible and queued (a tile never shaded is due)
+// and listed for shading;
 // the bits are cleared for a later request.
 fn mark_backed_page(index: u32, lid: u32) {
     let b = backed[index];
@@ -34,6 +36,7 @@ fn mark_backed_page(index: u32, lid: u32) {
             count(COUNT_NEW, 1u);
             tile_shaded[slot] = params.stamp;
             queue[slot] = vec2u(virtual_tile(l, texel), (object << 8u) | level_index);
+            shade_list[atomicAdd(&counters[COUNT_QUEUED], 1u)] = slot;
         }
     }
     if lid == 0u {

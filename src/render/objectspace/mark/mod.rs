@@ -18,7 +18,7 @@ use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 
 pub const SHADER: ShaderSource = ShaderSource::new("mark.wgsl", include_str!("mark.wgsl"));
 /// The marking of the pages backed this frame (`shadespace::objectspace_mark_backed`),
-/// which the mark-backed pass or, with [`super::PagingChain::Fused`], the
+/// which the mark-backed pass or, unless [`super::PagingChain::Split`], the
 /// triangle-map pass runs.
 pub const MARK_BACKED_WGSL: ShaderSource = ShaderSource::new("mark_backed.wgsl", include_str!("mark_backed.wgsl"));
 /// Defined for [`Marking::PerPixel`].
@@ -45,7 +45,6 @@ pub struct MarkPass {
     /// With [`super::GatherInput::Record`]: the pixel records (group 2).
     records: Option<wgpu::BindGroup>,
     mark_backed: wgpu::ComputePipeline,
-    compact_queue: wgpu::ComputePipeline,
     shade_args: wgpu::ComputePipeline,
 }
 
@@ -81,7 +80,6 @@ impl MarkPass {
             mark: compute_pipeline_with(device, shaders, SHADER, &defs, "mark", mark_groups)?,
             records,
             mark_backed: compute_pipeline(device, shaders, SHADER, "mark_backed", &plain)?,
-            compact_queue: compute_pipeline(device, shaders, SHADER, "compact_queue", &plain)?,
             shade_args: compute_pipeline(device, shaders, SHADER, "shade_args", &with_dispatch)?,
         })
     }
@@ -133,17 +131,11 @@ pub fn mark_backed_pages(cp: &mut TimedComputePass, pass: &MarkPass, res: &Resou
     cp.dispatch_workgroups_indirect(&res.dispatch, BACKED_ARGS);
 }
 
-/// Reads: the tiles' shade stamps. Writes: the packed shade queue and its
-/// count, then the shade pass's dispatch (`compact_queue`, `shade_args`).
-pub fn compact_shade_queue(cp: &mut TimedComputePass, pass: &MarkPass, res: &Resources, scene: &wgpu::BindGroup) {
+/// Reads: the shade list's count. Writes: the shade pass's dispatch
+/// (`shade_args`; [`super::PagingChain::OneGroup`] paging writes it itself).
+pub fn write_shade_args(cp: &mut TimedComputePass, pass: &MarkPass, res: &Resources, scene: &wgpu::BindGroup) {
     let mut cp = stage(cp, "queue");
     res.bind(&mut cp, scene);
-    cp.set_pipeline(&pass.compact_queue);
-    // A workgroup per 64 physical tiles, over x and y (a dimension holds
-    // at most 65535 groups).
-    let groups = res.max_queue(res.tile_size).div_ceil(64);
-    let x = groups.clamp(1, 65535);
-    cp.dispatch_workgroups(x, groups.div_ceil(x), 1);
     cp.set_pipeline(&pass.shade_args);
     cp.set_bind_group(2, &res.dispatch_group, &[]);
     cp.dispatch_workgroups(1, 1, 1);

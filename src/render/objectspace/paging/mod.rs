@@ -42,6 +42,9 @@ pub struct PagingPass {
     claim_blocks: wgpu::ComputePipeline,
     bind_pages: wgpu::ComputePipeline,
     backed_args: wgpu::ComputePipeline,
+    /// [`PagingChain::OneGroup`]'s first and last steps.
+    age_and_release: wgpu::ComputePipeline,
+    one_group: wgpu::ComputePipeline,
     release_slots: wgpu::ComputePipeline,
     /// Group 2 of `release_slots`: the released ranges.
     release_layout: wgpu::BindGroupLayout,
@@ -91,6 +94,15 @@ impl PagingPass {
             claim_blocks: compute_pipeline_with(device, shaders, SHADER, atomic, "claim_blocks", &plain)?,
             bind_pages: compute_pipeline_with(device, shaders, SHADER, atomic, "bind_pages", &plain)?,
             backed_args: compute_pipeline_with(device, shaders, SHADER, atomic, "backed_args", &with_dispatch)?,
+            age_and_release: compute_pipeline_with(
+                device,
+                shaders,
+                SHADER,
+                atomic,
+                "age_pages_and_release_chunks",
+                &plain,
+            )?,
+            one_group: compute_pipeline_with(device, shaders, SHADER, atomic, "page_in_one_group", &with_dispatch)?,
         })
     }
 }
@@ -102,6 +114,21 @@ impl PagingPass {
 pub fn back_pages(cp: &mut TimedComputePass, pass: &PagingPass, res: &Resources, scene: &wgpu::BindGroup) {
     let mut cp = stage(cp, "paging");
     res.bind(&mut cp, scene);
+    if pass.chain == PagingChain::OneGroup {
+        // Four dispatches where the other chains have seven: ranking with
+        // the chunks' release, the offsets, the list, then the rest in one
+        // workgroup.
+        cp.set_bind_group(2, &res.dispatch_group, &[]);
+        cp.set_pipeline(&pass.age_and_release);
+        cp.dispatch_workgroups(res.pool.pages.max(res.chunk_count()).div_ceil(64), 1, 1);
+        cp.set_pipeline(&pass.page_offsets);
+        cp.dispatch_workgroups(1, 1, 1);
+        cp.set_pipeline(&pass.list_candidates_if_requested);
+        cp.dispatch_workgroups(res.pool.pages.div_ceil(64), 1, 1);
+        cp.set_pipeline(&pass.one_group);
+        cp.dispatch_workgroups(1, 1, 1);
+        return;
+    }
     rank_candidates(&mut cp, pass, res, Ranking::IfRequested);
     // Group 2 (the dispatch arguments as storage) stays bound, but the
     // allocation's pipelines do not use it: a dispatch that reads the

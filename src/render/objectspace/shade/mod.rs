@@ -1,6 +1,6 @@
 //! Shade evaluation (`shade.wgsl`): one workgroup per queued tile, through
-//! an indirect dispatch (`mark::compact_shade_queue` packs them) (the queue is kept per physical
-//! tile: `objectspace.wgsl`); each texel finds its triangle in the triangle-index
+//! an indirect dispatch over the shade list (marking appends to it; the queue
+//! is kept per physical tile: `objectspace.wgsl`); each texel finds its triangle in the triangle-index
 //! map and runs the shared lighting model with the global lights and the
 //! lights of its world-grid cell.
 

@@ -1,5 +1,5 @@
-// Shade evaluation: one workgroup per queued tile (`shade_list`, packed by
-// `compact_queue`), one invocation per texel
+// Shade evaluation: one workgroup per queued tile (`shade_list`, listed by
+// marking), one invocation per texel
 // (tiles larger than 8x8 loop over 8x8 blocks). Each texel finds its triangle
 // in the triangle-index map, interpolates the vertex attributes at the texel
 // centre in chart space, applies the object's current transform, and runs the
@@ -25,7 +25,7 @@
 #import shadespace::surface::{surface_point, albedo_lod}
 #import shadespace::light_grid::{world_cell_of, light_surface_in_cell}
 #import shadespace::objectspace::{params, entry_level, queue, counters, shade_list, virtual_page, physical_page,
-    atlas_texel}
+    atlas_texel, island_code, triangle_charts}
 
 @group(2) @binding(0) var atlas: texture_storage_2d_array<rgba16float, write>;
 // Per atlas texel: triangle + 1 covering it; 0 = empty.
@@ -225,7 +225,7 @@ fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     } else if id != 0u {
         color = light_surface_in_cell(o, s, world_cell_of(s.position));
     }
-    textureStore(atlas, at.xy, at.layer, vec4f(color, 1.0));
+    textureStore(atlas, at.xy, at.layer, vec4f(color, texel_alpha(o, id)));
 #else
     let blocks = params.tile_size / 8u;
     for (var by = 0u; by < blocks; by++) {
@@ -247,10 +247,20 @@ fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
                 }
                 color /= f32(side * side);
             }
-            textureStore(atlas, at.xy, at.layer, vec4f(color, 1.0));
+            textureStore(atlas, at.xy, at.layer, vec4f(color, texel_alpha(o, id)));
         }
     }
 #endif
+}
+
+// A texel's alpha: the code of its triangle's chart island (triangle map
+// entry `id`: triangle + 1, 0 for none), which the gather's island filter
+// compares with the pixel's.
+fn texel_alpha(o: Object, id: u32) -> f32 {
+    if id == 0u {
+        return 0.0;
+    }
+    return island_code(triangle_charts[o.first_index / 3u + id - 1u]);
 }
 
 // The surface of triangle `tri` of object `o` at chart UV `uv`, its albedo
