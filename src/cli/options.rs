@@ -376,14 +376,13 @@ pub struct ObjectSpaceArgs {
     /// workgroup atomics: for profiling, not for timing).
     #[arg(long)]
     pub count_marks: bool,
-    /// How the passes that back requested pages are recorded: `one-group`
-    /// (default: one workgroup allocates and binds the frame's pages and
-    /// writes the triangle-map and shade dispatches; the triangle-map pass
-    /// marks the backed pages), `fused` (seven paging dispatches, the
-    /// dispatch arguments written with paging's, and one for the shade's) or
-    /// `split` (backed args and mark backed each a dispatch of their own
-    /// too). All give the same pages, tiles and image.
-    #[arg(long, value_enum, default_value = "one-group")]
+    /// How the passes that back requested pages are recorded: `fused`
+    /// (default: the triangle-map pass marks the backed pages, and the
+    /// dispatch arguments are written with paging's) or `split` (backed
+    /// args, mark backed and the shade pass's arguments each a dispatch of
+    /// their own: three dispatches more a frame). Both give the same pages,
+    /// tiles and image.
+    #[arg(long, value_enum, default_value = "fused")]
     pub os_paging: PagingChain,
     /// Invocations weighing each texel's triangles in the triangle-map pass
     /// (1, 2, 4 or 8): on a GPU more lanes shorten the slowest page, whose

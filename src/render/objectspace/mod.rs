@@ -453,41 +453,25 @@ pub enum Marking {
 }
 
 /// How the passes between marking and shading that back requested pages are
-/// recorded (`--os-paging`); all back, build and queue the same pages and
+/// recorded (`--os-paging`); both back, build and queue the same pages and
 /// tiles.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum PagingChain {
-    /// Ten dispatches (stages of object space's one pass): paging (age,
+    /// Eleven dispatches (stages of object space's one pass): paging (age,
     /// offsets, list, allocate, release chunks, claim blocks, bind pages,
-    /// backed args), triangle maps, mark backed (then, in either chain, the
-    /// queue stage that packs the shade queue).
+    /// backed args), triangle maps, mark backed, and the queue stage that
+    /// writes the shade pass's dispatch from the shade list's length.
     Split,
-    /// Eight dispatches: the offsets write the backed pages' dispatch
-    /// arguments as a bound (known once marking is done; extra workgroups
-    /// return), and the triangle-map workgroup of a page also marks its
-    /// requested tiles: no backed args or mark backed dispatch, each a
-    /// launch and a barrier. The default: 0.04 ms less a frame along
+    /// Eight dispatches: the offsets write the backed pages' and the shade
+    /// pass's dispatch arguments as bounds (known once marking is done;
+    /// extra workgroups return), and the triangle-map workgroup of a page also marks its
+    /// requested tiles: no backed args, mark backed or queue dispatch, each
+    /// a launch and a barrier. The default: 0.04 ms less a frame along
     /// Sponza's path at 1920x1080 on the H200 when each was a pass of its
     /// own (BENCHMARKS.md, "Object space's variants").
-    Fused,
-    /// Four dispatches for paging: ranking releases the chunks left empty
-    /// as it ages the pages (one dispatch), then the offsets and the list,
-    /// and one workgroup allocates, claims blocks and binds pages (hundreds
-    /// of requests a frame), its evictions releasing the chunks they empty,
-    /// and writes the backed pages' exact count; the triangle-map
-    /// workgroups mark the backed tiles as in [`Self::Fused`]. Five
-    /// dispatches in all where the fused chain has eight. The default.
     #[default]
-    OneGroup,
-}
-
-impl PagingChain {
-    /// Whether the triangle-map workgroup of a backed page also marks its
-    /// requested tiles (no dispatch of their own).
-    pub fn marks_backed_in_trimap(self) -> bool {
-        self != Self::Split
-    }
+    Fused,
 }
 
 /// What the gather reads to find a pixel's chart UV and levels
@@ -760,7 +744,7 @@ impl Default for ObjectSpaceConfig {
             shade_budget_texels: None,
             extra_views: ExtraViews::None,
             slot_timeout: DEFAULT_SLOT_TIMEOUT,
-            paging_chain: PagingChain::OneGroup,
+            paging_chain: PagingChain::Fused,
             trimap_lanes: None,
             trimap_search: TrimapSearch::Rings,
             trimap_grid: 1,
@@ -1328,7 +1312,7 @@ impl Pipeline for ObjectSpace {
             if self.config.paging_chain == PagingChain::Split {
                 mark_backed_pages(&mut cp, &self.mark, &self.res, scene);
             }
-            if self.config.paging_chain != PagingChain::OneGroup {
+            if self.config.paging_chain == PagingChain::Split {
                 write_shade_args(&mut cp, &self.mark, &self.res, scene);
             }
             shade_tiles(&mut cp, &self.shade, &self.res, scene, grid);

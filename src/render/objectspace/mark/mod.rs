@@ -132,7 +132,8 @@ pub fn mark_backed_pages(cp: &mut TimedComputePass, pass: &MarkPass, res: &Resou
 }
 
 /// Reads: the shade list's count. Writes: the shade pass's dispatch
-/// (`shade_args`; [`super::PagingChain::OneGroup`] paging writes it itself).
+/// (`shade_args`), with [`super::PagingChain::Split`]: the fused chain's
+/// paging writes it.
 pub fn write_shade_args(cp: &mut TimedComputePass, pass: &MarkPass, res: &Resources, scene: &wgpu::BindGroup) {
     let mut cp = stage(cp, "queue");
     res.bind(&mut cp, scene);

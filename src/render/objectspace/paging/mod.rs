@@ -22,7 +22,7 @@ pub const SHADER: ShaderSource = ShaderSource::new("paging.wgsl", include_str!("
 /// Frees the pages of slots given back (`slots`).
 pub const RELEASE_SHADER: ShaderSource = ShaderSource::new("release.wgsl", include_str!("release.wgsl"));
 /// Defined for [`PagingChain::Fused`]: `page_offsets` also writes the backed
-/// pages' dispatch arguments.
+/// pages' and the shade pass's dispatch arguments (bounds).
 pub const FUSED: &str = "FUSED_PAGING";
 /// Defined for every paging pipeline: they write the page directory, with
 /// atomics; the other passes read it with plain loads (`objectspace.wgsl`).
@@ -42,9 +42,6 @@ pub struct PagingPass {
     claim_blocks: wgpu::ComputePipeline,
     bind_pages: wgpu::ComputePipeline,
     backed_args: wgpu::ComputePipeline,
-    /// [`PagingChain::OneGroup`]'s first and last steps.
-    age_and_release: wgpu::ComputePipeline,
-    one_group: wgpu::ComputePipeline,
     release_slots: wgpu::ComputePipeline,
     /// Group 2 of `release_slots`: the released ranges.
     release_layout: wgpu::BindGroupLayout,
@@ -94,15 +91,6 @@ impl PagingPass {
             claim_blocks: compute_pipeline_with(device, shaders, SHADER, atomic, "claim_blocks", &plain)?,
             bind_pages: compute_pipeline_with(device, shaders, SHADER, atomic, "bind_pages", &plain)?,
             backed_args: compute_pipeline_with(device, shaders, SHADER, atomic, "backed_args", &with_dispatch)?,
-            age_and_release: compute_pipeline_with(
-                device,
-                shaders,
-                SHADER,
-                atomic,
-                "age_pages_and_release_chunks",
-                &plain,
-            )?,
-            one_group: compute_pipeline_with(device, shaders, SHADER, atomic, "page_in_one_group", &with_dispatch)?,
         })
     }
 }
@@ -110,25 +98,10 @@ impl PagingPass {
 /// Reads: the page requests, page use and owners. Writes: the page
 /// directory and table chunks, page owners and use, the backed-page list,
 /// the counters, the dispatches of allocation and of the backed pages' passes
-/// (with [`PagingChain::Fused`], a bound).
+/// (with [`PagingChain::Fused`], a bound, and a bound on the shade pass's).
 pub fn back_pages(cp: &mut TimedComputePass, pass: &PagingPass, res: &Resources, scene: &wgpu::BindGroup) {
     let mut cp = stage(cp, "paging");
     res.bind(&mut cp, scene);
-    if pass.chain == PagingChain::OneGroup {
-        // Four dispatches where the other chains have seven: ranking with
-        // the chunks' release, the offsets, the list, then the rest in one
-        // workgroup.
-        cp.set_bind_group(2, &res.dispatch_group, &[]);
-        cp.set_pipeline(&pass.age_and_release);
-        cp.dispatch_workgroups(res.pool.pages.max(res.chunk_count()).div_ceil(64), 1, 1);
-        cp.set_pipeline(&pass.page_offsets);
-        cp.dispatch_workgroups(1, 1, 1);
-        cp.set_pipeline(&pass.list_candidates_if_requested);
-        cp.dispatch_workgroups(res.pool.pages.div_ceil(64), 1, 1);
-        cp.set_pipeline(&pass.one_group);
-        cp.dispatch_workgroups(1, 1, 1);
-        return;
-    }
     rank_candidates(&mut cp, pass, res, Ranking::IfRequested);
     // Group 2 (the dispatch arguments as storage) stays bound, but the
     // allocation's pipelines do not use it: a dispatch that reads the

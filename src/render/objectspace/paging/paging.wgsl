@@ -12,14 +12,10 @@
 // their chunks and lists them as backed. Requests beyond the candidates (or
 // the free chunks) fail this frame (their pixels are shaded forward in the
 // gather) and the budget raises the mip bias.
-// `page_in_one_group` runs the same steps, in order, in one workgroup: the
-// chain's dispatches each cost a launch and a barrier whatever they do (0.025
-// ms for the seven on an H200 with no page requested), and a frame asks for
-// hundreds of pages among a few thousand.
 #import shadespace::contract::{COUNT_QUEUED, COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
     COUNT_FREE_CHUNKS, COUNT_CHUNKS_TAKEN, COUNT_TABLE_CHUNKS, AGE_BUCKET_BASE, AGE_BUCKETS}
 #import shadespace::objectspace::{params, atlas_entries, counters, page_table, page_used, page_owner, request_list,
-    candidates, backed, page_directory, table_chunks, free_chunks, forget_request, unbind_page, table_word, age_bucket, BLOCK_PAGES}
+    candidates, backed, page_directory, table_chunks, free_chunks, forget_request, unbind_page, age_bucket, BLOCK_PAGES}
 #import shadespace::objectspace_dispatch::{write_dispatch, ALLOCATE_ARGS, BACKED_ARGS, SHADE_ARGS}
 
 fn evictable(page: u32) -> bool {
@@ -121,8 +117,13 @@ fn page_offsets() {
     // The fused chain records no pass after paging to count what it did:
     // the backed pages' dispatch takes a bound known now (a request may
     // still fail in `bind_pages`; its extra workgroups see the count and
-    // return).
-    write_dispatch(BACKED_ARGS, min(requests(), offset));
+    // return), and so does the shade pass's: the tiles marking listed and
+    // every tile of those pages (the triangle-map pass lists their
+    // requested tiles; the workgroups past the list's end return).
+    let backed = min(requests(), offset);
+    write_dispatch(BACKED_ARGS, backed);
+    let per_row = params.page_size / params.tile_size;
+    write_dispatch(SHADE_ARGS, min(atomicLoad(&counters[COUNT_QUEUED]) + backed * per_row * per_row, params.max_queue));
 #endif
 }
 
@@ -147,25 +148,16 @@ fn fail(request: vec2u) {
 fn allocate(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
             @builtin(local_invocation_index) lid: u32) {
     let i = request_index(wg, groups, lid);
-    if i < requests() {
-        allocate_request(i, false);
+    if i >= requests() {
+        return;
     }
-}
-
-// Gives request `i` its candidate page, or fails it; with `release`, frees
-// the chunk the eviction empties (`unbind_and_release`).
-fn allocate_request(i: u32, release: bool) {
     if i >= atomicLoad(&counters[COUNT_CANDIDATES]) {
         fail(request_list[i]);
         return;
     }
     let physical = candidates[i];
     // The evicted page was not used this frame, so no request names it.
-    if release {
-        unbind_and_release(physical);
-    } else {
-        unbind_page(physical);
-    }
+    unbind_page(physical);
     page_owner[physical] = request_list[i].x + 1u;
     atomicStore(&page_used[physical], params.stamp);
 }
@@ -179,11 +171,7 @@ var<workgroup> group_base: u32;
 // one global atomic per 64 chunks, not one per chunk on a single word.
 @compute @workgroup_size(64)
 fn release_chunks(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) li: u32) {
-    release_chunk(id.x, li);
-}
-
-// Chunk `c` by invocation `li` of its workgroup: `release_chunks`.
-fn release_chunk(c: u32, li: u32) {
+    let c = id.x;
     if li == 0u {
         atomicStore(&group_free, 0u);
         atomicStore(&group_used, 0u);
@@ -224,14 +212,9 @@ const CLAIMING: u32 = 0xffffffffu;
 fn claim_blocks(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
                 @builtin(local_invocation_index) lid: u32) {
     let i = request_index(wg, groups, lid);
-    if i < allocated() {
-        claim_block(i);
+    if i >= allocated() {
+        return;
     }
-}
-
-// Allocated request `i`'s block takes a free chunk if it has none and no
-// other request of it took one.
-fn claim_block(i: u32) {
     let block = request_list[i].x / BLOCK_PAGES;
     // A weak exchange may fail spuriously: retry while the word is still 0.
     for (var attempt = 0u; attempt < 4u; attempt++) {
@@ -266,14 +249,9 @@ fn claim_block(i: u32) {
 fn bind_pages(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
               @builtin(local_invocation_index) lid: u32) {
     let i = request_index(wg, groups, lid);
-    if i < allocated() {
-        bind_page(i);
+    if i >= allocated() {
+        return;
     }
-}
-
-// Allocated request `i`'s page: its word in the block's chunk and the
-// backed-page list (or its physical page given back).
-fn bind_page(i: u32) {
     let request = request_list[i];
     let page = request.x;
     let physical = candidates[i];
@@ -292,78 +270,4 @@ fn bind_page(i: u32) {
 @compute @workgroup_size(1)
 fn backed_args() {
     write_dispatch(BACKED_ARGS, atomicLoad(&counters[COUNT_PAGES_BACKED]));
-}
-
-// Invocations of `page_in_one_group`.
-const ONE_GROUP: u32 = 256u;
-
-var<workgroup> frame_requests: u32;
-
-// Ranking and chunk release in one dispatch (`PagingChain::OneGroup`): page
-// `id.x` is aged as `age_pages_if_requested` ages it and chunk `id.x`
-// released as `release_chunks` releases it, before this frame's evictions
-// (`page_in_one_group` releases the chunks those empty).
-@compute @workgroup_size(64)
-fn age_pages_and_release_chunks(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
-    age(id.x, lid, requests() > 0u);
-    release_chunk(id.x, lid);
-}
-
-// Allocation, blocks claimed and pages bound in one workgroup
-// (`PagingChain::OneGroup`), the chain's steps in order, each a loop of the
-// workgroup's invocations over the requests (hundreds a frame) with a
-// storage barrier between them, where each was a dispatch (a launch and a
-// barrier whatever it does); then the backed pages' dispatch, their exact
-// count, and a bound on the shade pass's (no dispatch of its own). Its
-// evictions release the chunks they empty at once.
-@compute @workgroup_size(256)
-fn page_in_one_group(@builtin(local_invocation_index) lid: u32) {
-    if lid == 0u {
-        frame_requests = requests();
-    }
-    let n = workgroupUniformLoad(&frame_requests);
-    if n > 0u {
-        for (var i = lid; i < n; i += ONE_GROUP) {
-            allocate_request(i, true);
-        }
-        storageBarrier();
-        let backing = allocated();
-        for (var i = lid; i < backing; i += ONE_GROUP) {
-            claim_block(i);
-        }
-        storageBarrier();
-        for (var i = lid; i < backing; i += ONE_GROUP) {
-            bind_page(i);
-        }
-        storageBarrier();
-    }
-    if lid == 0u {
-        let backed = atomicLoad(&counters[COUNT_PAGES_BACKED]);
-        write_dispatch(BACKED_ARGS, backed);
-        // The shade pass's too, as a bound: the tiles marking listed and
-        // every tile of the backed pages, whose marking lists those
-        // requested (the workgroups past the list's end return).
-        let per_row = params.page_size / params.tile_size;
-        let bound = atomicLoad(&counters[COUNT_QUEUED]) + backed * per_row * per_row;
-        write_dispatch(SHADE_ARGS, min(bound, params.max_queue));
-    }
-}
-
-// `unbind_page`, and the page's chunk released and listed free when this
-// was its last page (what `release_chunks` after the allocation would do).
-fn unbind_and_release(physical: u32) {
-    let owner = page_owner[physical];
-    if owner == 0u {
-        return;
-    }
-    let word = table_word(owner - 1u);
-    page_table[word] = 0u;
-    page_owner[physical] = 0u;
-    let chunk = word / BLOCK_PAGES;
-    if atomicSub(&table_chunks[chunk].pages, 1u) == 1u {
-        atomicStore(&page_directory[table_chunks[chunk].block - 1u], 0u);
-        table_chunks[chunk].block = 0u;
-        free_chunks[atomicAdd(&counters[COUNT_FREE_CHUNKS], 1u)] = chunk;
-        atomicSub(&counters[COUNT_TABLE_CHUNKS], 1u);
-    }
 }

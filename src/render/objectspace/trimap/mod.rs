@@ -38,7 +38,7 @@ use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource, gpu_struct};
 use grid::ChartGrid;
 
 pub const SHADER: ShaderSource = ShaderSource::new("trimap.wgsl", include_str!("trimap.wgsl"));
-/// Defined unless [`PagingChain::Split`]: each page's workgroup also marks its
+/// Defined with [`PagingChain::Fused`]: each page's workgroup also marks its
 /// requested tiles (`mark_backed.wgsl`).
 pub const MARK_BACKED: &str = "MARK_BACKED";
 /// Defined for more than one invocation per texel, with `TRIMAP_LANES_4` or
@@ -72,7 +72,7 @@ fn defs(lanes: u32, chain: PagingChain, search: TrimapSearch, share: bool) -> Ve
         4 => vec![LANES, "TRIMAP_LANES_4"],
         _ => vec![LANES, "TRIMAP_LANES_8"],
     };
-    if chain.marks_backed_in_trimap() {
+    if chain == PagingChain::Fused {
         defs.push(MARK_BACKED);
     }
     if search == TrimapSearch::Neighbourhood {
@@ -159,7 +159,7 @@ impl TrimapPass {
     /// `uv0`; `config.trimap_grid` times the default cells per side); the
     /// pass weighs each texel's triangles with the lanes `config` asks for
     /// on `ctx`'s adapter ([`trimap_lanes`]), searching as
-    /// `config.trimap_search` says, and unless [`PagingChain::Split`] also
+    /// `config.trimap_search` says, and with [`PagingChain::Fused`] also
     /// marks the pages; with `config.trimap_share` the instances of a mesh
     /// in `layout` share maps.
     pub fn new(
@@ -255,7 +255,7 @@ impl TrimapPass {
 
 /// Reads: the backed-page list, the chart grids, the scene's chart UVs.
 /// Writes: the triangle maps of the pages backed this frame (with
-/// a chain other than [`PagingChain::Split`], what `mark::mark_backed_pages` writes too).
+/// [`PagingChain::Fused`], what `mark::mark_backed_pages` writes too).
 /// With shared maps, first forgets the keys of those pages, and after the
 /// build copies the maps of the pages that found a source (reads and
 /// writes the table and the keys; writes the backed pages' sources).
