@@ -253,7 +253,8 @@ fn table_word(page: u32) -> u32 {
 }
 
 // Takes physical page `physical` from the virtual page it backs, if any
-// (its chunk is freed by paging's `release_chunks` when that was its last page).
+// (its chunk is freed by paging's ranking, `release_chunk`, when that was
+// its last page).
 fn unbind_page(physical: u32) {
     let owner = page_owner[physical];
     if owner == 0u {

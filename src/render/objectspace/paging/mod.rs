@@ -35,10 +35,9 @@ pub struct PagingPass {
     age_pages: wgpu::ComputePipeline,
     page_offsets: wgpu::ComputePipeline,
     list_candidates: wgpu::ComputePipeline,
-    age_pages_if_requested: wgpu::ComputePipeline,
+    age_pages_and_release_chunks: wgpu::ComputePipeline,
     list_candidates_if_requested: wgpu::ComputePipeline,
     allocate: wgpu::ComputePipeline,
-    release_chunks: wgpu::ComputePipeline,
     claim_blocks: wgpu::ComputePipeline,
     bind_pages: wgpu::ComputePipeline,
     backed_args: wgpu::ComputePipeline,
@@ -70,12 +69,12 @@ impl PagingPass {
             age_pages: compute_pipeline_with(device, shaders, SHADER, atomic, "age_pages", &plain)?,
             page_offsets: compute_pipeline_with(device, shaders, SHADER, offsets_defs, "page_offsets", &with_dispatch)?,
             list_candidates: compute_pipeline_with(device, shaders, SHADER, atomic, "list_candidates", &plain)?,
-            age_pages_if_requested: compute_pipeline_with(
+            age_pages_and_release_chunks: compute_pipeline_with(
                 device,
                 shaders,
                 SHADER,
                 atomic,
-                "age_pages_if_requested",
+                "age_pages_and_release_chunks",
                 &plain,
             )?,
             list_candidates_if_requested: compute_pipeline_with(
@@ -87,7 +86,6 @@ impl PagingPass {
                 &plain,
             )?,
             allocate: compute_pipeline_with(device, shaders, SHADER, atomic, "allocate", &plain)?,
-            release_chunks: compute_pipeline_with(device, shaders, SHADER, atomic, "release_chunks", &plain)?,
             claim_blocks: compute_pipeline_with(device, shaders, SHADER, atomic, "claim_blocks", &plain)?,
             bind_pages: compute_pipeline_with(device, shaders, SHADER, atomic, "bind_pages", &plain)?,
             backed_args: compute_pipeline_with(device, shaders, SHADER, atomic, "backed_args", &with_dispatch)?,
@@ -108,8 +106,6 @@ pub fn back_pages(cp: &mut TimedComputePass, pass: &PagingPass, res: &Resources,
     // arguments as INDIRECT may follow in the same pass.
     cp.set_pipeline(&pass.allocate);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
-    cp.set_pipeline(&pass.release_chunks);
-    cp.dispatch_workgroups(res.chunk_count().div_ceil(64), 1, 1);
     cp.set_pipeline(&pass.claim_blocks);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     cp.set_pipeline(&pass.bind_pages);
@@ -146,7 +142,8 @@ pub(super) enum Ranking {
     /// Always (a resize's moves need candidates).
     Always,
     /// Only when this frame requested a page (paging: a frame that needs no
-    /// new page ranks none, and allocates none).
+    /// new page ranks none, and allocates none); the chunks left with no
+    /// page are released in the same dispatch either way.
     IfRequested,
 }
 
@@ -156,13 +153,18 @@ pub(super) enum Ranking {
 /// `res` bound as group 1. Rebinds group 2.
 pub(super) fn rank_candidates(cp: &mut wgpu::ComputePass, pass: &PagingPass, res: &Resources, ranking: Ranking) {
     let pages = res.pool.pages.div_ceil(64);
-    let (age, list) = match ranking {
-        Ranking::Always => (&pass.age_pages, &pass.list_candidates),
-        Ranking::IfRequested => (&pass.age_pages_if_requested, &pass.list_candidates_if_requested),
+    // Paging's ranking releases the chunks too: a workgroup per 64 of each.
+    let (age, list, age_groups) = match ranking {
+        Ranking::Always => (&pass.age_pages, &pass.list_candidates, pages),
+        Ranking::IfRequested => (
+            &pass.age_pages_and_release_chunks,
+            &pass.list_candidates_if_requested,
+            res.pool.pages.max(res.chunk_count()).div_ceil(64),
+        ),
     };
     cp.set_bind_group(2, &res.dispatch_group, &[]);
     cp.set_pipeline(age);
-    cp.dispatch_workgroups(pages, 1, 1);
+    cp.dispatch_workgroups(age_groups, 1, 1);
     cp.set_pipeline(&pass.page_offsets);
     cp.dispatch_workgroups(1, 1, 1);
     cp.set_pipeline(list);

@@ -6,8 +6,9 @@
 // order, and `allocate` gives the i-th request the i-th candidate, taking it
 // from the virtual page it backed before. The page table has two levels (a
 // directory word per block of pages, a chunk of page words per block with
-// backed pages): `release_chunks` frees the chunks whose last page was just
-// taken away and lists the free ones, `claim_blocks` gives a chunk to each
+// backed pages): ranking also frees the chunks left with no page (by the
+// slots given back or a resize) and lists the free ones, the allocation
+// frees those whose last page it takes away, `claim_blocks` gives a chunk to each
 // requested block that has none, and `bind_pages` writes the pages into
 // their chunks and lists them as backed. Requests beyond the candidates (or
 // the free chunks) fail this frame (their pixels are shaded forward in the
@@ -15,7 +16,7 @@
 #import shadespace::contract::{COUNT_QUEUED, COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
     COUNT_FREE_CHUNKS, COUNT_CHUNKS_TAKEN, COUNT_TABLE_CHUNKS, AGE_BUCKET_BASE, AGE_BUCKETS}
 #import shadespace::objectspace::{params, atlas_entries, counters, page_table, page_used, page_owner, request_list,
-    candidates, backed, page_directory, table_chunks, free_chunks, forget_request, unbind_page, age_bucket, BLOCK_PAGES}
+    candidates, backed, page_directory, table_chunks, free_chunks, forget_request, table_word, age_bucket, BLOCK_PAGES}
 #import shadespace::objectspace_dispatch::{write_dispatch, ALLOCATE_ARGS, BACKED_ARGS, SHADE_ARGS}
 
 fn evictable(page: u32) -> bool {
@@ -86,10 +87,13 @@ fn list_candidates(@builtin(global_invocation_id) id: vec3u, @builtin(local_invo
 }
 
 // Ranking for paging: nothing to rank in a frame that requested no page
-// (the allocation then dispatches no workgroup).
+// (the allocation then dispatches no workgroup). Chunk `id.x` is released
+// here too (`release_chunk`), before the allocation: one dispatch where the
+// release was one of its own after it (a launch and a barrier).
 @compute @workgroup_size(64)
-fn age_pages_if_requested(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
+fn age_pages_and_release_chunks(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
     age(id.x, lid, requests() > 0u);
+    release_chunk(id.x, lid);
 }
 
 @compute @workgroup_size(64)
@@ -155,23 +159,41 @@ fn allocate(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: v
         fail(request_list[i]);
         return;
     }
-    let physical = candidates[i];
     // The evicted page was not used this frame, so no request names it.
-    unbind_page(physical);
+    unbind_and_release(candidates[i]);
+    let physical = candidates[i];
     page_owner[physical] = request_list[i].x + 1u;
     atomicStore(&page_used[physical], params.stamp);
+}
+
+// `unbind_page`, and the page's chunk freed and listed when this was its
+// last page (its block's directory word cleared).
+fn unbind_and_release(physical: u32) {
+    let owner = page_owner[physical];
+    if owner == 0u {
+        return;
+    }
+    let word = table_word(owner - 1u);
+    page_table[word] = 0u;
+    page_owner[physical] = 0u;
+    let chunk = word / BLOCK_PAGES;
+    if atomicSub(&table_chunks[chunk].pages, 1u) == 1u {
+        atomicStore(&page_directory[table_chunks[chunk].block - 1u], 0u);
+        table_chunks[chunk].block = 0u;
+        free_chunks[atomicAdd(&counters[COUNT_FREE_CHUNKS], 1u)] = chunk;
+        atomicSub(&counters[COUNT_TABLE_CHUNKS], 1u);
+    }
 }
 
 var<workgroup> group_free: atomic<u32>;
 var<workgroup> group_used: atomic<u32>;
 var<workgroup> group_base: u32;
 
-// Per chunk: a chunk left with no page goes back (its block's directory
-// word cleared); the free ones are listed. Counted per workgroup first:
-// one global atomic per 64 chunks, not one per chunk on a single word.
-@compute @workgroup_size(64)
-fn release_chunks(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) li: u32) {
-    let c = id.x;
+// Chunk `c`, by invocation `li` of its workgroup: a chunk left with no page
+// goes back (its block's directory word cleared); the free ones are listed.
+// Counted per workgroup first: one global atomic per 64 chunks, not one per
+// chunk on a single word.
+fn release_chunk(c: u32, li: u32) {
     if li == 0u {
         atomicStore(&group_free, 0u);
         atomicStore(&group_used, 0u);
