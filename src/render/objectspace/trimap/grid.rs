@@ -69,24 +69,6 @@ impl ChartGrid {
         Self { side, cell_start, triangles }
     }
 
-    /// The entries listed in the cells below and left of each cell corner:
-    /// `(side + 1)^2` sums, row by row, corner (x, y) counting the cells
-    /// x' < x, y' < y, so that any box of cells' entries take four reads
-    /// (`box_entries` in `trimap.wgsl`: the triangle-map search skips the
-    /// rings of cells that list nothing, most of them at coarse levels).
-    pub fn entry_sums(&self) -> Vec<u32> {
-        let (side, w) = (self.side as usize, self.side as usize + 1);
-        let mut sums = vec![0u32; w * w];
-        for y in 0..side {
-            for x in 0..side {
-                let c = y * side + x;
-                let count = self.cell_start[c + 1] - self.cell_start[c];
-                sums[(y + 1) * w + x + 1] = count + sums[y * w + x + 1] + sums[(y + 1) * w + x] - sums[y * w + x];
-            }
-        }
-        sums
-    }
-
     /// The triangles listed in the cells that the UV rectangle [lo, hi] overlaps.
     pub fn near(&self, lo: Vec2, hi: Vec2) -> impl Iterator<Item = u32> + '_ {
         let side = self.side as f32;
@@ -127,30 +109,5 @@ mod tests {
         assert!(near.contains(&0) && near.contains(&7) && !near.contains(&6), "{near:?}");
         let far: Vec<u32> = g.near(Vec2::new(0.76, 0.8), Vec2::new(0.8, 0.85)).collect();
         assert!(far.contains(&6) && !far.contains(&0), "{far:?}");
-    }
-
-    /// Every box of cells: the sums' four corners give the entries its
-    /// cells list (a grid of 5 x 5 cells, some empty).
-    #[test]
-    fn entry_sums_count_any_box_of_cells() {
-        let mut uv = Vec::new();
-        for i in 0..9 {
-            let o = Vec2::new(0.05 + 0.1 * i as f32, 0.9 - 0.09 * i as f32);
-            uv.extend([o, o + Vec2::new(0.08, 0.0), o + Vec2::new(0.0, 0.07)]);
-        }
-        let indices: Vec<u32> = (0..uv.len() as u32).collect();
-        let g = ChartGrid::with_side(&uv, &indices, 5);
-        let sums = g.entry_sums();
-        let (side, w) = (5usize, 6usize);
-        let listed = |c: usize| (g.cell_start[c + 1] - g.cell_start[c]) as usize;
-        assert!((0..side * side).any(|c| listed(c) == 0), "some cell lists nothing");
-        for (x0, y0) in (0..side).flat_map(|y| (0..side).map(move |x| (x, y))) {
-            for (x1, y1) in (y0..side).flat_map(|y| (x0..side).map(move |x| (x, y))) {
-                let expected: usize = (y0..=y1).flat_map(|y| (x0..=x1).map(move |x| y * side + x)).map(listed).sum();
-                let corner = |x: usize, y: usize| sums[y * w + x] as usize;
-                let got = corner(x1 + 1, y1 + 1) + corner(x0, y0) - corner(x0, y1 + 1) - corner(x1 + 1, y0);
-                assert_eq!(got, expected, "cells ({x0}, {y0}) to ({x1}, {y1})");
-            }
-        }
     }
 }

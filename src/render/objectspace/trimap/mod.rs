@@ -125,9 +125,7 @@ gpu_struct! {
         pub cell_base: u32,
         pub side: u32,
         pub key_base: u32,
-        /// Index of the object's first entry sum in the cells' buffer
-        /// ([`ChartGrid::entry_sums`], after the mesh's cells).
-        pub sums_base: u32,
+        pub pad: u32,
     }
 }
 
@@ -180,11 +178,9 @@ impl TrimapPass {
         for (mesh, &key_base) in scene.meshes.iter().zip(&key_bases) {
             let g = ChartGrid::scaled(mesh.uv1.as_deref().unwrap_or(&mesh.uv0), &mesh.indices, config.trimap_grid);
             let cell_base = cell_start.len() as u32;
-            let sums_base = cell_base + g.cell_start.len() as u32;
-            mesh_grids.push(GpuChartGrid { cell_base, side: g.side, key_base, sums_base });
+            mesh_grids.push(GpuChartGrid { cell_base, side: g.side, key_base, pad: 0 });
             let offset = triangles.len() as u32;
             cell_start.extend(g.cell_start.iter().map(|s| s + offset));
-            cell_start.extend(g.entry_sums());
             triangles.extend(g.triangles);
         }
         let grids: Vec<GpuChartGrid> = scene.objects.iter().map(|o| mesh_grids[o.mesh]).collect();

@@ -25,16 +25,13 @@ struct ChartGrid {
     side: u32,
     // The object's mesh's first map number (NO_SHARE: its pages share none).
     key_base: u32,
-    // Index in `cell_start` of its entry sums: (side + 1)^2, corner (x, y)
-    // counting the entries of the cells x' < x, y' < y.
-    sums_base: u32,
+    pad: u32,
 }
 
 // Read and written: `copy_shared` reads the maps it copies.
 @group(2) @binding(0) var map: texture_storage_2d_array<r32uint, read_write>;
 @group(2) @binding(1) var<storage, read> grids: array<ChartGrid>;
-// Per cell: its first entry in `cell_triangles` (one more entry closes the
-// last cell); after each mesh's cells, its entry sums (`ChartGrid`).
+// Per cell: its first entry in `cell_triangles` (one more entry closes the last cell).
 @group(2) @binding(2) var<storage, read> cell_start: array<u32>;
 // Object-local triangle indices, cell after cell.
 @group(2) @binding(3) var<storage, read> cell_triangles: array<u32>;
@@ -344,32 +341,13 @@ fn weigh_rest(search: ptr<function, Search>, o: Object, g: ChartGrid, s: f32, lo
 #else
     let width = s / f32(g.side);
     let rings = ring_count(centre, c0, c1);
-    // Rings whose cells list nothing are skipped, and the search ends where
-    // no entry is left in [c0, c1]: at coarse levels the neighbourhood spans
-    // hundreds of cells, most of them empty, and every lane walked them all
-    // (the same maps: an empty cell weighs nothing).
-    let total = box_entries(g, c0, c1);
-    var within = box_entries(g, centre, centre);
-    for (var ring = 1u; ring <= rings && within < total; ring++) {
-        let entries = box_entries(g, max(centre, c0 + ring) - ring, min(centre + ring, c1));
-        if entries != within {
-            weigh_ring(search, o, g, s, lo, centre, c0, c1, ring, step);
-        }
-        within = entries;
+    for (var ring = 1u; ring <= rings; ring++) {
+        weigh_ring(search, o, g, s, lo, centre, c0, c1, ring, step);
         if search_done((*search).n, ring, width) {
             break;
         }
     }
 #endif
-}
-
-// The entries listed in the cells of [c0, c1] (corners included): four
-// reads of the grid's entry sums.
-fn box_entries(g: ChartGrid, c0: vec2u, c1: vec2u) -> u32 {
-    let w = g.side + 1u;
-    let s = g.sums_base;
-    let far = cell_start[s + (c1.y + 1u) * w + c1.x + 1u] + cell_start[s + c0.y * w + c0.x];
-    return far - cell_start[s + c0.y * w + c1.x + 1u] - cell_start[s + (c1.y + 1u) * w + c0.x];
 }
 
 // The chart grid cell holding point `p` of a level `s` texels wide.
