@@ -310,44 +310,6 @@ fn weigh_ring(search: ptr<function, Search>, o: Object, g: ChartGrid, s: f32, lo
     }
 }
 
-// Weighs the cells of ring `ring` (as `weigh_ring`) that are lane `lane`'s
-// of `lanes`: the lanes take the ring's cells in turn, each weighing all of
-// a cell's entries. A cell costs a chain of dependent loads whatever it
-// lists (about two entries), so striding each cell's entries over the
-// lanes, as the centre's cell does, left every lane walking every cell.
-fn weigh_ring_striped(search: ptr<function, Search>, o: Object, g: ChartGrid, s: f32, lo: vec2f, centre: vec2u,
-                      c0: vec2u, c1: vec2u, ring: u32, lane: u32, lanes: u32) {
-    let first = max(centre, c0 + ring) - ring;
-    let last = min(centre + ring, c1);
-    // The ring's i-th cell is lane (i % lanes)'s: its turn comes at 0.
-    var turn = lanes - lane;
-    for (var y = first.y; y <= last.y; y++) {
-        if y + ring == centre.y || y == centre.y + ring {
-            for (var x = first.x; x <= last.x; x++) {
-                weigh_in_turn(search, o, g, s, lo, vec2u(x, y), &turn, lanes);
-            }
-        } else {
-            if centre.x >= c0.x + ring {
-                weigh_in_turn(search, o, g, s, lo, vec2u(centre.x - ring, y), &turn, lanes);
-            }
-            if centre.x + ring <= c1.x {
-                weigh_in_turn(search, o, g, s, lo, vec2u(centre.x + ring, y), &turn, lanes);
-            }
-        }
-    }
-}
-
-// Weighs all of cell `cell`'s entries when this lane's turn comes (every
-// `lanes`-th), and counts the turn.
-fn weigh_in_turn(search: ptr<function, Search>, o: Object, g: ChartGrid, s: f32, lo: vec2f, cell: vec2u,
-                 turn: ptr<function, u32>, lanes: u32) {
-    if *turn % lanes == 0u {
-        (*search).skip = 0u;
-        weigh_cell(search, o, g, s, lo, cell, 1u);
-    }
-    *turn += 1u;
-}
-
 // Whether the search may stop after ring `ring` of cells `width` texels
 // wide, with the nearest triangles `n` found. A triangle's point nearest
 // the texel's centre lies in its bounding box, so in a cell that lists it:
@@ -369,7 +331,7 @@ fn search_done(n: Nearest, ring: u32, width: f32) -> bool {
 // `search_done`, or (`TRIMAP_NEIGHBOURHOOD`, the search before the rings)
 // every cell of [c0, c1], the centre's again included, row by row.
 fn weigh_rest(search: ptr<function, Search>, o: Object, g: ChartGrid, s: f32, lo: vec2f, centre: vec2u, c0: vec2u,
-              c1: vec2u, lane: u32, step: u32) {
+              c1: vec2u, step: u32) {
 #ifdef TRIMAP_NEIGHBOURHOOD
     for (var y = c0.y; y <= c1.y; y++) {
         for (var x = c0.x; x <= c1.x; x++) {
@@ -380,7 +342,7 @@ fn weigh_rest(search: ptr<function, Search>, o: Object, g: ChartGrid, s: f32, lo
     let width = s / f32(g.side);
     let rings = ring_count(centre, c0, c1);
     for (var ring = 1u; ring <= rings; ring++) {
-        weigh_ring_striped(search, o, g, s, lo, centre, c0, c1, ring, lane, step);
+        weigh_ring(search, o, g, s, lo, centre, c0, c1, ring, step);
         if search_done((*search).n, ring, width) {
             break;
         }
@@ -446,7 +408,7 @@ fn covering_triangle(search: ptr<function, Search>, o: Object, g: ChartGrid, siz
     (*search).n = Nearest(3.0e38, 0u, 3.0e38, 0u);
     weigh_ring(search, o, g, s, lo, centre, c0, c1, 0u, 1u);
     if !search_done((*search).n, 0u, s / f32(g.side)) {
-        weigh_rest(search, o, g, s, lo, centre, c0, c1, 0u, 1u);
+        weigh_rest(search, o, g, s, lo, centre, c0, c1, 1u);
     }
     return found((*search).n);
 }
@@ -563,7 +525,7 @@ fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
             // The texel's lanes merged the same pairs: they go on together.
             if inside && !search_done(merged, 0u, width) {
                 search.n = merged;
-                weigh_rest(&search, o, g, s, lo, centre, c0, c1, lane, LANES);
+                weigh_rest(&search, o, g, s, lo, centre, c0, c1, LANES);
             }
             weighed += search.weighed;
             ring_part[li] = search.n;
