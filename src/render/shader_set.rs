@@ -97,7 +97,6 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         ]),
         objectspace::gather::SHADER.with_defs(&[objectspace::gather::ISLAND_IN_ALPHA, crate::shaders::MSAA]),
         objectspace::shade::SHADER.with_defs(&[objectspace::shade::TILE_LIGHTS]),
-        objectspace::shade::SHADER.with_defs(&[objectspace::shade::TILE_LIGHTS, objectspace::shade::SUBGROUP_BOX]),
         objectspace::gather::SHADER.with_defs(&[objectspace::gather::PIXEL_CLASSES]),
         objectspace::gather::SHADER.with_defs(&[objectspace::gather::PIXEL_CLASSES, crate::shaders::MSAA]),
         objectspace::gather::SHADER.with_defs(&[

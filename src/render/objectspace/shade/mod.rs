@@ -16,9 +16,6 @@ pub const SHADER: ShaderSource = ShaderSource::new("shade.wgsl", include_str!("s
 /// each workgroup lists the lights that reach its tile and its texels loop
 /// over that list (`shade.wgsl`).
 pub const TILE_LIGHTS: &str = "TILE_LIGHTS";
-/// Defined with [`TILE_LIGHTS`] where the device has subgroup operations:
-/// the tile's box is reduced per subgroup before the workgroup's atomics.
-pub const SUBGROUP_BOX: &str = "SUBGROUP_BOX";
 
 pub struct ShadePass {
     pipeline: wgpu::ComputePipeline,
@@ -46,12 +43,7 @@ impl ShadePass {
             ],
         );
         let groups = [&scene.layout, &res.layout, &layout, &grid.layout];
-        let subgroups = device.features().contains(wgpu::Features::SUBGROUP);
-        let defs: &[&str] = match (tile_lights, subgroups) {
-            (true, true) => &[TILE_LIGHTS, SUBGROUP_BOX],
-            (true, false) => &[TILE_LIGHTS],
-            (false, _) => &[],
-        };
+        let defs: &[&str] = if tile_lights { &[TILE_LIGHTS] } else { &[] };
         let pipeline = compute_pipeline_with(device, shaders, SHADER, defs, "shade", &groups)?;
         let outputs = Self::outputs(device, &layout, res);
         Ok(Self { pipeline, io_layout: layout, outputs })

@@ -164,21 +164,8 @@ fn chart_barycentrics(a: vec2f, c: vec2f, d: vec2f, uv: vec2f) -> vec3f {
 }
 
 
-#ifdef SUBGROUP_BOX
-// This invocation's index in its subgroup.
-var<private> lane: u32;
-
-// naga takes the subgroup builtins only with a one-dimensional workgroup:
-// its 64 invocations cover the tile's 8x8 texels row by row.
-@compute @workgroup_size(64)
-fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
-         @builtin(local_invocation_index) local: u32, @builtin(subgroup_invocation_id) subgroup_lane: u32) {
-    let lid = vec3u(local % 8u, local / 8u, 0u);
-    lane = subgroup_lane;
-#else
 @compute @workgroup_size(8, 8)
 fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u, @builtin(local_invocation_id) lid: vec3u) {
-#endif
     let index = wg.y * groups.x + wg.x;
 #ifdef TILE_LIGHTS
     // The barriers below need the workgroup to return as one.
@@ -219,27 +206,11 @@ fn shade(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     var s: Surface;
     if id != 0u {
         s = chart_surface(o, triangle_vertices(o, id - 1u), (vec2f(texel) + 0.5) / f32(l.size), 1.0 / f32(l.size));
-    }
-#ifdef SUBGROUP_BOX
-    // The subgroup's box first, then one invocation of it adds it: the
-    // workgroup's atomics on the six words follow its subgroups, not its
-    // 64 texels (which all hit the same words, one after another).
-    let sub_lo = subgroupMin(select(vec3f(3.0e38), s.position, id != 0u));
-    let sub_hi = subgroupMax(select(vec3f(-3.0e38), s.position, id != 0u));
-    if subgroupBroadcastFirst(lane) == lane {
-        for (var k = 0u; k < 3u; k++) {
-            atomicMin(&box_lo[k], ordered(sub_lo[k]));
-            atomicMax(&box_hi[k], ordered(sub_hi[k]));
-        }
-    }
-#else
-    if id != 0u {
         for (var k = 0u; k < 3u; k++) {
             atomicMin(&box_lo[k], ordered(s.position[k]));
             atomicMax(&box_hi[k], ordered(s.position[k]));
         }
     }
-#endif
     workgroupBarrier();
     if li == 0u {
         let lo = vec3i(atomicLoad(&box_lo[0]), atomicLoad(&box_lo[1]), atomicLoad(&box_lo[2]));
