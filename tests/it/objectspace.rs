@@ -55,7 +55,8 @@ fn objectspace_matches_forward_on_floor() {
 /// With `--reuse 2` a camera shades every visible tile in the first
 /// frame, none in the second, and all again in the third (age 2 reached)
 /// once it moved (a millimetre). With `--reuse 1` every frame shades every
-/// visible tile. Changing a light invalidates the cache.
+/// visible tile. Changing a light invalidates the cache, and the tiles
+/// shaded again show it.
 #[test]
 fn reuse_skips_young_tiles_and_light_changes_invalidate() {
     let ctx = common::gpu();
@@ -67,6 +68,7 @@ fn reuse_skips_young_tiles_and_light_changes_invalidate() {
     }
     lights[1].intensity *= 2.0;
     os.render(&ctx, &moved, &lights, 3).unwrap();
+    let changed = os.read_image(&ctx).unwrap();
     let c = os.collect_counters(&ctx, true);
     assert_eq!(c.len(), 4);
     let (visible, shaded) = (counter(&c, "visible_tiles"), counter(&c, "shaded_tiles"));
@@ -79,6 +81,13 @@ fn reuse_skips_young_tiles_and_light_changes_invalidate() {
     assert_eq!(new[1], 0.0, "static camera: no new tiles");
     assert_eq!(shaded[2], visible[2], "age 2 reached, the camera moved: shade again");
     assert_eq!(shaded[3], visible[3], "a light changed: shade again");
+    // ... and every tile queued is shaded: the image after the change is a
+    // new renderer's first image of that view and those lights (a tile
+    // queued but left out of the shade list keeps the old light).
+    let mut fresh = Renderer::new(&ctx, &scene, &objectspace(2)).unwrap();
+    fresh.render(&ctx, &moved, &lights, 0).unwrap();
+    let (err, _) = metrics::compare(&fresh.read_image(&ctx).unwrap(), &changed);
+    assert_eq!(err.max_abs, 0, "after the light change against a new renderer: {err:?}");
 
     let mut every = Renderer::new(&ctx, &scene, &objectspace(1)).unwrap();
     for frame in 0..2 {
