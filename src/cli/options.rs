@@ -391,6 +391,14 @@ pub struct ObjectSpaceArgs {
     /// the same. Default: 4 on a GPU, 1 on a CPU adapter
     #[arg(long, value_parser = parse::trimap_lanes)]
     pub os_trimap_lanes: Option<u32>,
+    /// The widest level whose triangle maps are built once per mesh, the
+    /// first frame, and copied into pages backed later instead of searched
+    /// (0 or a power of two up to 2048; 0: none): the middle levels hold
+    /// the slowest pages, and the pass lasts as long as its slowest. The
+    /// maps are the same. Default: 256 on a GPU (87,000 texels a mesh),
+    /// 0 on a CPU adapter
+    #[arg(long)]
+    pub os_trimap_store: Option<u32>,
     /// How the triangle-map pass searches a texel's cells of the chart grid
     /// when its centre's cell does not settle it: `rings` (default: ring by
     /// ring round the centre's cell, stopping once no cell left can hold a

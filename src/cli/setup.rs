@@ -191,6 +191,7 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             count_mark_atomics: a.objectspace.count_marks,
             paging_chain: a.objectspace.os_paging,
             trimap_lanes: a.objectspace.os_trimap_lanes,
+            trimap_store: a.objectspace.os_trimap_store,
             trimap_search: a.objectspace.os_trimap_search,
             trimap_grid: a.objectspace.os_trimap_grid,
             trimap_share: a.objectspace.os_trimap_share,

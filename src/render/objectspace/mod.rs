@@ -592,6 +592,27 @@ pub fn trimap_lanes(config: &ObjectSpaceConfig, adapter: &wgpu::AdapterInfo) -> 
         _ => DEFAULT_TRIMAP_LANES,
     })
 }
+/// [`ObjectSpaceConfig::trimap_store`]'s default on a GPU: each mesh's
+/// triangle maps of the levels up to 256 texels wide are stored (87,000
+/// texels a mesh); on Sponza's path at 1920x1080 on the H200 the pass took
+/// 0.031 ms without searching those levels, 0.049 with (BENCHMARKS.md,
+/// "Where the remaining time goes").
+pub const DEFAULT_TRIMAP_STORE: u32 = 256;
+/// The widest level [`ObjectSpaceConfig::trimap_store`] takes (5.6 M texels
+/// a mesh).
+pub const MAX_TRIMAP_STORE: u32 = 2048;
+
+/// The widest level whose triangle maps are stored, `config`'s on
+/// `adapter`: its own, else none on a CPU adapter (lavapipe: building them
+/// costs seconds a scene there, and the pass is not what its frames wait
+/// on) and [`DEFAULT_TRIMAP_STORE`] on others.
+pub fn trimap_store(config: &ObjectSpaceConfig, adapter: &wgpu::AdapterInfo) -> u32 {
+    config.trimap_store.unwrap_or(match adapter.device_type {
+        wgpu::DeviceType::Cpu => 0,
+        _ => DEFAULT_TRIMAP_STORE,
+    })
+}
+
 /// Most [`ObjectSpaceConfig::trimap_grid`] (`--os-trimap-grid`).
 pub const MAX_TRIMAP_GRID: u32 = 4;
 
@@ -698,6 +719,11 @@ pub struct ObjectSpaceConfig {
     /// pass, one of [`TRIMAP_LANES`] (1: one per texel); `None`: the
     /// adapter's ([`trimap_lanes`]). The maps are the same whatever it is.
     pub trimap_lanes: Option<u32>,
+    /// The widest level (a power of two, or 0 for none) whose triangle maps
+    /// are built once per mesh and copied into the pages backed after
+    /// (`trimap`); `None`: the adapter's ([`trimap_store`]). The maps are
+    /// the same whatever it is.
+    pub trimap_store: Option<u32>,
     /// How the triangle-map pass searches the chart grids.
     pub trimap_search: TrimapSearch,
     /// The chart grids' cells per side, this many times the default (about
@@ -746,6 +772,7 @@ impl Default for ObjectSpaceConfig {
             slot_timeout: DEFAULT_SLOT_TIMEOUT,
             paging_chain: PagingChain::Fused,
             trimap_lanes: None,
+            trimap_store: None,
             trimap_search: TrimapSearch::Rings,
             trimap_grid: 1,
             trimap_share: true,
@@ -797,6 +824,8 @@ pub enum ObjectSpaceError {
     BadTrimapLanes(u32),
     #[error("the chart grid scale must be 1 to {MAX_TRIMAP_GRID} (got {0})")]
     BadTrimapGrid(u32),
+    #[error("the widest stored triangle-map level must be 0 or a power of two up to {MAX_TRIMAP_STORE} (got {0})")]
+    BadTrimapStore(u32),
     #[error("{lanes} triangle-map lanes need {invocations} invocations per workgroup; {adapter} allows {max}")]
     TrimapLanesTooMany { lanes: u32, invocations: u32, adapter: String, max: u32 },
     #[error("an atlas of {texels} texels takes {layers} layers of {side}x{side}, more than the adapter's {max} layers")]
@@ -916,6 +945,10 @@ impl ObjectSpace {
         }
         if !(1..=MAX_TRIMAP_GRID).contains(&config.trimap_grid) {
             return Err(ObjectSpaceError::BadTrimapGrid(config.trimap_grid));
+        }
+        let store = trimap_store(&config, &ctx.info);
+        if store > MAX_TRIMAP_STORE || (store != 0 && !store.is_power_of_two()) {
+            return Err(ObjectSpaceError::BadTrimapStore(store));
         }
         let invocations = 64 * lanes;
         let max = device.limits().max_compute_invocations_per_workgroup;
@@ -1308,7 +1341,7 @@ impl Pipeline for ObjectSpace {
         }
         if !quiet {
             back_pages(&mut cp, &self.paging, &self.res, scene);
-            build_triangle_maps(&mut cp, &self.trimap, &self.res, scene);
+            build_triangle_maps(&mut cp, &mut self.trimap, &self.res, scene);
             if self.config.paging_chain == PagingChain::Split {
                 mark_backed_pages(&mut cp, &self.mark, &self.res, scene);
             }
@@ -1529,6 +1562,7 @@ impl Pipeline for ObjectSpace {
             .memory("page_table", self.res.page_table_bytes())
             .memory("chart_grids", self.trimap.grid_bytes)
             .memory("trimap_share", self.trimap.share_bytes)
+            .memory("trimap_store", self.trimap.store_bytes)
             .memory("visibility", self.res.visibility.bytes())
             .memory("pixel_records", self.pixel_record_bytes())
             .memory("world_grid", self.grid.grid.bytes())

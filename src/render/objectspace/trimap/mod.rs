@@ -20,6 +20,14 @@
 //! pages backed this frame, the build pass claims each page (a source, or
 //! it builds and enters itself in the table) and a last pass copies the
 //! maps of the pages that found a source, after every build.
+//!
+//! The slowest pages to build are at the middle levels (on Sponza's path at
+//! 1920x1080, levels of 128 to 1,024 texels: the pass took 0.025 ms without
+//! their search, 0.049 with it, on the H200), and the pass lasts as long as
+//! its slowest page. With [`ObjectSpaceConfig::trimap_store`] each mesh's
+//! maps of every level up to that size are built once, the first frame
+//! (`build_stored`, the same search), and a page of those levels copies its
+//! texels from them: 87,000 texels a mesh up to 256.
 
 pub mod cpu;
 pub mod grid;
@@ -28,7 +36,7 @@ use wgpu::util::DeviceExt;
 
 use super::atlas::AtlasLayout;
 use super::resources::{BACKED_ARGS, Resources, TRIANGLE_MAP_FORMAT};
-use super::{ObjectSpaceConfig, PagingChain, TrimapSearch, trimap_lanes};
+use super::{ObjectSpaceConfig, PagingChain, TrimapSearch, trimap_lanes, trimap_store};
 use crate::gpu::GpuContext;
 use crate::render::frame::{TimedComputePass, stage};
 use crate::render::passes::{Binding, bind_group, bind_group_layout, compute_pipeline_with};
@@ -125,8 +133,60 @@ gpu_struct! {
         pub cell_base: u32,
         pub side: u32,
         pub key_base: u32,
-        pub pad: u32,
+        /// Where the mesh's stored maps start ([`StoredMaps`]), and the
+        /// widest level stored (0: none).
+        pub store_base: u32,
+        pub store_size: u32,
+        pub pad: [u32; 3],
     }
+}
+
+/// The stored maps: per mesh, every level size up to the store's (or the
+/// mesh's largest instance's, if smaller), built once by `build_stored`.
+struct StoredMaps {
+    pipeline: wgpu::ComputePipeline,
+    /// Blocks of 8x8 texels to fill (a workgroup each).
+    blocks: u32,
+    built: bool,
+}
+
+/// Per mesh, where its stored maps start and the widest level stored (0:
+/// none), for levels up to `store` texels wide (0: none); and the blocks
+/// of 8x8 texels they take, (an object of the mesh, level size, first texel
+/// x | y << 16, 0).
+fn store_layout(scene: &Scene, layout: &AtlasLayout, store: u32) -> (Vec<(u32, u32)>, Vec<[u32; 4]>, u64) {
+    let mut largest = vec![(0u32, 0usize); scene.meshes.len()];
+    for (o, (object, atlas)) in scene.objects.iter().zip(&layout.objects).enumerate() {
+        if let Some(a) = atlas
+            && a.size > largest[object.mesh].0
+        {
+            largest[object.mesh] = (a.size, o);
+        }
+    }
+    let (mut next, mut blocks) = (0u64, Vec::new());
+    let bases = largest
+        .iter()
+        .map(|&(size, object)| {
+            let top = store.min(size);
+            if top == 0 {
+                return (0, 0);
+            }
+            let base = next;
+            // Every power of two up to `top`: (4 top^2 - 1) / 3 texels.
+            next += (4 * u64::from(top) * u64::from(top) - 1) / 3;
+            let mut s = 1;
+            while s <= top {
+                for y in (0..s).step_by(8) {
+                    for x in (0..s).step_by(8) {
+                        blocks.push([object as u32, s, x | (y << 16), 0]);
+                    }
+                }
+                s *= 2;
+            }
+            (base as u32, top)
+        })
+        .collect();
+    (bases, blocks, next)
 }
 
 /// With shared maps: the passes forgetting the keys of the pages backed
@@ -142,14 +202,19 @@ pub struct TrimapPass {
     layout: wgpu::BindGroupLayout,
     /// The chart grids, their cells' first triangles, the triangles, the
     /// shared maps' table (physical page + 1 per slot) and keys (per
-    /// physical page: the key of the map it holds + 1, 0 for none known).
-    buffers: [wgpu::Buffer; 5],
+    /// physical page: the key of the map it holds + 1, 0 for none known),
+    /// the stored maps after their blocks.
+    buffers: [wgpu::Buffer; 6],
     sharing: Option<Sharing>,
     group: wgpu::BindGroup,
     /// Bytes of the chart grids.
     pub grid_bytes: u64,
     /// Bytes of the shared maps' table and keys (0 without sharing).
     pub share_bytes: u64,
+    /// The stored maps, until built and after ([`ObjectSpaceConfig::trimap_store`]).
+    stored: Option<StoredMaps>,
+    /// Bytes of the stored maps (0 without).
+    pub store_bytes: u64,
     /// Invocations weighing each texel's triangles.
     pub lanes: u32,
 }
@@ -175,10 +240,14 @@ impl TrimapPass {
         let (mut cell_start, mut triangles, mut mesh_grids) = (Vec::new(), Vec::new(), Vec::new());
         let key_bases =
             if config.trimap_share { mesh_key_bases(scene, layout) } else { vec![NO_SHARE; scene.meshes.len()] };
-        for (mesh, &key_base) in scene.meshes.iter().zip(&key_bases) {
+        let (store_bases, store_blocks, store_texels) = store_layout(scene, layout, trimap_store(config, &ctx.info));
+        // The maps follow the blocks' count and the blocks in their buffer.
+        let maps_start = 1 + 4 * store_blocks.len() as u32;
+        for ((mesh, &key_base), &(store_base, store_size)) in scene.meshes.iter().zip(&key_bases).zip(&store_bases) {
             let g = ChartGrid::scaled(mesh.uv1.as_deref().unwrap_or(&mesh.uv0), &mesh.indices, config.trimap_grid);
             let cell_base = cell_start.len() as u32;
-            mesh_grids.push(GpuChartGrid { cell_base, side: g.side, key_base, pad: 0 });
+            let store_base = store_base + maps_start;
+            mesh_grids.push(GpuChartGrid { cell_base, side: g.side, key_base, store_base, store_size, pad: [0; 3] });
             let offset = triangles.len() as u32;
             cell_start.extend(g.cell_start.iter().map(|s| s + offset));
             triangles.extend(g.triangles);
@@ -202,12 +271,18 @@ impl TrimapPass {
             if share { ((res.pool.pages * 2).next_power_of_two().max(64), res.pool.pages) } else { (4, 4) };
         let table = buffer("shared triangle maps", &vec![0; table_slots as usize * 4], none);
         let keys = buffer("triangle map keys", &vec![0; key_count as usize * 4], wgpu::BufferUsages::COPY_DST);
+        // The blocks' count and the blocks, then the maps (one binding).
+        let mut store_words = vec![store_blocks.len() as u32];
+        store_words.extend(store_blocks.iter().flatten());
+        store_words.resize(store_words.len() + store_texels as usize, 0);
+        let store = buffer("stored triangle maps", bytemuck::cast_slice(&store_words), none);
+        let store_bytes = store_words.len() as u64 * 4;
         let read = Binding::Storage { read_only: true };
         let write = Binding::Storage { read_only: false };
         let dimension = wgpu::TextureViewDimension::D2Array;
         // Read and written: the copy pass reads the maps it copies.
         let map = Binding::StorageTextureReadWrite { format: TRIANGLE_MAP_FORMAT, dimension };
-        let layout = bind_group_layout(device, "triangle map build", &[map, read, read, read, write, write]);
+        let layout = bind_group_layout(device, "triangle map build", &[map, read, read, read, write, write, write]);
         let groups = [&scene_gpu.layout, &res.layout, &layout];
         let defs = defs(lanes, config.paging_chain, config.trimap_search, share);
         let pipeline = compute_pipeline_with(device, shaders, SHADER, &defs, "build", &groups)?;
@@ -221,11 +296,17 @@ impl TrimapPass {
         } else {
             None
         };
-        let grid_bytes = (grids.len() * 16 + cell_start.len() * 4 + triangles.len() * 4) as u64;
+        let grid_bytes = (grids.len() * size_of::<GpuChartGrid>() + cell_start.len() * 4 + triangles.len() * 4) as u64;
         let share_bytes = if share { (table_slots as u64 + key_count as u64) * 4 } else { 0 };
-        let buffers = [grid_buffer, start_buffer, triangle_buffer, table, keys];
+        let stored = if store_blocks.is_empty() {
+            None
+        } else {
+            let pipeline = compute_pipeline_with(device, shaders, SHADER, &defs, "build_stored", &groups)?;
+            Some(StoredMaps { pipeline, blocks: store_blocks.len() as u32, built: false })
+        };
+        let buffers = [grid_buffer, start_buffer, triangle_buffer, table, keys, store];
         let group = Self::group(device, &layout, &buffers, res);
-        Ok(Self { pipeline, layout, buffers, sharing, group, grid_bytes, share_bytes, lanes })
+        Ok(Self { pipeline, layout, buffers, sharing, group, grid_bytes, share_bytes, stored, store_bytes, lanes })
     }
 
     /// Binds the triangle maps again after the atlas was resized.
@@ -244,7 +325,7 @@ impl TrimapPass {
     fn group(
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
-        buffers: &[wgpu::Buffer; 5],
+        buffers: &[wgpu::Buffer; 6],
         res: &Resources,
     ) -> wgpu::BindGroup {
         let mut resources = vec![wgpu::BindingResource::TextureView(&res.physical.triangle_map_array)];
@@ -259,7 +340,17 @@ impl TrimapPass {
 /// With shared maps, first forgets the keys of those pages, and after the
 /// build copies the maps of the pages that found a source (reads and
 /// writes the table and the keys; writes the backed pages' sources).
-pub fn build_triangle_maps(cp: &mut TimedComputePass, pass: &TrimapPass, res: &Resources, scene: &wgpu::BindGroup) {
+pub fn build_triangle_maps(cp: &mut TimedComputePass, pass: &mut TrimapPass, res: &Resources, scene: &wgpu::BindGroup) {
+    if let Some(stored) = pass.stored.as_mut().filter(|s| !s.built) {
+        // The stored maps, once, before the first page copies from them.
+        let mut cp = stage(cp, "stored triangle maps");
+        cp.set_pipeline(&stored.pipeline);
+        res.bind(&mut cp, scene);
+        cp.set_bind_group(2, &pass.group, &[]);
+        let x = stored.blocks.clamp(1, 65535);
+        cp.dispatch_workgroups(x, stored.blocks.div_ceil(x), 1);
+        stored.built = true;
+    }
     let mut record = |name, pipeline| {
         let mut cp = stage(cp, name);
         cp.set_pipeline(pipeline);

@@ -8,7 +8,10 @@
 // (one ring of dilation, so that bilinear taps just outside a chart find a
 // triangle to extrapolate); else 0. `cpu.rs` has the same rule in Rust.
 // With `TRIMAP_SHARE` a page copies the map of a page holding the same
-// (mesh, level, page) where the table of keys finds one (`mod.rs`).
+// (mesh, level, page) where the table of keys finds one (`mod.rs`). A page
+// of a level no wider than its mesh's stored maps copies its map from them
+// (`stored_maps`, built once by `build_stored` with the same search): those
+// middle levels hold the slowest pages, and the pass lasts as its slowest.
 #import shadespace::contract::{COUNT_PAGES_BACKED, COUNT_TRIMAP_PAGES, COUNT_TRIMAP_WEIGHED, COUNT_TRIMAP_SHARED}
 #import shadespace::scene_bindings::{vertices, objects, triangle_vertices}
 #import shadespace::scene::Object
@@ -25,7 +28,13 @@ struct ChartGrid {
     side: u32,
     // The object's mesh's first map number (NO_SHARE: its pages share none).
     key_base: u32,
-    pad: u32,
+    // Where its mesh's stored maps start in `stored_maps`, and the widest
+    // level stored (0: none): every level up to it, smallest first.
+    store_base: u32,
+    store_size: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 // Read and written: `copy_shared` reads the maps it copies.
@@ -40,6 +49,12 @@ struct ChartGrid {
 @group(2) @binding(4) var<storage, read_write> share_table: array<atomic<u32>>;
 // Per physical page: the key of the map it holds (0: none known).
 @group(2) @binding(5) var<storage, read_write> map_keys: array<atomic<u32>>;
+// The stored maps, after the blocks of 8x8 texels `build_stored` fills
+// (one buffer: a stage holds at most 32): their count, then per block an
+// object of the mesh, level size, x | y << 16 of its first texel, 0; then
+// per mesh each level size up to its `store_size`, row by row (triangle +
+// 1, 0 for none).
+@group(2) @binding(6) var<storage, read_write> stored_maps: array<u32>;
 
 const NO_SHARE: u32 = 0xffffffffu;
 // Slots a key's search looks at from its home slot: past them a page builds.
@@ -361,6 +376,59 @@ fn found(n: Nearest) -> u32 {
     return select(n.near_id, n.touching_id, n.touching_id != 0u);
 }
 
+// Where the stored map of a level `size` texels wide starts in
+// `stored_maps` (the sizes below it before it), or NO_STORE.
+fn stored_level(g: ChartGrid, size: u32) -> u32 {
+    if size > g.store_size {
+        return NO_STORE;
+    }
+    return g.store_base + (size * size - 1u) / 3u;
+}
+
+const NO_STORE: u32 = 0xffffffffu;
+
+// The stored level of backed page `b`'s map (NO_STORE: built), the same
+// in every invocation.
+var<workgroup> page_stored: u32;
+fn page_store(b: vec4u, li: u32) -> u32 {
+    if li == 0u {
+        let object = b.y >> 8u;
+        page_stored = stored_level(grids[object], entry_level(object, b.y & 0xffu).size);
+    }
+    return workgroupUniformLoad(&page_stored);
+}
+
+// Texel `texel` of backed page `b`'s map from the stored level at `stored`
+// (a level `size` texels wide).
+fn copy_stored(b: vec4u, stored: u32, size: u32, texel: vec2u) {
+    var id = 0u;
+    if all(texel < vec2u(size)) {
+        id = stored_maps[stored + texel.y * size + texel.x];
+    }
+    let at = atlas_texel(b.z, texel);
+    textureStore(map, at.xy, at.layer, vec4u(id, 0u, 0u, 0u));
+}
+
+// Block `index` of the stored maps: its object, level size, first texel and
+// where its level starts (NO_STORE past the last block).
+struct StoreBlock {
+    object: u32,
+    size: u32,
+    origin: vec2u,
+    stored: u32,
+}
+
+fn store_block(index: u32) -> StoreBlock {
+    if index >= stored_maps[0] {
+        return StoreBlock(0u, 0u, vec2u(0u), NO_STORE);
+    }
+    let at = 1u + 4u * index;
+    let object = stored_maps[at];
+    let size = stored_maps[at + 1u];
+    let origin = stored_maps[at + 2u];
+    return StoreBlock(object, size, vec2u(origin & 0xffffu, origin >> 16u), stored_level(grids[object], size));
+}
+
 // Entries weighed by the workgroup's invocations, counted once per page.
 var<workgroup> page_weighed: atomic<u32>;
 
@@ -428,6 +496,15 @@ fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     let g = grids[object];
     let origin = page_origin(l, b.x);
     let blocks = params.page_size / 8u;
+    let stored = page_store(b, li);
+    if stored != NO_STORE {
+        for (var by = 0u; by < blocks; by++) {
+            for (var bx = 0u; bx < blocks; bx++) {
+                copy_stored(b, stored, l.size, origin + vec2u(bx, by) * 8u + lid.xy);
+            }
+        }
+        return;
+    }
     var search = new_search(0u);
     for (var by = 0u; by < blocks; by++) {
         for (var bx = 0u; bx < blocks; bx++) {
@@ -441,6 +518,20 @@ fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
         }
     }
     count_weighed(search.weighed, li);
+}
+
+// A block of 8x8 texels of the stored maps, once.
+@compute @workgroup_size(8, 8)
+fn build_stored(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+                @builtin(local_invocation_id) lid: vec3u) {
+    let k = store_block(wg.y * groups.x + wg.x);
+    let texel = k.origin + lid.xy;
+    if k.stored == NO_STORE || any(texel >= vec2u(k.size)) {
+        return;
+    }
+    var search = new_search(0u);
+    let id = covering_triangle(&search, objects[k.object], grids[k.object], k.size, texel);
+    stored_maps[k.stored + texel.y * k.size + texel.x] = id;
 }
 #else
 // Several invocations per texel (`LANES`, adjacent in the workgroup): each
@@ -478,6 +569,43 @@ fn nearer(a: Nearest, b: Nearest) -> Nearest {
     return n;
 }
 
+// The triangle + 1 of texel `texel` of a level `size` texels wide (0 for
+// none), found by the texel's lanes together (`lane` of them; every
+// invocation of the workgroup calls this, for its texel). Adds the entries
+// this lane weighed to `weighed`.
+fn lanes_texel(o: Object, g: ChartGrid, size: u32, texel: vec2u, lane: u32, li: u32, weighed: ptr<function, u32>) -> u32 {
+    let s = f32(size);
+    let width = s / f32(g.side);
+    let first = li - lane;
+    let inside = all(texel < vec2u(size));
+    let lo = vec2f(texel);
+    let centre = cell_of(g, s, lo + 0.5);
+    let c0 = cell_of(g, s, lo - 1.0);
+    let c1 = cell_of(g, s, lo + 2.0);
+    var search = new_search(lane);
+    if inside {
+        weigh_ring(&search, o, g, s, lo, centre, c0, c1, 0u, LANES);
+    }
+    centre_part[li] = search.n;
+    workgroupBarrier();
+    var merged = search.n;
+    for (var j = 0u; j < LANES; j++) {
+        merged = nearer(merged, centre_part[first + j]);
+    }
+    // The texel's lanes merged the same pairs: they go on together.
+    if inside && !search_done(merged, 0u, width) {
+        search.n = merged;
+        weigh_rest(&search, o, g, s, lo, centre, c0, c1, LANES);
+    }
+    *weighed += search.weighed;
+    ring_part[li] = search.n;
+    workgroupBarrier();
+    for (var j = 0u; j < LANES; j++) {
+        merged = nearer(merged, ring_part[first + j]);
+    }
+    return select(0u, found(merged), inside);
+}
+
 // The centre's cell first, its entries shared by the lanes, which merge
 // their least pairs: most texels stop there (`search_done`). The others
 // go on (`weigh_rest`), each lane its share of the entries from the merged
@@ -498,47 +626,53 @@ fn build(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3
     let o = objects[object];
     let g = grids[object];
     let origin = page_origin(l, b.x);
-    let s = f32(l.size);
-    let width = s / f32(g.side);
     let lane = lid.x;
-    let first = li - lane;
     let blocks = params.page_size / 8u;
+    let stored = page_store(b, li);
+    if stored != NO_STORE {
+        for (var by = 0u; by < blocks; by++) {
+            for (var bx = 0u; bx < blocks; bx++) {
+                if lane == 0u {
+                    copy_stored(b, stored, l.size, origin + vec2u(bx, by) * 8u + lid.yz);
+                }
+            }
+        }
+        return;
+    }
     var weighed = 0u;
     for (var by = 0u; by < blocks; by++) {
         for (var bx = 0u; bx < blocks; bx++) {
             let texel = origin + vec2u(bx, by) * 8u + lid.yz;
-            let inside = all(texel < vec2u(l.size));
-            let lo = vec2f(texel);
-            let centre = cell_of(g, s, lo + 0.5);
-            let c0 = cell_of(g, s, lo - 1.0);
-            let c1 = cell_of(g, s, lo + 2.0);
-            var search = new_search(lane);
-            if inside {
-                weigh_ring(&search, o, g, s, lo, centre, c0, c1, 0u, LANES);
-            }
-            centre_part[li] = search.n;
-            workgroupBarrier();
-            var merged = search.n;
-            for (var j = 0u; j < LANES; j++) {
-                merged = nearer(merged, centre_part[first + j]);
-            }
-            // The texel's lanes merged the same pairs: they go on together.
-            if inside && !search_done(merged, 0u, width) {
-                search.n = merged;
-                weigh_rest(&search, o, g, s, lo, centre, c0, c1, LANES);
-            }
-            weighed += search.weighed;
-            ring_part[li] = search.n;
-            workgroupBarrier();
-            for (var j = 0u; j < LANES; j++) {
-                merged = nearer(merged, ring_part[first + j]);
-            }
+            let id = lanes_texel(o, g, l.size, texel, lane, li, &weighed);
             if lane == 0u {
                 let at = atlas_texel(b.z, texel);
-                textureStore(map, at.xy, at.layer, vec4u(select(0u, found(merged), inside), 0u, 0u, 0u));
+                textureStore(map, at.xy, at.layer, vec4u(id, 0u, 0u, 0u));
             }
         }
     }
     count_weighed(weighed, li);
+}
+
+var<workgroup> block: StoreBlock;
+
+// A block of 8x8 texels of the stored maps, once.
+@compute @workgroup_size(LANES, 8, 8)
+fn build_stored(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+                @builtin(local_invocation_id) lid: vec3u, @builtin(local_invocation_index) li: u32) {
+    // Read by one invocation for all: the buffer is written here too, so
+    // its loads are not uniform to the compiler.
+    if li == 0u {
+        block = store_block(wg.y * groups.x + wg.x);
+    }
+    let k = workgroupUniformLoad(&block);
+    if k.stored == NO_STORE {
+        return;
+    }
+    let texel = k.origin + lid.yz;
+    var weighed = 0u;
+    let id = lanes_texel(objects[k.object], grids[k.object], k.size, texel, lid.x, li, &weighed);
+    if lid.x == 0u && all(texel < vec2u(k.size)) {
+        stored_maps[k.stored + texel.y * k.size + texel.x] = id;
+    }
 }
 #endif
