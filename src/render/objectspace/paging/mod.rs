@@ -81,9 +81,9 @@ impl PagingPass {
                 device,
                 shaders,
                 SHADER,
-                atomic,
+                offsets_defs,
                 "list_candidates_if_requested",
-                &plain,
+                &with_dispatch,
             )?,
             allocate: compute_pipeline_with(device, shaders, SHADER, atomic, "allocate", &plain)?,
             claim_blocks: compute_pipeline_with(device, shaders, SHADER, atomic, "claim_blocks", &plain)?,
@@ -165,8 +165,11 @@ pub(super) fn rank_candidates(cp: &mut wgpu::ComputePass, pass: &PagingPass, res
     cp.set_bind_group(2, &res.dispatch_group, &[]);
     cp.set_pipeline(age);
     cp.dispatch_workgroups(age_groups, 1, 1);
-    cp.set_pipeline(&pass.page_offsets);
-    cp.dispatch_workgroups(1, 1, 1);
+    // Paging's listing finds the offsets itself (and writes the dispatches).
+    if ranking == Ranking::Always {
+        cp.set_pipeline(&pass.page_offsets);
+        cp.dispatch_workgroups(1, 1, 1);
+    }
     cp.set_pipeline(list);
     cp.dispatch_workgroups(pages, 1, 1);
 }

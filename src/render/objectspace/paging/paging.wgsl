@@ -2,8 +2,8 @@
 // on the GPU, least recently used first. After marking:
 // `age_pages` sorts the physical pages no visible tile used this frame into
 // age buckets (free pages first, then the oldest), `page_offsets` turns the
-// bucket sizes into offsets, `list_candidates` lists the pages in that
-// order, and `allocate` gives the i-th request the i-th candidate, taking it
+// bucket sizes into offsets (paging's listing finds them itself),
+// `list_candidates` lists the pages in that order, and `allocate` gives the i-th request the i-th candidate, taking it
 // from the virtual page it backed before. The page table has two levels (a
 // directory word per block of pages, a chunk of page words per block with
 // backed pages): ranking also frees the chunks left with no page (by the
@@ -13,7 +13,7 @@
 // their chunks and lists them as backed. Requests beyond the candidates (or
 // the free chunks) fail this frame (their pixels are shaded forward in the
 // gather) and the budget raises the mip bias.
-#import shadespace::contract::{COUNT_QUEUED, COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
+#import shadespace::contract::{TILE_COUNTER_SLOTS, COUNT_QUEUED, COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
     COUNT_FREE_CHUNKS, COUNT_CHUNKS_TAKEN, COUNT_TABLE_CHUNKS, AGE_BUCKET_BASE, AGE_BUCKETS}
 #import shadespace::objectspace::{params, atlas_entries, counters, page_table, page_used, page_owner, request_list,
     candidates, backed, page_directory, table_chunks, free_chunks, forget_request, table_word, age_bucket, BLOCK_PAGES}
@@ -96,10 +96,38 @@ fn age_pages_and_release_chunks(@builtin(global_invocation_id) id: vec3u, @built
     release_chunk(id.x, lid);
 }
 
+// Paging's listing leaves the ranking's counts per bucket as they are:
+// each workgroup adds up the buckets before its pages' own, where
+// `page_offsets` turned the counts into offsets in a dispatch of its own
+// (a launch and a barrier), and places its pages past those the workgroups
+// before it placed in the bucket, counted in the bucket's first stripe copy
+// (no count uses it; the CPU's fold adds it to the bucket's count, which
+// nothing reads). The first invocation writes what `page_offsets` writes.
 @compute @workgroup_size(64)
 fn list_candidates_if_requested(@builtin(global_invocation_id) id: vec3u,
                                 @builtin(local_invocation_index) lid: u32) {
-    list(id.x, lid, requests() > 0u);
+    let at = bucket_slot(id.x, lid, requests() > 0u);
+    if lid < AGE_BUCKETS {
+        let n = atomicLoad(&bucket_pages[lid]);
+        if n > 0u {
+            var offset = 0u;
+            for (var b = 0u; b < lid; b++) {
+                offset += atomicLoad(&counters[AGE_BUCKET_BASE + b]);
+            }
+            bucket_base[lid] = offset + atomicAdd(&counters[TILE_COUNTER_SLOTS + AGE_BUCKET_BASE + lid], n);
+        }
+    }
+    workgroupBarrier();
+    if at.x < AGE_BUCKETS {
+        candidates[bucket_base[at.x] + at.y] = id.x;
+    }
+    if id.x == 0u {
+        var total = 0u;
+        for (var b = 0u; b < AGE_BUCKETS; b++) {
+            total += atomicLoad(&counters[AGE_BUCKET_BASE + b]);
+        }
+        write_paging_args(total);
+    }
 }
 
 // This frame's listed requests.
@@ -115,7 +143,13 @@ fn page_offsets() {
         atomicStore(&counters[AGE_BUCKET_BASE + b], offset);
         offset += n;
     }
-    atomicStore(&counters[COUNT_CANDIDATES], offset);
+    write_paging_args(offset);
+}
+
+// The candidates' count (`candidates` pages), the allocation's dispatch
+// and, with the fused chain, the bounds below.
+fn write_paging_args(candidates: u32) {
+    atomicStore(&counters[COUNT_CANDIDATES], candidates);
     write_dispatch(ALLOCATE_ARGS, (requests() + 63u) / 64u);
 #ifdef FUSED_PAGING
     // The fused chain records no pass after paging to count what it did:
@@ -124,7 +158,7 @@ fn page_offsets() {
     // return), and so does the shade pass's: the tiles marking listed and
     // every tile of those pages (the triangle-map pass lists their
     // requested tiles; the workgroups past the list's end return).
-    let backed = min(requests(), offset);
+    let backed = min(requests(), candidates);
     write_dispatch(BACKED_ARGS, backed);
     let per_row = params.page_size / params.tile_size;
     write_dispatch(SHADE_ARGS, min(atomicLoad(&counters[COUNT_QUEUED]) + backed * per_row * per_row, params.max_queue));
