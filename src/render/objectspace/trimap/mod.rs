@@ -137,7 +137,9 @@ gpu_struct! {
         /// widest level stored (0: none).
         pub store_base: u32,
         pub store_size: u32,
-        pub pad: [u32; 3],
+        pub pad0: u32,
+        pub pad1: u32,
+        pub pad2: u32,
     }
 }
 
@@ -247,7 +249,16 @@ impl TrimapPass {
             let g = ChartGrid::scaled(mesh.uv1.as_deref().unwrap_or(&mesh.uv0), &mesh.indices, config.trimap_grid);
             let cell_base = cell_start.len() as u32;
             let store_base = store_base + maps_start;
-            mesh_grids.push(GpuChartGrid { cell_base, side: g.side, key_base, store_base, store_size, pad: [0; 3] });
+            mesh_grids.push(GpuChartGrid {
+                cell_base,
+                side: g.side,
+                key_base,
+                store_base,
+                store_size,
+                pad0: 0,
+                pad1: 0,
+                pad2: 0,
+            });
             let offset = triangles.len() as u32;
             cell_start.extend(g.cell_start.iter().map(|s| s + offset));
             triangles.extend(g.triangles);
