@@ -16,7 +16,7 @@
 #import shadespace::contract::{TILE_COUNTER_SLOTS, COUNT_QUEUED, COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
     COUNT_FREE_CHUNKS, COUNT_CHUNKS_TAKEN, COUNT_TABLE_CHUNKS, AGE_BUCKET_BASE, AGE_BUCKETS}
 #import shadespace::objectspace::{params, atlas_entries, counters, page_table, page_used, page_owner, request_list,
-    candidates, backed, page_directory, table_chunks, free_chunks, forget_request, table_word, age_bucket, BLOCK_PAGES}
+    candidates, backed, page_directory, table_chunks, free_chunks, forget_request, unbind_page, age_bucket, BLOCK_PAGES}
 #import shadespace::objectspace_dispatch::{write_dispatch, ALLOCATE_ARGS, BACKED_ARGS, SHADE_ARGS}
 
 fn evictable(page: u32) -> bool {
@@ -203,15 +203,9 @@ fn allocate(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: v
 // `unbind_page`, and the page's chunk freed and listed when this was its
 // last page (its block's directory word cleared).
 fn unbind_and_release(physical: u32) {
-    let owner = page_owner[physical];
-    if owner == 0u {
-        return;
-    }
-    let word = table_word(owner - 1u);
-    page_table[word] = 0u;
-    page_owner[physical] = 0u;
-    let chunk = word / BLOCK_PAGES;
-    if atomicSub(&table_chunks[chunk].pages, 1u) == 1u {
+    let emptied = unbind_page(physical);
+    if emptied != 0u {
+        let chunk = emptied - 1u;
         atomicStore(&page_directory[table_chunks[chunk].block - 1u], 0u);
         table_chunks[chunk].block = 0u;
         free_chunks[atomicAdd(&counters[COUNT_FREE_CHUNKS], 1u)] = chunk;
