@@ -458,12 +458,12 @@ pub enum Marking {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum PagingChain {
-    /// Ten dispatches (stages of object space's one pass): paging (age and
-    /// chunk release, offsets, list, allocate, claim blocks, bind pages,
-    /// backed args), triangle maps, mark backed, and the queue stage that
-    /// writes the shade pass's dispatch from the shade list's length.
+    /// Nine dispatches (stages of object space's one pass): paging (age and
+    /// chunk release, list, allocate, claim blocks, bind pages, backed
+    /// args), triangle maps, mark backed, and the queue stage that writes
+    /// the shade pass's dispatch from the shade list's length.
     Split,
-    /// Seven dispatches: the offsets write the backed pages' and the shade
+    /// Six dispatches: the listing writes the backed pages' and the shade
     /// pass's dispatch arguments as bounds (known once marking is done;
     /// extra workgroups return), and the triangle-map workgroup of a page also marks its
     /// requested tiles: no backed args, mark backed or queue dispatch, each

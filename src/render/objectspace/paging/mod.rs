@@ -21,8 +21,9 @@ use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 pub const SHADER: ShaderSource = ShaderSource::new("paging.wgsl", include_str!("paging.wgsl"));
 /// Frees the pages of slots given back (`slots`).
 pub const RELEASE_SHADER: ShaderSource = ShaderSource::new("release.wgsl", include_str!("release.wgsl"));
-/// Defined for [`PagingChain::Fused`]: `page_offsets` also writes the backed
-/// pages' and the shade pass's dispatch arguments (bounds).
+/// Defined for [`PagingChain::Fused`]: the paging arguments (`page_offsets`'s,
+/// the listing's) include the backed pages' and the shade pass's dispatch
+/// (bounds).
 pub const FUSED: &str = "FUSED_PAGING";
 /// Defined for every paging pipeline: they write the page directory, with
 /// atomics; the other passes read it with plain loads (`objectspace.wgsl`).
