@@ -397,7 +397,7 @@ pub struct ObjectSpaceArgs {
     /// the slowest pages, and the pass lasts as long as its slowest. The
     /// maps are the same. Default: 256 on a GPU (87,000 texels a mesh),
     /// 0 on a CPU adapter
-    #[arg(long)]
+    #[arg(long, value_parser = parse::trimap_store)]
     pub os_trimap_store: Option<u32>,
     /// How the triangle-map pass searches a texel's cells of the chart grid
     /// when its centre's cell does not settle it: `rings` (default: ring by

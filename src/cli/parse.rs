@@ -233,6 +233,15 @@ pub fn trimap_lanes(s: &str) -> Result<u32, String> {
     }
 }
 
+/// `--os-trimap-store`: 0 or a power of two up to the widest stored level.
+pub fn trimap_store(s: &str) -> Result<u32, String> {
+    use shadespace::render::objectspace::MAX_TRIMAP_STORE;
+    match s.parse::<u32>() {
+        Ok(n) if n == 0 || (n.is_power_of_two() && n <= MAX_TRIMAP_STORE) => Ok(n),
+        _ => Err(format!("'{s}' is not 0 or a power of two up to {MAX_TRIMAP_STORE} (texels)")),
+    }
+}
+
 /// `--msaa`: samples per pixel, 1, 2, 4 or 8 (the counts with standard
 /// sample positions).
 pub fn msaa(s: &str) -> Result<u32, String> {

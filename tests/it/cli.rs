@@ -109,6 +109,9 @@ fn bad_options_say_what_is_wrong() {
     let (code, err) = run(&["render", "--pipeline", "objectspace", "--os-trimap-lanes", "3"]);
     assert_eq!(code, 2);
     assert!(err.contains("--os-trimap-lanes") && err.contains("1, 2, 4 or 8"), "{err}");
+    let (code, err) = run(&["render", "--pipeline", "objectspace", "--os-trimap-store", "3"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--os-trimap-store") && err.contains("power of two up to 2048"), "{err}");
     let (code, err) = run(&["render", "--pipeline", "objectspace", "--os-gather", "record", "--msaa", "4"]);
     assert_eq!(code, 2);
     assert!(err.contains("--os-gather record") && err.contains("--msaa 4"), "{err}");
