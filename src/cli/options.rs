@@ -395,8 +395,8 @@ pub struct ObjectSpaceArgs {
     /// first frame, and copied into pages backed later instead of searched
     /// (0 or a power of two up to 2048; 0: none): the middle levels hold
     /// the slowest pages, and the pass lasts as long as its slowest. The
-    /// maps are the same. Default: 256 on a GPU (87,000 texels a mesh),
-    /// 0 on a CPU adapter
+    /// maps are the same. Default: 512 on a GPU (350,000 texels, 1.4 MB, a
+    /// mesh), 0 on a CPU adapter
     #[arg(long, value_parser = parse::trimap_store)]
     pub os_trimap_store: Option<u32>,
     /// How the triangle-map pass searches a texel's cells of the chart grid

@@ -425,7 +425,9 @@ fn a_stereo_pair_shares_one_atlas() {
 /// saw, so pages are evicted every frame and their blocks' chunks freed and
 /// given to other blocks. After every frame, each backed page is found
 /// through its block's chunk, each table word names the page that owns it,
-/// and no chunk outlives its last page.
+/// and no chunk outlives its last page by more than the frame that took it
+/// (the allocation leaves such a chunk to the next frame's ranking: a chunk
+/// with no page held pages, for the same block, after the frame before).
 #[test]
 fn the_page_table_follows_pages_evicted_along_a_path() {
     use shadespace::scene::{self, lights, path};
@@ -444,11 +446,22 @@ fn the_page_table_follows_pages_evicted_along_a_path() {
     let options = RenderOptions { width, height, pipeline: PipelineConfig::ObjectSpace(config), samples: 1 };
     let mut os = Renderer::new(&ctx, &scene, &options).unwrap();
     let (mut chunk_sets, mut backed, mut pages) = (Vec::new(), 0.0, 0);
+    let (mut previous, mut emptied): (Option<shadespace::render::objectspace::debug::PageTableState>, usize) =
+        (None, 0);
     for frame in 0..12u32 {
         os.render(&ctx, &path.camera_at(frame * 40), &lights, frame as u64).unwrap();
         let table = os.pipeline::<ObjectSpace>().unwrap().read_page_table(&ctx).unwrap();
         let problems = table.inconsistencies();
         assert!(problems.is_empty(), "frame {frame}: {problems:?}");
+        for (c, block) in table.empty_chunks() {
+            let before = previous.as_ref().map(|p| p.chunks[c]);
+            assert!(
+                before.is_some_and(|[pages, b]| pages > 0 && b == block + 1),
+                "frame {frame}: chunk {c} of block {block} holds no page and was not freed (after the frame before: {before:?})"
+            );
+            emptied += 1;
+        }
+        previous = Some(table.clone());
         chunk_sets.push(table.chunks.iter().map(|c| c[1]).collect::<Vec<_>>());
         pages = table.owners.len();
         let c = os.collect_counters(&ctx, true);
@@ -459,6 +472,8 @@ fn the_page_table_follows_pages_evicted_along_a_path() {
     }
     ctx.check_errors().unwrap();
     assert!(backed > pages as f64, "{backed} pages backed after frame 0: the atlas ({pages}) was not cycled");
+    eprintln!("{emptied} chunks left with no page by a frame's allocation, freed by the next");
+    assert!(emptied > 0, "no frame's allocation left a chunk with no page: the case above was not met");
     // Chunks changed hands: some chunk served different blocks.
     let reassigned = (0..chunk_sets[0].len()).any(|c| {
         chunk_sets.iter().filter_map(|s| (s[c] != 0).then_some(s[c])).collect::<std::collections::BTreeSet<_>>().len()

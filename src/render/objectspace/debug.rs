@@ -153,8 +153,10 @@ impl PageTableState {
     /// Everything that disagrees between the levels of the table and the
     /// page owners (empty when consistent): every backed page is found
     /// through its block's chunk, every table word names a page that owns
-    /// it back, every chunk counts its words, belongs to the block that
-    /// points at it and is freed with its last page.
+    /// it back, every chunk counts its words and belongs to the block that
+    /// points at it. (A chunk the frame's allocation left with no page
+    /// keeps its block until the next frame's ranking frees it:
+    /// [`Self::empty_chunks`].)
     pub fn inconsistencies(&self) -> Vec<String> {
         let block_pages = BLOCK_PAGES as usize;
         let mut out = Vec::new();
@@ -178,7 +180,7 @@ impl PageTableState {
                 Some(b) if chunk_of(b as usize) != Some(c) => {
                     out.push(format!("chunk {c} of block {b} is not its chunk"))
                 }
-                Some(b) if backed == 0 => out.push(format!("chunk {c} of block {b} holds no page and was not freed")),
+                Some(_) if backed == 0 => {}
                 Some(b) => {
                     for (i, &w) in words.iter().enumerate().filter(|(_, w)| **w != 0) {
                         let page = b * BLOCK_PAGES + i as u32;
@@ -195,9 +197,18 @@ impl PageTableState {
         out
     }
 
-    /// Chunks holding at least one page.
+    /// Chunks given to a block (holding pages, or left with none by the
+    /// frame's allocation).
     pub fn chunks_in_use(&self) -> usize {
         self.chunks.iter().filter(|c| c[1] != 0).count()
+    }
+
+    /// The chunks given to a block that hold no page, as (chunk, block).
+    pub fn empty_chunks(&self) -> Vec<(usize, u32)> {
+        (self.chunks.iter().enumerate())
+            .filter(|(_, [pages, block])| *block != 0 && *pages == 0)
+            .map(|(c, [_, block])| (c, block - 1))
+            .collect()
     }
 }
 

@@ -593,11 +593,12 @@ pub fn trimap_lanes(config: &ObjectSpaceConfig, adapter: &wgpu::AdapterInfo) -> 
     })
 }
 /// [`ObjectSpaceConfig::trimap_store`]'s default on a GPU: each mesh's
-/// triangle maps of the levels up to 256 texels wide are stored (87,000
-/// texels a mesh); on Sponza's path at 1920x1080 on the H200 the pass took
-/// 0.031 ms without searching those levels, 0.049 with (BENCHMARKS.md,
-/// "Where the remaining time goes").
-pub const DEFAULT_TRIMAP_STORE: u32 = 256;
+/// triangle maps of the levels up to 512 texels wide are stored (350,000
+/// texels, 1.4 MB, a mesh; 22 MB on Sponza); on Sponza's path at 1920x1080
+/// on the H200 the pass took 0.029 ms, against 0.033 storing up to 256
+/// (5.6 MB) and 0.049 searching every level (BENCHMARKS.md, "Paging in
+/// three dispatches").
+pub const DEFAULT_TRIMAP_STORE: u32 = 512;
 /// The widest level [`ObjectSpaceConfig::trimap_store`] takes (5.6 M texels
 /// a mesh).
 pub const MAX_TRIMAP_STORE: u32 = 2048;

@@ -252,20 +252,17 @@ fn table_word(page: u32) -> u32 {
     return (directory_word(page / BLOCK_PAGES) - 1u) * BLOCK_PAGES + page % BLOCK_PAGES;
 }
 
-// Takes physical page `physical` from the virtual page it backs, if any;
-// returns its page-table chunk + 1 where that was the chunk's last page,
-// else 0 (paging's ranking frees such chunks, `release_chunk`, and its
-// allocation those it empties at once).
-fn unbind_page(physical: u32) -> u32 {
+// Takes physical page `physical` from the virtual page it backs, if any (a
+// chunk left with no page is freed by paging's next ranking, `release_chunk`).
+fn unbind_page(physical: u32) {
     let owner = page_owner[physical];
     if owner == 0u {
-        return 0u;
+        return;
     }
     let word = table_word(owner - 1u);
     page_table[word] = 0u;
     page_owner[physical] = 0u;
-    let chunk = word / BLOCK_PAGES;
-    return select(0u, chunk + 1u, atomicSub(&table_chunks[chunk].pages, 1u) == 1u);
+    atomicSub(&table_chunks[word / BLOCK_PAGES].pages, 1u);
 }
 
 const NOT_BACKED: u32 = 0xffffffffu;

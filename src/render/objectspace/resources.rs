@@ -180,7 +180,8 @@ impl PhysicalPages {
             shade_list: storage(device, "shade list", tiles * 4, none),
             page_used: storage(device, "page used", pages * 4, copy),
             page_owner: storage(device, "page owner", pages * 4, copy),
-            candidates: storage(device, "page candidates", pages * 4, none),
+            // Paging lists each age bucket's pages apart (`rank_pages`).
+            candidates: storage(device, "page candidates", pages * 4 * TileCounter::AGE_BUCKETS as u64, none),
             backed: storage(device, "backed pages", pages * 16, none),
             tile_views: storage(device, "tile views", tiles * 4, copy),
         }

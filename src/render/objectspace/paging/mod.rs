@@ -21,8 +21,8 @@ use crate::shaders::{ShaderError, ShaderLibrary, ShaderSource};
 pub const SHADER: ShaderSource = ShaderSource::new("paging.wgsl", include_str!("paging.wgsl"));
 /// Frees the pages of slots given back (`slots`).
 pub const RELEASE_SHADER: ShaderSource = ShaderSource::new("release.wgsl", include_str!("release.wgsl"));
-/// Defined for [`PagingChain::Fused`]: the paging arguments (`page_offsets`'s,
-/// the listing's) include the backed pages' and the shade pass's dispatch
+/// Defined for [`PagingChain::Fused`]: the paging arguments (`rank_pages`
+/// writes them) include the backed pages' and the shade pass's dispatch
 /// (bounds).
 pub const FUSED: &str = "FUSED_PAGING";
 /// Defined for every paging pipeline: they write the page directory, with
@@ -36,10 +36,8 @@ pub struct PagingPass {
     age_pages: wgpu::ComputePipeline,
     page_offsets: wgpu::ComputePipeline,
     list_candidates: wgpu::ComputePipeline,
-    age_pages_and_release_chunks: wgpu::ComputePipeline,
-    list_candidates_if_requested: wgpu::ComputePipeline,
+    rank_pages: wgpu::ComputePipeline,
     allocate: wgpu::ComputePipeline,
-    claim_blocks: wgpu::ComputePipeline,
     bind_pages: wgpu::ComputePipeline,
     backed_args: wgpu::ComputePipeline,
     release_slots: wgpu::ComputePipeline,
@@ -60,7 +58,7 @@ impl PagingPass {
         let with_dispatch = [&scene.layout, &res.layout, &res.dispatch_layout];
         let release_layout = bind_group_layout(device, "released slots", &[Binding::Storage { read_only: true }]);
         let with_ranges = [&scene.layout, &res.layout, &release_layout];
-        let offsets_defs: &[&str] =
+        let rank_defs: &[&str] =
             if chain == PagingChain::Fused { &[FUSED, DIRECTORY_ATOMIC] } else { &[DIRECTORY_ATOMIC] };
         let atomic = &[DIRECTORY_ATOMIC][..];
         Ok(Self {
@@ -68,26 +66,10 @@ impl PagingPass {
             release_slots: compute_pipeline(device, shaders, RELEASE_SHADER, "release_slots", &with_ranges)?,
             release_layout,
             age_pages: compute_pipeline_with(device, shaders, SHADER, atomic, "age_pages", &plain)?,
-            page_offsets: compute_pipeline_with(device, shaders, SHADER, offsets_defs, "page_offsets", &with_dispatch)?,
+            page_offsets: compute_pipeline_with(device, shaders, SHADER, atomic, "page_offsets", &plain)?,
             list_candidates: compute_pipeline_with(device, shaders, SHADER, atomic, "list_candidates", &plain)?,
-            age_pages_and_release_chunks: compute_pipeline_with(
-                device,
-                shaders,
-                SHADER,
-                atomic,
-                "age_pages_and_release_chunks",
-                &plain,
-            )?,
-            list_candidates_if_requested: compute_pipeline_with(
-                device,
-                shaders,
-                SHADER,
-                offsets_defs,
-                "list_candidates_if_requested",
-                &with_dispatch,
-            )?,
+            rank_pages: compute_pipeline_with(device, shaders, SHADER, rank_defs, "rank_pages", &with_dispatch)?,
             allocate: compute_pipeline_with(device, shaders, SHADER, atomic, "allocate", &plain)?,
-            claim_blocks: compute_pipeline_with(device, shaders, SHADER, atomic, "claim_blocks", &plain)?,
             bind_pages: compute_pipeline_with(device, shaders, SHADER, atomic, "bind_pages", &plain)?,
             backed_args: compute_pipeline_with(device, shaders, SHADER, atomic, "backed_args", &with_dispatch)?,
         })
@@ -107,8 +89,6 @@ pub fn back_pages(cp: &mut TimedComputePass, pass: &PagingPass, res: &Resources,
     // arguments as INDIRECT may follow in the same pass.
     cp.set_pipeline(&pass.allocate);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
-    cp.set_pipeline(&pass.claim_blocks);
-    cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     cp.set_pipeline(&pass.bind_pages);
     cp.dispatch_workgroups_indirect(&res.dispatch, ALLOCATE_ARGS);
     if pass.chain == PagingChain::Split {
@@ -116,7 +96,7 @@ pub fn back_pages(cp: &mut TimedComputePass, pass: &PagingPass, res: &Resources,
         cp.set_pipeline(&pass.backed_args);
         cp.dispatch_workgroups(1, 1, 1);
     }
-    // (With the fused chain `page_offsets` wrote the backed pages' dispatch.)
+    // (With the fused chain `rank_pages` wrote a bound on the backed pages' dispatch.)
 }
 
 /// Frees the physical pages backing the virtual pages of `ranges` (first,
@@ -154,23 +134,18 @@ pub(super) enum Ranking {
 /// `res` bound as group 1. Rebinds group 2.
 pub(super) fn rank_candidates(cp: &mut wgpu::ComputePass, pass: &PagingPass, res: &Resources, ranking: Ranking) {
     let pages = res.pool.pages.div_ceil(64);
-    // Paging's ranking releases the chunks too: a workgroup per 64 of each.
-    let (age, list, age_groups) = match ranking {
-        Ranking::Always => (&pass.age_pages, &pass.list_candidates, pages),
-        Ranking::IfRequested => (
-            &pass.age_pages_and_release_chunks,
-            &pass.list_candidates_if_requested,
-            res.pool.pages.max(res.chunk_count()).div_ceil(64),
-        ),
-    };
     cp.set_bind_group(2, &res.dispatch_group, &[]);
-    cp.set_pipeline(age);
-    cp.dispatch_workgroups(age_groups, 1, 1);
-    // Paging's listing finds the offsets itself (and writes the dispatches).
-    if ranking == Ranking::Always {
-        cp.set_pipeline(&pass.page_offsets);
-        cp.dispatch_workgroups(1, 1, 1);
+    if ranking == Ranking::IfRequested {
+        // One dispatch: the pages listed per bucket, the chunks released (a
+        // workgroup per 64 of each), the allocation's dispatch written.
+        cp.set_pipeline(&pass.rank_pages);
+        cp.dispatch_workgroups(res.pool.pages.max(res.chunk_count()).div_ceil(64), 1, 1);
+        return;
     }
-    cp.set_pipeline(list);
+    cp.set_pipeline(&pass.age_pages);
+    cp.dispatch_workgroups(pages, 1, 1);
+    cp.set_pipeline(&pass.page_offsets);
+    cp.dispatch_workgroups(1, 1, 1);
+    cp.set_pipeline(&pass.list_candidates);
     cp.dispatch_workgroups(pages, 1, 1);
 }

@@ -1,19 +1,20 @@
 // Paging: backs the pages this frame's pixels requested with physical pages,
-// on the GPU, least recently used first. After marking:
-// `age_pages` sorts the physical pages no visible tile used this frame into
-// age buckets (free pages first, then the oldest), `page_offsets` turns the
-// bucket sizes into offsets (paging's listing finds them itself),
-// `list_candidates` lists the pages in that order, and `allocate` gives the i-th request the i-th candidate, taking it
-// from the virtual page it backed before. The page table has two levels (a
+// on the GPU, least recently used first. After marking, `rank_pages` lists
+// the physical pages no visible tile used this frame by age bucket (free
+// pages first, then the oldest; a list per bucket), and `allocate` gives the
+// i-th request the i-th of them (`candidate`), taking it from the virtual
+// page it backed before. (A resize ranks them into one list: `age_pages`
+// counts them per bucket, `page_offsets` turns the counts into offsets and
+// `list_candidates` places them.) The page table has two levels (a
 // directory word per block of pages, a chunk of page words per block with
 // backed pages): ranking also frees the chunks left with no page (by the
-// slots given back or a resize) and lists the free ones, the allocation
-// frees those whose last page it takes away, `claim_blocks` gives a chunk to each
-// requested block that has none, and `bind_pages` writes the pages into
-// their chunks and lists them as backed. Requests beyond the candidates (or
+// slots given back, a resize or the last frame's allocation) and lists the
+// free ones, the allocation also gives a chunk to each requested block that
+// has none, and `bind_pages` writes the pages into their chunks and lists
+// them as backed. Requests beyond the candidates (or
 // the free chunks) fail this frame (their pixels are shaded forward in the
 // gather) and the budget raises the mip bias.
-#import shadespace::contract::{TILE_COUNTER_SLOTS, COUNT_QUEUED, COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
+#import shadespace::contract::{COUNT_QUEUED, COUNT_PAGES_REQUESTED, COUNT_PAGES_BACKED, COUNT_PAGES_FAILED, COUNT_CANDIDATES,
     COUNT_FREE_CHUNKS, COUNT_CHUNKS_TAKEN, COUNT_TABLE_CHUNKS, AGE_BUCKET_BASE, AGE_BUCKETS}
 #import shadespace::objectspace::{params, atlas_entries, counters, page_table, page_used, page_owner, request_list,
     candidates, backed, page_directory, table_chunks, free_chunks, forget_request, unbind_page, age_bucket, BLOCK_PAGES}
@@ -86,48 +87,64 @@ fn list_candidates(@builtin(global_invocation_id) id: vec3u, @builtin(local_invo
     list(id.x, lid, true);
 }
 
-// Ranking for paging: nothing to rank in a frame that requested no page
-// (the allocation then dispatches no workgroup). Chunk `id.x` is released
-// here too (`release_chunk`), before the allocation: one dispatch where the
-// release was one of its own after it (a launch and a barrier).
+// Ranking for paging, in one dispatch: each workgroup appends its pages to
+// their buckets' lists (`candidates` holds AGE_BUCKETS lists side by side,
+// `bucket_stride` entries each), so no workgroup waits for the others'
+// counts (and `candidate` finds the i-th page across the lists). Nothing to
+// rank in a frame that requested no page (the allocation then dispatches
+// no workgroup). Chunk `id.x` is released here too (`release_chunk`),
+// before the allocation: one dispatch where the ranking, the listing and
+// the release were three (a launch and a barrier each).
 @compute @workgroup_size(64)
-fn age_pages_and_release_chunks(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
-    age(id.x, lid, requests() > 0u);
+fn rank_pages(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
+    let at = bucket_slot(id.x, lid, requests() > 0u);
+    add_bucket_counts(lid);
+    workgroupBarrier();
+    if at.x < AGE_BUCKETS {
+        candidates[at.x * bucket_stride() + bucket_base[at.x] + at.y] = id.x;
+    }
     release_chunk(id.x, lid);
+    if id.x == 0u {
+        write_paging_args(requests());
+    }
 }
 
-// Paging's listing leaves the ranking's counts per bucket as they are:
-// each workgroup adds up the buckets before its pages' own, where
-// `page_offsets` turned the counts into offsets in a dispatch of its own
-// (a launch and a barrier), and places its pages past those the workgroups
-// before it placed in the bucket, counted in the bucket's first stripe copy
-// (no count uses it; the CPU's fold adds it to the bucket's count, which
-// nothing reads). The first invocation writes what `page_offsets` writes.
-@compute @workgroup_size(64)
-fn list_candidates_if_requested(@builtin(global_invocation_id) id: vec3u,
-                                @builtin(local_invocation_index) lid: u32) {
-    let at = bucket_slot(id.x, lid, requests() > 0u);
-    if lid < AGE_BUCKETS {
-        let n = atomicLoad(&bucket_pages[lid]);
-        if n > 0u {
-            var offset = 0u;
-            for (var b = 0u; b < lid; b++) {
-                offset += atomicLoad(&counters[AGE_BUCKET_BASE + b]);
-            }
-            bucket_base[lid] = offset + atomicAdd(&counters[TILE_COUNTER_SLOTS + AGE_BUCKET_BASE + lid], n);
+// Entries of each bucket's list in paging's `candidates`.
+fn bucket_stride() -> u32 {
+    return arrayLength(&candidates) / AGE_BUCKETS;
+}
+
+// Where each bucket's pages end among the candidates (the counts summed),
+// read once for the workgroup by `load_bucket_ends`: a page's lookup then
+// walks workgroup memory, not nine atomic loads one after another.
+var<workgroup> bucket_ends: array<u32, AGE_BUCKETS>;
+
+// Fills `bucket_ends` (called by every invocation `lid` of the workgroup).
+fn load_bucket_ends(lid: u32) {
+    if lid == 0u {
+        var end = 0u;
+        for (var b = 0u; b < AGE_BUCKETS; b++) {
+            end += atomicLoad(&counters[AGE_BUCKET_BASE + b]);
+            bucket_ends[b] = end;
         }
     }
     workgroupBarrier();
-    if at.x < AGE_BUCKETS {
-        candidates[bucket_base[at.x] + at.y] = id.x;
+}
+
+// The pages `rank_pages` listed, over every bucket (after `load_bucket_ends`).
+fn candidate_count() -> u32 {
+    return bucket_ends[AGE_BUCKETS - 1u];
+}
+
+// The `i`-th page `rank_pages` listed, in bucket order (free pages first,
+// then the oldest), `i` below `candidate_count()` (after `load_bucket_ends`).
+fn candidate(i: u32) -> u32 {
+    var b = 0u;
+    while b < AGE_BUCKETS - 1u && i >= bucket_ends[b] {
+        b++;
     }
-    if id.x == 0u {
-        var total = 0u;
-        for (var b = 0u; b < AGE_BUCKETS; b++) {
-            total += atomicLoad(&counters[AGE_BUCKET_BASE + b]);
-        }
-        write_paging_args(total);
-    }
+    let start = select(0u, bucket_ends[max(b, 1u) - 1u], b > 0u);
+    return candidates[b * bucket_stride() + i - start];
 }
 
 // This frame's listed requests.
@@ -135,6 +152,8 @@ fn requests() -> u32 {
     return min(atomicLoad(&counters[COUNT_PAGES_REQUESTED]), params.request_capacity);
 }
 
+// The resize's ranking: the bucket counts turned into offsets, the
+// candidates' count.
 @compute @workgroup_size(1)
 fn page_offsets() {
     var offset = 0u;
@@ -143,13 +162,13 @@ fn page_offsets() {
         atomicStore(&counters[AGE_BUCKET_BASE + b], offset);
         offset += n;
     }
-    write_paging_args(offset);
+    atomicStore(&counters[COUNT_CANDIDATES], offset);
 }
 
-// The candidates' count (`candidates` pages), the allocation's dispatch
-// and, with the fused chain, the bounds below.
-fn write_paging_args(candidates: u32) {
-    atomicStore(&counters[COUNT_CANDIDATES], candidates);
+// The allocation's dispatch and, with the fused chain, the bounds below,
+// for at most `backed` pages backed (the requests: the candidates are not
+// counted yet when `rank_pages` writes them).
+fn write_paging_args(backed: u32) {
     write_dispatch(ALLOCATE_ARGS, (requests() + 63u) / 64u);
 #ifdef FUSED_PAGING
     // The fused chain records no pass after paging to count what it did:
@@ -158,7 +177,6 @@ fn write_paging_args(candidates: u32) {
     // return), and so does the shade pass's: the tiles marking listed and
     // every tile of those pages (the triangle-map pass lists their
     // requested tiles; the workgroups past the list's end return).
-    let backed = min(requests(), candidates);
     write_dispatch(BACKED_ARGS, backed);
     let per_row = params.page_size / params.tile_size;
     write_dispatch(SHADE_ARGS, min(atomicLoad(&counters[COUNT_QUEUED]) + backed * per_row * per_row, params.max_queue));
@@ -171,9 +189,9 @@ fn request_index(wg: vec3u, groups: vec3u, lid: u32) -> u32 {
     return (wg.y * groups.x + wg.x) * 64u + lid;
 }
 
-// Requests that got a candidate page.
+// Requests that got a candidate page (after `load_bucket_ends`).
 fn allocated() -> u32 {
-    return min(requests(), atomicLoad(&counters[COUNT_CANDIDATES]));
+    return min(requests(), candidate_count());
 }
 
 // Forgets request `request` (no page for it this frame).
@@ -182,34 +200,65 @@ fn fail(request: vec2u) {
     forget_request(atlas_entries[request.y >> 8u].levels[request.y & 0xffu], request.x);
 }
 
+// Per request: the i-th candidate page, taken from the virtual page it
+// backed, and a chunk for the request's block where it has none (the first
+// request of such a block takes a free one; the others find it taken). A
+// chunk the page's old block is left with no page keeps its block until the
+// next frame's ranking releases it (`release_chunk`): a request of this
+// frame may bind into it, and the chunks this dispatch takes come from the
+// ranking's free list alone, complete before it. (Claims were a dispatch of
+// their own after the allocation, which released the chunks it emptied:
+// a launch and a barrier more.)
 @compute @workgroup_size(64)
 fn allocate(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
             @builtin(local_invocation_index) lid: u32) {
     let i = request_index(wg, groups, lid);
+    load_bucket_ends(lid);
     if i >= requests() {
         return;
     }
-    if i >= atomicLoad(&counters[COUNT_CANDIDATES]) {
-        fail(request_list[i]);
+    let request = request_list[i];
+    if i >= candidate_count() {
+        fail(request);
         return;
     }
     // The evicted page was not used this frame, so no request names it.
-    unbind_and_release(candidates[i]);
-    let physical = candidates[i];
-    page_owner[physical] = request_list[i].x + 1u;
+    let physical = candidate(i);
+    unbind_page(physical);
+    page_owner[physical] = request.x + 1u;
     atomicStore(&page_used[physical], params.stamp);
+    claim_block(request.x / BLOCK_PAGES);
 }
 
-// `unbind_page`, and the page's chunk freed and listed when this was its
-// last page (its block's directory word cleared).
-fn unbind_and_release(physical: u32) {
-    let emptied = unbind_page(physical);
-    if emptied != 0u {
-        let chunk = emptied - 1u;
-        atomicStore(&page_directory[table_chunks[chunk].block - 1u], 0u);
-        table_chunks[chunk].block = 0u;
-        free_chunks[atomicAdd(&counters[COUNT_FREE_CHUNKS], 1u)] = chunk;
-        atomicSub(&counters[COUNT_TABLE_CHUNKS], 1u);
+// A directory word while one request of its block takes a chunk for it.
+const CLAIMING: u32 = 0xffffffffu;
+
+// Gives `block` a free chunk unless it has one (or another request is
+// giving it one).
+fn claim_block(block: u32) {
+    // A weak exchange may fail spuriously: retry while the word is still 0.
+    for (var attempt = 0u; attempt < 4u; attempt++) {
+        if atomicLoad(&page_directory[block]) != 0u {
+            return;
+        }
+        let r = atomicCompareExchangeWeak(&page_directory[block], 0u, CLAIMING);
+        if r.exchanged {
+            let n = atomicAdd(&counters[COUNT_CHUNKS_TAKEN], 1u);
+            if n < atomicLoad(&counters[COUNT_FREE_CHUNKS]) {
+                let c = free_chunks[n];
+                table_chunks[c].block = block + 1u;
+                atomicStore(&page_directory[block], c + 1u);
+                atomicAdd(&counters[COUNT_TABLE_CHUNKS], 1u);
+            } else {
+                // No chunk left (with one chunk per physical page this
+                // cannot happen): the block's requests fail this frame.
+                atomicStore(&page_directory[block], 0u);
+            }
+            return;
+        }
+        if r.old_value != 0u {
+            return;
+        }
     }
 }
 
@@ -253,45 +302,6 @@ fn release_chunk(c: u32, li: u32) {
     }
 }
 
-// A directory word while one request of its block takes a chunk for it.
-const CLAIMING: u32 = 0xffffffffu;
-
-// Per allocated request: the first request of a block with no chunk takes
-// a free one (the others of the block find it taken).
-@compute @workgroup_size(64)
-fn claim_blocks(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
-                @builtin(local_invocation_index) lid: u32) {
-    let i = request_index(wg, groups, lid);
-    if i >= allocated() {
-        return;
-    }
-    let block = request_list[i].x / BLOCK_PAGES;
-    // A weak exchange may fail spuriously: retry while the word is still 0.
-    for (var attempt = 0u; attempt < 4u; attempt++) {
-        if atomicLoad(&page_directory[block]) != 0u {
-            return;
-        }
-        let r = atomicCompareExchangeWeak(&page_directory[block], 0u, CLAIMING);
-        if r.exchanged {
-            let n = atomicAdd(&counters[COUNT_CHUNKS_TAKEN], 1u);
-            if n < atomicLoad(&counters[COUNT_FREE_CHUNKS]) {
-                let c = free_chunks[n];
-                table_chunks[c].block = block + 1u;
-                atomicStore(&page_directory[block], c + 1u);
-                atomicAdd(&counters[COUNT_TABLE_CHUNKS], 1u);
-            } else {
-                // No chunk left (with one chunk per physical page this
-                // cannot happen): the block's requests fail this frame.
-                atomicStore(&page_directory[block], 0u);
-            }
-            return;
-        }
-        if r.old_value != 0u {
-            return;
-        }
-    }
-}
-
 // Per allocated request: the page's word in its block's chunk, and the
 // backed-page list; a request whose block found no chunk gives its
 // physical page back.
@@ -299,12 +309,13 @@ fn claim_blocks(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) group
 fn bind_pages(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
               @builtin(local_invocation_index) lid: u32) {
     let i = request_index(wg, groups, lid);
+    load_bucket_ends(lid);
     if i >= allocated() {
         return;
     }
     let request = request_list[i];
     let page = request.x;
-    let physical = candidates[i];
+    let physical = candidate(i);
     let chunk = atomicLoad(&page_directory[page / BLOCK_PAGES]);
     if chunk == 0u {
         page_owner[physical] = 0u;

@@ -15,7 +15,7 @@ fn release_slots(@builtin(global_invocation_id) id: vec3u) {
     let owner = page_owner[page] - 1u;
     for (var i = 0u; i < arrayLength(&released); i++) {
         if owner >= released[i].x && owner < released[i].y {
-            _ = unbind_page(page);
+            unbind_page(page);
             // Free: the first candidate a request takes.
             atomicStore(&page_used[page], 0u);
             return;

@@ -79,7 +79,7 @@ fn move_pages(@builtin(global_invocation_id) id: vec3u) {
     if page_owner[dest] != 0u && atomicLoad(&page_used[dest]) >= used {
         return;
     }
-    _ = unbind_page(dest);
+    unbind_page(dest);
     let owner = page_owner[source];
     page_table[table_word(owner - 1u)] = dest + 1u;
     page_owner[dest] = owner;
@@ -98,7 +98,7 @@ fn move_pages(@builtin(global_invocation_id) id: vec3u) {
 fn evict_rest(@builtin(global_invocation_id) id: vec3u) {
     let page = params.physical_pages + id.x;
     if page < arrayLength(&page_owner) {
-        _ = unbind_page(page);
+        unbind_page(page);
     }
 }
 
