@@ -458,12 +458,12 @@ pub enum Marking {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum PagingChain {
-    /// Nine dispatches (stages of object space's one pass): paging (age and
-    /// chunk release, list, allocate, claim blocks, bind pages, backed
+    /// Seven dispatches (stages of object space's one pass): paging (rank
+    /// and chunk release, allocate and claim blocks, bind pages, backed
     /// args), triangle maps, mark backed, and the queue stage that writes
     /// the shade pass's dispatch from the shade list's length.
     Split,
-    /// Six dispatches: the listing writes the backed pages' and the shade
+    /// Four dispatches: the ranking writes the backed pages' and the shade
     /// pass's dispatch arguments as bounds (known once marking is done;
     /// extra workgroups return), and the triangle-map workgroup of a page also marks its
     /// requested tiles: no backed args, mark backed or queue dispatch, each
