@@ -83,7 +83,12 @@ impl PagingPass {
 pub fn back_pages(cp: &mut TimedComputePass, pass: &PagingPass, res: &Resources, scene: &wgpu::BindGroup) {
     let mut cp = stage(cp, "paging");
     res.bind(&mut cp, scene);
-    rank_candidates(&mut cp, pass, res, Ranking::IfRequested);
+    // One dispatch ranks the pages when a page was requested (a list per
+    // age bucket), releases the chunks left with no page (a workgroup per
+    // 64 of each) and writes the allocation's dispatch.
+    cp.set_bind_group(2, &res.dispatch_group, &[]);
+    cp.set_pipeline(&pass.rank_pages);
+    cp.dispatch_workgroups(res.pool.pages.max(res.chunk_count()).div_ceil(64), 1, 1);
     // Group 2 (the dispatch arguments as storage) stays bound, but the
     // allocation's pipelines do not use it: a dispatch that reads the
     // arguments as INDIRECT may follow in the same pass.
@@ -117,31 +122,13 @@ pub fn release_slots(frame: &mut Frame, pass: &PagingPass, res: &Resources, rang
     cp.dispatch_workgroups(res.pool.pages.div_ceil(64), 1, 1);
 }
 
-/// When [`rank_candidates`] ranks the pages.
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub(super) enum Ranking {
-    /// Always (a resize's moves need candidates).
-    Always,
-    /// Only when this frame requested a page (paging: a frame that needs no
-    /// new page ranks none, and allocates none); the chunks left with no
-    /// page are released in the same dispatch either way.
-    IfRequested,
-}
-
-/// Lists the physical pages below `params.physical_pages` not used this
-/// frame as `candidates`, free first, then least recently used (counts in
-/// the counters' age buckets and `COUNT_CANDIDATES`), on a compute pass with
-/// `res` bound as group 1. Rebinds group 2.
-pub(super) fn rank_candidates(cp: &mut wgpu::ComputePass, pass: &PagingPass, res: &Resources, ranking: Ranking) {
+/// For a resize's moves: lists the physical pages below
+/// `params.physical_pages` not used this frame as `candidates`, in one list,
+/// free first, then least recently used (offsets in the counters' age
+/// buckets, their count in `COUNT_CANDIDATES`), on a compute pass with `res`
+/// bound as group 1.
+pub(super) fn rank_candidates(cp: &mut wgpu::ComputePass, pass: &PagingPass, res: &Resources) {
     let pages = res.pool.pages.div_ceil(64);
-    cp.set_bind_group(2, &res.dispatch_group, &[]);
-    if ranking == Ranking::IfRequested {
-        // One dispatch: the pages listed per bucket, the chunks released (a
-        // workgroup per 64 of each), the allocation's dispatch written.
-        cp.set_pipeline(&pass.rank_pages);
-        cp.dispatch_workgroups(res.pool.pages.max(res.chunk_count()).div_ceil(64), 1, 1);
-        return;
-    }
     cp.set_pipeline(&pass.age_pages);
     cp.dispatch_workgroups(pages, 1, 1);
     cp.set_pipeline(&pass.page_offsets);

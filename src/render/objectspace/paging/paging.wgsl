@@ -49,8 +49,9 @@ fn bucket_slot(page: u32, lid: u32, ranked: bool) -> vec2u {
 }
 
 // Adds this workgroup's count of each bucket to the bucket's global count,
-// keeping where its pages of the bucket start (after `page_offsets` the
-// global counts are offsets: what `list` places its pages by).
+// keeping where its pages of the bucket start: in the bucket's own list
+// (`rank_pages`), or, after `page_offsets` turned the counts into offsets,
+// in the resize's one list (`list`).
 fn add_bucket_counts(lid: u32) {
     if lid < AGE_BUCKETS {
         let n = atomicLoad(&bucket_pages[lid]);
@@ -93,8 +94,8 @@ fn list_candidates(@builtin(global_invocation_id) id: vec3u, @builtin(local_invo
 // counts (and `candidate` finds the i-th page across the lists). Nothing to
 // rank in a frame that requested no page (the allocation then dispatches
 // no workgroup). Chunk `id.x` is released here too (`release_chunk`),
-// before the allocation: one dispatch where the ranking, the listing and
-// the release were three (a launch and a barrier each).
+// before the allocation: one dispatch where the ranking (with the release)
+// and the listing were two (a launch and a barrier each).
 @compute @workgroup_size(64)
 fn rank_pages(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
     let at = bucket_slot(id.x, lid, requests() > 0u);
@@ -105,7 +106,7 @@ fn rank_pages(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocatio
     }
     release_chunk(id.x, lid);
     if id.x == 0u {
-        write_paging_args(requests());
+        write_paging_args();
     }
 }
 
@@ -166,9 +167,9 @@ fn page_offsets() {
 }
 
 // The allocation's dispatch and, with the fused chain, the bounds below,
-// for at most `backed` pages backed (the requests: the candidates are not
-// counted yet when `rank_pages` writes them).
-fn write_paging_args(backed: u32) {
+// for at most a page backed per request (the candidates are not counted
+// yet when `rank_pages` writes them).
+fn write_paging_args() {
     write_dispatch(ALLOCATE_ARGS, (requests() + 63u) / 64u);
 #ifdef FUSED_PAGING
     // The fused chain records no pass after paging to count what it did:
@@ -177,6 +178,7 @@ fn write_paging_args(backed: u32) {
     // return), and so does the shade pass's: the tiles marking listed and
     // every tile of those pages (the triangle-map pass lists their
     // requested tiles; the workgroups past the list's end return).
+    let backed = requests();
     write_dispatch(BACKED_ARGS, backed);
     let per_row = params.page_size / params.tile_size;
     write_dispatch(SHADE_ARGS, min(atomicLoad(&counters[COUNT_QUEUED]) + backed * per_row * per_row, params.max_queue));

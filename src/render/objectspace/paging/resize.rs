@@ -7,7 +7,7 @@
 //! Movers that find no page (more of them than pages below the new size, or
 //! only younger pages there) are evicted.
 
-use super::{PagingPass, Ranking, rank_candidates};
+use super::{PagingPass, rank_candidates};
 use crate::render::frame::Frame;
 use crate::render::objectspace::TileCounter;
 use crate::render::objectspace::resources::{ATLAS_FORMAT, PhysicalPages, Resources, TRIANGLE_MAP_FORMAT};
@@ -101,7 +101,7 @@ pub fn compact_pages(frame: &mut Frame, pass: &ResizePass, paging: &PagingPass, 
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass("atlas compaction");
     res.bind(&mut cp, scene);
-    rank_candidates(&mut cp, paging, res, Ranking::Always);
+    rank_candidates(&mut cp, paging, res);
     cp.set_bind_group(2, &moves.group, &[]);
     cp.set_pipeline(&pass.count_movers);
     cp.dispatch_workgroups(capacity.div_ceil(64), 1, 1);
