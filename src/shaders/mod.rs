@@ -274,12 +274,29 @@ impl ShaderLibrary {
         extra: &[&str],
     ) -> Result<wgpu::ShaderModule, ShaderError> {
         let module = self.compose_with(shader, extra)?;
-        Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        let desc = wgpu::ShaderModuleDescriptor {
             label: Some(shader.file),
             source: wgpu::ShaderSource::Naga(Cow::Owned(module)),
-        }))
+        };
+        // SAFETY: the one check left out, `force_loop_bounding`, makes a
+        // loop that never ends stop after 2^64 turns instead of hanging the
+        // GPU; every loop in the project's shaders ends by its own bound
+        // (counts, lists and probes with a maximum). naga's counter in every
+        // loop cost every pipeline 4-11 % of its frame along Sponza's path
+        // on an H200 (`deferred-compute` 0.570 -> 0.506 ms with 30
+        // shadowed lights; BENCHMARKS.md, "Loops without naga's bound").
+        Ok(unsafe { device.create_shader_module_trusted(desc, SHADER_CHECKS) })
     }
 }
+
+/// The runtime checks compiled into every pass shader: wgpu's defaults
+/// (bounds checks, integer division checks) less the loop counter naga
+/// adds to every loop (see [`ShaderLibrary::module_with`]).
+const SHADER_CHECKS: wgpu::ShaderRuntimeChecks = {
+    let mut checks = wgpu::ShaderRuntimeChecks::checked();
+    checks.force_loop_bounding = false;
+    checks
+};
 
 /// Bytes of the WGSL struct `name` (declared in `module`'s own file, not an
 /// imported one) as an array element: for buffers of structs that only the
