@@ -292,7 +292,7 @@ impl ShaderLibrary {
 /// The runtime checks compiled into every pass shader: wgpu's defaults
 /// (bounds checks, integer division checks) less the loop counter naga
 /// adds to every loop (see [`ShaderLibrary::module_with`]).
-const SHADER_CHECKS: wgpu::ShaderRuntimeChecks = {
+pub const SHADER_CHECKS: wgpu::ShaderRuntimeChecks = {
     let mut checks = wgpu::ShaderRuntimeChecks::checked();
     checks.force_loop_bounding = false;
     checks

@@ -267,7 +267,14 @@ fn first_in_workgroup(tile: u32) -> bool {
 // subgroup only elects more than one: the workgroup table still dedups.
 fn first_in_subgroup(tile: u32) -> bool {
     var claims = false;
-    loop {
+    // A round per distinct tile at most (each retires the first active
+    // lane's), so at most one per lane. The bound is also what keeps this
+    // loop's end from resting on other invocations alone: shaders are built
+    // without naga's loop counter (`shaders::SHADER_CHECKS`), and a compiler
+    // that takes loops without side effects to end (LLVM: lavapipe) then
+    // made every lane leave in the first round, electing one tile a
+    // subgroup (`mark_twin::subgroup_marking_matches_workgroup_marking_with_fewer_claims`).
+    for (var round = 0u; round < MAX_SUBGROUP; round++) {
         if tile == subgroupBroadcastFirst(tile) {
             claims = elected();
             break;
@@ -275,6 +282,9 @@ fn first_in_subgroup(tile: u32) -> bool {
     }
     return claims;
 }
+
+// Lanes of the largest subgroup a GPU has (Vulkan allows up to 128).
+const MAX_SUBGROUP: u32 = 128u;
 
 // This invocation's index in its subgroup (`mark` sets it).
 var<private> lane: u32;
