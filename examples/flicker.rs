@@ -92,6 +92,7 @@ fn main() -> anyhow::Result<()> {
                 depth_prepass: true,
                 visibility: VisibilityMethod::preferred(ctx.device.features()),
                 count_visibility: false,
+                ..Default::default()
             }),
             other => {
                 let Some(opts) = other.strip_prefix("os") else {

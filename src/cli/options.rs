@@ -6,6 +6,7 @@ use std::str::FromStr;
 
 use clap::{Args, ValueEnum};
 use glam::Vec3;
+use shadespace::render::deferred_compute::TileSide;
 use shadespace::render::objectspace::{
     DEFAULT_PAGE_SIZE, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, MAX_TRIMAP_GRID, Marking, MsaaGather,
     PagingChain, TrimapSearch,
@@ -182,6 +183,13 @@ pub struct SceneArgs {
     /// counters. Adds atomics: for profiling, not for timing.
     #[arg(long)]
     pub count_visibility: bool,
+    /// deferred-compute: the side in pixels of the lighting pass's tiles, 8
+    /// or 16 (default), one workgroup of side x side invocations a tile. On
+    /// an H200 along Sponza's path 8 was 8-12 % faster with one material and
+    /// 23-30 % slower with 8 layers a material (BENCHMARKS.md, "Tiles of
+    /// 8x8"); the same image.
+    #[arg(long, default_value = "16")]
+    pub dc_tile: TileSide,
     /// Compute visibility: read each covered pixel before its 64-bit
     /// atomicMax and skip the atomic where the pixel already holds something
     /// nearer (the image is the same either way). Off by default: it cuts

@@ -207,6 +207,7 @@ pub fn render_options(a: &SceneArgs, s: &Setup, view: DebugView, features: wgpu:
             depth_prepass: !a.no_depth_prepass,
             visibility,
             count_visibility: a.count_visibility,
+            tile: a.dc_tile,
         }),
     };
     RenderOptions { width: a.size.0, height: a.size.1, pipeline, samples: a.msaa }

@@ -11,7 +11,7 @@ use rand_chacha::ChaCha8Rng;
 use shadespace::gpu::GpuContext;
 use shadespace::metrics;
 use shadespace::render::deferred::Deferred;
-use shadespace::render::deferred_compute::TILE_LIGHT_CAPACITY;
+use shadespace::render::deferred_compute::{TILE_LIGHT_CAPACITY, TileSide};
 use shadespace::render::{
     DeferredComputeConfig, DeferredConfig, ForwardConfig, PipelineConfig, RenderOptions, Renderer,
 };
@@ -121,11 +121,14 @@ fn check_against_forward(
     assert!(brightest > 150, "{name}: the reference is nearly black");
     let out = common::out_dir();
     let mut deferred = None;
-    for pipeline in [
-        PipelineConfig::DeferredCompute(DeferredComputeConfig::default()),
-        PipelineConfig::Deferred(DeferredConfig::default()),
+    // Tiled deferred with each tile side (`--dc-tile`), then deferred.
+    let small_tiles = DeferredComputeConfig { tile: TileSide::Eight, ..Default::default() };
+    for (pipeline, tag) in [
+        (PipelineConfig::DeferredCompute(DeferredComputeConfig::default()), ""),
+        (PipelineConfig::DeferredCompute(small_tiles), "-tile8"),
+        (PipelineConfig::Deferred(DeferredConfig::default()), ""),
     ] {
-        let label = format!("{name}-{}", pipeline.name());
+        let label = format!("{name}-{}{tag}", pipeline.name());
         let (test, renderer) = render(ctx, scene, camera, lights, size, pipeline);
         let (err, map) = metrics::compare(&reference, &test);
         eprintln!("{label}: {} lights, against forward: {err:?}", lights.len());

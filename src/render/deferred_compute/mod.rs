@@ -1,7 +1,8 @@
 //! Tiled deferred shading, lit in compute: the shared G-buffer pass, then
-//! one compute pass over 16x16 screen tiles (`tiled.wgsl`). Each workgroup
-//! reduces its tile's depth range, builds the tile's frustum, culls every
-//! point and spot light against it in chunks of 256 into a workgroup list
+//! one compute pass over 16x16 screen tiles (8x8 with `--dc-tile 8`;
+//! `tiled.wgsl`). Each workgroup reduces its tile's depth range, builds the
+//! tile's frustum, culls every point and spot light against it in chunks of
+//! one light per invocation into a workgroup list
 //! (in light order, so the image is deterministic), shades its pixels with
 //! the ambient and directional lights and the listed ones, and writes
 //! `targets.hdr`. A tile reached by more lights than the list holds shades in
@@ -39,7 +40,7 @@ use super::passes::blended::{BlendedPass, blended_pass};
 use super::passes::gbuffer::{GbufferStage, geometry};
 use super::passes::visibility::compute::{ComputeVisibility, compute_visibility};
 use super::passes::visibility::{VisibilityBuffer, VisibilityMethod};
-use super::passes::{Binding, bind_group, bind_group_layout, compute_pipeline, hdr_output};
+use super::passes::{Binding, bind_group, bind_group_layout, compute_pipeline_with, hdr_output};
 use super::report::Counters;
 use super::report::PipelineReport;
 use super::scene_gpu::SceneGpu;
@@ -56,17 +57,57 @@ pub const SHADER_MSAA: ShaderSource = SHADER.with_defs(&[crate::shaders::MSAA]);
 /// `tiled.wgsl` reading the compute visibility pass's samples.
 pub const SHADER_VISIBILITY_MSAA: ShaderSource = SHADER.with_defs(&["VISIBILITY_BUFFER", crate::shaders::MSAA]);
 
-/// Tile side in pixels (one workgroup of `TILE_SIZE`² threads per tile).
-pub const TILE_SIZE: u32 = 16;
-/// Lights culled per step, one per thread of a tile.
-pub const LIGHT_CHUNK: u32 = TILE_SIZE * TILE_SIZE;
+/// Side in pixels of the lighting pass's tiles (`--dc-tile`): one workgroup
+/// of side x side invocations a tile, each culling one light a step.
+/// Which is faster depends on the scene: along Sponza's path on an H200,
+/// 8x8 tiles took 0.388 ms a frame instead of 0.422 at 1920x1080 with one
+/// light, 0.460 instead of 0.507 with 30 shadowed lights (1.157 and 1.393
+/// instead of 1.294 and 1.572 at 3840x2160), where the pass holds 109
+/// registers an invocation and a workgroup of 64 waits at its barriers for
+/// fewer; with 8 layers a material and 30 shadowed lights, 2.697 ms instead
+/// of 2.074 (9.933 instead of 7.675): the layers' walk per light makes the
+/// culling steps rarer and each pixel's work longer (BENCHMARKS.md, "Tiles
+/// of 8x8").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+pub enum TileSide {
+    /// 8x8 pixels, 64 invocations a workgroup.
+    #[value(name = "8")]
+    #[serde(rename = "8")]
+    Eight,
+    /// 16x16 pixels, 256 invocations a workgroup.
+    #[default]
+    #[value(name = "16")]
+    #[serde(rename = "16")]
+    Sixteen,
+}
+
+impl TileSide {
+    /// The side in pixels.
+    pub fn pixels(self) -> u32 {
+        match self {
+            Self::Eight => 8,
+            Self::Sixteen => 16,
+        }
+    }
+
+    /// The definitions `tiled.wgsl` takes for it.
+    fn defs(self) -> &'static [&'static str] {
+        match self {
+            Self::Eight => &[SMALL_TILES],
+            Self::Sixteen => &[],
+        }
+    }
+}
+
+/// Defined for `tiled.wgsl` with [`TileSide::Eight`].
+pub const SMALL_TILES: &str = "SMALL_TILES";
 /// Lights a tile's workgroup list holds; when fewer than a chunk's worth of
 /// places are left, the tile shades the listed lights and starts again.
 pub const TILE_LIGHT_CAPACITY: u32 = 512;
 
 /// The constants `tiled.wgsl` shares with Rust (`shaders::contract`).
-pub fn wgsl_constants() -> [(&'static str, u32); 3] {
-    [("TILED_TILE_SIZE", TILE_SIZE), ("TILED_CHUNK", LIGHT_CHUNK), ("TILED_LIST_CAPACITY", TILE_LIGHT_CAPACITY)]
+pub fn wgsl_constants() -> [(&'static str, u32); 1] {
+    [("TILED_LIST_CAPACITY", TILE_LIGHT_CAPACITY)]
 }
 
 /// Settings of the tiled deferred pipeline.
@@ -84,11 +125,18 @@ pub struct DeferredComputeConfig {
     /// Compute visibility: count the rasterizer's work every frame into the
     /// counters (adds atomics: for profiling, not timing).
     pub count_visibility: bool,
+    /// The lighting pass's tiles.
+    pub tile: TileSide,
 }
 
 impl Default for DeferredComputeConfig {
     fn default() -> Self {
-        Self { depth_prepass: true, visibility: VisibilityMethod::Raster, count_visibility: false }
+        Self {
+            depth_prepass: true,
+            visibility: VisibilityMethod::Raster,
+            count_visibility: false,
+            tile: TileSide::default(),
+        }
     }
 }
 
@@ -173,7 +221,7 @@ impl DeferredCompute {
             Surfaces::Visibility { pass, .. } => (SHADER_VISIBILITY, &pass.read_layout),
         };
         let groups = [&scene.layout, read_layout, &layout];
-        let lighting = compute_pipeline(device, shaders, shader, "tiled_lighting", &groups)?;
+        let lighting = compute_pipeline_with(device, shaders, shader, config.tile.defs(), "tiled_lighting", &groups)?;
         // The compute rasterizer leaves the depth target to the blended pass.
         let lay_depth = config.visibility == VisibilityMethod::Compute;
         let blended = BlendedPass::new(device, shaders, scene, targets, forward::SHADER, &[], lay_depth)?;
@@ -201,7 +249,7 @@ impl Pipeline for DeferredCompute {
         if let Some(counts) = &self.edge_counts {
             frame.encoder.clear_buffer(&counts.buffer, 0, None);
         }
-        tiled_lighting(frame, &self.lighting, read, &self.output);
+        tiled_lighting(frame, &self.lighting, read, &self.output, self.config.tile.pixels());
         if let Some(counts) = &mut self.edge_counts {
             counts.readback.copy(frame.device, frame.encoder, &counts.buffer, EDGE_COUNTS_BYTES, frame.number);
         }
@@ -294,7 +342,9 @@ impl Pipeline for DeferredCompute {
                 report.memory("visibility", ids.bytes()).memory("visibility_raster", pass.bytes())
             }
         };
-        report.setup("tile_size", TILE_SIZE as u64).setup("tile_light_capacity", TILE_LIGHT_CAPACITY as u64)
+        report
+            .setup("tile_size", self.config.tile.pixels() as u64)
+            .setup("tile_light_capacity", TILE_LIGHT_CAPACITY as u64)
     }
 }
 
@@ -305,8 +355,9 @@ fn tiled_lighting(
     pipeline: &wgpu::ComputePipeline,
     read: &wgpu::BindGroup,
     output: &wgpu::BindGroup,
+    side: u32,
 ) {
-    let (w, h) = (frame.targets.width.div_ceil(TILE_SIZE), frame.targets.height.div_ceil(TILE_SIZE));
+    let (w, h) = (frame.targets.width.div_ceil(side), frame.targets.height.div_ceil(side));
     let scene = frame.scene_group;
     let mut cp = frame.compute_pass("tiled lighting");
     cp.set_pipeline(pipeline);

@@ -1,4 +1,4 @@
-// Tiled deferred lighting, one workgroup per 16x16 screen tile, one thread
+// Tiled deferred lighting, one workgroup per 16x16 (or 8x8) screen tile, one thread
 // per pixel:
 // 1. the tile's depth range: workgroup atomic min/max over its pixels' depths
 //    (background pixels, depth 0, are left out; an all-background tile is
@@ -6,7 +6,7 @@
 // 2. the tile's frustum: four side planes through its pixel edges and two
 //    depth planes at its range, taken from rows of the view-projection;
 // 3. the point and spot lights (every light after the global ones), in
-//    chunks of 256 (one per thread), tested against it by bounding sphere
+//    chunks of one per thread, tested against it by bounding sphere
 //    (`light_bounds`: a point light's range, a spot light's sector);
 //    survivors are appended to a workgroup list in light order (a ballot of
 //    bits and population counts, so the image does not depend on thread
@@ -21,7 +21,7 @@
 // whose samples see one surface is shaded once at its centre, an edge pixel
 // (`gbuffer_pixel`) sample by sample and averaged, and the frame's lit and
 // edge pixels are counted.
-#import shadespace::contract::{TILED_TILE_SIZE, TILED_CHUNK, TILED_LIST_CAPACITY}
+#import shadespace::contract::TILED_LIST_CAPACITY
 #import shadespace::lighting::{Surface, light_radiance}
 #import shadespace::light_bounds::{light_bounds, sphere_touches}
 #import shadespace::scene_bindings::{view, lights}
@@ -43,6 +43,15 @@
 #endif
 #endif
 
+// The tile's side in pixels (`deferred_compute::TileSide`), and the lights
+// culled a step, one per invocation.
+#ifdef SMALL_TILES
+const TILED_TILE_SIZE: u32 = 8u;
+#else
+const TILED_TILE_SIZE: u32 = 16u;
+#endif
+const TILED_CHUNK: u32 = TILED_TILE_SIZE * TILED_TILE_SIZE;
+
 @group(2) @binding(0) var hdr: texture_storage_2d<rgba16float, write>;
 #ifdef MSAA
 // The frame's lit pixels and, of those, edge pixels (cleared every frame).
@@ -57,7 +66,8 @@ var<workgroup> depth_min_bits: atomic<u32>;
 var<workgroup> depth_max_bits: atomic<u32>;
 // The tile's device-depth range (x: min, y: max), or (1, 0) when empty.
 var<workgroup> tile_range: vec2f;
-// This chunk's lights that touch the tile, one bit per thread.
+// This chunk's lights that touch the tile, one bit per thread (room for
+// 256 threads).
 var<workgroup> chunk_bits: array<atomic<u32>, 8>;
 var<workgroup> list: array<u32, TILED_LIST_CAPACITY>;
 var<workgroup> list_count: u32;
