@@ -76,7 +76,7 @@ pub fn pass_shaders() -> Vec<ShaderSource> {
         deferred_compute::SHADER_VISIBILITY,
         deferred_compute::SHADER_MSAA,
         deferred_compute::SHADER_VISIBILITY_MSAA,
-        deferred_compute::SHADER_VISIBILITY.with_defs(&["VISIBILITY_BUFFER", deferred_compute::SMALL_TILES]),
+        deferred_compute::SHADER.with_defs(&["VISIBILITY_BUFFER", deferred_compute::SMALL_TILES]),
         deferred_compute::SHADER.with_defs(&[crate::shaders::MSAA, deferred_compute::SMALL_TILES]),
     ]);
     all.extend([

@@ -51,6 +51,8 @@ const TILED_TILE_SIZE: u32 = 8u;
 const TILED_TILE_SIZE: u32 = 16u;
 #endif
 const TILED_CHUNK: u32 = TILED_TILE_SIZE * TILED_TILE_SIZE;
+// Words of a chunk's bits (`chunk_bits`).
+const CHUNK_WORDS: u32 = TILED_CHUNK / 32u;
 
 @group(2) @binding(0) var hdr: texture_storage_2d<rgba16float, write>;
 #ifdef MSAA
@@ -66,9 +68,8 @@ var<workgroup> depth_min_bits: atomic<u32>;
 var<workgroup> depth_max_bits: atomic<u32>;
 // The tile's device-depth range (x: min, y: max), or (1, 0) when empty.
 var<workgroup> tile_range: vec2f;
-// This chunk's lights that touch the tile, one bit per thread (room for
-// 256 threads).
-var<workgroup> chunk_bits: array<atomic<u32>, 8>;
+// This chunk's lights that touch the tile, one bit per thread.
+var<workgroup> chunk_bits: array<atomic<u32>, CHUNK_WORDS>;
 var<workgroup> list: array<u32, TILED_LIST_CAPACITY>;
 var<workgroup> list_count: u32;
 
@@ -192,7 +193,7 @@ fn tiled_lighting(
         atomicStore(&tile_edges, 0u);
 #endif
     }
-    if thread < 8u {
+    if thread < CHUNK_WORDS {
         atomicStore(&chunk_bits[thread], 0u);
     }
     workgroupBarrier();
@@ -278,7 +279,7 @@ fn tiled_lighting(
         // survivors on lower threads.
         var total = 0u;
         var below = 0u;
-        for (var w = 0u; w < 8u; w++) {
+        for (var w = 0u; w < CHUNK_WORDS; w++) {
             let bits = atomicLoad(&chunk_bits[w]);
             total += countOneBits(bits);
             if w < word {
@@ -291,7 +292,7 @@ fn tiled_lighting(
             list[listed + below] = index;
         }
         workgroupBarrier();
-        if thread < 8u {
+        if thread < CHUNK_WORDS {
             atomicStore(&chunk_bits[thread], 0u);
         }
         if thread == 0u {
