@@ -105,9 +105,15 @@ pub const SMALL_TILES: &str = "SMALL_TILES";
 /// places are left, the tile shades the listed lights and starts again.
 pub const TILE_LIGHT_CAPACITY: u32 = 512;
 
-/// The constants `tiled.wgsl` shares with Rust (`shaders::contract`).
-pub fn wgsl_constants() -> [(&'static str, u32); 1] {
-    [("TILED_LIST_CAPACITY", TILE_LIGHT_CAPACITY)]
+/// The constants `tiled.wgsl` shares with Rust (`shaders::contract`): the
+/// list's capacity and the tile sides, which size the workgroups there and
+/// the dispatch here.
+pub fn wgsl_constants() -> [(&'static str, u32); 3] {
+    [
+        ("TILED_LIST_CAPACITY", TILE_LIGHT_CAPACITY),
+        ("TILED_SMALL_SIDE", TileSide::Eight.pixels()),
+        ("TILED_LARGE_SIDE", TileSide::Sixteen.pixels()),
+    ]
 }
 
 /// Settings of the tiled deferred pipeline.

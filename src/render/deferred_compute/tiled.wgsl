@@ -21,7 +21,7 @@
 // whose samples see one surface is shaded once at its centre, an edge pixel
 // (`gbuffer_pixel`) sample by sample and averaged, and the frame's lit and
 // edge pixels are counted.
-#import shadespace::contract::TILED_LIST_CAPACITY
+#import shadespace::contract::{TILED_LIST_CAPACITY, TILED_SMALL_SIDE, TILED_LARGE_SIDE}
 #import shadespace::lighting::{Surface, light_radiance}
 #import shadespace::light_bounds::{light_bounds, sphere_touches}
 #import shadespace::scene_bindings::{view, lights}
@@ -43,12 +43,12 @@
 #endif
 #endif
 
-// The tile's side in pixels (`deferred_compute::TileSide`), and the lights
-// culled a step, one per invocation.
+// The tile's side in pixels (`deferred_compute::TileSide`, whose sides the
+// dispatch uses too), and the lights culled a step, one per invocation.
 #ifdef SMALL_TILES
-const TILED_TILE_SIZE: u32 = 8u;
+const TILED_TILE_SIZE: u32 = TILED_SMALL_SIDE;
 #else
-const TILED_TILE_SIZE: u32 = 16u;
+const TILED_TILE_SIZE: u32 = TILED_LARGE_SIDE;
 #endif
 const TILED_CHUNK: u32 = TILED_TILE_SIZE * TILED_TILE_SIZE;
 // Words of a chunk's bits (`chunk_bits`).
