@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use clap::{Args, ValueEnum};
 use glam::Vec3;
-use shadespace::render::deferred_compute::TileSide;
+use shadespace::render::deferred_compute::TileChoice;
 use shadespace::render::objectspace::{
     DEFAULT_PAGE_SIZE, GatherFilter, GatherInput, MAX_ATLAS_BUDGET_MI, MAX_TRIMAP_GRID, Marking, MsaaGather,
     PagingChain, TrimapSearch,
@@ -184,12 +184,17 @@ pub struct SceneArgs {
     #[arg(long)]
     pub count_visibility: bool,
     /// deferred-compute: the side in pixels of the lighting pass's tiles, 8
-    /// or 16 (default), one workgroup of side x side invocations a tile. On
-    /// an H200 along Sponza's path 8 was 8-12 % faster with one material and
-    /// 23-30 % slower with 8 layers a material (BENCHMARKS.md, "Tiles of
-    /// 8x8"); the same image.
-    #[arg(long, default_value = "16")]
-    pub dc_tile: TileSide,
+    /// or 16, one workgroup of side x side invocations a tile; the same
+    /// image either way. `auto` (default) takes the one measured faster for
+    /// the frame's scenario: 8 with at most 128 point and spot lights on
+    /// single-layer materials at one sample a pixel (3-11 % faster on an
+    /// H200 along Sponza's path), else 16 (8 was 1-160 % slower from 150
+    /// lights, up to 42 % with layered materials, 6 % under 4x MSAA with 30
+    /// shadowed lights), chosen again when the lights change; the side taken
+    /// is the report's `tile_size` (BENCHMARKS.md, "The lighting tiles'
+    /// side, chosen per scenario").
+    #[arg(long, default_value = "auto")]
+    pub dc_tile: TileChoice,
     /// Compute visibility: read each covered pixel before its 64-bit
     /// atomicMax and skip the atomic where the pixel already holds something
     /// nearer (the image is the same either way). Off by default: it cuts

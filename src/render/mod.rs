@@ -236,6 +236,20 @@ pub trait Pipeline: Any {
     ) -> Result<(), ShaderError> {
         Ok(())
     }
+    /// Called before recording a frame whose lights differ from the last
+    /// frame's (and before the first), with its count of point and spot
+    /// lights: pipelines whose passes are built for a light count
+    /// (`deferred-compute`'s tile side under `--dc-tile auto`) build them
+    /// again here. Others do nothing.
+    fn lights_changed(
+        &mut self,
+        _device: &wgpu::Device,
+        _shaders: &mut ShaderLibrary,
+        _scene: &SceneGpu,
+        _point_lights: usize,
+    ) -> Result<(), ShaderError> {
+        Ok(())
+    }
     /// Called right after the frame's submit (to start read-backs).
     fn after_submit(&mut self) {}
     /// Counters of finished frames, by frame number, oldest first; `wait`
@@ -639,6 +653,10 @@ impl Renderer {
             tracing::warn!("{} shadowed lights cast no shadow: the atlas holds {max} faces", shadow_plan.unshadowed);
         }
         self.shadows.set_plan(&ctx.device, &ctx.queue, &mut self.scene, &lights, &shadow_plan);
+        if lights_changed {
+            let point_lights = lights.len() - global_lights as usize;
+            self.pipeline.lights_changed(&ctx.device, &mut self.shaders, &self.scene, point_lights)?;
+        }
         self.scene.update_frame(&ctx.device, &ctx.queue, &view, changed, &lists);
         self.scene.culling = self.culling;
         self.scene.vis_depth_test = self.vis_depth_test;

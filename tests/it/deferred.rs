@@ -11,7 +11,7 @@ use rand_chacha::ChaCha8Rng;
 use shadespace::gpu::GpuContext;
 use shadespace::metrics;
 use shadespace::render::deferred::Deferred;
-use shadespace::render::deferred_compute::{TILE_LIGHT_CAPACITY, TileSide};
+use shadespace::render::deferred_compute::{SMALL_TILES_MOST_LIGHTS, TILE_LIGHT_CAPACITY, TileChoice};
 use shadespace::render::{
     DeferredComputeConfig, DeferredConfig, ForwardConfig, PipelineConfig, RenderOptions, Renderer,
 };
@@ -122,10 +122,10 @@ fn check_against_forward(
     let out = common::out_dir();
     let mut deferred = None;
     // Tiled deferred with each tile side (`--dc-tile`), then deferred.
-    let small_tiles = DeferredComputeConfig { tile: TileSide::Eight, ..Default::default() };
+    let tiles = |tile| PipelineConfig::DeferredCompute(DeferredComputeConfig { tile, ..Default::default() });
     for (pipeline, tag) in [
-        (PipelineConfig::DeferredCompute(DeferredComputeConfig::default()), ""),
-        (PipelineConfig::DeferredCompute(small_tiles), "-tile8"),
+        (tiles(TileChoice::Sixteen), "-tile16"),
+        (tiles(TileChoice::Eight), "-tile8"),
         (PipelineConfig::Deferred(DeferredConfig::default()), ""),
     ] {
         let label = format!("{name}-{}{tag}", pipeline.name());
@@ -141,6 +141,44 @@ fn check_against_forward(
         deferred = Some(renderer);
     }
     deferred.expect("deferred ran last")
+}
+
+/// `--dc-tile auto` (the default) takes 8x8 tiles for up to
+/// `SMALL_TILES_MOST_LIGHTS` point and spot lights and 16x16 past them,
+/// building the lighting pass again when a frame's lights cross that count,
+/// and draws what a renderer with that side fixed draws (the pass for 8x8
+/// tiles dispatched for 16x16 ones would leave three quarters of the
+/// pixels unlit).
+#[test]
+fn auto_tiles_follow_the_light_count() {
+    let ctx = common::gpu();
+    let (scene, camera, _) = common::floor_scene();
+    let scatter = |count, seed| {
+        scattered_lights(Scatter { count, half_side: 4.0, heights: 0.05..0.3, radii: 0.6..1.2, intensity: 0.03, seed })
+    };
+    let most = SMALL_TILES_MOST_LIGHTS as u32;
+    let (few, many) = (scatter(most, 5), scatter(most + 1, 6));
+    let size = (72, 40);
+    let auto_tiles = PipelineConfig::DeferredCompute(DeferredComputeConfig::default());
+    let options = RenderOptions { width: size.0, height: size.1, pipeline: auto_tiles, samples: 1 };
+    let mut auto = Renderer::new(&ctx, &scene, &options).unwrap();
+    let mut images = Vec::new();
+    for (frame, lights, side) in [(0, &few, 8), (1, &many, 16), (2, &few, 8)] {
+        auto.render(&ctx, &camera, lights, frame).unwrap();
+        let image = auto.read_image(&ctx).unwrap();
+        let point_lights = lights.len() - 1;
+        assert_eq!(auto.report().setup["tile_size"], side, "frame {frame}: {point_lights} point and spot lights");
+        let lit = image.pixels().filter(|p| p[0] as u32 + p[1] as u32 + p[2] as u32 > 60).count();
+        let pixels = (size.0 * size.1) as usize;
+        assert!(lit * 4 > pixels, "frame {frame}: only {lit} of {pixels} pixels lit");
+        let tile = if side == 8 { TileChoice::Eight } else { TileChoice::Sixteen };
+        let fixed = PipelineConfig::DeferredCompute(DeferredComputeConfig { tile, ..Default::default() });
+        let (expected, _) = render(&ctx, &scene, &camera, lights, size, fixed);
+        assert!(image.as_raw() == expected.as_raw(), "frame {frame}: not the image of {side}x{side} tiles");
+        images.push(image);
+    }
+    assert!(images[0] != images[1], "the two light sets drew the same image: the lights do not show");
+    ctx.check_errors().unwrap();
 }
 
 /// 2,000 lights crowd the middle of the floor: the tile under the centre is

@@ -1,6 +1,7 @@
 //! Tiled deferred shading, lit in compute: the shared G-buffer pass, then
-//! one compute pass over 16x16 screen tiles (8x8 with `--dc-tile 8`;
-//! `tiled.wgsl`). Each workgroup reduces its tile's depth range, builds the
+//! one compute pass over 8x8 or 16x16 screen tiles (`tiled.wgsl`; the side
+//! measured faster for the frame's lights, materials and samples, or
+//! `--dc-tile 8|16`: [`TileSide::for_scenario`]). Each workgroup reduces its tile's depth range, builds the
 //! tile's frustum, culls every point and spot light against it in chunks of
 //! one light per invocation into a workgroup list
 //! (in light order, so the image is deterministic), shades its pixels with
@@ -29,7 +30,7 @@
 //! Simplified: lights are culled by bounding spheres (a spot light by its
 //! sector's), not by exact cone tests; one depth range per tile (no 2.5D
 //! depth masks or clusters), so tiles across depth discontinuities keep
-//! lights of the gap; no shadows (the lighting model has none yet).
+//! lights of the gap.
 
 use serde::Serialize;
 
@@ -57,31 +58,67 @@ pub const SHADER_MSAA: ShaderSource = SHADER.with_defs(&[crate::shaders::MSAA]);
 /// `tiled.wgsl` reading the compute visibility pass's samples.
 pub const SHADER_VISIBILITY_MSAA: ShaderSource = SHADER.with_defs(&["VISIBILITY_BUFFER", crate::shaders::MSAA]);
 
-/// Side in pixels of the lighting pass's tiles (`--dc-tile`): one workgroup
-/// of side x side invocations a tile, each culling one light a step.
-/// Which is faster depends on the scene: along Sponza's path on an H200,
-/// 8x8 tiles took 0.388 ms a frame instead of 0.422 at 1920x1080 with one
-/// light, 0.460 instead of 0.507 with 30 shadowed lights (1.157 and 1.393
-/// instead of 1.294 and 1.572 at 3840x2160), where the pass holds 109
-/// registers an invocation and a workgroup of 64 waits at its barriers for
-/// fewer; with 8 layers a material and 30 shadowed lights, 2.697 ms instead
-/// of 2.074 (9.933 instead of 7.675): the layers' walk per light makes the
-/// culling steps rarer and each pixel's work longer (BENCHMARKS.md, "Tiles
-/// of 8x8").
+/// `--dc-tile`: the side of the lighting pass's tiles, or `auto`, the one
+/// measured faster for the scenario ([`TileSide::for_scenario`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
-pub enum TileSide {
+#[serde(rename_all = "lowercase")]
+pub enum TileChoice {
+    /// 8x8 with few lights on single-layer materials at one sample a pixel,
+    /// else 16x16, chosen again whenever the frame's lights change.
+    #[default]
+    Auto,
     /// 8x8 pixels, 64 invocations a workgroup.
     #[value(name = "8")]
     #[serde(rename = "8")]
     Eight,
     /// 16x16 pixels, 256 invocations a workgroup.
-    #[default]
     #[value(name = "16")]
     #[serde(rename = "16")]
     Sixteen,
 }
 
+impl TileChoice {
+    /// The side for a frame with `point_lights` point and spot lights.
+    pub fn side(self, point_lights: usize, layered: bool, samples: u32) -> TileSide {
+        match self {
+            Self::Auto => TileSide::for_scenario(point_lights, layered, samples),
+            Self::Eight => TileSide::Eight,
+            Self::Sixteen => TileSide::Sixteen,
+        }
+    }
+}
+
+/// Side in pixels of the lighting pass's tiles: one workgroup of side x side
+/// invocations a tile, each culling one light a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TileSide {
+    /// 8x8 pixels, 64 invocations a workgroup.
+    Eight,
+    /// 16x16 pixels, 256 invocations a workgroup.
+    Sixteen,
+}
+
+/// The most point and spot lights for which `--dc-tile auto` takes 8x8
+/// tiles. Along Sponza's path on an H200 8x8 tiles were 3-11 % faster up to
+/// 100 small lights (and with 64 shadowed or 32 big ones) and 1-26 % slower
+/// from 150 to 500 (43-52 % at 1,000) at 1920x1080 and 3840x2160
+/// (BENCHMARKS.md, "The lighting tiles' side, chosen per scenario").
+pub const SMALL_TILES_MOST_LIGHTS: usize = 128;
+
 impl TileSide {
+    /// The side measured faster for a frame with `point_lights` point and
+    /// spot lights, on layered materials or not, at `samples` per pixel:
+    /// 8x8 where a pixel's work is short and the lights few (the pass holds
+    /// 109 registers an invocation, so small workgroups wait at their
+    /// barriers for fewer invocations), 16x16 where each tile's culling of
+    /// many lights costs more than that (a quarter of the tiles cull them)
+    /// or a pixel's work is long: layers walked for every light, MSAA's edge
+    /// pixels shaded per sample. Measured with compute visibility, the
+    /// default where the adapter has 64-bit atomics.
+    pub fn for_scenario(point_lights: usize, layered: bool, samples: u32) -> Self {
+        if layered || samples > 1 || point_lights > SMALL_TILES_MOST_LIGHTS { Self::Sixteen } else { Self::Eight }
+    }
+
     /// The side in pixels.
     pub fn pixels(self) -> u32 {
         match self {
@@ -132,7 +169,7 @@ pub struct DeferredComputeConfig {
     /// counters (adds atomics: for profiling, not timing).
     pub count_visibility: bool,
     /// The lighting pass's tiles.
-    pub tile: TileSide,
+    pub tile: TileChoice,
 }
 
 impl Default for DeferredComputeConfig {
@@ -141,7 +178,7 @@ impl Default for DeferredComputeConfig {
             depth_prepass: true,
             visibility: VisibilityMethod::Raster,
             count_visibility: false,
-            tile: TileSide::default(),
+            tile: TileChoice::default(),
         }
     }
 }
@@ -150,6 +187,16 @@ impl Default for DeferredComputeConfig {
 enum Surfaces {
     Gbuffer(Box<GbufferStage>),
     Visibility { ids: VisibilityBuffer, pass: Box<ComputeVisibility> },
+}
+
+impl Surfaces {
+    /// The layout of their group (the lighting pass's group 1).
+    fn read_layout(&self) -> &wgpu::BindGroupLayout {
+        match self {
+            Self::Gbuffer(stage) => &stage.gbuffer.read_layout,
+            Self::Visibility { pass, .. } => &pass.read_layout,
+        }
+    }
 }
 
 /// Under MSAA: the lighting pass's count of lit and edge pixels (two
@@ -162,11 +209,57 @@ struct EdgeCounts {
 /// Bytes of [`EdgeCounts::buffer`].
 const EDGE_COUNTS_BYTES: u64 = 8;
 
+/// The lighting pass's pipeline for one tile side, and what building it for
+/// the other side takes (its shader variant and its group 2's layout).
+struct TiledLighting {
+    side: TileSide,
+    pipeline: wgpu::ComputePipeline,
+    shader: ShaderSource,
+    output_layout: wgpu::BindGroupLayout,
+}
+
+impl TiledLighting {
+    /// Builds the pass for `side`, over the scene's and the surfaces' groups.
+    fn new(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        groups: [&wgpu::BindGroupLayout; 2],
+        shader: ShaderSource,
+        output_layout: wgpu::BindGroupLayout,
+        side: TileSide,
+    ) -> Result<Self, ShaderError> {
+        let layouts = [groups[0], groups[1], &output_layout];
+        let pipeline = compute_pipeline_with(device, shaders, shader, side.defs(), "tiled_lighting", &layouts)?;
+        Ok(Self { side, pipeline, shader, output_layout })
+    }
+
+    /// Builds it again for `side` where it was built for the other.
+    fn set_side(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        groups: [&wgpu::BindGroupLayout; 2],
+        side: TileSide,
+    ) -> Result<(), ShaderError> {
+        if side != self.side {
+            let layouts = [groups[0], groups[1], &self.output_layout];
+            self.pipeline =
+                compute_pipeline_with(device, shaders, self.shader, side.defs(), "tiled_lighting", &layouts)?;
+            self.side = side;
+        }
+        Ok(())
+    }
+}
+
 /// The tiled deferred pipeline.
 pub struct DeferredCompute {
     config: DeferredComputeConfig,
     surfaces: Surfaces,
-    lighting: wgpu::ComputePipeline,
+    lighting: TiledLighting,
+    /// Whether some material has layers, and the samples a pixel: with the
+    /// lights, what `--dc-tile auto` chooses by.
+    layered: bool,
+    samples: u32,
     /// The HDR target, written (and under MSAA the edge counts).
     output: wgpu::BindGroup,
     edge_counts: Option<EdgeCounts>,
@@ -220,14 +313,17 @@ impl DeferredCompute {
             let (layout, output) = hdr_output(device, targets, "tiled lighting output");
             (layout, output, None)
         };
-        let (shader, read_layout) = match &surfaces {
-            Surfaces::Gbuffer(stage) if msaa => (SHADER_MSAA, &stage.gbuffer.read_layout),
-            Surfaces::Gbuffer(stage) => (SHADER, &stage.gbuffer.read_layout),
-            Surfaces::Visibility { pass, .. } if msaa => (SHADER_VISIBILITY_MSAA, &pass.read_layout),
-            Surfaces::Visibility { pass, .. } => (SHADER_VISIBILITY, &pass.read_layout),
+        let shader = match (&surfaces, msaa) {
+            (Surfaces::Gbuffer(_), true) => SHADER_MSAA,
+            (Surfaces::Gbuffer(_), false) => SHADER,
+            (Surfaces::Visibility { .. }, true) => SHADER_VISIBILITY_MSAA,
+            (Surfaces::Visibility { .. }, false) => SHADER_VISIBILITY,
         };
-        let groups = [&scene.layout, read_layout, &layout];
-        let lighting = compute_pipeline_with(device, shaders, shader, config.tile.defs(), "tiled_lighting", &groups)?;
+        // `auto` builds the side for no point lights until the first
+        // frame's lights ask for the other (`lights_changed`).
+        let side = config.tile.side(0, scene.layers, targets.samples);
+        let lighting =
+            TiledLighting::new(device, shaders, [&scene.layout, surfaces.read_layout()], shader, layout, side)?;
         // The compute rasterizer leaves the depth target to the blended pass.
         let lay_depth = config.visibility == VisibilityMethod::Compute;
         let blended = BlendedPass::new(device, shaders, scene, targets, forward::SHADER, &[], lay_depth)?;
@@ -236,7 +332,17 @@ impl DeferredCompute {
             Surfaces::Visibility { ids, .. } => Coverage::Ids(ids),
         };
         let background = Background::new(device, shaders, scene, targets, coverage, false)?;
-        Ok(Self { config, surfaces, lighting, output, edge_counts, background, blended })
+        Ok(Self {
+            config,
+            surfaces,
+            lighting,
+            layered: scene.layers,
+            samples: targets.samples,
+            output,
+            edge_counts,
+            background,
+            blended,
+        })
     }
 }
 
@@ -255,7 +361,7 @@ impl Pipeline for DeferredCompute {
         if let Some(counts) = &self.edge_counts {
             frame.encoder.clear_buffer(&counts.buffer, 0, None);
         }
-        tiled_lighting(frame, &self.lighting, read, &self.output, self.config.tile.pixels());
+        tiled_lighting(frame, &self.lighting.pipeline, read, &self.output, self.lighting.side.pixels());
         if let Some(counts) = &mut self.edge_counts {
             counts.readback.copy(frame.device, frame.encoder, &counts.buffer, EDGE_COUNTS_BYTES, frame.number);
         }
@@ -270,6 +376,19 @@ impl Pipeline for DeferredCompute {
     /// Lights come from the tiles' own lists, not the CPU's per-object ones.
     fn uses_object_light_lists(&self) -> bool {
         false
+    }
+
+    /// `--dc-tile auto`: the tile side for these lights, the pass built
+    /// again when it changes.
+    fn lights_changed(
+        &mut self,
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        scene: &SceneGpu,
+        point_lights: usize,
+    ) -> Result<(), ShaderError> {
+        let side = self.config.tile.side(point_lights, self.layered, self.samples);
+        self.lighting.set_side(device, shaders, [&scene.layout, self.surfaces.read_layout()], side)
     }
 
     /// With the G-buffer and its depth pre-pass (the compute rasterizer culls on its own).
@@ -349,7 +468,7 @@ impl Pipeline for DeferredCompute {
             }
         };
         report
-            .setup("tile_size", self.config.tile.pixels() as u64)
+            .setup("tile_size", self.lighting.side.pixels() as u64)
             .setup("tile_light_capacity", TILE_LIGHT_CAPACITY as u64)
     }
 }
@@ -371,4 +490,22 @@ fn tiled_lighting(
     cp.set_bind_group(1, read, &[]);
     cp.set_bind_group(2, output, &[]);
     cp.dispatch_workgroups(w, h, 1);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_takes_small_tiles_only_for_short_pixels_and_few_lights() {
+        let most = SMALL_TILES_MOST_LIGHTS;
+        assert_eq!(TileSide::for_scenario(0, false, 1), TileSide::Eight);
+        assert_eq!(TileSide::for_scenario(most, false, 1), TileSide::Eight);
+        assert_eq!(TileSide::for_scenario(most + 1, false, 1), TileSide::Sixteen);
+        assert_eq!(TileSide::for_scenario(1, true, 1), TileSide::Sixteen);
+        assert_eq!(TileSide::for_scenario(1, false, 4), TileSide::Sixteen);
+        assert_eq!(TileChoice::Auto.side(most + 1, false, 1), TileSide::Sixteen);
+        assert_eq!(TileChoice::Eight.side(10_000, true, 4), TileSide::Eight);
+        assert_eq!(TileChoice::Sixteen.side(0, false, 1), TileSide::Sixteen);
+    }
 }
