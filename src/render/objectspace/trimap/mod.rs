@@ -133,7 +133,7 @@ gpu_struct! {
         pub cell_base: u32,
         pub side: u32,
         pub key_base: u32,
-        /// Where the mesh's stored maps start ([`StoredMaps`]), and the
+        /// Where the mesh's stored maps start (`StoredMaps`), and the
         /// widest level stored (0: none).
         pub store_base: u32,
         pub store_size: u32,
