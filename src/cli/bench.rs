@@ -19,8 +19,9 @@ use super::setup::{configure, new_renderer, open_gpu, render_options, setup};
 pub struct BenchArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Measured frames (the camera path repeats if it is shorter).
-    #[arg(help_heading = "Frames and output", long, default_value_t = 600)]
+    /// Measured frames, at least 1 (the camera path repeats if it is shorter).
+    #[arg(help_heading = "Frames and output", long, default_value_t = 600,
+        value_parser = clap::value_parser!(u32).range(1..))]
     pub frames: u32,
     /// Frames rendered first and not measured.
     #[arg(help_heading = "Frames and output", long, default_value_t = 60)]

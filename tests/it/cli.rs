@@ -150,6 +150,16 @@ fn numeric_flags_must_be_finite_and_in_range() {
         assert_eq!(code, 2, "{flags:?} was accepted:\n{err}");
         assert!(err.contains(flags[1]) && err.contains(expected), "{flags:?}: {err}");
     }
+    // A bench of no measured frames has nothing to report; the tile side
+    // names its choices.
+    for (args, expected) in [
+        (&["bench", "--frames", "0"][..], "'0' for '--frames"),
+        (&["bench", "--pipeline", "deferred-compute", "--dc-tile", "12"][..], "auto, 8, 16"),
+    ] {
+        let (code, err) = run(args);
+        assert_eq!(code, 2, "{args:?} was accepted:\n{err}");
+        assert!(err.contains(expected), "{args:?}: {err}");
+    }
 }
 
 /// `--bloom` takes a finite strength from 0 to 1, and says so.
