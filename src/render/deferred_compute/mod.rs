@@ -1,7 +1,8 @@
 //! Tiled deferred shading, lit in compute: the shared G-buffer pass, then
 //! one compute pass over 8x8 or 16x16 screen tiles (`tiled.wgsl`; the side
-//! measured faster for the frame's lights, materials and samples, or
-//! `--dc-tile 8|16`: [`TileSide::for_scenario`]). Each workgroup reduces its tile's depth range, builds the
+//! measured faster for the frame's lights, materials and samples,
+//! [`TileSide::for_scenario`], or `--dc-tile 8|16`). Each workgroup reduces
+//! its tile's depth range, builds the
 //! tile's frustum, culls every point and spot light against it in chunks of
 //! one light per invocation into a workgroup list
 //! (in light order, so the image is deterministic), shades its pixels with
@@ -228,8 +229,7 @@ impl TiledLighting {
         output_layout: wgpu::BindGroupLayout,
         side: TileSide,
     ) -> Result<Self, ShaderError> {
-        let layouts = [groups[0], groups[1], &output_layout];
-        let pipeline = compute_pipeline_with(device, shaders, shader, side.defs(), "tiled_lighting", &layouts)?;
+        let pipeline = Self::build(device, shaders, groups, shader, &output_layout, side)?;
         Ok(Self { side, pipeline, shader, output_layout })
     }
 
@@ -242,12 +242,22 @@ impl TiledLighting {
         side: TileSide,
     ) -> Result<(), ShaderError> {
         if side != self.side {
-            let layouts = [groups[0], groups[1], &self.output_layout];
-            self.pipeline =
-                compute_pipeline_with(device, shaders, self.shader, side.defs(), "tiled_lighting", &layouts)?;
+            self.pipeline = Self::build(device, shaders, groups, self.shader, &self.output_layout, side)?;
             self.side = side;
         }
         Ok(())
+    }
+
+    fn build(
+        device: &wgpu::Device,
+        shaders: &mut ShaderLibrary,
+        groups: [&wgpu::BindGroupLayout; 2],
+        shader: ShaderSource,
+        output_layout: &wgpu::BindGroupLayout,
+        side: TileSide,
+    ) -> Result<wgpu::ComputePipeline, ShaderError> {
+        let layouts = [groups[0], groups[1], output_layout];
+        compute_pipeline_with(device, shaders, shader, side.defs(), "tiled_lighting", &layouts)
     }
 }
 
