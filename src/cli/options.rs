@@ -187,9 +187,9 @@ pub struct SceneArgs {
     /// or 16, one workgroup of side x side invocations a tile; the same
     /// image either way. `auto` (default) takes the one measured faster for
     /// the frame's scenario: 8 with at most 128 point and spot lights on
-    /// single-layer materials at one sample a pixel (3-11 % faster on an
+    /// single-layer materials at one sample a pixel (2-13 % faster on an
     /// H200 along Sponza's path), else 16 (8 was 1-160 % slower from 150
-    /// lights, up to 42 % with layered materials, 6 % under 4x MSAA with 30
+    /// lights, up to 43 % with layered materials, 6 % under 4x MSAA with 30
     /// shadowed lights), chosen again when the lights change; the side taken
     /// is the report's `tile_size` (BENCHMARKS.md, "The lighting tiles'
     /// side, chosen per scenario").

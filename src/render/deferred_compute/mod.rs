@@ -100,7 +100,7 @@ pub enum TileSide {
 }
 
 /// The most point and spot lights for which `--dc-tile auto` takes 8x8
-/// tiles. Along Sponza's path on an H200 8x8 tiles were 3-11 % faster up to
+/// tiles. Along Sponza's path on an H200 8x8 tiles were 2-13 % faster up to
 /// 100 small lights (and with 64 shadowed or 32 big ones) and 1-26 % slower
 /// from 150 to 500 (43-52 % at 1,000) at 1920x1080 and 3840x2160
 /// (BENCHMARKS.md, "The lighting tiles' side, chosen per scenario").
