@@ -266,9 +266,8 @@ pub struct DeferredCompute {
     config: DeferredComputeConfig,
     surfaces: Surfaces,
     lighting: TiledLighting,
-    /// Whether some material has layers, and the samples a pixel: with the
-    /// lights, what `--dc-tile auto` chooses by.
-    layered: bool,
+    /// Samples a pixel: with the lights and the scene's layers, what
+    /// `--dc-tile auto` chooses by.
     samples: u32,
     /// The HDR target, written (and under MSAA the edge counts).
     output: wgpu::BindGroup,
@@ -342,17 +341,7 @@ impl DeferredCompute {
             Surfaces::Visibility { ids, .. } => Coverage::Ids(ids),
         };
         let background = Background::new(device, shaders, scene, targets, coverage, false)?;
-        Ok(Self {
-            config,
-            surfaces,
-            lighting,
-            layered: scene.layers,
-            samples: targets.samples,
-            output,
-            edge_counts,
-            background,
-            blended,
-        })
+        Ok(Self { config, surfaces, lighting, samples: targets.samples, output, edge_counts, background, blended })
     }
 }
 
@@ -397,7 +386,7 @@ impl Pipeline for DeferredCompute {
         scene: &SceneGpu,
         point_lights: usize,
     ) -> Result<(), ShaderError> {
-        let side = self.config.tile.side(point_lights, self.layered, self.samples);
+        let side = self.config.tile.side(point_lights, scene.layers, self.samples);
         self.lighting.set_side(device, shaders, [&scene.layout, self.surfaces.read_layout()], side)
     }
 
